@@ -47,7 +47,9 @@ pub enum MeshError {
         area: f64,
     },
     /// Two triangles use the same three vertices.
-    #[error("triangle {triangle} repeats triangle {first} (same vertices {vertices:?}): remove one")]
+    #[error(
+        "triangle {triangle} repeats triangle {first} (same vertices {vertices:?}): remove one"
+    )]
     DuplicateTriangle {
         /// The later triangle's index.
         triangle: u32,
@@ -76,13 +78,15 @@ pub enum MeshError {
         triangles: [u32; 2],
     },
     /// A vertex is used by no element (warning level: the mesh is still accepted).
-    #[error("vertex {vertex} is not used by any element (warning)")]
+    #[error("vertex {vertex} is not used by any element; it is ignored")]
     UnreferencedVertex {
         /// Vertex index.
         vertex: u32,
     },
     /// A tetrahedron refers to a vertex that does not exist.
-    #[error("tetrahedron {tet} refers to vertex {index}, but the mesh has only {vertex_count} vertices")]
+    #[error(
+        "tetrahedron {tet} refers to vertex {index}, but the mesh has only {vertex_count} vertices"
+    )]
     TetIndexOutOfRange {
         /// Tetrahedron index.
         tet: u32,
@@ -137,6 +141,24 @@ pub enum MeshError {
     InvalidParameter {
         /// Which parameter and why.
         what: String,
+    },
+    /// Two tetrahedra use the same four vertices.
+    #[error(
+        "tetrahedron {tet} repeats tetrahedron {first} (same vertices {vertices:?}): remove one"
+    )]
+    DuplicateTet {
+        /// The later tetrahedron's index.
+        tet: u32,
+        /// The first tetrahedron with these vertices.
+        first: u32,
+        /// The shared vertices, as stored in `tet`.
+        vertices: [u32; 4],
+    },
+    /// A measure that needs an open surface (one with a boundary) was given a closed one.
+    #[error("the {surface} surface is closed (it has no boundary); the volume between two surfaces needs two open surfaces with the same boundary (for a closed surface, use its signed volume)")]
+    NotOpen {
+        /// Which surface: `"before"` or `"after"`.
+        surface: &'static str,
     },
 }
 

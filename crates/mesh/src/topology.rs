@@ -109,8 +109,7 @@ impl Topology {
 
         let boundary_edge_count = boundary.len();
         let boundary_loops = trace_loops(boundary);
-        let (triangle_components, component_count) =
-            components(triangles.len(), &edge_triangles);
+        let (triangle_components, component_count) = components(triangles.len(), &edge_triangles);
         Topology {
             edges,
             edge_triangles,

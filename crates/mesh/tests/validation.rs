@@ -25,14 +25,7 @@ fn grid(n: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
 
 /// A regular octahedron, normals outward.
 fn octahedron() -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let p = vec![
-        Vec3::X,
-        -Vec3::X,
-        Vec3::Y,
-        -Vec3::Y,
-        Vec3::Z,
-        -Vec3::Z,
-    ];
+    let p = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
     let t = vec![
         [0, 2, 4],
         [2, 1, 4],

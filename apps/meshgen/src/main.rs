@@ -1,0 +1,99 @@
+//! `meshgen`: writes the thesis's deterministic test meshes, as `fixtures/generate.sh` runs it.
+//!
+//! ```text
+//! meshgen grid   --n 65 --side 1 OUT.obj
+//! meshgen sphere --segments 32 --rings 31 --radius 0.25 OUT.obj
+//! meshgen cube   --per-edge 8 --side 2 OUT.obj
+//! meshgen disc   --radial 8 --segments 32 --radius 1 OUT.obj
+//! ```
+//! The output format follows the extension (obj, ply, stl, vtk). Exit code 2 on bad arguments.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use tissue_mesh::{disc, grid, subdivided_cube, uv_sphere, TriMesh};
+
+/// Writes deterministic test meshes (the thesis's planes, spheres and cube).
+#[derive(Parser, Debug)]
+#[command(version, about)]
+struct Args {
+    #[command(subcommand)]
+    shape: Shape,
+}
+
+#[derive(Subcommand, Debug)]
+enum Shape {
+    /// Square plane of n×n vertices and the given side, centred at the origin in z = 0.
+    Grid {
+        #[arg(long)]
+        n: u32,
+        #[arg(long)]
+        side: f32,
+        out: PathBuf,
+    },
+    /// UV sphere: `rings` latitude circles of `segments` vertices plus two poles.
+    Sphere {
+        #[arg(long)]
+        segments: u32,
+        #[arg(long)]
+        rings: u32,
+        #[arg(long)]
+        radius: f32,
+        out: PathBuf,
+    },
+    /// Axis-aligned cube centred at the origin, each face split into per_edge² quads.
+    Cube {
+        #[arg(long)]
+        per_edge: u32,
+        #[arg(long)]
+        side: f32,
+        out: PathBuf,
+    },
+    /// Flat disc in z = 0: a centre vertex and `radial` rings of `segments` vertices.
+    Disc {
+        #[arg(long)]
+        radial: u32,
+        #[arg(long)]
+        segments: u32,
+        #[arg(long)]
+        radius: f32,
+        out: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    let (mesh, out): (Result<TriMesh, _>, PathBuf) = match args.shape {
+        Shape::Grid { n, side, out } => (grid(n, side), out),
+        Shape::Sphere {
+            segments,
+            rings,
+            radius,
+            out,
+        } => (uv_sphere(segments, rings, radius), out),
+        Shape::Cube {
+            per_edge,
+            side,
+            out,
+        } => (subdivided_cube(per_edge, side), out),
+        Shape::Disc {
+            radial,
+            segments,
+            radius,
+            out,
+        } => (disc(radial, segments, radius), out),
+    };
+    let mesh = match mesh {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("meshgen: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    if let Err(e) = tissue_meshio::write_surface(&out, &mesh) {
+        eprintln!("meshgen: {e}");
+        return ExitCode::from(2);
+    }
+    ExitCode::SUCCESS
+}

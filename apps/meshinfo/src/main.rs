@@ -1,0 +1,56 @@
+//! `meshinfo FILE [--json]`: what a user should know about a mesh before planning on it.
+//!
+//! Prints counts, bounding box, area, volume (closed surfaces), boundary loops with their lengths,
+//! components, Euler characteristic and every defect found. Exit code 0 when the mesh loads
+//! (warnings allowed), 2 when it cannot be read or has hard defects.
+
+mod report;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Parser;
+
+/// Counts, measures, topology and defects of a mesh file (OBJ, PLY, STL, VTK, TetGen .node/.ele).
+#[derive(Parser, Debug)]
+#[command(version, about)]
+struct Args {
+    /// The mesh file: .obj, .ply, .stl, .vtk, or a TetGen .node/.ele pair (give either file).
+    file: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+fn main() -> ExitCode {
+    let args = Args::parse();
+    let report = match report::inspect(&args.file) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("meshinfo: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    if args.json {
+        match serde_json::to_string_pretty(&report) {
+            Ok(s) => println!("{s}"),
+            Err(e) => {
+                eprintln!("meshinfo: cannot write JSON: {e}");
+                return ExitCode::from(2);
+            }
+        }
+    } else {
+        print!("{}", report.to_text());
+    }
+    if report.loaded {
+        ExitCode::SUCCESS
+    } else {
+        eprintln!(
+            "meshinfo: {} was read but rejected: {} hard defect(s); the first: {}",
+            args.file.display(),
+            report.hard_defect_count(),
+            report.first_hard_defect().unwrap_or("?")
+        );
+        ExitCode::from(2)
+    }
+}

@@ -1,0 +1,71 @@
+//! # tissue-meshio: mesh files in and out (the only library crate that touches files)
+//!
+//! ## Brief overview
+//! - [`read_surface`] reads an `.obj`, `.ply`, `.stl` or `.vtk` file (by extension) into a
+//!   validated [`tissue_mesh::TriMesh`]; [`read_surface_data`] stops before validation and gives
+//!   the raw [`SurfaceData`], so that a tool can list every defect of a bad file.
+//! - [`read_tets`] reads a validated [`tissue_mesh::TetMesh`] from TetGen `.node`/`.ele`
+//!   ([`read_tetgen`]) or VTK ([`read_vtk`], which also returns `POINT_DATA` fields);
+//!   [`read_tet_data`] stops before validation and gives the raw [`TetData`].
+//! - [`write_surface`] writes by extension; [`write_obj`], [`write_ply`] (binary),
+//!   [`write_stl`] (binary), [`write_vtk`] and [`write_vtk_tets`] (ASCII, with per-vertex
+//!   [`VertexField`]s for ParaView) write one format each.
+//! - [`MeshIoError`]: every error names the file, and the line (text) or element (binary), and
+//!   says how to fix it where it can.
+//!
+//! Every reader also has a `parse_*` twin that takes bytes and a display name, for data that is
+//! not in a file. What each format supports is in the docs of its reader.
+//!
+//! Units: none are converted. Positions are stored and returned as the file has them (`f32`);
+//! the rest of tissue works in centimetres, so convert on load if a file is in other units.
+//!
+//! Invariants:
+//! - Reads never panic, whatever the bytes: a malformed, truncated or hostile file is an
+//!   `Err`, and no count in a file makes an allocation larger than the file can fill.
+//! - Indices in returned data are in range (0-based), and vertices keep the file's order (STL,
+//!   which stores corners, numbers the welded vertices in order of first appearance).
+//! - Writes are atomic: data go to a temporary file in the target's folder, which is synced and
+//!   then renamed over the target; on failure it is removed. A reader never sees half a file.
+//! - What is written reads back identically: the same triangles, and positions with the same
+//!   `f32` bits (STL: the same triangles up to vertex numbering, since STL stores corners).
+//!
+//! ```
+//! use glam::Vec3;
+//! use tissue_mesh::TriMesh;
+//!
+//! // A tetrahedron's surface, outward normals.
+//! let mesh = TriMesh::new(
+//!     vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(0.0, 0.0, 0.1)],
+//!     vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+//! )?;
+//! let path = std::env::temp_dir().join(format!("meshio-doc-{}.ply", std::process::id()));
+//! tissue_meshio::write_surface(&path, &mesh)?;
+//! let back = tissue_meshio::read_surface(&path)?;
+//! assert_eq!(back, mesh);
+//! std::fs::remove_file(&path).ok();
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod atomic;
+mod data;
+mod error;
+mod obj;
+mod ply;
+mod stl;
+mod tetgen;
+mod text;
+mod vtk;
+
+pub use data::{
+    parse_surface_data, read_surface, read_surface_data, read_tet_data, read_tets, write_surface,
+    SurfaceData, SurfaceFormat, TetData,
+};
+pub use error::MeshIoError;
+pub use obj::{parse_obj, read_obj, write_obj};
+pub use ply::{parse_ply, read_ply, write_ply};
+pub use stl::{parse_stl, read_stl, write_stl};
+pub use tetgen::{parse_tetgen, read_tetgen};
+pub use vtk::{
+    parse_vtk, read_vtk, write_vtk, write_vtk_tets, FieldValues, PointField, PointValues,
+    VertexField, VtkData, VtkMesh,
+};
