@@ -59,7 +59,10 @@ pub struct DefectReport {
 
 impl Report {
     pub fn hard_defect_count(&self) -> usize {
-        self.defects.iter().filter(|d| d.severity == "error").count()
+        self.defects
+            .iter()
+            .filter(|d| d.severity == "error")
+            .count()
     }
 
     pub fn first_hard_defect(&self) -> Option<&str> {

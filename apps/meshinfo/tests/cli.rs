@@ -10,7 +10,10 @@ fn fixture(name: &str) -> PathBuf {
 }
 
 fn shared_meshes() -> Option<PathBuf> {
-    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/meshes"));
+    let dir = Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/meshes"
+    ));
     if dir.is_dir() {
         Some(dir.to_path_buf())
     } else {
@@ -95,13 +98,12 @@ fn broken_mesh_lists_every_defect_and_exits_2() {
             )
         })
         .collect();
-    let has = |kind: &str, text: &str| {
-        kinds
-            .iter()
-            .any(|(k, m)| k == kind && m.contains(text))
-    };
+    let has = |kind: &str, text: &str| kinds.iter().any(|(k, m)| k == kind && m.contains(text));
     assert!(has("DegenerateTriangle", "triangle 9 "), "{kinds:?}");
-    assert!(has("DuplicateTriangle", "triangle 8 repeats triangle 3"), "{kinds:?}");
+    assert!(
+        has("DuplicateTriangle", "triangle 8 repeats triangle 3"),
+        "{kinds:?}"
+    );
     assert!(has("InconsistentWinding", "[0, 1]"), "{kinds:?}");
     assert!(has("InconsistentWinding", "[1, 4]"), "{kinds:?}");
     assert!(has("UnreferencedVertex", "vertex 9 "), "{kinds:?}");
@@ -110,7 +112,10 @@ fn broken_mesh_lists_every_defect_and_exits_2() {
     // The text form says the same, and stderr says why it was rejected.
     let (code, out, err) = run(&[fixture("defects/broken.obj").as_os_str()]);
     assert_eq!(code, 2);
-    assert!(out.contains("defects               5 (4 errors, 1 warnings)"), "{out}");
+    assert!(
+        out.contains("defects               5 (4 errors, 1 warnings)"),
+        "{out}"
+    );
     assert!(err.contains("rejected"), "{err}");
 }
 
@@ -118,7 +123,10 @@ fn broken_mesh_lists_every_defect_and_exits_2() {
 fn unreferenced_vertex_is_a_warning_and_loads() {
     let (code, out, _) = run(&[fixture("defects/unreferenced_vertex.obj").as_os_str()]);
     assert_eq!(code, 0);
-    assert!(out.contains("warning: vertex 9 is not used by any element"), "{out}");
+    assert!(
+        out.contains("warning: vertex 9 is not used by any element"),
+        "{out}"
+    );
     assert!(out.contains("area                  4.000000"), "{out}");
 }
 
