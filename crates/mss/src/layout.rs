@@ -1,0 +1,88 @@
+//! How springs and anchors are ordered so that forces can be summed block by block, in parallel,
+//! with the same result for any number of threads.
+//!
+//! Particles are cut into contiguous blocks whose length depends only on the particle count.
+//! A spring with both ends in block `b` is *internal* to `b`; the others are *crossing*. Springs
+//! are stored internal-by-block first (sorted by lower end, for a sequential sweep over
+//! positions), then the crossing ones. The force phase gives each block its own slice of the force
+//! array and adds its internal springs (blocks in parallel), then adds the crossing springs in one
+//! serial pass. Every particle's forces are therefore added in one fixed order: the serial path
+//! runs the same blocks one after another and is bit-identical.
+//!
+//! With particles numbered so that neighbours are close (a grid row by row, the two layers of a
+//! region interleaved), almost every spring is internal.
+
+use crate::spring::Spring;
+
+/// At most this many blocks: enough for load balance on a few cores, few enough that crossing
+/// springs (which run serially) stay a small share.
+pub(crate) const MAX_BLOCKS: usize = 16;
+/// At least this many particles per block, so small systems stay in one block (serial) where a
+/// thread hand-off would cost more than the work.
+pub(crate) const MIN_BLOCK_LEN: usize = 2048;
+
+/// A zero-length spring to a fixed point, as the force loop reads it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct AnchorRecord {
+    pub particle: u32,
+    pub k: f32,
+    pub target: glam::Vec3A,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Layout {
+    /// Particles per block (the last block may be shorter).
+    pub block_len: usize,
+    /// Number of blocks (≥ 1).
+    pub count: usize,
+    /// `springs[spring_start[b]..spring_start[b + 1]]` are internal to block `b`;
+    /// `springs[spring_start[count]..]` cross blocks.
+    pub spring_start: Vec<usize>,
+    /// `anchors[anchor_start[b]..anchor_start[b + 1]]` act on block `b`.
+    pub anchor_start: Vec<usize>,
+}
+
+impl Layout {
+    pub(crate) fn block_len_for(n: usize) -> usize {
+        MIN_BLOCK_LEN.max(n.div_ceil(MAX_BLOCKS))
+    }
+
+    /// Sorts `springs` and `anchors` in place into block order and records the block ranges.
+    pub(crate) fn arrange(
+        n: usize,
+        springs: &mut [Spring],
+        anchors: &mut [AnchorRecord],
+    ) -> Layout {
+        let block_len = Self::block_len_for(n);
+        let count = n.div_ceil(block_len).max(1);
+        let group = |s: &Spring| {
+            let (ba, bb) = (s.a as usize / block_len, s.b as usize / block_len);
+            if ba == bb {
+                ba
+            } else {
+                count
+            }
+        };
+        springs.sort_by_key(|s| (group(s), s.a.min(s.b), s.a.max(s.b)));
+        let mut spring_start = Vec::with_capacity(count + 1);
+        for b in 0..=count {
+            spring_start.push(springs.partition_point(|s| group(s) < b));
+        }
+        anchors.sort_by_key(|a| a.particle);
+        let mut anchor_start = Vec::with_capacity(count + 1);
+        for b in 0..=count {
+            anchor_start.push(anchors.partition_point(|a| (a.particle as usize) < b * block_len));
+        }
+        Layout {
+            block_len,
+            count,
+            spring_start,
+            anchor_start,
+        }
+    }
+
+    /// Number of springs that cross blocks (summed serially).
+    pub(crate) fn crossing(&self, springs: usize) -> usize {
+        springs - self.spring_start[self.count]
+    }
+}
