@@ -47,7 +47,7 @@
 //! let mut system = MassSpringSystem::new(particles, vec![Spring::new(0, 1, 1.0, k)])?;
 //! system.set_gravity(Vec3::new(0.0, 0.0, -981.0))?;
 //! system.set_damping(0.99)?;
-//! let criterion = StopCriterion { window: 20, tolerance: 1e-3, max_steps: 100_000 };
+//! let criterion = StopCriterion { window: 20, tolerance: 1e-3, max_steps: 100_000, floor: 0.0 };
 //! let report = system.run(1e-3, &criterion)?;
 //! assert_eq!(report.reason, StopReason::Settled);
 //! let z = system.particles().positions()[1].z;

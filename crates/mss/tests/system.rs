@@ -93,10 +93,10 @@ fn hanging_chain_settles_at_the_analytic_static_stretch() {
         window: 50,
         tolerance: 1e-3,
         max_steps: 400_000,
+        floor: 0.0,
     };
     let report = s.run(1e-4, &criterion).unwrap();
     assert_eq!(report.reason, StopReason::Settled, "{report:?}");
-    eprintln!("hanging chain settled after {} steps", report.steps);
     let x = s.particles().positions();
     let mut total = 0.0f64;
     for j in 0..n as usize {
@@ -119,6 +119,7 @@ fn stop_criterion_reports_the_step_limit() {
         window: 10,
         tolerance: 1e-9,
         max_steps: 30,
+        floor: 0.0,
     };
     let report = s.run(1e-4, &criterion).unwrap();
     assert_eq!(report.reason, StopReason::StepLimit);
