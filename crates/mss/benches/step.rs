@@ -5,11 +5,14 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;
 use tissue_mss::scenes::two_layer_region;
-use tissue_mss::MassSpringSystem;
+use tissue_mss::{Integrator, MassSpringSystem};
 
 fn scene(n: u32) -> MassSpringSystem {
     let mut s = two_layer_region(n).expect("scene builds");
     s.set_gravity(Vec3::new(0.0, 0.0, -981.0)).expect("finite");
+    // Criterion runs the step millions of times: symplectic Euler stays bounded there (the
+    // thesis's explicit Euler costs the same per step but gains energy without end).
+    s.set_integrator(Integrator::SymplecticEuler);
     // Lift the free particles (the thesis's start) so the springs are loaded.
     let free: Vec<bool> = s
         .particles()
@@ -52,5 +55,15 @@ fn step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, step);
+/// The force phase alone, serial, at the largest size: the rest of a step is integration.
+fn forces(c: &mut Criterion) {
+    let mut group = c.benchmark_group("mss_forces");
+    let mut s = scene(257);
+    s.set_parallel(false);
+    group.throughput(Throughput::Elements(s.springs().len() as u64));
+    group.bench_function("serial/257x257", |b| b.iter(|| s.compute_forces()));
+    group.finish();
+}
+
+criterion_group!(benches, step, forces);
 criterion_main!(benches);

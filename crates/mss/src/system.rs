@@ -257,10 +257,16 @@ impl MassSpringSystem {
         &self.springs
     }
 
-    /// Number of springs whose ends lie in different particle blocks: these are summed serially,
-    /// the rest in parallel. Number particles so that neighbours are close to keep it small.
+    /// Number of springs whose ends lie in different particle blocks.
     pub fn crossing_springs(&self) -> usize {
         self.layout.crossing(self.springs.len())
+    }
+
+    /// Number of springs whose ends lie in blocks that are not neighbours: these are summed
+    /// serially, the rest in parallel. Number particles so that neighbours are close (a grid row
+    /// by row, the layers interleaved) to keep it near zero.
+    pub fn far_springs(&self) -> usize {
+        self.layout.far().len()
     }
 
     /// Steps taken so far.
@@ -278,9 +284,14 @@ impl MassSpringSystem {
     }
 
     /// Phase 1: every force on every particle, into [`Particles::forces`].
+    ///
+    /// Four passes over disjoint slices of the force array (see the layout in the crate's
+    /// determinism notes): blocks, even block pairs, odd block pairs, far springs.
     pub fn compute_forces(&mut self) {
         let _span = tracing::trace_span!("forces").entered();
-        let bl = self.layout.block_len;
+        let parallel = self.run_parallel();
+        let layout = &self.layout;
+        let bl = layout.block_len;
         let Particles {
             position,
             mass,
@@ -294,26 +305,27 @@ impl MassSpringSystem {
             gravity: self.gravity,
             springs: &self.springs,
             anchors: &self.anchors,
-            layout: &self.layout,
+            layout,
         };
-        #[cfg(feature = "parallel")]
-        if self.parallel && self.layout.count > 1 {
-            use rayon::prelude::*;
-            force
-                .par_chunks_mut(bl)
-                .enumerate()
-                .for_each(|(b, chunk)| ctx.block(b, chunk));
-        } else {
-            for (b, chunk) in force.chunks_mut(bl).enumerate() {
-                ctx.block(b, chunk);
-            }
+        over_chunks(parallel, force, bl, |b, chunk| ctx.block(b, chunk));
+        if layout.count > 1 {
+            let springs = &self.springs;
+            // Even pairs: chunk j holds blocks 2j and 2j + 1.
+            over_chunks(parallel, force, 2 * bl, |j, chunk| {
+                let pair = 2 * j;
+                if pair + 1 < layout.count {
+                    add_springs(&springs[layout.pair(pair)], position, chunk, pair * bl);
+                }
+            });
+            // Odd pairs: chunk j holds blocks 2j + 1 and 2j + 2.
+            over_chunks(parallel, &mut force[bl..], 2 * bl, |j, chunk| {
+                let pair = 2 * j + 1;
+                if pair + 1 < layout.count {
+                    add_springs(&springs[layout.pair(pair)], position, chunk, pair * bl);
+                }
+            });
+            add_springs(&springs[layout.far()], position, force, 0);
         }
-        #[cfg(not(feature = "parallel"))]
-        for (b, chunk) in force.chunks_mut(bl).enumerate() {
-            ctx.block(b, chunk);
-        }
-        let crossing = &self.springs[self.layout.spring_start[self.layout.count]..];
-        add_springs(crossing, position, force, 0);
         for v in &self.volumes {
             v.add_forces(position, mass, force, &mut self.volume_scratch);
         }
@@ -477,6 +489,28 @@ impl MassSpringSystem {
     }
 }
 
+/// Runs `f(j, chunk)` over the `size`-long chunks of `data`, on rayon's pool when `parallel`.
+fn over_chunks(
+    parallel: bool,
+    data: &mut [Vec3A],
+    size: usize,
+    f: impl Fn(usize, &mut [Vec3A]) + Sync + Send,
+) {
+    #[cfg(feature = "parallel")]
+    if parallel {
+        use rayon::prelude::*;
+        data.par_chunks_mut(size)
+            .enumerate()
+            .for_each(|(j, chunk)| f(j, chunk));
+        return;
+    }
+    #[cfg(not(feature = "parallel"))]
+    let _ = parallel;
+    for (j, chunk) in data.chunks_mut(size).enumerate() {
+        f(j, chunk);
+    }
+}
+
 /// What the force phase of one block reads.
 struct ForceContext<'a> {
     position: &'a [Vec3A],
@@ -506,8 +540,12 @@ impl ForceContext<'_> {
             let i = a.particle as usize;
             force[i - start] += (a.target - self.position[i]) * a.k;
         }
-        let springs = &self.springs[self.layout.spring_start[b]..self.layout.spring_start[b + 1]];
-        add_springs(springs, self.position, force, start);
+        add_springs(
+            &self.springs[self.layout.internal(b)],
+            self.position,
+            force,
+            start,
+        );
     }
 }
 
@@ -540,7 +578,11 @@ impl IntegrateContext {
         force: &[Vec3A],
         inverse_mass: &[f32],
     ) -> BlockSums {
-        let mut sums = BlockSums::EMPTY;
+        // Four partial sums (by particle index mod 4) so the additions do not wait on each other;
+        // they are combined in a fixed order, so the result does not depend on threads.
+        let mut lanes = [0.0f64; 4];
+        let mut max_move_sq = 0.0f32;
+        let mut bad = u32::MAX;
         let h = self.h;
         for (i, (((x, v), f), &w)) in position
             .iter_mut()
@@ -561,13 +603,17 @@ impl IntegrateContext {
                 *v = new;
                 *x = nx;
                 let m = dx.length_squared();
-                sums.displacement += f64::from(m.sqrt());
-                sums.max_move_sq = sums.max_move_sq.max(m);
-            } else if sums.bad == u32::MAX {
-                sums.bad = (start + i) as u32;
+                lanes[i & 3] += f64::from(m.sqrt());
+                max_move_sq = max_move_sq.max(m);
+            } else if bad == u32::MAX {
+                bad = (start + i) as u32;
             }
         }
-        sums
+        BlockSums {
+            displacement: (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]),
+            max_move_sq,
+            bad,
+        }
     }
 }
 

@@ -23,7 +23,8 @@ impl Rng {
 }
 
 /// A free chain of `n` particles with random masses, jittered positions and random velocities,
-/// neighbours joined, plus every 7th particle joined to the one 3 ahead.
+/// neighbours joined, every 7th particle joined to the one 3 ahead, and every 97th to a particle
+/// far away (so that large chains have springs between distant particle blocks).
 fn free_chain(n: u32, seed: u64) -> MassSpringSystem {
     let mut rng = Rng(seed);
     let positions: Vec<Vec3> = (0..n)
@@ -38,6 +39,11 @@ fn free_chain(n: u32, seed: u64) -> MassSpringSystem {
             .step_by(7)
             .map(|i| Spring::new(i, i + 3, 0.3, 50.0)),
     );
+    springs.extend((0..n).step_by(97).filter_map(|i| {
+        let j = (i * 7919 + 13) % n;
+        let rest = positions[i as usize].distance(positions[j as usize]);
+        (j != i).then(|| Spring::new(i, j, rest, 5.0))
+    }));
     let mut p = Particles::new(&positions, &masses).unwrap();
     for v in p.velocities_mut() {
         *v = Vec3A::from(rng.vec());
@@ -52,6 +58,7 @@ fn free_chain_conserves_linear_momentum() {
         let mut s = free_chain(5000, 7);
         s.set_integrator(integrator);
         assert!(s.crossing_springs() > 0);
+        assert!(s.far_springs() > 0);
         let p0 = s.particles().momentum();
         let scale: f64 = s
             .particles()
@@ -185,6 +192,29 @@ fn results_do_not_depend_on_the_number_of_threads() {
     assert_eq!(serial, run(Some(1)), "1 thread differs from serial");
     assert_eq!(serial, run(Some(2)), "2 threads differ from serial");
     assert_eq!(serial, run(Some(3)), "3 threads differ from serial");
+
+    // A chain with springs between neighbouring and distant blocks.
+    let chain = |threads: usize| {
+        let mut s = free_chain(20_000, 9);
+        assert!(s.is_parallel() && s.far_springs() > 0);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            for _ in 0..30 {
+                s.step(1e-3).unwrap();
+            }
+        });
+        positions_bits(&s)
+    };
+    let mut serial = free_chain(20_000, 9);
+    serial.set_parallel(false);
+    for _ in 0..30 {
+        serial.step(1e-3).unwrap();
+    }
+    assert_eq!(positions_bits(&serial), chain(1));
+    assert_eq!(positions_bits(&serial), chain(2));
 }
 
 #[test]
