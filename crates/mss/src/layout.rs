@@ -70,7 +70,13 @@ impl Layout {
                 2 * count - 1
             }
         };
-        springs.sort_by_key(|s| (group(s), s.a.min(s.b), s.a.max(s.b)));
+        for s in springs.iter_mut() {
+            if s.a > s.b {
+                // The same spring: the force on each end only changes sign with the direction.
+                std::mem::swap(&mut s.a, &mut s.b);
+            }
+        }
+        springs.sort_by_key(|s| (group(s), s.a, s.b));
         let mut spring_start = Vec::with_capacity(2 * count + 1);
         for g in 0..2 * count {
             spring_start.push(springs.partition_point(|s| group(s) < g));
