@@ -30,6 +30,7 @@
 //! # Ok::<(), tissue_mesh::MeshError>(())
 //! ```
 
+#![forbid(unsafe_code)]
 #![warn(
     clippy::unwrap_used,
     clippy::expect_used,

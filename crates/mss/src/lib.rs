@@ -14,8 +14,8 @@
 //! `parallel` feature).
 //!
 //! ## Units
-//! Centimetres, grams, seconds: positions in cm, masses in g, stiffness in g/s² (= N/m × 1000 /
-//! 1000… simply mass per time squared), forces in g·cm/s² (dyn), Young's modulus in g/(cm·s²)
+//! Centimetres, grams, seconds: positions in cm, masses in g, velocities in cm/s, forces in
+//! g·cm/s² (dyn), stiffness in g/s² (dyn/cm; 1 N/m = 1000 g/s²), Young's modulus in g/(cm·s²)
 //! (= 0.1 Pa).
 //!
 //! ## Equations (SPEC A.2 numbering)
@@ -54,6 +54,7 @@
 //! assert!((z - (-1.0 - 2.0 * 981.0 / k)).abs() < 1e-4);
 //! # Ok::<(), tissue_mss::MssError>(())
 //! ```
+#![forbid(unsafe_code)]
 #![warn(
     clippy::unwrap_used,
     clippy::expect_used,
