@@ -1,0 +1,343 @@
+//! The collision phase of a simulation step for one pair of surfaces, with everything it keeps
+//! between steps: the surfaces' topology, A's hierarchy, B's hierarchy or voxel grid, the scratch
+//! space and the contacts.
+
+use glam::Vec3A;
+use tissue_bvh::{BuildOptions, BuildWorkspace, Bvh, RefitReport, Triangles};
+use tissue_mesh::TriMesh;
+
+use crate::{
+    apply_impulses, correct_positions, detect_bvh_bvh, detect_bvh_voxels, Bodies, CollideError,
+    Contact, ContactParams, CorrectionReport, DetectStats, DetectWorkspace, ImpulseReport,
+    ImpulseWorkspace, ResponseParams, Side, Snapshot, Surface, VoxelGrid,
+};
+
+/// How surface B is represented for the broad phase.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BroadPhase {
+    /// A hierarchy over each surface ([`detect_bvh_bvh`]).
+    #[default]
+    BvhBvh,
+    /// A hierarchy over A, a voxel grid over B ([`detect_bvh_voxels`]); meant for a small B.
+    BvhVoxels,
+}
+
+/// Configuration of a [`Collider`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ColliderOptions {
+    /// B's representation.
+    pub broad_phase: BroadPhase,
+    /// A's hierarchy.
+    pub bvh_a: BuildOptions,
+    /// B's hierarchy (with [`BroadPhase::BvhBvh`]).
+    pub bvh_b: BuildOptions,
+    /// B's voxel size in cm (with [`BroadPhase::BvhVoxels`]); `None` =
+    /// [`VoxelGrid::suggested_cell_size`] at the initial positions.
+    pub cell_size: Option<f32>,
+    /// What counts as a contact. With `shared_particles`, both meshes index one particle array:
+    /// pass the same positions for A and B, and [`Bodies::One`] to the response.
+    pub contact: ContactParams,
+    /// A hierarchy is rebuilt when a refit leaves its [`Bvh::cost`] above this multiple of its
+    /// [`Bvh::build_cost`] (`f32::INFINITY`: never).
+    pub rebuild_ratio: f32,
+}
+
+impl Default for ColliderOptions {
+    /// BVH vs BVH with the thesis's equal-area split, leaves of 16 (A) and 2 (B) triangles (the
+    /// fastest equal-area pair in the plane-press bench), tolerance 0, rebuild at twice the build
+    /// cost.
+    fn default() -> Self {
+        ColliderOptions {
+            broad_phase: BroadPhase::BvhBvh,
+            bvh_a: BuildOptions {
+                leaf_size: 16,
+                ..BuildOptions::default()
+            },
+            bvh_b: BuildOptions {
+                leaf_size: 2,
+                ..BuildOptions::default()
+            },
+            cell_size: None,
+            contact: ContactParams::default(),
+            rebuild_ratio: 2.0,
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+enum Broad {
+    Bvh(Bvh),
+    Voxels(VoxelGrid),
+}
+
+/// What [`Collider::update`] did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UpdateReport {
+    /// A's refit.
+    pub refit_a: RefitReport,
+    /// B's refit (`None` with a voxel grid, which is re-binned instead).
+    pub refit_b: Option<RefitReport>,
+    /// Hierarchies rebuilt because their cost passed [`ColliderOptions::rebuild_ratio`].
+    pub rebuilds: u32,
+}
+
+/// What [`Collider::separate`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SeparationReport {
+    /// Rounds of detect-then-correct run.
+    pub iterations: u32,
+    /// Corrections applied over all rounds.
+    pub corrected: u32,
+    /// Edges still through a triangle after the last round (0 unless only fixed particles are
+    /// involved or `max_iterations` was too small).
+    pub remaining: u32,
+}
+
+/// Collision handling between two surfaces with separate particle arrays, for one simulation
+/// step at a time. The step's collision phase (SPEC A.2 phase 3) is [`Collider::detect`] then
+/// [`Collider::apply_impulses`]; after the positions are integrated (phase 4),
+/// [`Collider::separate`] leaves no edge through a triangle.
+///
+/// Nothing allocates in a step once the buffers have grown to the largest contact set seen,
+/// except a hierarchy rebuild (rare, see [`ColliderOptions::rebuild_ratio`]).
+#[derive(Debug, Clone)]
+pub struct Collider {
+    a: Surface,
+    b: Surface,
+    bvh_a: Bvh,
+    broad_b: Broad,
+    options: ColliderOptions,
+    ws: DetectWorkspace,
+    build_ws: BuildWorkspace,
+    impulse_ws: ImpulseWorkspace,
+    contacts: Vec<Contact>,
+    stats: DetectStats,
+}
+
+impl Collider {
+    /// Surfaces A and B at their meshes' positions.
+    ///
+    /// # Errors
+    /// [`CollideError::InvalidParameter`] for bad options,
+    /// [`CollideError::Bvh`] when a hierarchy cannot be built, the voxel grid's errors.
+    pub fn new(a: &TriMesh, b: &TriMesh, options: &ColliderOptions) -> Result<Self, CollideError> {
+        options.contact.validate()?;
+        if options.rebuild_ratio.is_nan() || options.rebuild_ratio <= 1.0 {
+            return Err(CollideError::InvalidParameter {
+                name: "rebuild_ratio",
+                value: options.rebuild_ratio,
+                expected: "greater than 1 (f32::INFINITY: never rebuild)",
+            });
+        }
+        let (sa, sb) = (Surface::new(a), Surface::new(b));
+        let pa: Vec<Vec3A> = a.positions().iter().map(|&p| p.into()).collect();
+        let pb: Vec<Vec3A> = b.positions().iter().map(|&p| p.into()).collect();
+        let mut build_ws = BuildWorkspace::new();
+        let va = sa.view(Side::A, &pa)?;
+        let vb = sb.view(Side::B, &pb)?;
+        let bvh_a =
+            Bvh::build_with(va.triangles(), &options.bvh_a, &mut build_ws).map_err(|source| {
+                CollideError::Bvh {
+                    side: Side::A,
+                    source,
+                }
+            })?;
+        let broad_b = match options.broad_phase {
+            BroadPhase::BvhBvh => Broad::Bvh(
+                Bvh::build_with(vb.triangles(), &options.bvh_b, &mut build_ws).map_err(
+                    |source| CollideError::Bvh {
+                        side: Side::B,
+                        source,
+                    },
+                )?,
+            ),
+            BroadPhase::BvhVoxels => {
+                let h = options
+                    .cell_size
+                    .unwrap_or_else(|| VoxelGrid::suggested_cell_size(&vb));
+                Broad::Voxels(VoxelGrid::new(&vb, h)?)
+            }
+        };
+        Ok(Collider {
+            a: sa,
+            b: sb,
+            bvh_a,
+            broad_b,
+            options: *options,
+            ws: DetectWorkspace::new(),
+            build_ws,
+            impulse_ws: ImpulseWorkspace::new(),
+            contacts: Vec::new(),
+            stats: DetectStats::default(),
+        })
+    }
+
+    /// The surface of `side`.
+    pub fn surface(&self, side: Side) -> &Surface {
+        match side {
+            Side::A => &self.a,
+            Side::B => &self.b,
+        }
+    }
+
+    /// A's hierarchy.
+    pub fn bvh_a(&self) -> &Bvh {
+        &self.bvh_a
+    }
+
+    /// B's hierarchy, if it has one.
+    pub fn bvh_b(&self) -> Option<&Bvh> {
+        match &self.broad_b {
+            Broad::Bvh(b) => Some(b),
+            Broad::Voxels(_) => None,
+        }
+    }
+
+    /// B's voxel grid, if it has one.
+    pub fn voxels_b(&self) -> Option<&VoxelGrid> {
+        match &self.broad_b {
+            Broad::Voxels(g) => Some(g),
+            Broad::Bvh(_) => None,
+        }
+    }
+
+    /// The options.
+    pub fn options(&self) -> &ColliderOptions {
+        &self.options
+    }
+
+    /// The contacts of the last detection, sorted by [`Contact::key`].
+    pub fn contacts(&self) -> &[Contact] {
+        &self.contacts
+    }
+
+    /// Counts from the last detection.
+    pub fn stats(&self) -> DetectStats {
+        self.stats
+    }
+
+    /// Brings A's hierarchy and B's hierarchy or grid to the given positions (refit, or rebuild
+    /// when the cost ratio is passed; re-bin the grid).
+    ///
+    /// # Errors
+    /// [`CollideError::ParticleCount`], [`CollideError::Bvh`] (e.g. a non-finite position),
+    /// the grid's errors.
+    pub fn update(
+        &mut self,
+        pos_a: &[Vec3A],
+        pos_b: &[Vec3A],
+    ) -> Result<UpdateReport, CollideError> {
+        let va = self.a.view(Side::A, pos_a)?;
+        let vb = self.b.view(Side::B, pos_b)?;
+        let ratio = self.options.rebuild_ratio;
+        let mut rebuilds = 0;
+        let mut refit = |bvh: &mut Bvh,
+                         side: Side,
+                         tris: &Triangles<'_>|
+         -> Result<RefitReport, CollideError> {
+            let err = |source| CollideError::Bvh { side, source };
+            let report = bvh.refit(tris).map_err(err)?;
+            if report.cost > ratio * bvh.build_cost() {
+                bvh.rebuild(tris, &mut self.build_ws).map_err(err)?;
+                rebuilds += 1;
+            }
+            Ok(report)
+        };
+        let refit_a = refit(&mut self.bvh_a, Side::A, va.triangles())?;
+        let refit_b = match &mut self.broad_b {
+            Broad::Bvh(bvh) => Some(refit(bvh, Side::B, vb.triangles())?),
+            Broad::Voxels(grid) => {
+                grid.update(&vb)?;
+                None
+            }
+        };
+        Ok(UpdateReport {
+            refit_a,
+            refit_b,
+            rebuilds,
+        })
+    }
+
+    /// [`Collider::update`], then detection by the configured broad phase; returns the contacts
+    /// (also kept for [`Collider::apply_impulses`]).
+    ///
+    /// # Errors
+    /// As [`Collider::update`].
+    pub fn detect(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A]) -> Result<&[Contact], CollideError> {
+        self.update(pos_a, pos_b)?;
+        let va = self.a.view(Side::A, pos_a)?;
+        let vb = self.b.view(Side::B, pos_b)?;
+        let params = &self.options.contact;
+        self.stats = match &self.broad_b {
+            Broad::Bvh(bvh_b) => detect_bvh_bvh(
+                &va,
+                &self.bvh_a,
+                &vb,
+                bvh_b,
+                params,
+                &mut self.ws,
+                &mut self.contacts,
+            )?,
+            Broad::Voxels(grid) => detect_bvh_voxels(
+                &va,
+                &self.bvh_a,
+                &vb,
+                grid,
+                params,
+                &mut self.ws,
+                &mut self.contacts,
+            )?,
+        };
+        Ok(&self.contacts)
+    }
+
+    /// Impulses for the contacts of the last detection ([`apply_impulses`]); `velocities` holds
+    /// the particles' velocities.
+    ///
+    /// # Errors
+    /// As [`apply_impulses`].
+    pub fn apply_impulses(
+        &mut self,
+        velocities: &mut Bodies<'_>,
+        params: &ResponseParams,
+    ) -> Result<ImpulseReport, CollideError> {
+        apply_impulses(&self.contacts, velocities, params, &mut self.impulse_ws)
+    }
+
+    /// Detects at the current `positions` and corrects every crossing ([`correct_positions`],
+    /// back to the side each edge had at the `previous` positions, the start of the step),
+    /// repeating until no edge passes through a triangle or `params.max_iterations` rounds have
+    /// run. Leaves [`Collider::contacts`] as detected at the final positions.
+    ///
+    /// # Errors
+    /// As [`Collider::detect`] and [`correct_positions`].
+    pub fn separate(
+        &mut self,
+        positions: &mut Bodies<'_>,
+        previous: Option<Snapshot<'_>>,
+        params: &ResponseParams,
+    ) -> Result<SeparationReport, CollideError> {
+        params.validate()?;
+        let _span = tracing::trace_span!("separate").entered();
+        let mut report = SeparationReport::default();
+        loop {
+            let crossing = self
+                .detect(positions.state(Side::A), positions.state(Side::B))?
+                .iter()
+                .filter(|c| c.is_crossing())
+                .count() as u32;
+            report.remaining = crossing;
+            if crossing == 0 || report.iterations == params.max_iterations {
+                return Ok(report);
+            }
+            let c: CorrectionReport =
+                correct_positions(&self.contacts, positions, previous, params)?;
+            report.iterations += 1;
+            report.corrected += c.corrected;
+            if c.corrected == 0 {
+                // Only fixed particles left: nothing more can move.
+                return Ok(report);
+            }
+        }
+    }
+}

@@ -1,0 +1,356 @@
+//! The narrow phase: one edge against one triangle (SPEC A.4, "edges of one triangle against the
+//! other triangle"), robust at shared-vertex, touching, coplanar and parallel configurations.
+
+use glam::Vec3A;
+use tissue_bvh::{closest_point_on_triangle, Aabb};
+
+/// A crossing point whose barycentric coordinates are all `≥ −BARY_SLACK` counts as inside: an
+/// edge through the common side of two triangles is then found by both, never by neither.
+const BARY_SLACK: f32 = 1e-5;
+
+/// The result of [`edge_triangle`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EdgeTriangleHit {
+    /// Parameter of the contact point along the edge `p → q`, in `[0, 1]`.
+    pub s: f32,
+    /// Barycentric coordinates of the contact point on the triangle (each in `[0, 1]`, sum 1).
+    pub barycentric: [f32; 3],
+    /// Unit vector along which the edge must move relative to the triangle to separate.
+    pub normal: Vec3A,
+    /// `> 0`: the edge crosses the triangle, and this is the distance from its nearer endpoint to
+    /// the triangle's plane (how far the edge must move along `normal` to clear the plane). `≤ 0`:
+    /// minus the distance between edge and triangle.
+    pub depth: f32,
+}
+
+/// Tests the edge `p → q` against the triangle `abc`: a contact when the edge passes through the
+/// triangle, or when their distance is at most `tolerance` (touching counts, at distance 0).
+///
+/// 1. Signed distances `d_p`, `d_q` of the endpoints to the triangle's plane: both beyond the
+///    reach (below) on one side means no contact (the common, cheap exit).
+/// 2. The edge's box and the triangle's box must overlap once grown by `tolerance`
+///    ([`Aabb::overlaps`], the broad phase's own test), so a contact is never outside what any
+///    conservative broad phase reports.
+/// 3. Strictly opposite signs: the crossing point `x = p + s(q − p)`, `s = d_p/(d_p − d_q)`, and
+///    its barycentric coordinates; inside (each `≥ −10⁻⁵`, so that an edge through the common
+///    side of two triangles is found by both, never by neither) gives a crossing contact with
+///    `depth = min(|d_p|, |d_q|)` and the normal pointing to the side of the farther endpoint (the
+///    smallest move that clears the plane). Outside, and farther from the triangle than the part
+///    of the edge near the plane can reach (bounded from `x`'s distance to the triangle's box and
+///    its barycentric coordinates), no contact.
+/// 4. Otherwise (including an edge lying in the plane, touching at a vertex, or parallel to the
+///    triangle) the closest points of edge and triangle, from the five candidates (each endpoint
+///    against the triangle, the edge against each side); within the reach this is a near
+///    contact with `depth = −distance`, normal from the triangle's point to the edge's, or, when
+///    they touch, the plane normal toward the edge's farther endpoint (`+n` when it lies in the
+///    plane).
+///
+/// Distances are compared with the reach `tolerance + 10⁻⁶·L` (`L` the longest side of the edge
+/// or the triangle), so that a pair touching exactly, like an endpoint on the triangle, is not
+/// lost to the rounding of the closest-point computation; a distance below `10⁻⁶·L` is reported
+/// as exactly 0.
+///
+/// A degenerate (zero-area) triangle has no plane: only step 4 applies. Whether an edge and a
+/// triangle that share a particle may be in contact is the caller's decision
+/// ([`crate::ContactParams::shared_particles`]).
+pub fn edge_triangle(
+    p: Vec3A,
+    q: Vec3A,
+    a: Vec3A,
+    b: Vec3A,
+    c: Vec3A,
+    tolerance: f32,
+) -> Option<EdgeTriangleHit> {
+    let plane = TrianglePlane::new(a, b, c);
+    edge_against(
+        &plane,
+        p,
+        q,
+        plane.distance(p),
+        plane.distance(q),
+        tolerance,
+    )
+}
+
+/// What [`edge_triangle`] computes once per triangle: the narrow phase builds it once per triangle
+/// pair and tests all the edges involved against it, with the same arithmetic (so the same
+/// results) as separate calls.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct TrianglePlane {
+    a: Vec3A,
+    b: Vec3A,
+    c: Vec3A,
+    aabb: Aabb,
+    /// `(b − a) × (c − a)`, its squared length, and the unit normal (zero if not planar).
+    nr: Vec3A,
+    nn: f32,
+    n: Vec3A,
+    /// `|nr|` (twice the area), the longest side and its square.
+    len: f32,
+    longest: f32,
+    longest_sq: f32,
+    planar: bool,
+}
+
+impl TrianglePlane {
+    #[inline]
+    pub fn new(a: Vec3A, b: Vec3A, c: Vec3A) -> TrianglePlane {
+        let nr = (b - a).cross(c - a);
+        let nn = nr.length_squared();
+        let longest_sq = (b - a)
+            .length_squared()
+            .max((c - b).length_squared())
+            .max((a - c).length_squared());
+        // A plane exists when the triangle's height exceeds ~1e-6 of its longest side.
+        let planar = nn > 1e-12 * longest_sq * longest_sq && nn.is_finite();
+        let len = nn.sqrt();
+        let n = if planar { nr / len } else { Vec3A::ZERO };
+        TrianglePlane {
+            a,
+            b,
+            c,
+            aabb: Aabb::from_triangle(a, b, c),
+            nr,
+            nn,
+            n,
+            len,
+            longest: longest_sq.sqrt(),
+            longest_sq,
+            planar,
+        }
+    }
+
+    /// The longest side.
+    #[inline]
+    pub fn longest(&self) -> f32 {
+        self.longest
+    }
+
+    /// `true` when the triangle has a plane and the distances `d` all exceed `reach` on one side
+    /// of it: then no edge between these points with a reach of at most `reach` passes the first
+    /// test of [`edge_against`].
+    #[inline]
+    pub fn all_beyond(&self, d: [f32; 3], reach: f32) -> bool {
+        self.planar
+            && ((d[0] > reach && d[1] > reach && d[2] > reach)
+                || (d[0] < -reach && d[1] < -reach && d[2] < -reach))
+    }
+
+    /// Signed distance of `x` to the plane (0 without a plane).
+    #[inline]
+    pub fn distance(&self, x: Vec3A) -> f32 {
+        self.n.dot(x - self.a)
+    }
+}
+
+/// [`edge_triangle`] with the triangle prepared and the endpoints' plane distances
+/// `dp = plane.distance(p)`, `dq = plane.distance(q)` given.
+#[inline]
+pub(crate) fn edge_against(
+    plane: &TrianglePlane,
+    p: Vec3A,
+    q: Vec3A,
+    dp: f32,
+    dq: f32,
+    tolerance: f32,
+) -> Option<EdgeTriangleHit> {
+    let TrianglePlane { a, b, c, .. } = *plane;
+    let edge_sq = (q - p).length_squared();
+    let scale = plane.longest_sq.max(edge_sq).sqrt();
+    let reach = tolerance + 1e-6 * scale;
+    if plane.planar && ((dp > reach && dq > reach) || (dp < -reach && dq < -reach)) {
+        return None;
+    }
+    if !Aabb::from_segment(p, q).overlaps(&plane.aabb, tolerance) {
+        return None;
+    }
+    if plane.planar && ((dp > 0.0 && dq < 0.0) || (dp < 0.0 && dq > 0.0)) {
+        let (nr, nn, n) = (plane.nr, plane.nn, plane.n);
+        let s = dp / (dp - dq);
+        let x = p + (q - p) * s;
+        // The part of the edge within `reach` of the plane lies within `spread` of the crossing
+        // point `x`; if `x` is farther than `reach + spread` from the triangle's box (hence from
+        // the triangle), no point of the edge is within `reach` of the triangle.
+        let spread = reach * ((q - p).length() / (dp - dq).abs());
+        if plane.aabb.distance_squared(x) > 4.0 * (reach + spread) * (reach + spread) {
+            return None;
+        }
+        let u = nr.dot((b - x).cross(c - x)) / nn;
+        let v = nr.dot((c - x).cross(a - x)) / nn;
+        let w = 1.0 - u - v;
+        let outside = -(u.min(v).min(w));
+        if outside <= BARY_SLACK {
+            let (near, far) = if dp.abs() <= dq.abs() {
+                (dp, dq)
+            } else {
+                (dq, dp)
+            };
+            return Some(EdgeTriangleHit {
+                s: s.clamp(0.0, 1.0),
+                barycentric: normalized([u, v, w]),
+                normal: n * far.signum(),
+                depth: near.abs(),
+            });
+        }
+        // The crossing point lies outside the triangle, at least `outside·(2·area/longest side)`
+        // from it in the plane. The part of the edge within `reach` of the plane lies within
+        // `reach·|q − p|/|dp − dq|` of the crossing point, so if that is still farther than
+        // `reach` from the triangle, no point of the edge is within `reach` of it.
+        let in_plane = outside * plane.len / plane.longest;
+        if in_plane > 2.0 * (reach + spread) {
+            return None;
+        }
+    }
+    let (dist2, s, bary, on_edge, on_tri) = closest_segment_triangle(p, q, a, b, c);
+    if dist2.is_nan() || dist2 > reach * reach {
+        return None;
+    }
+    // Touching to within rounding counts as touching: depth exactly 0.
+    let dist = if dist2 <= (1e-6 * scale) * (1e-6 * scale) {
+        0.0
+    } else {
+        dist2.sqrt()
+    };
+    let normal = if dist > 1e-5 * scale {
+        (on_edge - on_tri) / dist
+    } else if plane.planar {
+        let far = if dp.abs() >= dq.abs() { dp } else { dq };
+        if far < 0.0 {
+            -plane.n
+        } else {
+            plane.n
+        }
+    } else {
+        (q - p).any_orthonormal_vector()
+    };
+    Some(EdgeTriangleHit {
+        s,
+        barycentric: bary,
+        normal,
+        depth: 0.0 - dist,
+    })
+}
+
+/// Clamps to `[0, 1]` and rescales to sum 1.
+fn normalized(b: [f32; 3]) -> [f32; 3] {
+    let c = b.map(|x| x.clamp(0.0, 1.0));
+    let sum = c[0] + c[1] + c[2];
+    if sum > 0.0 {
+        c.map(|x| x / sum)
+    } else {
+        [1.0 / 3.0; 3]
+    }
+}
+
+/// Closest points of segment `pq` and triangle `abc` when the segment does not cross the
+/// triangle's interior: `(distance², s on the segment, barycentric on the triangle, point on the
+/// segment, point on the triangle)`.
+fn closest_segment_triangle(
+    p: Vec3A,
+    q: Vec3A,
+    a: Vec3A,
+    b: Vec3A,
+    c: Vec3A,
+) -> (f32, f32, [f32; 3], Vec3A, Vec3A) {
+    let (tp, bp) = closest_point_on_triangle(p, a, b, c);
+    let mut best = ((tp - p).length_squared(), 0.0, bp, p, tp);
+    let (tq, bq) = closest_point_on_triangle(q, a, b, c);
+    let dq = (tq - q).length_squared();
+    if dq < best.0 {
+        best = (dq, 1.0, bq, q, tq);
+    }
+    let sides = [(a, b, 0usize), (b, c, 1), (c, a, 2)];
+    for (x, y, k) in sides {
+        let (s, t, on_seg, on_side) = closest_segment_segment(p, q, x, y);
+        let d = (on_seg - on_side).length_squared();
+        if d < best.0 {
+            let mut bary = [0.0; 3];
+            bary[k] = 1.0 - t;
+            bary[(k + 1) % 3] = t;
+            best = (d, s, bary, on_seg, on_side);
+        }
+    }
+    best
+}
+
+/// Closest points of segments `p1q1` and `p2q2` (Ericson, *Real-Time Collision Detection* 5.1.9):
+/// `(s, t, p1 + s(q1 − p1), p2 + t(q2 − p2))`, parallel and point-like segments included.
+pub(crate) fn closest_segment_segment(
+    p1: Vec3A,
+    q1: Vec3A,
+    p2: Vec3A,
+    q2: Vec3A,
+) -> (f32, f32, Vec3A, Vec3A) {
+    let d1 = q1 - p1;
+    let d2 = q2 - p2;
+    let r = p1 - p2;
+    let a = d1.length_squared();
+    let e = d2.length_squared();
+    let f = d2.dot(r);
+    let tiny = f32::MIN_POSITIVE;
+    let (s, t) = if a <= tiny && e <= tiny {
+        (0.0, 0.0)
+    } else if a <= tiny {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(r);
+        if e <= tiny {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > 0.0 {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    (s, t, p1 + d1 * s, p2 + d2 * t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn segment_segment_crossing_parallel_and_degenerate() {
+        let (s, t, c1, c2) = closest_segment_segment(
+            Vec3A::new(-1.0, 0.0, 0.0),
+            Vec3A::new(1.0, 0.0, 0.0),
+            Vec3A::new(0.0, -1.0, 1.0),
+            Vec3A::new(0.0, 1.0, 1.0),
+        );
+        assert_eq!((s, t), (0.5, 0.5));
+        assert!((c1 - c2).length() - 1.0 < 1e-6);
+        // Parallel: some pair at the right distance.
+        let (_, _, c1, c2) = closest_segment_segment(
+            Vec3A::ZERO,
+            Vec3A::X,
+            Vec3A::new(0.5, 0.0, 2.0),
+            Vec3A::new(1.5, 0.0, 2.0),
+        );
+        assert!(((c1 - c2).length() - 2.0).abs() < 1e-6);
+        // A point against a segment.
+        let (_, t, _, c2) =
+            closest_segment_segment(Vec3A::Y, Vec3A::Y, Vec3A::ZERO, Vec3A::new(2.0, 0.0, 0.0));
+        assert_eq!(t, 0.0);
+        assert_eq!(c2, Vec3A::ZERO);
+    }
+
+    #[test]
+    fn normalized_clamps_and_sums_to_one() {
+        let b = normalized([-1e-6, 0.5, 0.500001]);
+        assert!(b.iter().all(|&x| (0.0..=1.0).contains(&x)));
+        assert!((b.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,267 @@
+//! Impulse response (SPEC A.4, eqs. 8–10, after Mirtich & Canny), generalised to contact points
+//! inside an edge and a triangle.
+//!
+//! The thesis's two-body impulse `j = −(1+e)(v₂−v₁)·n / (1/m₁ + 1/m₂)`, `v₁ ← v₁ + j·n/m₁`,
+//! `v₂ ← v₂ − j·n/m₂` becomes, for the contact point `(1−s)·x_p + s·x_q` of the edge and
+//! `u·x_a + v·x_b + w·x_c` of the triangle, with weights `c = (1−s, s, −u, −v, −w)` and inverse
+//! masses `w_k`:
+//!
+//! - relative velocity `v_rel = Σ c_k v_k` (edge point minus triangle point), normal part
+//!   `v_n = v_rel·n`; only an approaching contact (`v_n < 0`) gets an impulse;
+//! - effective inverse mass `W = Σ c_k² w_k` (eq. 8's `1/m₁ + 1/m₂` when `s` and the barycentric
+//!   coordinates pick single particles), `j = −(1+e)·v_n / W`;
+//! - `Δv_k = c_k·w_k·j·n` (eqs. 9–10), so `v_n` becomes `−e·v_n` and `Σ m_k Δv_k = j·n·Σ c_k = 0`:
+//!   momentum is conserved; a fixed particle (`w_k = 0`) takes nothing;
+//! - Coulomb friction: the tangential relative velocity `v_t` is reduced by an impulse
+//!   `j_t = min(μ·j, |v_t|/W)` along `−v_t/|v_t|`, distributed the same way.
+//!
+//! [`impulse`] is that kernel for one contact; [`apply_impulses`] solves all the contacts of a
+//! step together (projected Gauss–Seidel on the accumulated impulses), which for an isolated
+//! contact is the same impulse.
+
+use glam::Vec3A;
+
+use crate::bodies::contact_particles;
+use crate::{Bodies, CollideError, Contact};
+
+/// The velocity changes of one contact's five particles.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Impulse {
+    /// `Δv` of the edge's two particles, then the triangle's three (cm/s).
+    pub dv: [Vec3A; 5],
+    /// The normal impulse `j` (g·cm/s).
+    pub normal: f32,
+    /// The friction impulse `j_t` (g·cm/s).
+    pub friction: f32,
+}
+
+/// The impulse of one contact (see the module docs): `velocities`, `inv_masses` and `weights` of
+/// the five particles (edge `(1−s, s)`, triangle `(−u, −v, −w)`), unit `normal` (the direction the
+/// edge must move relative to the triangle), restitution `e ∈ [0, 1]`, friction coefficient `μ ≥ 0`.
+/// `None` when the contact is not approaching or no particle can move.
+pub fn impulse(
+    velocities: [Vec3A; 5],
+    inv_masses: [f32; 5],
+    weights: [f32; 5],
+    normal: Vec3A,
+    restitution: f32,
+    friction: f32,
+) -> Option<Impulse> {
+    let mut v_rel = Vec3A::ZERO;
+    let mut w_eff = 0.0f32;
+    for k in 0..5 {
+        v_rel += velocities[k] * weights[k];
+        w_eff += weights[k] * weights[k] * inv_masses[k];
+    }
+    let vn = v_rel.dot(normal);
+    if !(vn < 0.0 && w_eff > 0.0) {
+        return None;
+    }
+    let j = -(1.0 + restitution) * vn / w_eff;
+    let mut dir = normal * j;
+    let vt = v_rel - normal * vn;
+    let vt_len = vt.length();
+    let mut jt = 0.0;
+    if friction > 0.0 && vt_len > 0.0 {
+        jt = (friction * j).min(vt_len / w_eff);
+        dir -= vt * (jt / vt_len);
+    }
+    let dv = [0, 1, 2, 3, 4].map(|k| dir * (weights[k] * inv_masses[k]));
+    Some(Impulse {
+        dv,
+        normal: j,
+        friction: jt,
+    })
+}
+
+/// Parameters of the response.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResponseParams {
+    /// Coefficient of restitution `e ∈ [0, 1]`: 0 stops the approach, 1 reverses it.
+    pub restitution: f32,
+    /// Coulomb friction coefficient `μ ≥ 0`.
+    pub friction: f32,
+    /// Passes of [`apply_impulses`] over the contacts (≥ 1): with particles in several contacts,
+    /// each pass brings every contact closer to its target.
+    pub sweeps: u32,
+    /// The gap (cm, ≥ 0) [`crate::correct_positions`] leaves between a corrected edge and the
+    /// triangle's plane; a little above 0 so the next detection sees a near contact, not a
+    /// crossing.
+    pub separation: f32,
+    /// Rounds of detect-then-correct in [`crate::Collider::separate`] (≥ 1).
+    pub max_iterations: u32,
+}
+
+impl Default for ResponseParams {
+    /// Inelastic (`e = 0`), frictionless, 8 sweeps, separation 10⁻⁴ cm, 32 correction rounds.
+    fn default() -> Self {
+        ResponseParams {
+            restitution: 0.0,
+            friction: 0.0,
+            sweeps: 8,
+            separation: 1e-4,
+            max_iterations: 32,
+        }
+    }
+}
+
+impl ResponseParams {
+    /// Checks the ranges.
+    ///
+    /// # Errors
+    /// [`CollideError::InvalidParameter`] naming the first parameter out of range.
+    pub fn validate(&self) -> Result<(), CollideError> {
+        let bad = |name, value, expected| {
+            Err(CollideError::InvalidParameter {
+                name,
+                value,
+                expected,
+            })
+        };
+        if !(0.0..=1.0).contains(&self.restitution) {
+            return bad("restitution", self.restitution, "in [0, 1]");
+        }
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return bad("friction", self.friction, "finite and at least 0");
+        }
+        if self.sweeps == 0 {
+            return bad("sweeps", 0.0, "at least 1");
+        }
+        if !(self.separation.is_finite() && self.separation >= 0.0) {
+            return bad("separation", self.separation, "finite and at least 0 (cm)");
+        }
+        if self.max_iterations == 0 {
+            return bad("max_iterations", 0.0, "at least 1");
+        }
+        Ok(())
+    }
+}
+
+/// What [`apply_impulses`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ImpulseReport {
+    /// Contacts left with a positive normal impulse.
+    pub active: u32,
+    /// Sum of the normal impulses (g·cm/s).
+    pub normal_impulse: f32,
+}
+
+/// Per-contact scratch of [`apply_impulses`] (accumulated impulses and targets), kept by the
+/// caller so that a step allocates nothing once it has grown to the largest contact count.
+#[derive(Debug, Clone, Default)]
+pub struct ImpulseWorkspace {
+    normal: Vec<f32>,
+    friction: Vec<Vec3A>,
+    target: Vec<f32>,
+}
+
+impl ImpulseWorkspace {
+    /// An empty workspace.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// Applies the contacts' impulses to `velocities` (the particles' velocities).
+///
+/// Every contact that approaches at the start (`v_n⁰ < 0`) must end with `v_n = −e·v_n⁰`; every
+/// other contact must not start approaching (`v_n ≥ 0`). With many contacts sharing particles,
+/// single impulses applied one after another overshoot (each one, distributed with barycentric
+/// weights, also moves the other contacts of its particles), and particles would leave with
+/// energy they never had. So the contacts are solved together by projected Gauss–Seidel over
+/// `params.sweeps` passes in the detection order: each contact keeps its accumulated normal
+/// impulse `λ ≥ 0` and friction impulse `|λ_t| ≤ μ·λ`, and each pass applies the change
+/// `Δλ = (target − v_n)/W` (clamped so the accumulated impulse stays admissible) with
+/// [`impulse`]'s weights. A contact alone gets exactly [`impulse`] in the first pass and nothing
+/// after; momentum is conserved by every change.
+///
+/// # Errors
+/// [`CollideError::ParticleCount`] when an inverse-mass array does not match its velocities,
+/// [`CollideError::ParticleOutOfRange`] / [`CollideError::InvalidInverseMass`] naming a
+/// contact's particle (checked before any velocity changes), [`CollideError::InvalidParameter`].
+pub fn apply_impulses(
+    contacts: &[Contact],
+    velocities: &mut Bodies<'_>,
+    params: &ResponseParams,
+    ws: &mut ImpulseWorkspace,
+) -> Result<ImpulseReport, CollideError> {
+    params.validate()?;
+    velocities.check_lengths()?;
+    let _span = tracing::trace_span!("impulses", contacts = contacts.len()).entered();
+    let n = contacts.len();
+    ws.normal.clear();
+    ws.normal.resize(n, 0.0);
+    ws.friction.clear();
+    ws.friction.resize(n, Vec3A::ZERO);
+    ws.target.clear();
+    // Targets from the velocities before any impulse; this pass also checks every particle.
+    for c in contacts {
+        let (v, _, weights) = gather(c, velocities)?;
+        let vn = relative(&v, &weights).dot(Vec3A::from(c.normal));
+        ws.target.push(if vn < 0.0 {
+            -params.restitution * vn
+        } else {
+            0.0
+        });
+    }
+    for _ in 0..params.sweeps {
+        for (k, c) in contacts.iter().enumerate() {
+            let (v, w, weights) = gather(c, velocities)?;
+            let w_eff: f32 = (0..5).map(|i| weights[i] * weights[i] * w[i]).sum();
+            if w_eff.is_nan() || w_eff <= 0.0 {
+                continue;
+            }
+            let n = Vec3A::from(c.normal);
+            let v_rel = relative(&v, &weights);
+            let vn = v_rel.dot(n);
+            let lambda = (ws.normal[k] + (ws.target[k] - vn) / w_eff).max(0.0);
+            let d_lambda = lambda - ws.normal[k];
+            ws.normal[k] = lambda;
+            let mut j = n * d_lambda;
+            if params.friction > 0.0 {
+                // The normal impulse does not change the tangential relative velocity.
+                let vt = v_rel - n * vn;
+                let mut ft = ws.friction[k] - vt / w_eff;
+                let limit = params.friction * lambda;
+                let len = ft.length();
+                if len > limit {
+                    ft *= limit / len;
+                }
+                j += ft - ws.friction[k];
+                ws.friction[k] = ft;
+            }
+            if j != Vec3A::ZERO {
+                let parts = contact_particles(c);
+                for (i, &(side, particle, weight)) in parts.iter().enumerate() {
+                    velocities.add(side, particle, j * (weight * w[i]));
+                }
+            }
+        }
+    }
+    Ok(ImpulseReport {
+        active: ws.normal.iter().filter(|&&l| l > 0.0).count() as u32,
+        normal_impulse: ws.normal.iter().sum(),
+    })
+}
+
+/// Velocities, inverse masses and weights of a contact's five particles.
+type Gathered = ([Vec3A; 5], [f32; 5], [f32; 5]);
+
+/// [`Gathered`] for contact `c`, checked.
+#[inline]
+fn gather(c: &Contact, bodies: &Bodies<'_>) -> Result<Gathered, CollideError> {
+    let parts = contact_particles(c);
+    let mut v = [Vec3A::ZERO; 5];
+    let mut w = [0.0; 5];
+    let mut weights = [0.0; 5];
+    for (k, &(side, i, weight)) in parts.iter().enumerate() {
+        (v[k], w[k]) = bodies.get(side, i)?;
+        weights[k] = weight;
+    }
+    Ok((v, w, weights))
+}
+
+#[inline]
+fn relative(v: &[Vec3A; 5], weights: &[f32; 5]) -> Vec3A {
+    (0..5).map(|k| v[k] * weights[k]).sum()
+}
