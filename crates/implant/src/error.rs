@@ -17,6 +17,12 @@ pub enum ImplantError {
     /// The patient surface, region or implant mesh is not usable.
     #[error("mesh: {0}")]
     Mesh(#[from] tissue_mesh::MeshError),
+    /// The region given for the tissue model is a closed surface: it needs a boundary to hold.
+    #[error("the region is a closed surface ({triangles} triangles); select an open patch of the patient surface")]
+    ClosedRegion {
+        /// Its triangle count.
+        triangles: usize,
+    },
     /// The mass–spring model refused its input or diverged.
     #[error("tissue model: {0}")]
     Model(#[from] tissue_mss::MssError),

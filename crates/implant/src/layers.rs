@@ -1,9 +1,356 @@
-//! The two-layer tissue model of SPEC A.5 steps 1–3 (being written).
+//! The two-layer tissue model of SPEC A.5 steps 1–3.
+//!
+//! Layer 1 is the selected skin region; layer 2 is a copy offset inward (against the region's
+//! vertex normals, which point out of the body) by the placement depth. Region vertex `r` is
+//! particle `2r` in layer 1 and `2r + 1` in layer 2: the layers are interleaved so that
+//! neighbours stay close in memory (see `tissue-mss`'s layout).
+//!
+//! ## Springs
+//! - Within each layer, one spring per edge with Van Gelder stiffness (eq. 3) from the skin's
+//!   Young's modulus `E`, Poisson ratio `ν` and thickness `t`, rest lengths from that layer's
+//!   geometry.
+//! - Between the layers, derived from a continuum slab of thickness `depth` so that they resist
+//!   compression and shear like the tissue they stand for:
+//!   - a *vertical* spring per vertex, `k = E·Aᵢ/depth`, with `Aᵢ` a third of the area of the
+//!     triangles around the vertex (its tributary area): the slab's axial stiffness;
+//!   - two *diagonals* per edge `ab` (`a`–`b′` and `b`–`a′`) of stiffness
+//!     `k = G·Aₑ/(depth·sin²θ)`, `G = E/(2(1+ν))`, `Aₑ` a third of the area of the edge's
+//!     triangles and `θ` the diagonal's angle to the vertical (`sin θ = Lₑ/L_diag`). A shear `u`
+//!     stretches one diagonal and shortens the other by `(u·ê)·sin θ`, so the pair resists with
+//!     `2k·sin²θ·(u·ê)ê = 2·G·Aₑ·(u·ê)ê/depth`. Summed over the edges this is
+//!     `(2G/depth)·Σ Aₑ ê⊗ê·u`, and for a mesh without a preferred direction `Σ Aₑ ê⊗ê = A·I/2`
+//!     (exactly so for each equilateral triangle): the slab's shear stiffness `G·A/depth`.
+//!     Under compression the pair adds `2k·cos²θ` to the vertical springs.
+//! - Every layer-2 particle has a zero-length anchor to its original position (the deeper tissue
+//!   holding it), of stiffness `anchor_ratio` × its vertical spring's.
+//!
+//! ## Masses and fixed particles
+//! The region's mass is area × skin thickness × density (SPEC A.5 step 1), shared equally by the
+//! two layers, each by eq. (2) on its own triangles. Particles on the region's boundary loops are
+//! fixed in both layers.
 
-/// Material and geometry of the two-layer model.
+use glam::{Vec3, Vec3A};
+use tissue_mesh::TriMesh;
+use tissue_mss::{
+    masses_from_triangles, springs_from_triangles, Anchor, MassSpringSystem, Particles,
+    SheetMaterial, Spring,
+};
+
+use crate::ImplantError;
+
+/// Which layer of the model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layer {
+    /// Layer 1: the skin region itself.
+    Outer = 0,
+    /// Layer 2: the region offset inward by the placement depth; it meets the implant.
+    Inner = 1,
+}
+
+/// Material and geometry of the two-layer model. Units: cm, g, s.
 #[derive(Debug, Clone, PartialEq)]
-pub struct LayerParams {}
+pub struct LayerParams {
+    /// Young's modulus of skin, g/(cm·s²) (1 Pa = 10 g/(cm·s²)).
+    pub young: f64,
+    /// Poisson ratio of skin, in [0, 0.5).
+    pub poisson: f64,
+    /// Skin thickness, cm.
+    pub skin_thickness: f64,
+    /// Tissue density, g/cm³.
+    pub density: f64,
+    /// Placement depth: the distance between the layers, cm.
+    pub depth: f64,
+    /// Anchor stiffness of a layer-2 particle as a multiple of its vertical spring's.
+    pub anchor_ratio: f64,
+}
 
-/// The two-layer mass–spring model of a skin region.
-#[derive(Debug)]
-pub struct TissueLayers {}
+impl Default for LayerParams {
+    /// Skin of `E` = 0.2 MPa (in vivo tensile tests on human skin report roughly 0.1–1 MPa at
+    /// small strain; Agache et al. 1980, Pailler-Mattei et al. 2008), `ν` = 0.45 (soft tissue is
+    /// nearly incompressible), thickness 0.2 cm (dermis 1–4 mm), density 1.1 g/cm³, depth 1 cm,
+    /// anchors as stiff as the vertical springs.
+    fn default() -> Self {
+        LayerParams {
+            young: 2.0e6,
+            poisson: 0.45,
+            skin_thickness: 0.2,
+            density: 1.1,
+            depth: 1.0,
+            anchor_ratio: 1.0,
+        }
+    }
+}
+
+impl LayerParams {
+    fn check(&self) -> Result<(), ImplantError> {
+        let positive = |name: &'static str, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(ImplantError::InvalidParameter {
+                    name,
+                    value,
+                    expected: "positive and finite".into(),
+                })
+            }
+        };
+        positive("young", self.young)?;
+        positive("skin_thickness", self.skin_thickness)?;
+        positive("density", self.density)?;
+        positive("depth", self.depth)?;
+        if !(self.anchor_ratio.is_finite() && self.anchor_ratio >= 0.0) {
+            return Err(ImplantError::InvalidParameter {
+                name: "anchor_ratio",
+                value: self.anchor_ratio,
+                expected: "finite and ≥ 0".into(),
+            });
+        }
+        if !(self.poisson.is_finite() && (0.0..0.5).contains(&self.poisson)) {
+            return Err(ImplantError::InvalidParameter {
+                name: "poisson",
+                value: self.poisson,
+                expected: "in [0, 0.5)".into(),
+            });
+        }
+        Ok(())
+    }
+
+    fn shear_modulus(&self) -> f64 {
+        self.young / (2.0 * (1.0 + self.poisson))
+    }
+}
+
+/// The two-layer mass–spring model of a skin region (see the module docs).
+#[derive(Debug, Clone)]
+pub struct TissueLayers {
+    system: MassSpringSystem,
+    outer: TriMesh,
+    inner: TriMesh,
+    normals: Vec<Vec3>,
+    boundary: Vec<u32>,
+}
+
+impl TissueLayers {
+    /// Builds the model of `region` (an open surface whose normals point out of the body).
+    ///
+    /// Errors if the parameters are out of range, the region is closed (it needs a boundary to
+    /// hold), or the placement depth is too large for the surface's curvature (the inward offset
+    /// would fold a triangle over).
+    pub fn new(region: &TriMesh, params: &LayerParams) -> Result<Self, ImplantError> {
+        let _span = tracing::debug_span!("layers_new", vertices = region.vertex_count()).entered();
+        params.check()?;
+        let topo = region.topology();
+        if region.is_closed() {
+            return Err(ImplantError::ClosedRegion {
+                triangles: region.triangle_count(),
+            });
+        }
+        let n = region.vertex_count();
+        let normals = region.vertex_normals();
+        let depth = params.depth as f32;
+        let inner_positions: Vec<Vec3> = region
+            .positions()
+            .iter()
+            .zip(&normals)
+            .map(|(p, nrm)| *p - *nrm * depth)
+            .collect();
+        let inner = region.with_positions(inner_positions)?;
+        // The offset must not fold: every inner triangle keeps the orientation of its original.
+        for (t, (a, b)) in region
+            .triangle_normals()
+            .iter()
+            .zip(inner.triangle_normals())
+            .enumerate()
+        {
+            if a.dot(b) <= 0.0 {
+                return Err(ImplantError::InvalidParameter {
+                    name: "depth",
+                    value: params.depth,
+                    expected: format!(
+                        "smaller: offsetting the region inward by it folds triangle {t} over \
+                         (the surface curves more tightly than the depth there)"
+                    ),
+                });
+            }
+        }
+
+        let total_mass = region.area() * params.skin_thickness * params.density;
+        let outer_mass = masses_from_triangles(region, 0.5 * total_mass)?;
+        let inner_mass = masses_from_triangles(&inner, 0.5 * total_mass)?;
+        let mut positions = Vec::with_capacity(2 * n);
+        let mut masses = Vec::with_capacity(2 * n);
+        for r in 0..n {
+            positions.push(region.positions()[r]);
+            positions.push(inner.positions()[r]);
+            // An unreferenced vertex gets a token mass so the particle is valid; it has no springs.
+            masses.push(outer_mass[r].max(f32::MIN_POSITIVE));
+            masses.push(inner_mass[r].max(f32::MIN_POSITIVE));
+        }
+        let mut particles = Particles::new(&positions, &masses)?;
+        let mut boundary: Vec<u32> = topo.boundary_loops().iter().flatten().copied().collect();
+        boundary.sort_unstable();
+        boundary.dedup();
+        for &r in &boundary {
+            particles.fix(Self::particle(Layer::Outer, r))?;
+            particles.fix(Self::particle(Layer::Inner, r))?;
+        }
+
+        let material = SheetMaterial {
+            young: params.young,
+            poisson: params.poisson,
+            thickness: params.skin_thickness,
+        };
+        let remap = |layer: Layer, springs: Vec<Spring>| {
+            springs.into_iter().map(move |s| {
+                Spring::new(
+                    Self::particle(layer, s.a),
+                    Self::particle(layer, s.b),
+                    s.rest,
+                    s.k,
+                )
+            })
+        };
+        let mut springs: Vec<Spring> =
+            remap(Layer::Outer, springs_from_triangles(region, &material, 0)?)
+                .chain(remap(
+                    Layer::Inner,
+                    springs_from_triangles(&inner, &material, 0)?,
+                ))
+                .collect();
+
+        // Tributary areas: a third of each triangle to each of its vertices and edges.
+        let areas = region.triangle_areas();
+        let mut vertex_area = vec![0.0f64; n];
+        let mut edge_area = vec![0.0f64; topo.edges().len()];
+        for (t, (tri, edges)) in region
+            .triangles()
+            .iter()
+            .zip(topo.triangle_edges())
+            .enumerate()
+        {
+            for i in 0..3 {
+                vertex_area[tri[i] as usize] += areas[t] / 3.0;
+                edge_area[edges[i] as usize] += areas[t] / 3.0;
+            }
+        }
+        let vertical_k: Vec<f64> = vertex_area
+            .iter()
+            .map(|a| params.young * a / params.depth)
+            .collect();
+        for r in 0..n as u32 {
+            if vertical_k[r as usize] > 0.0 {
+                springs.push(Spring::new(
+                    Self::particle(Layer::Outer, r),
+                    Self::particle(Layer::Inner, r),
+                    params.depth as f32,
+                    vertical_k[r as usize] as f32,
+                ));
+            }
+        }
+        let g = params.shear_modulus();
+        let p = &positions;
+        for (&[a, b], &area) in topo.edges().iter().zip(&edge_area) {
+            for (top, bottom) in [(a, b), (b, a)] {
+                let (i, j) = (
+                    Self::particle(Layer::Outer, top),
+                    Self::particle(Layer::Inner, bottom),
+                );
+                let rest = f64::from(p[i as usize].distance(p[j as usize]));
+                let along = f64::from(p[2 * a as usize].distance(p[2 * b as usize]));
+                let sin2 = (along / rest).powi(2);
+                let k = g * area / (params.depth * sin2);
+                springs.push(Spring::new(i, j, rest as f32, k as f32));
+            }
+        }
+        let mut system = MassSpringSystem::new(particles, springs)?;
+        let anchors: Vec<Anchor> = (0..n as u32)
+            .map(|r| Anchor {
+                particle: Self::particle(Layer::Inner, r),
+                k: (params.anchor_ratio * vertical_k[r as usize]) as f32,
+                target: inner.positions()[r as usize],
+            })
+            .collect();
+        system.add_anchors(&anchors)?;
+        Ok(TissueLayers {
+            system,
+            outer: region.clone(),
+            inner,
+            normals,
+            boundary,
+        })
+    }
+
+    /// The particle of region vertex `vertex` in `layer`.
+    pub const fn particle(layer: Layer, vertex: u32) -> u32 {
+        2 * vertex + layer as u32
+    }
+
+    /// The mass–spring system (both layers).
+    pub fn system(&self) -> &MassSpringSystem {
+        &self.system
+    }
+
+    /// The mass–spring system, to step it, add forces or set damping and gravity.
+    pub fn system_mut(&mut self) -> &mut MassSpringSystem {
+        &mut self.system
+    }
+
+    /// A layer at rest (as built).
+    pub fn rest(&self, layer: Layer) -> &TriMesh {
+        match layer {
+            Layer::Outer => &self.outer,
+            Layer::Inner => &self.inner,
+        }
+    }
+
+    /// The region's vertex normals at rest (unit, pointing out of the body).
+    pub fn normals(&self) -> &[Vec3] {
+        &self.normals
+    }
+
+    /// Region vertices on the boundary (fixed in both layers), in increasing order.
+    pub fn boundary(&self) -> &[u32] {
+        &self.boundary
+    }
+
+    /// Current positions of one layer, by region vertex.
+    pub fn positions(&self, layer: Layer) -> Vec<Vec3> {
+        self.system
+            .particles()
+            .positions()
+            .iter()
+            .skip(layer as usize)
+            .step_by(2)
+            .map(|&p| Vec3::from(p))
+            .collect()
+    }
+
+    /// One layer as a mesh at its current positions.
+    pub fn current(&self, layer: Layer) -> Result<TriMesh, ImplantError> {
+        Ok(self.rest(layer).with_positions(self.positions(layer))?)
+    }
+
+    /// Moves every free particle of both layers `height` (cm) outward along the region's rest
+    /// normals: the thesis's start, with the tissue lifted by the implant's height.
+    pub fn lift(&mut self, height: f32) -> Result<(), ImplantError> {
+        if !height.is_finite() {
+            return Err(ImplantError::InvalidParameter {
+                name: "height",
+                value: f64::from(height),
+                expected: "finite".into(),
+            });
+        }
+        let particles = self.system.particles_mut();
+        let free: Vec<bool> = particles
+            .inverse_masses()
+            .iter()
+            .map(|&w| w > 0.0)
+            .collect();
+        for (i, x) in particles.positions_mut().iter_mut().enumerate() {
+            if free[i] {
+                *x += Vec3A::from(self.normals[i / 2] * height);
+            }
+        }
+        Ok(())
+    }
+}

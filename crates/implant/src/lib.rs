@@ -7,6 +7,18 @@
 //!
 //! Pure scenario logic on top of `tissue-mesh`, `tissue-mss`, `tissue-bvh` and `tissue-collide`:
 //! no threads, no terminal, no file I/O. Units: cm, g, s.
+//!
+//! ```
+//! use tissue_implant::{Layer, LayerParams, TissueLayers};
+//!
+//! // A flat skin patch of radius 3 cm, its inner layer 1 cm below, lifted 0.5 cm.
+//! let region = tissue_mesh::disc(6, 24, 3.0)?;
+//! let mut layers = TissueLayers::new(&region, &LayerParams::default())?;
+//! layers.lift(0.5)?;
+//! let centre = layers.positions(Layer::Outer)[0];
+//! assert!((centre.z - 0.5).abs() < 1e-6);
+//! # Ok::<(), tissue_implant::ImplantError>(())
+//! ```
 #![forbid(unsafe_code)]
 #![warn(
     clippy::unwrap_used,
@@ -19,4 +31,4 @@ mod error;
 mod layers;
 
 pub use error::ImplantError;
-pub use layers::{LayerParams, TissueLayers};
+pub use layers::{Layer, LayerParams, TissueLayers};

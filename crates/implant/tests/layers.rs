@@ -1,0 +1,240 @@
+//! The two-layer tissue model against the continuum slab it stands for.
+
+use glam::{Vec3, Vec3A};
+use tissue_implant::{ImplantError, Layer, LayerParams, TissueLayers};
+use tissue_mesh::{disc, uv_sphere, TriMesh};
+use tissue_mss::{Integrator, StopCriterion, StopReason};
+
+fn params() -> LayerParams {
+    LayerParams {
+        depth: 0.8,
+        ..LayerParams::default()
+    }
+}
+
+/// Sum of the forces on the free and fixed particles of one layer.
+fn layer_force(layers: &TissueLayers, layer: Layer) -> Vec3 {
+    layers
+        .system()
+        .particles()
+        .forces()
+        .iter()
+        .skip(layer as usize)
+        .step_by(2)
+        .fold(Vec3::ZERO, |s, f| s + Vec3::from(*f))
+}
+
+fn shift_layer(layers: &mut TissueLayers, layer: Layer, by: Vec3) {
+    for x in layers
+        .system_mut()
+        .particles_mut()
+        .positions_mut()
+        .iter_mut()
+        .skip(layer as usize)
+        .step_by(2)
+    {
+        *x += Vec3A::from(by);
+    }
+}
+
+#[test]
+fn structure_of_the_model() {
+    let region = disc(6, 24, 3.0).unwrap();
+    let p = params();
+    let layers = TissueLayers::new(&region, &p).unwrap();
+    let n = region.vertex_count();
+    let e = region.topology().edges().len();
+    let s = layers.system();
+    assert_eq!(s.particles().len(), 2 * n);
+    // Two layers of edge springs, one vertical per vertex, two diagonals per edge.
+    assert_eq!(s.springs().len(), 2 * e + n + 2 * e);
+    // Layer 2 lies `depth` below the flat region.
+    for (a, b) in layers
+        .positions(Layer::Outer)
+        .iter()
+        .zip(layers.positions(Layer::Inner))
+    {
+        assert!((*a - b - Vec3::new(0.0, 0.0, 0.8)).length() < 1e-6);
+    }
+    // Boundary fixed in both layers.
+    let fixed = s
+        .particles()
+        .inverse_masses()
+        .iter()
+        .filter(|&&w| w == 0.0)
+        .count();
+    assert_eq!(fixed, 2 * 24);
+    assert_eq!(layers.boundary().len(), 24);
+    // Mass = area × skin thickness × density.
+    let total: f64 = s.particles().masses().iter().map(|&m| f64::from(m)).sum();
+    let expected = region.area() * p.skin_thickness * p.density;
+    assert!(
+        (total - expected).abs() < 1e-5 * expected,
+        "{total} vs {expected}"
+    );
+}
+
+#[test]
+fn no_force_at_rest() {
+    let region = disc(6, 24, 3.0).unwrap();
+    let mut layers = TissueLayers::new(&region, &params()).unwrap();
+    layers.system_mut().compute_forces();
+    let k_scale = params().young * 3.0 / params().depth; // a generous stiffness scale, g/s²
+    let worst = layers
+        .system()
+        .particles()
+        .forces()
+        .iter()
+        .map(|f| f.length())
+        .fold(0.0f32, f32::max);
+    assert!(
+        f64::from(worst) < 1e-6 * k_scale,
+        "largest force at rest {worst} dyn"
+    );
+}
+
+#[test]
+fn shear_of_the_outer_layer_meets_the_slab_shear_stiffness() {
+    // Shifting layer 1 rigidly by u along x leaves the in-layer springs and the anchors alone:
+    // only the interlayer springs act, and the slab's answer is G·A·u/depth.
+    let region = disc(8, 32, 3.0).unwrap();
+    let p = params();
+    let mut layers = TissueLayers::new(&region, &p).unwrap();
+    let u = 1e-4 * p.depth as f32;
+    shift_layer(&mut layers, Layer::Outer, Vec3::new(u, 0.0, 0.0));
+    layers.system_mut().compute_forces();
+    let f = layer_force(&layers, Layer::Outer);
+    let g = p.young / (2.0 * (1.0 + p.poisson));
+    let expected = -g * region.area() * f64::from(u) / p.depth;
+    assert!(
+        (f64::from(f.x) - expected).abs() < 0.01 * expected.abs(),
+        "shear force {} vs G·A·u/depth = {expected}",
+        f.x
+    );
+    assert!(f.y.abs() < 1e-3 * f.x.abs() && f.z.abs() < 1e-2 * f.x.abs());
+}
+
+#[test]
+fn compression_of_the_slab_meets_axial_plus_diagonal_stiffness() {
+    // Pressing layer 1 rigidly down by w: the vertical springs give E·A/depth, each diagonal pair
+    // 2·G·Aₑ·(depth/Lₑ)²/depth, with Aₑ a third of the area of the edge's triangles.
+    let region = disc(8, 32, 3.0).unwrap();
+    let p = params();
+    let mut layers = TissueLayers::new(&region, &p).unwrap();
+    let w = 1e-4 * p.depth as f32;
+    shift_layer(&mut layers, Layer::Outer, Vec3::new(0.0, 0.0, -w));
+    layers.system_mut().compute_forces();
+    let f = layer_force(&layers, Layer::Outer);
+
+    let topo = region.topology();
+    let areas = region.triangle_areas();
+    let mut diagonal = 0.0f64;
+    for (e, &[a, b]) in topo.edges().iter().enumerate() {
+        let tributary: f64 = topo.edge_triangles()[e]
+            .iter()
+            .filter(|&&t| t != tissue_mesh::NO_TRIANGLE)
+            .map(|&t| areas[t as usize] / 3.0)
+            .sum();
+        let len =
+            f64::from(region.positions()[a as usize].distance(region.positions()[b as usize]));
+        diagonal += tributary * (p.depth / len).powi(2);
+    }
+    let g = p.young / (2.0 * (1.0 + p.poisson));
+    let expected = (p.young * region.area() + 2.0 * g * diagonal) * f64::from(w) / p.depth;
+    assert!(
+        (f64::from(f.z) - expected).abs() < 0.01 * expected,
+        "compression force {} vs {expected}",
+        f.z
+    );
+}
+
+#[test]
+fn lifted_layers_relax_back_to_rest() {
+    let region = disc(4, 16, 2.0).unwrap();
+    let mut layers = TissueLayers::new(&region, &params()).unwrap();
+    let rest_outer = layers.positions(Layer::Outer);
+    layers.lift(0.2).unwrap();
+    let lifted = layers.positions(Layer::Outer);
+    assert!((lifted[0] - rest_outer[0]).length() > 0.19); // the centre moved
+    let s = layers.system_mut();
+    s.set_integrator(Integrator::SymplecticEuler);
+    s.set_damping(0.99).unwrap();
+    let report = s
+        .run(
+            5e-5,
+            &StopCriterion {
+                window: 200,
+                tolerance: 1e-4,
+                max_steps: 200_000,
+                floor: 1e-4,
+            },
+        )
+        .unwrap();
+    assert_eq!(report.reason, StopReason::Settled, "{report:?}");
+    let worst = layers
+        .positions(Layer::Outer)
+        .iter()
+        .zip(&rest_outer)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0f32, f32::max);
+    assert!(worst < 1e-3 * 0.2, "layer 1 is {worst} cm from rest");
+}
+
+#[test]
+fn offset_folding_on_a_tight_curve_is_an_error() {
+    // A spherical cap of radius 1 cm: offsetting it inward by more than the radius turns it
+    // inside out.
+    let sphere = uv_sphere(24, 23, 1.0).unwrap();
+    let keep: Vec<[u32; 3]> = sphere
+        .triangles()
+        .iter()
+        .copied()
+        .filter(|t| t.iter().all(|&v| sphere.positions()[v as usize].z > 0.3))
+        .collect();
+    let cap = TriMesh::new(sphere.positions().to_vec(), keep).unwrap();
+    assert!(TissueLayers::new(
+        &cap,
+        &LayerParams {
+            depth: 0.3,
+            ..params()
+        }
+    )
+    .is_ok());
+    let err = TissueLayers::new(
+        &cap,
+        &LayerParams {
+            depth: 1.5,
+            ..params()
+        },
+    )
+    .unwrap_err();
+    assert!(
+        matches!(err, ImplantError::InvalidParameter { name: "depth", .. }),
+        "{err}"
+    );
+    // A closed surface has no boundary to hold.
+    assert!(matches!(
+        TissueLayers::new(&sphere, &params()),
+        Err(ImplantError::ClosedRegion { .. })
+    ));
+    // Bad parameters.
+    for bad in [
+        LayerParams {
+            young: -1.0,
+            ..params()
+        },
+        LayerParams {
+            poisson: 0.5,
+            ..params()
+        },
+        LayerParams {
+            depth: f64::NAN,
+            ..params()
+        },
+    ] {
+        assert!(matches!(
+            TissueLayers::new(&cap, &bad),
+            Err(ImplantError::InvalidParameter { .. })
+        ));
+    }
+}
