@@ -58,6 +58,33 @@ pub struct DefectReport {
 }
 
 impl Report {
+    /// What is known before the mesh is built: counts, box and defects; the rest is filled in
+    /// once it loads.
+    fn unloaded(
+        path: &Path,
+        kind: &'static str,
+        positions: &[glam::Vec3],
+        defects: &[MeshError],
+    ) -> Report {
+        Report {
+            file: path.display().to_string(),
+            kind,
+            loaded: false,
+            vertices: positions.len(),
+            triangles: 0,
+            tetrahedra: None,
+            edges: None,
+            bounding_box: finite_box(positions),
+            area: None,
+            closed: None,
+            volume: None,
+            boundary_loops: Vec::new(),
+            components: None,
+            euler_characteristic: None,
+            defects: defect_reports(defects),
+        }
+    }
+
     pub fn hard_defect_count(&self) -> usize {
         self.defects
             .iter()
@@ -220,23 +247,8 @@ fn surface_fields(report: &mut Report, mesh: &TriMesh) {
 
 fn inspect_surface(path: &Path, positions: Vec<glam::Vec3>, triangles: Vec<[u32; 3]>) -> Report {
     let defects = diagnose(&positions, &triangles);
-    let mut report = Report {
-        file: path.display().to_string(),
-        kind: "surface",
-        loaded: false,
-        vertices: positions.len(),
-        triangles: triangles.len(),
-        tetrahedra: None,
-        edges: None,
-        bounding_box: finite_box(&positions),
-        area: None,
-        closed: None,
-        volume: None,
-        boundary_loops: Vec::new(),
-        components: None,
-        euler_characteristic: None,
-        defects: defect_reports(&defects),
-    };
+    let mut report = Report::unloaded(path, "surface", &positions, &defects);
+    report.triangles = triangles.len();
     if let Ok(mesh) = TriMesh::new(positions, triangles) {
         report.loaded = true;
         surface_fields(&mut report, &mesh);
@@ -247,23 +259,8 @@ fn inspect_surface(path: &Path, positions: Vec<glam::Vec3>, triangles: Vec<[u32;
 
 fn inspect_tets(path: &Path, positions: Vec<glam::Vec3>, tets: Vec<[u32; 4]>) -> Report {
     let defects = diagnose_tets(&positions, &tets);
-    let mut report = Report {
-        file: path.display().to_string(),
-        kind: "tetrahedral",
-        loaded: false,
-        vertices: positions.len(),
-        triangles: 0,
-        tetrahedra: Some(tets.len()),
-        edges: None,
-        bounding_box: finite_box(&positions),
-        area: None,
-        closed: None,
-        volume: None,
-        boundary_loops: Vec::new(),
-        components: None,
-        euler_characteristic: None,
-        defects: defect_reports(&defects),
-    };
+    let mut report = Report::unloaded(path, "tetrahedral", &positions, &defects);
+    report.tetrahedra = Some(tets.len());
     let Ok(tet_mesh) = TetMesh::new(positions, tets) else {
         return report;
     };

@@ -8,6 +8,7 @@
 
 use glam::Vec3;
 
+use crate::trimesh::{unreferenced_defects, vertex_defects};
 use crate::{MeshError, TriMesh};
 
 /// Marks a face with no neighbour (a boundary face) in [`TetMesh::neighbours`].
@@ -216,32 +217,19 @@ pub fn diagnose_tets(positions: &[Vec3], tets: &[[u32; 4]]) -> Vec<MeshError> {
         tets = tets.len()
     )
     .entered();
-    let mut defects = Vec::new();
-    if positions.is_empty() || tets.is_empty() {
-        defects.push(MeshError::Empty {
+    let Some(mut defects) = vertex_defects(positions, tets.len()) else {
+        return vec![MeshError::Empty {
             vertices: positions.len(),
             elements: tets.len(),
-        });
-        return defects;
-    }
-    if positions.len() >= u32::MAX as usize {
-        defects.push(MeshError::InvalidParameter {
-            what: format!(
-                "{} vertices: a mesh holds fewer than 2^32 - 1",
-                positions.len()
-            ),
-        });
+        }];
+    };
+    if defects
+        .first()
+        .is_some_and(|d| matches!(d, MeshError::InvalidParameter { .. }))
+    {
         return defects;
     }
     let n = positions.len() as u32;
-    for (v, p) in positions.iter().enumerate() {
-        if !p.is_finite() {
-            defects.push(MeshError::NonFiniteCoordinate {
-                vertex: v as u32,
-                position: p.to_array(),
-            });
-        }
-    }
     // `usable[t]`: indices in range; `in_faces[t]`: also four distinct vertices, not a duplicate.
     let mut usable = vec![true; tets.len()];
     for (t, tet) in tets.iter().enumerate() {
@@ -315,21 +303,7 @@ pub fn diagnose_tets(positions: &[Vec3], tets: &[[u32; 4]]) -> Vec<MeshError> {
         }
     }
 
-    let mut referenced = vec![false; positions.len()];
-    for (t, tet) in tets.iter().enumerate() {
-        if usable[t] {
-            for &i in tet {
-                referenced[i as usize] = true;
-            }
-        }
-    }
-    defects.extend(
-        referenced
-            .iter()
-            .enumerate()
-            .filter(|(_, &r)| !r)
-            .map(|(v, _)| MeshError::UnreferencedVertex { vertex: v as u32 }),
-    );
+    unreferenced_defects(positions.len(), tets, &usable, &mut defects);
     defects
 }
 

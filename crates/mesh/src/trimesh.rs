@@ -164,32 +164,19 @@ pub(crate) fn doubled_area_and_longest_edge_sq(p: [Vec3; 3]) -> (f64, f64) {
 /// Triangles with an out-of-range index are left out of the later checks, and so are zero-area and
 /// duplicate triangles from the edge checks, so that one bad triangle is reported once.
 pub fn diagnose(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<MeshError> {
-    let mut defects = Vec::new();
-    if positions.is_empty() || triangles.is_empty() {
-        defects.push(MeshError::Empty {
+    let Some(mut defects) = vertex_defects(positions, triangles.len()) else {
+        return vec![MeshError::Empty {
             vertices: positions.len(),
             elements: triangles.len(),
-        });
-        return defects;
-    }
-    if positions.len() >= u32::MAX as usize {
-        defects.push(MeshError::InvalidParameter {
-            what: format!(
-                "{} vertices: a mesh holds fewer than 2^32 - 1",
-                positions.len()
-            ),
-        });
+        }];
+    };
+    if defects
+        .first()
+        .is_some_and(|d| matches!(d, MeshError::InvalidParameter { .. }))
+    {
         return defects;
     }
     let n = positions.len() as u32;
-    for (v, p) in positions.iter().enumerate() {
-        if !p.is_finite() {
-            defects.push(MeshError::NonFiniteCoordinate {
-                vertex: v as u32,
-                position: p.to_array(),
-            });
-        }
-    }
     // `usable[t]`: indices in range; `in_surface[t]`: also non-degenerate and not a duplicate.
     let mut usable = vec![true; triangles.len()];
     for (t, tri) in triangles.iter().enumerate() {
@@ -273,12 +260,49 @@ pub fn diagnose(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<MeshError> {
     }
     defects.extend(winding);
 
-    let mut referenced = vec![false; positions.len()];
-    for (t, tri) in triangles.iter().enumerate() {
-        if usable[t] {
-            for &i in tri {
-                referenced[i as usize] = true;
-            }
+    unreferenced_defects(positions.len(), triangles, &usable, &mut defects);
+    defects
+}
+
+/// The checks every mesh's vertices get: `None` when there are no vertices or no elements (the
+/// caller reports [`MeshError::Empty`]); otherwise a too-large vertex count (alone — nothing else
+/// is checked then) or every non-finite coordinate.
+pub(crate) fn vertex_defects(positions: &[Vec3], elements: usize) -> Option<Vec<MeshError>> {
+    if positions.is_empty() || elements == 0 {
+        return None;
+    }
+    if positions.len() >= u32::MAX as usize {
+        return Some(vec![MeshError::InvalidParameter {
+            what: format!(
+                "{} vertices: a mesh holds fewer than 2^32 - 1",
+                positions.len()
+            ),
+        }]);
+    }
+    Some(
+        positions
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| !p.is_finite())
+            .map(|(v, p)| MeshError::NonFiniteCoordinate {
+                vertex: v as u32,
+                position: p.to_array(),
+            })
+            .collect(),
+    )
+}
+
+/// Appends a warning for every vertex that no usable element (`usable[e]`) refers to.
+pub(crate) fn unreferenced_defects<const K: usize>(
+    vertex_count: usize,
+    elements: &[[u32; K]],
+    usable: &[bool],
+    defects: &mut Vec<MeshError>,
+) {
+    let mut referenced = vec![false; vertex_count];
+    for (element, _) in elements.iter().zip(usable).filter(|(_, &u)| u) {
+        for &i in element {
+            referenced[i as usize] = true;
         }
     }
     defects.extend(
@@ -288,7 +312,6 @@ pub fn diagnose(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<MeshError> {
             .filter(|(_, &r)| !r)
             .map(|(v, _)| MeshError::UnreferencedVertex { vertex: v as u32 }),
     );
-    defects
 }
 
 #[cfg(test)]
