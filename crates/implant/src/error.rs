@@ -23,6 +23,75 @@ pub enum ImplantError {
         /// Its triangle count.
         triangles: usize,
     },
+    /// The point given for the implant is too far from the patient surface.
+    #[error("the point {point:?} is {distance:.3} cm from the surface (nearest surface point {nearest:?}); at most {max_distance:.3} cm is accepted: pick a point on the skin")]
+    PointOffSurface {
+        /// The point given.
+        point: [f32; 3],
+        /// Its distance to the surface (cm).
+        distance: f64,
+        /// The largest distance accepted (cm).
+        max_distance: f64,
+        /// The nearest surface point.
+        nearest: [f32; 3],
+    },
+    /// The radius is too small to select even the triangle under the centre.
+    #[error("a region of radius {radius:.3} cm around triangle {triangle} is empty; use a radius of at least {min_radius:.3} cm")]
+    EmptyRegion {
+        /// The radius given (cm).
+        radius: f64,
+        /// The smallest radius that selects the centre's triangle (cm).
+        min_radius: f64,
+        /// The triangle under the centre.
+        triangle: u32,
+    },
+    /// The radius selects the whole connected piece of the surface: no boundary would be left to
+    /// hold the region.
+    #[error("a region of radius {radius:.3} cm covers the whole surface piece ({triangles} triangles, farthest point {farthest:.3} cm away); use a smaller radius")]
+    RegionCoversSurface {
+        /// The radius given (cm).
+        radius: f64,
+        /// Triangles of the surface piece.
+        triangles: usize,
+        /// Geodesic distance of the piece's farthest point (cm).
+        farthest: f64,
+    },
+    /// The surface height given for an implant's base is not finite.
+    #[error("the surface height under the implant at ({x}, {y}) is {value}: it must be finite")]
+    SurfaceHeight {
+        /// Local x (cm).
+        x: f32,
+        /// Local y (cm).
+        y: f32,
+        /// The height returned.
+        value: f32,
+    },
+    /// The implant's outline cannot be meshed with the parameters given.
+    #[error("the implant shape cannot be meshed: {reason}")]
+    ShapeNotMeshable {
+        /// Why.
+        reason: String,
+    },
+    /// The implant volume cannot be reached with a plausible height for this base.
+    #[error("an implant volume of {volume:.3} cm³ is out of reach for this base: between {min:.3} and {max:.3} cm³ can be made")]
+    VolumeOutOfRange {
+        /// The target volume (cm³).
+        volume: f64,
+        /// The smallest volume possible (cm³).
+        min: f64,
+        /// The largest volume possible (cm³).
+        max: f64,
+    },
+    /// Solving for the implant height did not reach the target volume within 0.5%.
+    #[error("the implant height search reached {reached:.3} cm³ (height {height:.3} cm) for a target of {target:.3} cm³")]
+    VolumeNotReached {
+        /// The target volume (cm³).
+        target: f64,
+        /// The closest volume reached (cm³).
+        reached: f64,
+        /// The height that gave it (cm).
+        height: f64,
+    },
     /// The mass–spring model refused its input or diverged.
     #[error("tissue model: {0}")]
     Model(#[from] tissue_mss::MssError),

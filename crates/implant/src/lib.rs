@@ -1,9 +1,17 @@
 //! # tissue-implant: the implant-insertion scenario of the thesis (SPEC A.5)
 //!
 //! ## Brief overview
+//! - [`RegionSelection`]: the geodesic disc of the patient surface around the implant position
+//!   ([`select_region`]; radius by default [`default_radius`]), as its own mesh with vertex maps,
+//!   boundary loops, area and distances.
+//! - [`SurfacePoint`]: a point snapped to a surface ([`snap_to_surface`]), the source of
+//!   [`geodesic_distances`] (fast marching with point-source updates).
 //! - [`TissueLayers`]: the two-layer mass–spring model of a skin region (layer 1 the region,
 //!   layer 2 offset inward by the placement depth, springs between the layers against
 //!   compression and shear, zero-length anchors on layer 2, the boundary fixed).
+//! - [`ImplantSpec`]: a tissue expander ([`ImplantShape`]: round, rectangular, crescent) of a
+//!   target volume, built as a closed outward mesh ([`Implant`]) by solving for its dome height,
+//!   flat or bent onto the body surface it lies on ([`ImplantFrame`]).
 //!
 //! Pure scenario logic on top of `tissue-mesh`, `tissue-mss`, `tissue-bvh` and `tissue-collide`:
 //! no threads, no terminal, no file I/O. Units: cm, g, s.
@@ -28,7 +36,16 @@
 )]
 
 mod error;
+mod geodesic;
 mod layers;
+mod region;
+mod shape;
 
 pub use error::ImplantError;
 pub use layers::{Layer, LayerParams, TissueLayers};
+pub use region::{
+    default_radius, default_snap_distance, geodesic_distances, select_region, select_region_with,
+    snap_to_surface, RegionOptions, RegionRule, RegionSelection, SurfacePoint,
+    DEFAULT_RADIUS_FACTOR, DEFAULT_SNAP_FRACTION, NOT_IN_REGION,
+};
+pub use shape::{Implant, ImplantFrame, ImplantShape, ImplantSpec};
