@@ -748,7 +748,6 @@ mod tests {
             ("sphere", &sphere, Vec3::new(0.0, 0.0, 1.0)),
         ] {
             let (d, corrections) = march(mesh, q);
-            eprintln!("{name}: {corrections} corrections for {} vertices", d.len());
             assert!(corrections * 10 < d.len(), "{name}: {corrections}");
         }
     }
