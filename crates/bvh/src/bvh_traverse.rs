@@ -37,26 +37,7 @@ impl Bvh {
         out: &mut Vec<u32>,
     ) {
         out.clear();
-        let stack = &mut ws.stack;
-        stack.clear();
-        if !self.nodes[0].aabb.overlaps(aabb, gap) {
-            return;
-        }
-        stack.push(0);
-        while let Some(i) = stack.pop() {
-            let node = &self.nodes[i as usize];
-            if node.is_leaf() {
-                out.push(i);
-                continue;
-            }
-            let c = node.first;
-            if self.nodes[c as usize + 1].aabb.overlaps(aabb, gap) {
-                stack.push(c + 1);
-            }
-            if self.nodes[c as usize].aabb.overlaps(aabb, gap) {
-                stack.push(c);
-            }
-        }
+        self.visit_overlapping_leaves(aabb, gap, &mut ws.stack, |leaf| out.push(leaf));
     }
 
     /// Appends to `out` (after clearing it) the primitives whose own boxes overlap `aabb` grown by
@@ -70,7 +51,27 @@ impl Bvh {
         out: &mut Vec<u32>,
     ) {
         out.clear();
-        let stack = &mut ws.stack;
+        self.visit_overlapping_leaves(aabb, gap, &mut ws.stack, |leaf| {
+            let node = &self.nodes[leaf as usize];
+            let slots = node.first as usize..(node.first + node.count) as usize;
+            out.extend(
+                self.order[slots]
+                    .iter()
+                    .copied()
+                    .filter(|&p| prims.bounds(p).overlaps(aabb, gap)),
+            );
+        });
+    }
+
+    /// Calls `visit` with every leaf whose box overlaps `aabb` grown by `gap`, depth first,
+    /// using `stack` as scratch.
+    fn visit_overlapping_leaves(
+        &self,
+        aabb: &Aabb,
+        gap: f32,
+        stack: &mut Vec<u32>,
+        mut visit: impl FnMut(u32),
+    ) {
         stack.clear();
         if !self.nodes[0].aabb.overlaps(aabb, gap) {
             return;
@@ -79,12 +80,7 @@ impl Bvh {
         while let Some(i) = stack.pop() {
             let node = &self.nodes[i as usize];
             if node.is_leaf() {
-                let slots = node.first as usize..(node.first + node.count) as usize;
-                for &p in &self.order[slots] {
-                    if prims.bounds(p).overlaps(aabb, gap) {
-                        out.push(p);
-                    }
-                }
+                visit(i);
                 continue;
             }
             let c = node.first;

@@ -110,9 +110,7 @@ fn triangle_masses_sum_to_the_total_and_follow_area() {
     let m = masses_from_triangles(&mesh, total).unwrap();
     let sum: f64 = m.iter().map(|&x| f64::from(x)).sum();
     assert!((sum - total).abs() < 1e-5 * total, "{sum} vs {total}");
-    // On a uniform grid a corner with one triangle gets 1/3 of an interior vertex with six... the
-    // checkerboard split gives corners 1 or 2 triangles: check one interior vertex by hand.
-    // Interior vertex: 6 or 8... take the area-weighted formula directly for vertex 65·32+32.
+    // One interior vertex by eq. (2): a third of its triangles' share of the mass.
     let v = 65 * 32 + 32;
     let around: f64 = mesh
         .topology()

@@ -150,71 +150,64 @@ fn positions_bits(s: &MassSpringSystem) -> Vec<[u32; 3]> {
         .collect()
 }
 
+/// Takes `steps` steps of `h` — serially when `threads` is `None`, else on a rayon pool of that
+/// many threads — and returns the positions' bits.
+fn stepped_bits(
+    mut s: MassSpringSystem,
+    threads: Option<usize>,
+    steps: usize,
+    h: f32,
+) -> Vec<[u32; 3]> {
+    s.set_parallel(threads.is_some());
+    assert_eq!(s.is_parallel(), threads.is_some());
+    let mut run = || {
+        for _ in 0..steps {
+            s.step(h).unwrap();
+        }
+    };
+    match threads {
+        None => run(),
+        Some(t) => rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .unwrap()
+            .install(run),
+    }
+    positions_bits(&s)
+}
+
 #[test]
 fn results_do_not_depend_on_the_number_of_threads() {
-    let run = |threads: Option<usize>| {
-        let mut s = two_layer_region(129).unwrap();
-        // Lift the free particles as the thesis does before a run, so everything moves.
-        for (x, &w) in s
-            .particles_mut()
-            .positions_mut()
-            .iter_mut()
-            .zip(two_layer_region(129).unwrap().particles().inverse_masses())
-        {
-            if w > 0.0 {
-                x.z += 0.05;
-            }
+    let mut region = two_layer_region(129).unwrap();
+    // Lift the free particles as the thesis does before a run, so everything moves.
+    let free: Vec<bool> = region
+        .particles()
+        .inverse_masses()
+        .iter()
+        .map(|&w| w > 0.0)
+        .collect();
+    for (x, free) in region.particles_mut().positions_mut().iter_mut().zip(free) {
+        if free {
+            x.z += 0.05;
         }
-        s.set_gravity(Vec3::new(0.0, 0.0, -981.0)).unwrap();
-        match threads {
-            None => {
-                s.set_parallel(false);
-                for _ in 0..40 {
-                    s.step(2e-5).unwrap();
-                }
-            }
-            Some(t) => {
-                assert!(s.is_parallel());
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(t)
-                    .build()
-                    .unwrap();
-                pool.install(|| {
-                    for _ in 0..40 {
-                        s.step(2e-5).unwrap();
-                    }
-                });
-            }
-        }
-        positions_bits(&s)
-    };
-    let serial = run(None);
-    assert_eq!(serial, run(Some(1)), "1 thread differs from serial");
-    assert_eq!(serial, run(Some(2)), "2 threads differ from serial");
-    assert_eq!(serial, run(Some(3)), "3 threads differ from serial");
+    }
+    region.set_gravity(Vec3::new(0.0, 0.0, -981.0)).unwrap();
+    let serial = stepped_bits(region.clone(), None, 40, 2e-5);
+    for t in [1, 2, 3] {
+        assert_eq!(
+            serial,
+            stepped_bits(region.clone(), Some(t), 40, 2e-5),
+            "{t} threads differ from serial"
+        );
+    }
 
     // A chain with springs between neighbouring and distant blocks.
-    let chain = |threads: usize| {
-        let mut s = free_chain(20_000, 9);
-        assert!(s.is_parallel() && s.far_springs() > 0);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            for _ in 0..30 {
-                s.step(1e-3).unwrap();
-            }
-        });
-        positions_bits(&s)
-    };
-    let mut serial = free_chain(20_000, 9);
-    serial.set_parallel(false);
-    for _ in 0..30 {
-        serial.step(1e-3).unwrap();
+    let chain = free_chain(20_000, 9);
+    assert!(chain.far_springs() > 0);
+    let serial = stepped_bits(chain.clone(), None, 30, 1e-3);
+    for t in [1, 2] {
+        assert_eq!(serial, stepped_bits(chain.clone(), Some(t), 30, 1e-3));
     }
-    assert_eq!(positions_bits(&serial), chain(1));
-    assert_eq!(positions_bits(&serial), chain(2));
 }
 
 #[test]
