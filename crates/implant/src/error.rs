@@ -95,4 +95,45 @@ pub enum ImplantError {
     /// The mass–spring model refused its input or diverged.
     #[error("tissue model: {0}")]
     Model(#[from] tissue_mss::MssError),
+    /// Collision detection or response refused its input.
+    #[error("collision: {0}")]
+    Collide(#[from] tissue_collide::CollideError),
+    /// The run was cancelled by its caller between two steps.
+    #[error("cancelled by the caller after {steps} steps")]
+    Cancelled {
+        /// Steps completed before the cancel.
+        steps: u64,
+    },
+    /// The run produced a non-finite position or velocity.
+    #[error("the run diverged at step {step}: {what} of particle {particle} is not finite; use a smaller time step")]
+    Diverged {
+        /// The step (0-based).
+        step: u64,
+        /// Which particle (in the tissue or the implant, see `what`).
+        particle: u32,
+        /// Which quantity and which body.
+        what: &'static str,
+    },
+    /// An inverse search was given a bracket whose ends do not enclose the target.
+    #[error("target area gain {target:.3} cm² is not between the gains at the bracket ends: {low_gain:.3} cm² at {low_volume:.3} cm³ and {high_gain:.3} cm² at {high_volume:.3} cm³; widen the volume bracket")]
+    TargetNotBracketed {
+        /// The target gain (cm²).
+        target: f64,
+        /// The lower volume (cm³).
+        low_volume: f64,
+        /// The gain it gave (cm²).
+        low_gain: f64,
+        /// The upper volume (cm³).
+        high_volume: f64,
+        /// The gain it gave (cm²).
+        high_gain: f64,
+    },
+    /// A point of the implant's base is not over the region's inner layer.
+    #[error("the implant's base point at local ({x:.3}, {y:.3}) cm is not over the region's inner layer: select a larger region or a smaller implant")]
+    FootprintOutsideRegion {
+        /// Local x (cm).
+        x: f32,
+        /// Local y (cm).
+        y: f32,
+    },
 }

@@ -22,7 +22,9 @@
 //!     (exactly so for each equilateral triangle): the slab's shear stiffness `G·A/depth`.
 //!     Under compression the pair adds `2k·cos²θ` to the vertical springs.
 //! - Every layer-2 particle has a zero-length anchor to its original position (the deeper tissue
-//!   holding it), of stiffness `anchor_ratio` × its vertical spring's.
+//!   holding it): `k = E_a·Aᵢ/depth` with `E_a` the modulus of the loose subcutaneous tissue
+//!   below the implant plane (`anchor_young`), far softer than skin. It sets the pressure the
+//!   tissue puts on an implant: lifting layer 2 by `u` costs `E_a·u/depth` per unit area.
 //!
 //! ## Masses and fixed particles
 //! The region's mass is area × skin thickness × density (SPEC A.5 step 1), shared equally by the
@@ -60,15 +62,19 @@ pub struct LayerParams {
     pub density: f64,
     /// Placement depth: the distance between the layers, cm.
     pub depth: f64,
-    /// Anchor stiffness of a layer-2 particle as a multiple of its vertical spring's.
-    pub anchor_ratio: f64,
+    /// Young's modulus of the springs between the layers (the tissue slab), g/(cm·s²).
+    pub slab_young: f64,
+    /// Young's modulus of the loose subcutaneous tissue that anchors layer 2, g/(cm·s²).
+    pub anchor_young: f64,
 }
 
 impl Default for LayerParams {
     /// Skin of `E` = 0.2 MPa (in vivo tensile tests on human skin report roughly 0.1–1 MPa at
     /// small strain; Agache et al. 1980, Pailler-Mattei et al. 2008), `ν` = 0.45 (soft tissue is
     /// nearly incompressible), thickness 0.2 cm (dermis 1–4 mm), density 1.1 g/cm³, depth 1 cm,
-    /// anchors as stiff as the vertical springs.
+    /// anchors of `E_a` = 2 kPa (subcutaneous fat and areolar tissue: 1–3 kPa; Samani et al.
+    /// 2003, Comley & Fleck 2010), which puts about 60 mmHg on a 100 cm³ expander, the pressure
+    /// measured in filled expanders.
     fn default() -> Self {
         LayerParams {
             young: 2.0e6,
@@ -76,7 +82,8 @@ impl Default for LayerParams {
             skin_thickness: 0.2,
             density: 1.1,
             depth: 1.0,
-            anchor_ratio: 1.0,
+            anchor_young: 2.0e4,
+            slab_young: 2.0e7,
         }
     }
 }
@@ -98,10 +105,10 @@ impl LayerParams {
         positive("skin_thickness", self.skin_thickness)?;
         positive("density", self.density)?;
         positive("depth", self.depth)?;
-        if !(self.anchor_ratio.is_finite() && self.anchor_ratio >= 0.0) {
+        if !(self.anchor_young.is_finite() && self.anchor_young >= 0.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "anchor_ratio",
-                value: self.anchor_ratio,
+                name: "anchor_young",
+                value: self.anchor_young,
                 expected: "finite and ≥ 0".into(),
             });
         }
@@ -210,11 +217,17 @@ impl TissueLayers {
                 )
             })
         };
+        // Layer 2 is the deep face of the subcutaneous tissue: as soft in its plane as the
+        // tissue its anchors stand for.
+        let deep = SheetMaterial {
+            young: params.anchor_young.max(f64::MIN_POSITIVE),
+            ..material
+        };
         let mut springs: Vec<Spring> =
             remap(Layer::Outer, springs_from_triangles(region, &material, 0)?)
                 .chain(remap(
                     Layer::Inner,
-                    springs_from_triangles(&inner, &material, 0)?,
+                    springs_from_triangles(&inner, &deep, 0)?,
                 ))
                 .collect();
 
@@ -235,7 +248,7 @@ impl TissueLayers {
         }
         let vertical_k: Vec<f64> = vertex_area
             .iter()
-            .map(|a| params.young * a / params.depth)
+            .map(|a| params.slab_young * a / params.depth)
             .collect();
         for r in 0..n as u32 {
             if vertical_k[r as usize] > 0.0 {
@@ -247,7 +260,7 @@ impl TissueLayers {
                 ));
             }
         }
-        let g = params.shear_modulus();
+        let g = params.slab_young / (2.0 * (1.0 + params.poisson));
         let p = &positions;
         for (&[a, b], &area) in topo.edges().iter().zip(&edge_area) {
             for (top, bottom) in [(a, b), (b, a)] {
@@ -266,7 +279,7 @@ impl TissueLayers {
         let anchors: Vec<Anchor> = (0..n as u32)
             .map(|r| Anchor {
                 particle: Self::particle(Layer::Inner, r),
-                k: (params.anchor_ratio * vertical_k[r as usize]) as f32,
+                k: (params.anchor_young * vertex_area[r as usize] / params.depth) as f32,
                 target: inner.positions()[r as usize],
             })
             .collect();
@@ -333,11 +346,29 @@ impl TissueLayers {
     /// Moves every free particle of both layers `height` (cm) outward along the region's rest
     /// normals: the thesis's start, with the tissue lifted by the implant's height.
     pub fn lift(&mut self, height: f32) -> Result<(), ImplantError> {
-        if !height.is_finite() {
+        let heights = vec![height; self.normals.len()];
+        self.lift_by(&heights)
+    }
+
+    /// Moves the free particles of region vertex `r` in both layers `heights[r]` (cm) outward
+    /// along the region's rest normal at `r`.
+    ///
+    /// # Errors
+    /// [`ImplantError::InvalidParameter`] for a wrong length or a non-finite height (the
+    /// message names the vertex); nothing is moved then.
+    pub fn lift_by(&mut self, heights: &[f32]) -> Result<(), ImplantError> {
+        if heights.len() != self.normals.len() {
             return Err(ImplantError::InvalidParameter {
-                name: "height",
-                value: f64::from(height),
-                expected: "finite".into(),
+                name: "heights",
+                value: heights.len() as f64,
+                expected: format!("one height per region vertex ({})", self.normals.len()),
+            });
+        }
+        if let Some(r) = heights.iter().position(|h| !h.is_finite()) {
+            return Err(ImplantError::InvalidParameter {
+                name: "heights",
+                value: f64::from(heights[r]),
+                expected: format!("finite (region vertex {r})"),
             });
         }
         let particles = self.system.particles_mut();
@@ -348,7 +379,7 @@ impl TissueLayers {
             .collect();
         for (i, x) in particles.positions_mut().iter_mut().enumerate() {
             if free[i] {
-                *x += Vec3A::from(self.normals[i / 2] * height);
+                *x += Vec3A::from(self.normals[i / 2] * heights[i / 2]);
             }
         }
         Ok(())

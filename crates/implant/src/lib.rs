@@ -35,14 +35,25 @@
     clippy::print_stderr
 )]
 
+mod contact_run;
 mod error;
 mod geodesic;
+mod insertion;
 mod layers;
+mod outcome;
+mod planning;
 mod region;
 mod shape;
 
+pub use contact_run::{ContactRun, RunParams, StepSummary};
 pub use error::ImplantError;
+pub use insertion::{
+    implant_system, place_implant, ImplantParams, Insertion, InsertionOutcome, InsertionParams,
+    Progress,
+};
 pub use layers::{Layer, LayerParams, TissueLayers};
+pub use planning::{sweep, volume_for_gain, InverseOptions, InverseSearch, PlanningRun};
+pub use outcome::{replace_region, vertex_displacements, vertex_stretch, FieldRange};
 pub use region::{
     default_radius, default_snap_distance, geodesic_distances, select_region, select_region_with,
     snap_to_surface, RegionOptions, RegionRule, RegionSelection, SurfacePoint,

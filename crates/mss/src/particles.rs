@@ -114,6 +114,12 @@ impl Particles {
         &mut self.velocity
     }
 
+    /// Positions (mutable), velocities (mutable) and inverse masses at once, for code such as
+    /// collision response that moves particles while reading which are fixed.
+    pub fn state_mut(&mut self) -> (&mut [Vec3A], &mut [Vec3A], &[f32]) {
+        (&mut self.position, &mut self.velocity, &self.inverse_mass)
+    }
+
     /// Forces of the last force evaluation (g·cm/s²).
     pub fn forces(&self) -> &[Vec3A] {
         &self.force

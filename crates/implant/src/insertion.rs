@@ -1,0 +1,514 @@
+//! The implant-insertion run (SPEC A.5): a tissue expander under a skin region, the region
+//! lifted by the implant's height and relaxing back onto it.
+//!
+//! - The tissue is [`TissueLayers`]; the implant is a mass–spring system of its own: springs on
+//!   its surface from its silicone shell (Van Gelder, eq. 3), volume preservation (eq. 5) for its
+//!   saline fill, mass = volume × density of water.
+//! - **The implant's base is held by the deeper tissue**: the expander lies on fascia, muscle or
+//!   bone, far stiffer than the skin and fat it pushes up, so its base vertices are fixed where
+//!   they were built (on layer 2's rest surface, [`place_implant`]). The dome and its rim move.
+//! - Before the run every free tissue particle is lifted by the implant's dome height (plus twice
+//!   the contact distance) along the region's normals (SPEC A.5 step 3); the layers then fall
+//!   back, held by their anchors, and collide with the implant, which is squeezed but keeps its
+//!   volume.
+//! - The step is [`ContactRun::step`]; the run ends on the stop criterion or the step limit, and
+//!   a progress callback between steps may cancel it.
+
+use std::ops::ControlFlow;
+use std::time::{Duration, Instant};
+
+use glam::{Vec3, Vec3A};
+use tissue_bvh::{BuildOptions, Bvh, BvhWorkspace, Ray, Triangles};
+use tissue_mesh::{volume_between, TriMesh};
+use tissue_mss::{
+    masses_from_triangles, springs_from_triangles, MassSpringSystem, Particles, SheetMaterial,
+    StopReason, VolumePreservation, WATER_DENSITY,
+};
+
+use crate::contact_run::{ContactRun, RunParams, StepSummary};
+use crate::outcome::{replace_region, vertex_displacements, vertex_stretch};
+use crate::{
+    Implant, ImplantError, ImplantFrame, ImplantSpec, Layer, LayerParams, RegionSelection,
+    TissueLayers,
+};
+
+/// The implant's mechanics. Units: cm, g, s.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImplantParams {
+    /// Young's modulus of the silicone shell, g/(cm·s²).
+    pub shell_young: f64,
+    /// Poisson ratio of the shell.
+    pub shell_poisson: f64,
+    /// Shell thickness, cm.
+    pub shell_thickness: f64,
+    /// Density of the fill, g/cm³ (saline: water).
+    pub fill_density: f64,
+    /// How hard the fill resists a change of volume: the pressure per relative volume change,
+    /// g/(cm·s²). Volume preservation's `k_v` (eq. 5) is derived from it: a uniform inward
+    /// move `δ` of every vertex changes the volume by `A·δ` and, with `T` triangles of mean area
+    /// `A/T`, produces the pressure `3·k_v·T²·δ/A`, so `k_v = K·A²/(3·T²·V)`.
+    pub fill_bulk_modulus: f64,
+    /// Eq. (5)'s `C` in (0, 1): the weight of a particle's own radial change.
+    pub volume_coupling: f64,
+}
+
+impl Default for ImplantParams {
+    /// A silicone elastomer shell of `E` = 3 MPa (medical silicones are 1–10 MPa), `ν` = 0.45,
+    /// 0.05 cm thick (expander shells are about 0.5 mm); saline fill of density 1 g/cm³ and a
+    /// bulk modulus of 10 MPa — far below water's 2.2 GPa, which would need a step a hundred
+    /// times smaller, but enough to hold the volume within about 0.1 % under the tissue's
+    /// pressure; `C` = 0.5.
+    fn default() -> Self {
+        ImplantParams {
+            shell_young: 3.0e7,
+            shell_poisson: 0.45,
+            shell_thickness: 0.05,
+            fill_density: WATER_DENSITY,
+            fill_bulk_modulus: 1.0e9,
+            volume_coupling: 0.5,
+        }
+    }
+}
+
+impl ImplantParams {
+    fn check(&self) -> Result<(), ImplantError> {
+        for (name, value) in [
+            ("shell_young", self.shell_young),
+            ("shell_thickness", self.shell_thickness),
+            ("fill_density", self.fill_density),
+            ("fill_bulk_modulus", self.fill_bulk_modulus),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(ImplantError::InvalidParameter {
+                    name,
+                    value,
+                    expected: "positive and finite".into(),
+                });
+            }
+        }
+        if !(0.0..0.5).contains(&self.shell_poisson) {
+            return Err(ImplantError::InvalidParameter {
+                name: "shell_poisson",
+                value: self.shell_poisson,
+                expected: "in [0, 0.5)".into(),
+            });
+        }
+        if !(self.volume_coupling > 0.0 && self.volume_coupling < 1.0) {
+            return Err(ImplantError::InvalidParameter {
+                name: "volume_coupling",
+                value: self.volume_coupling,
+                expected: "in (0, 1)".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Everything a run needs besides its geometry: one parameter set serves every scenario.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct InsertionParams {
+    /// The tissue.
+    pub layers: LayerParams,
+    /// The implant.
+    pub implant: ImplantParams,
+    /// Stepping, collisions, stopping.
+    pub run: RunParams,
+}
+
+/// Builds `spec` on layer 2's rest surface under `layers`, centred under the region point
+/// `centre` (on layer 1), its base following the surface: the frame's normal is the region's
+/// normal at the centre (the mean of the vertex normals within the implant's footprint would
+/// serve as well on a body patch), the tangent `tangent`'s part across it.
+///
+/// # Errors
+/// [`ImplantError::FootprintOutsideRegion`] when a base point is not over layer 2 (the region is
+/// too small for the implant), and the errors of [`ImplantSpec::build_on`] and
+/// [`ImplantFrame::new`].
+pub fn place_implant(
+    layers: &TissueLayers,
+    spec: &ImplantSpec,
+    centre: Vec3,
+    normal: Vec3,
+    tangent: Vec3,
+) -> Result<Implant, ImplantError> {
+    let _span = tracing::debug_span!("place_implant").entered();
+    let frame = ImplantFrame::new(centre, normal, tangent)?;
+    let inner = layers.rest(Layer::Inner);
+    let positions: Vec<Vec3A> = inner.positions().iter().map(|&p| p.into()).collect();
+    let triangles = Triangles::new(&positions, inner.triangles()).map_err(|e| {
+        ImplantError::InvalidParameter {
+            name: "region",
+            value: 0.0,
+            expected: format!("a region whose inner layer can be searched: {e}"),
+        }
+    })?;
+    let bvh = Bvh::build(&triangles, &BuildOptions::default()).map_err(|e| {
+        ImplantError::InvalidParameter {
+            name: "region",
+            value: 0.0,
+            expected: format!("a region whose inner layer can be searched: {e}"),
+        }
+    })?;
+    let reach = (inner.bounding_box().size().length() + 1.0) * 2.0;
+    let ws = std::cell::RefCell::new(BvhWorkspace::default());
+    let missed = std::cell::Cell::new(None);
+    let down = Vec3A::from(-frame.normal());
+    let implant = spec.build_on(&frame, |x, y| {
+        let above = frame.to_world(glam::DVec3::new(f64::from(x), f64::from(y), 0.0));
+        let origin = Vec3A::from(above.as_vec3()) - down * reach;
+        let ray = Ray::new(origin, down);
+        match bvh.cast_ray(&triangles, &ray, 2.0 * reach, &mut ws.borrow_mut()) {
+            Some(hit) => reach - hit.t,
+            None => {
+                if missed.get().is_none() {
+                    missed.set(Some((x, y)));
+                }
+                0.0
+            }
+        }
+    })?;
+    if let Some((x, y)) = missed.get() {
+        return Err(ImplantError::FootprintOutsideRegion { x, y });
+    }
+    Ok(implant)
+}
+
+/// The implant as a mass–spring system (module docs): particle `v` is implant vertex `v`.
+pub fn implant_system(
+    implant: &Implant,
+    params: &ImplantParams,
+) -> Result<MassSpringSystem, ImplantError> {
+    params.check()?;
+    let mesh = implant.mesh();
+    let volume = mesh.signed_volume()?;
+    let masses = masses_from_triangles(mesh, volume * params.fill_density)?;
+    let mut particles = Particles::new(mesh.positions(), &masses)?;
+    for v in implant.base() {
+        particles.fix(v)?;
+    }
+    let springs = springs_from_triangles(
+        mesh,
+        &SheetMaterial {
+            young: params.shell_young,
+            poisson: params.shell_poisson,
+            thickness: params.shell_thickness,
+        },
+        0,
+    )?;
+    let mut system = MassSpringSystem::new(particles, springs)?;
+    let area = mesh.area();
+    let t = mesh.triangle_count() as f64;
+    let k_v = params.fill_bulk_modulus * area * area / (3.0 * t * t * volume);
+    system.add_volume_preservation(VolumePreservation::new(
+        mesh,
+        &masses,
+        0,
+        k_v as f32,
+        params.volume_coupling as f32,
+    )?)?;
+    Ok(system)
+}
+
+/// How far each region vertex is lifted before the run: over the implant's footprint, the
+/// implant's height above the vertex's layer-2 point along its normal plus `margin`; elsewhere
+/// the harmonic interpolation between those heights and 0 on the region's boundary (the shape
+/// of a slack membrane spanning them), solved by successive over-relaxation on the mesh graph.
+///
+/// The thesis lifts every moving particle by the implant's full height. With the boundary fixed,
+/// that stretches the ring of springs next to it by the whole height (several times their
+/// length) and stores an elastic energy that, released in an explicit run, throws the tissue
+/// through the implant. This start is as faithful — the tissue starts above the implant and
+/// relaxes onto it — with only the energy of the stretch the implant really causes.
+pub fn lift_profile(
+    layers: &TissueLayers,
+    implant: &Implant,
+    margin: f32,
+) -> Result<Vec<f32>, ImplantError> {
+    let _span = tracing::debug_span!("lift_profile").entered();
+    let mesh = implant.mesh();
+    let positions: Vec<Vec3A> = mesh.positions().iter().map(|&p| p.into()).collect();
+    let searchable = |e: tissue_bvh::BvhError| ImplantError::InvalidParameter {
+        name: "implant",
+        value: 0.0,
+        expected: format!("an implant mesh that can be searched: {e}"),
+    };
+    let triangles = Triangles::new(&positions, mesh.triangles()).map_err(searchable)?;
+    let bvh = Bvh::build(&triangles, &BuildOptions::default()).map_err(searchable)?;
+    let mut ws = BvhWorkspace::default();
+    let inner = layers.rest(Layer::Inner);
+    let n = inner.vertex_count();
+    let reach = 2.0 * (mesh.bounding_box().size().length() + implant.dome_height() as f32);
+    let mut height = vec![0.0f32; n];
+    let mut fixed = vec![false; n];
+    for &r in layers.boundary() {
+        fixed[r as usize] = true;
+    }
+    for r in 0..n {
+        if fixed[r] {
+            continue;
+        }
+        let normal = Vec3A::from(layers.normals()[r]);
+        let from = Vec3A::from(inner.positions()[r]);
+        let ray = Ray::new(from + normal * reach, -normal);
+        if let Some(hit) = bvh.cast_ray(&triangles, &ray, 2.0 * reach, &mut ws) {
+            let h = reach - hit.t;
+            if h > 0.0 {
+                height[r] = h + margin;
+                fixed[r] = true;
+            }
+        }
+    }
+    let topo = inner.topology();
+    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for &[a, b] in topo.edges() {
+        neighbours[a as usize].push(b);
+        neighbours[b as usize].push(a);
+    }
+    // Each vertex over the implant or next to one takes the largest height around it, so that
+    // every layer-2 edge passes above the implant (a chord of a convex dome lies inside it, and
+    // an edge across the rim would cut the steep side).
+    let over = height.clone();
+    for r in 0..n {
+        if layers.boundary().binary_search(&(r as u32)).is_ok() {
+            continue;
+        }
+        let around = neighbours[r]
+            .iter()
+            .map(|&q| over[q as usize])
+            .fold(over[r], f32::max);
+        if around > 0.0 {
+            height[r] = around;
+            fixed[r] = true;
+        }
+    }
+    // Successive over-relaxation of the graph Laplacian on the free vertices.
+    let top = height.iter().copied().fold(0.0f32, f32::max);
+    let tolerance = 1e-5 * top.max(1e-6);
+    for _ in 0..20 * n.max(100) {
+        let mut change = 0.0f32;
+        for r in 0..n {
+            if fixed[r] || neighbours[r].is_empty() {
+                continue;
+            }
+            let mean = neighbours[r].iter().map(|&q| height[q as usize]).sum::<f32>()
+                / neighbours[r].len() as f32;
+            let next = height[r] + 1.8 * (mean - height[r]);
+            change = change.max((next - height[r]).abs());
+            height[r] = next;
+        }
+        if change <= tolerance {
+            break;
+        }
+    }
+    Ok(height)
+}
+
+/// What the caller sees between steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Steps done.
+    pub steps: u64,
+    /// The step limit.
+    pub max_steps: u64,
+    /// The last step's summary.
+    pub last: StepSummary,
+}
+
+/// An implant under a skin region, ready to run (module docs).
+#[derive(Debug, Clone)]
+pub struct Insertion {
+    run: ContactRun,
+    implant_rest: TriMesh,
+    implant_volume: f64,
+    dome_height: f64,
+}
+
+impl Insertion {
+    /// Sets up the run for `region` (an open patch of the patient surface, normals out of the
+    /// body) and `implant` (built on the region's layer 2 by [`place_implant`]).
+    ///
+    /// # Errors
+    /// Parameter and mesh errors of the layers, the implant and the collider.
+    pub fn new(
+        region: &TriMesh,
+        implant: &Implant,
+        params: &InsertionParams,
+    ) -> Result<Self, ImplantError> {
+        let _span = tracing::info_span!("insertion_setup", vertices = region.vertex_count()).entered();
+        let mut layers = TissueLayers::new(region, &params.layers)?;
+        let body = implant_system(implant, &params.implant)?;
+        let margin = params.run.contact_distance.unwrap_or_else(|| {
+            params.run.contact_fraction * crate::contact_run::mean_edge_length(layers.rest(Layer::Inner))
+        });
+        let heights = lift_profile(&layers, implant, 2.0 * margin)?;
+        layers.lift_by(&heights)?;
+        let run = ContactRun::new(layers, body, implant.mesh(), &params.run)?;
+        Ok(Insertion {
+            run,
+            implant_rest: implant.mesh().clone(),
+            implant_volume: implant.volume(),
+            dome_height: implant.dome_height(),
+        })
+    }
+
+    /// The underlying run (time step, step count, the layers and the implant's system).
+    pub fn contact_run(&self) -> &ContactRun {
+        &self.run
+    }
+
+    /// One step.
+    pub fn step(&mut self) -> Result<StepSummary, ImplantError> {
+        self.run.step()
+    }
+
+    /// Steps until the stop criterion fires or the step limit is reached. `progress` is called
+    /// after every step; [`ControlFlow::Break`] cancels the run ([`ImplantError::Cancelled`]).
+    ///
+    /// # Errors
+    /// [`ImplantError::Cancelled`], [`ImplantError::Diverged`], collision errors.
+    pub fn run(
+        &mut self,
+        mut progress: impl FnMut(&Progress) -> ControlFlow<()>,
+    ) -> Result<InsertionOutcome, ImplantError> {
+        let _span = tracing::info_span!("insertion_run").entered();
+        let start = Instant::now();
+        let max_steps = self.run.max_steps();
+        while !self.run.settled() && self.run.steps() < max_steps {
+            let last = self.run.step()?;
+            let report = Progress {
+                steps: self.run.steps(),
+                max_steps,
+                last,
+            };
+            if progress(&report).is_break() {
+                return Err(ImplantError::Cancelled {
+                    steps: self.run.steps(),
+                });
+            }
+        }
+        let wall_time = start.elapsed();
+        self.outcome(wall_time)
+    }
+
+    /// The results at the current state.
+    pub fn outcome(&mut self, wall_time: Duration) -> Result<InsertionOutcome, ImplantError> {
+        let _span = tracing::debug_span!("insertion_outcome").entered();
+        let max_penetration = self.run.max_penetration()?;
+        let layers = self.run.layers();
+        let before = layers.rest(Layer::Outer).clone();
+        let after = layers.current(Layer::Outer)?;
+        let implant_after = self.implant_rest.with_positions(
+            self.run
+                .body()
+                .particles()
+                .positions()
+                .iter()
+                .map(|&p| Vec3::from(p))
+                .collect(),
+        )?;
+        let boundary_unchanged = layers.boundary().iter().all(|&r| {
+            before.positions()[r as usize].to_array().map(f32::to_bits)
+                == after.positions()[r as usize].to_array().map(f32::to_bits)
+        });
+        let displacement = vertex_displacements(&before, &after)?;
+        let stretch = vertex_stretch(&before, &after)?;
+        let (area_before, area_after) = (before.area(), after.area());
+        let implant_volume_after = implant_after.signed_volume()?;
+        Ok(InsertionOutcome {
+            area_before,
+            area_after,
+            area_gain: area_after - area_before,
+            volume_difference: volume_between(&before, &after)?,
+            implant_volume: self.implant_volume,
+            implant_volume_after,
+            implant_compression: 1.0 - implant_volume_after / self.implant_volume,
+            dome_height: self.dome_height,
+            max_displacement: displacement.iter().copied().fold(0.0, f32::max),
+            max_penetration,
+            boundary_unchanged,
+            steps: self.run.steps(),
+            stop_reason: if self.run.settled() {
+                StopReason::Settled
+            } else {
+                StopReason::StepLimit
+            },
+            time_step: self.run.time_step(),
+            wall_time,
+            displacement,
+            stretch,
+            inner_after: layers.current(Layer::Inner)?,
+            region_before: before,
+            region_after: after,
+            implant_after,
+        })
+    }
+}
+
+/// What a run gives the planner (SPEC A.5 step 5 and more). Units: cm, cm², cm³, s.
+#[derive(Debug, Clone)]
+pub struct InsertionOutcome {
+    /// Region (layer 1) area before the run.
+    pub area_before: f64,
+    /// Region area after the run.
+    pub area_after: f64,
+    /// `area_after − area_before`: the skin gained for grafting.
+    pub area_gain: f64,
+    /// Volume between the region before and after, joined along their common boundary.
+    pub volume_difference: f64,
+    /// The implant's volume as built (its nominal volume within 0.5 %).
+    pub implant_volume: f64,
+    /// The implant's volume at the end.
+    pub implant_volume_after: f64,
+    /// `1 − implant_volume_after / implant_volume`: how much the tissue squeezed it.
+    pub implant_compression: f64,
+    /// The implant's dome height as built.
+    pub dome_height: f64,
+    /// The largest displacement of a region vertex.
+    pub max_displacement: f32,
+    /// The deepest layer-2 edge through the implant at the end (0 when none crosses).
+    pub max_penetration: f32,
+    /// Whether every boundary vertex is where it started, bit for bit.
+    pub boundary_unchanged: bool,
+    /// Steps taken.
+    pub steps: u64,
+    /// Why the run ended.
+    pub stop_reason: StopReason,
+    /// The time step used (s).
+    pub time_step: f32,
+    /// Wall-clock time of the stepping.
+    pub wall_time: Duration,
+    /// Per region vertex: how far it moved.
+    pub displacement: Vec<f32>,
+    /// Per region vertex: area after / area before of the skin around it.
+    pub stretch: Vec<f32>,
+    /// The region before.
+    pub region_before: TriMesh,
+    /// The region after.
+    pub region_after: TriMesh,
+    /// Layer 2 after.
+    pub inner_after: TriMesh,
+    /// The implant after.
+    pub implant_after: TriMesh,
+}
+
+impl InsertionOutcome {
+    /// The patient surface with the region replaced by the result (boundary unchanged bit for
+    /// bit, so the seam is closed).
+    ///
+    /// # Errors
+    /// As [`replace_region`].
+    pub fn patient_after(
+        &self,
+        patient: &TriMesh,
+        selection: &RegionSelection,
+    ) -> Result<TriMesh, ImplantError> {
+        replace_region(patient, selection, self.region_after.positions())
+    }
+
+    /// Whether every position of the result is finite.
+    pub fn is_finite(&self) -> bool {
+        [&self.region_after, &self.inner_after, &self.implant_after]
+            .iter()
+            .all(|m| m.positions().iter().all(|p| p.is_finite()))
+    }
+}
