@@ -133,6 +133,15 @@ impl RunParams {
     }
 }
 
+/// A kinematic phase of the body: particles moving at constant velocity from where they are to
+/// `end` over `steps` steps, then released to the forces.
+#[derive(Debug, Clone)]
+struct Fill {
+    particles: Vec<u32>,
+    end: Vec<Vec3A>,
+    steps: u64,
+}
+
 /// What one step did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepSummary {
@@ -159,6 +168,7 @@ pub struct ContactRun {
     contact_distance: f32,
     params: RunParams,
     detector: SettleDetector,
+    fill: Option<Fill>,
     settled: bool,
     steps: u64,
 }
@@ -257,9 +267,69 @@ impl ContactRun {
             contact_distance,
             params: params.clone(),
             detector,
+            fill: None,
             settled: false,
             steps: 0,
         })
+    }
+
+    /// Moves the body's free particles kinematically from `start` to their current positions
+    /// over `duration` (s, at least one step), then releases them to the forces: the expander
+    /// being filled. The stop criterion counts only after the release.
+    pub(crate) fn fill_body(&mut self, start: &[Vec3A], duration: f32) -> Result<(), ImplantError> {
+        let particles = self.body.particles_mut();
+        if start.len() != particles.len() {
+            return Err(ImplantError::InvalidParameter {
+                name: "start",
+                value: start.len() as f64,
+                expected: format!("one position per body particle ({})", particles.len()),
+            });
+        }
+        let steps = (f64::from(duration) / f64::from(self.h)).ceil().max(1.0) as u64;
+        let free: Vec<u32> = (0..particles.len() as u32)
+            .filter(|&i| !particles.is_fixed(i))
+            .collect();
+        let end: Vec<Vec3A> = free
+            .iter()
+            .map(|&i| particles.positions()[i as usize])
+            .collect();
+        let span = steps as f32 * self.h;
+        for (&i, &to) in free.iter().zip(&end) {
+            particles.fix(i)?;
+            let from = start[i as usize];
+            particles.positions_mut()[i as usize] = from;
+            particles.velocities_mut()[i as usize] = (to - from) / span;
+        }
+        self.fill = Some(Fill {
+            particles: free,
+            end,
+            steps,
+        });
+        Ok(())
+    }
+
+    /// Ends the fill when its time has come.
+    fn end_fill(&mut self) -> Result<(), ImplantError> {
+        let Some(fill) = &self.fill else {
+            return Ok(());
+        };
+        if self.steps < fill.steps {
+            return Ok(());
+        }
+        let particles = self.body.particles_mut();
+        for (&i, &to) in fill.particles.iter().zip(&fill.end) {
+            particles.positions_mut()[i as usize] = to;
+            particles.velocities_mut()[i as usize] = Vec3A::ZERO;
+            particles.release(i)?;
+        }
+        self.fill = None;
+        self.detector.reset();
+        Ok(())
+    }
+
+    /// Whether the body is still being filled.
+    pub fn filling(&self) -> bool {
+        self.fill.is_some()
     }
 
     /// The time step in use (s).
@@ -305,6 +375,7 @@ impl ContactRun {
     /// One step in the thesis's order (module docs).
     pub fn step(&mut self) -> Result<StepSummary, ImplantError> {
         let _span = tracing::debug_span!("implant_step", step = self.steps).entered();
+        self.end_fill()?;
         let h = self.h;
         let step = self.steps;
         let tissue = self.layers.system_mut();
@@ -363,7 +434,7 @@ impl ContactRun {
         };
         let displacement = a.displacement + b.displacement;
         self.steps += 1;
-        if self.detector.push(displacement) {
+        if self.fill.is_none() && self.detector.push(displacement) {
             self.settled = true;
         }
         Ok(StepSummary {

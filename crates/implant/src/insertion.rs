@@ -105,7 +105,7 @@ impl ImplantParams {
 }
 
 /// Everything a run needs besides its geometry: one parameter set serves every scenario.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct InsertionParams {
     /// The tissue.
     pub layers: LayerParams,
@@ -113,9 +113,55 @@ pub struct InsertionParams {
     pub implant: ImplantParams,
     /// Stepping, collisions, stopping.
     pub run: RunParams,
+    /// How long the expander takes to fill (s): its dome rises from flat to full at constant
+    /// speed, then is released to the forces.
+    pub fill_time: f32,
 }
 
-/// Builds `spec` on layer 2's rest surface under `layers`, centred under the region point
+impl Default for InsertionParams {
+    /// The defaults of each part; a 20 ms fill (slower than the tissue's slowest modes, a few
+    /// ms, so the tissue follows it nearly at rest).
+    fn default() -> Self {
+        InsertionParams {
+            layers: LayerParams::default(),
+            implant: ImplantParams::default(),
+            run: RunParams::default(),
+            fill_time: 0.02,
+        }
+    }
+}
+
+/// Where the implant's dome starts filling from: every dome vertex moved along the rim's normal
+/// down to the plane through the lowest base vertex (flat, and below the whole base, so below
+/// layer 2 whatever the body's curvature); base vertices stay.
+fn flat_start(implant: &Implant) -> Vec<Vec3A> {
+    let p = implant.mesh().positions();
+    let rim: Vec<Vec3> = implant.rim().map(|v| p[v as usize]).collect();
+    let mut normal = Vec3::ZERO;
+    for (k, a) in rim.iter().enumerate() {
+        let b = rim[(k + 1) % rim.len()];
+        normal += a.cross(b);
+    }
+    let normal = normal.normalize_or_zero();
+    let floor = implant
+        .base()
+        .map(|v| p[v as usize].dot(normal))
+        .fold(f32::INFINITY, f32::min);
+    let dome = implant.dome();
+    p.iter()
+        .enumerate()
+        .map(|(v, &x)| {
+            if dome.contains(&(v as u32)) {
+                Vec3A::from(x - normal * (x.dot(normal) - floor))
+            } else {
+                Vec3A::from(x)
+            }
+        })
+        .collect()
+}
+
+/// Builds `spec` on layer 2's rest surface under `layers` (a fifth of an edge below it, so that
+/// the two start apart), centred under the region point
 /// `centre` (on layer 1), its base following the surface: the frame's normal is the region's
 /// normal at the centre (the mean of the vertex normals within the implant's footprint would
 /// serve as well on a body patch), the tangent `tangent`'s part across it.
@@ -150,6 +196,7 @@ pub fn place_implant(
         }
     })?;
     let reach = (inner.bounding_box().size().length() + 1.0) * 2.0;
+    let gap = 0.2 * crate::contact_run::mean_edge_length(inner);
     let ws = std::cell::RefCell::new(BvhWorkspace::default());
     let missed = std::cell::Cell::new(None);
     let down = Vec3A::from(-frame.normal());
@@ -158,7 +205,7 @@ pub fn place_implant(
         let origin = Vec3A::from(above.as_vec3()) - down * reach;
         let ray = Ray::new(origin, down);
         match bvh.cast_ray(&triangles, &ray, 2.0 * reach, &mut ws.borrow_mut()) {
-            Some(hit) => reach - hit.t,
+            Some(hit) => reach - hit.t - gap,
             None => {
                 if missed.get().is_none() {
                     missed.set(Some((x, y)));
@@ -209,100 +256,6 @@ pub fn implant_system(
     Ok(system)
 }
 
-/// How far each region vertex is lifted before the run: over the implant's footprint, the
-/// implant's height above the vertex's layer-2 point along its normal plus `margin`; elsewhere
-/// the harmonic interpolation between those heights and 0 on the region's boundary (the shape
-/// of a slack membrane spanning them), solved by successive over-relaxation on the mesh graph.
-///
-/// The thesis lifts every moving particle by the implant's full height. With the boundary fixed,
-/// that stretches the ring of springs next to it by the whole height (several times their
-/// length) and stores an elastic energy that, released in an explicit run, throws the tissue
-/// through the implant. This start is as faithful — the tissue starts above the implant and
-/// relaxes onto it — with only the energy of the stretch the implant really causes.
-pub fn lift_profile(
-    layers: &TissueLayers,
-    implant: &Implant,
-    margin: f32,
-) -> Result<Vec<f32>, ImplantError> {
-    let _span = tracing::debug_span!("lift_profile").entered();
-    let mesh = implant.mesh();
-    let positions: Vec<Vec3A> = mesh.positions().iter().map(|&p| p.into()).collect();
-    let searchable = |e: tissue_bvh::BvhError| ImplantError::InvalidParameter {
-        name: "implant",
-        value: 0.0,
-        expected: format!("an implant mesh that can be searched: {e}"),
-    };
-    let triangles = Triangles::new(&positions, mesh.triangles()).map_err(searchable)?;
-    let bvh = Bvh::build(&triangles, &BuildOptions::default()).map_err(searchable)?;
-    let mut ws = BvhWorkspace::default();
-    let inner = layers.rest(Layer::Inner);
-    let n = inner.vertex_count();
-    let reach = 2.0 * (mesh.bounding_box().size().length() + implant.dome_height() as f32);
-    let mut height = vec![0.0f32; n];
-    let mut fixed = vec![false; n];
-    for &r in layers.boundary() {
-        fixed[r as usize] = true;
-    }
-    for r in 0..n {
-        if fixed[r] {
-            continue;
-        }
-        let normal = Vec3A::from(layers.normals()[r]);
-        let from = Vec3A::from(inner.positions()[r]);
-        let ray = Ray::new(from + normal * reach, -normal);
-        if let Some(hit) = bvh.cast_ray(&triangles, &ray, 2.0 * reach, &mut ws) {
-            let h = reach - hit.t;
-            if h > 0.0 {
-                height[r] = h + margin;
-                fixed[r] = true;
-            }
-        }
-    }
-    let topo = inner.topology();
-    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for &[a, b] in topo.edges() {
-        neighbours[a as usize].push(b);
-        neighbours[b as usize].push(a);
-    }
-    // Each vertex over the implant or next to one takes the largest height around it, so that
-    // every layer-2 edge passes above the implant (a chord of a convex dome lies inside it, and
-    // an edge across the rim would cut the steep side).
-    let over = height.clone();
-    for r in 0..n {
-        if layers.boundary().binary_search(&(r as u32)).is_ok() {
-            continue;
-        }
-        let around = neighbours[r]
-            .iter()
-            .map(|&q| over[q as usize])
-            .fold(over[r], f32::max);
-        if around > 0.0 {
-            height[r] = around;
-            fixed[r] = true;
-        }
-    }
-    // Successive over-relaxation of the graph Laplacian on the free vertices.
-    let top = height.iter().copied().fold(0.0f32, f32::max);
-    let tolerance = 1e-5 * top.max(1e-6);
-    for _ in 0..20 * n.max(100) {
-        let mut change = 0.0f32;
-        for r in 0..n {
-            if fixed[r] || neighbours[r].is_empty() {
-                continue;
-            }
-            let mean = neighbours[r].iter().map(|&q| height[q as usize]).sum::<f32>()
-                / neighbours[r].len() as f32;
-            let next = height[r] + 1.8 * (mean - height[r]);
-            change = change.max((next - height[r]).abs());
-            height[r] = next;
-        }
-        if change <= tolerance {
-            break;
-        }
-    }
-    Ok(height)
-}
-
 /// What the caller sees between steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Progress {
@@ -335,14 +288,17 @@ impl Insertion {
         params: &InsertionParams,
     ) -> Result<Self, ImplantError> {
         let _span = tracing::info_span!("insertion_setup", vertices = region.vertex_count()).entered();
-        let mut layers = TissueLayers::new(region, &params.layers)?;
+        if !(params.fill_time.is_finite() && params.fill_time >= 0.0) {
+            return Err(ImplantError::InvalidParameter {
+                name: "fill_time",
+                value: f64::from(params.fill_time),
+                expected: "finite and ≥ 0 (s)".into(),
+            });
+        }
+        let layers = TissueLayers::new(region, &params.layers)?;
         let body = implant_system(implant, &params.implant)?;
-        let margin = params.run.contact_distance.unwrap_or_else(|| {
-            params.run.contact_fraction * crate::contact_run::mean_edge_length(layers.rest(Layer::Inner))
-        });
-        let heights = lift_profile(&layers, implant, 2.0 * margin)?;
-        layers.lift_by(&heights)?;
-        let run = ContactRun::new(layers, body, implant.mesh(), &params.run)?;
+        let mut run = ContactRun::new(layers, body, implant.mesh(), &params.run)?;
+        run.fill_body(&flat_start(implant), params.fill_time)?;
         Ok(Insertion {
             run,
             implant_rest: implant.mesh().clone(),

@@ -75,6 +75,21 @@ impl Particles {
         Ok(())
     }
 
+    /// Releases particle `i`: forces move it again (its inverse mass is `1/mass` again). Its
+    /// velocity is kept.
+    pub fn release(&mut self, i: u32) -> Result<(), MssError> {
+        let n = self.len();
+        let (Some(w), Some(&m)) = (self.inverse_mass.get_mut(i as usize), self.mass.get(i as usize))
+        else {
+            return Err(MssError::InvalidParticle {
+                particle: i,
+                what: format!("cannot release it: the system has {n} particles"),
+            });
+        };
+        *w = 1.0 / m;
+        Ok(())
+    }
+
     /// Number of particles.
     pub fn len(&self) -> usize {
         self.position.len()
