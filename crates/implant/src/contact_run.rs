@@ -223,9 +223,9 @@ impl ContactRun {
             .map(|t| t.map(|r| TissueLayers::particle(Layer::Inner, r)))
             .collect();
         let surface = TriMesh::new(tissue_positions, triangles)?;
-        let contact_distance = params
-            .contact_distance
-            .unwrap_or_else(|| params.contact_fraction * mean_edge_length(layers.rest(Layer::Inner)));
+        let contact_distance = params.contact_distance.unwrap_or_else(|| {
+            params.contact_fraction * mean_edge_length(layers.rest(Layer::Inner))
+        });
         let body_now: Vec<glam::Vec3> = body
             .particles()
             .positions()
@@ -367,11 +367,6 @@ impl ContactRun {
         &self.body
     }
 
-    /// The second body's system, to move a kinematic body (fixed particles with a velocity).
-    pub(crate) fn body_mut(&mut self) -> &mut MassSpringSystem {
-        &mut self.body
-    }
-
     /// One step in the thesis's order (module docs).
     pub fn step(&mut self) -> Result<StepSummary, ImplantError> {
         let _span = tracing::debug_span!("implant_step", step = self.steps).entered();
@@ -415,7 +410,8 @@ impl ContactRun {
         // their approach, so an edge can only have crossed if something moved by a good part
         // of that distance; only then is the (detection-priced) correction run.
         let moved = a.max_move + b.max_move;
-        let remaining = if moved >= 0.5 * self.contact_distance || !self.params.skip_safe_separation {
+        let remaining = if moved >= 0.5 * self.contact_distance || !self.params.skip_safe_separation
+        {
             let _c = tracing::debug_span!("separate").entered();
             let (pos_a, _, inv_a) = tissue.particles_mut().state_mut();
             let (pos_b, _, inv_b) = self.body.particles_mut().state_mut();

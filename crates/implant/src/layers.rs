@@ -11,6 +11,7 @@
 //!   geometry.
 //! - Between the layers, derived from a continuum slab of thickness `depth` so that they resist
 //!   compression and shear like the tissue they stand for:
+//!   (`E` here is the slab's modulus, [`LayerParams::slab_young`])
 //!   - a *vertical* spring per vertex, `k = E·Aᵢ/depth`, with `Aᵢ` a third of the area of the
 //!     triangles around the vertex (its tributary area): the slab's axial stiffness;
 //!   - two *diagonals* per edge `ab` (`a`–`b′` and `b`–`a′`) of stiffness
@@ -73,8 +74,11 @@ impl Default for LayerParams {
     /// small strain; Agache et al. 1980, Pailler-Mattei et al. 2008), `ν` = 0.45 (soft tissue is
     /// nearly incompressible), thickness 0.2 cm (dermis 1–4 mm), density 1.1 g/cm³, depth 1 cm,
     /// anchors of `E_a` = 2 kPa (subcutaneous fat and areolar tissue: 1–3 kPa; Samani et al.
-    /// 2003, Comley & Fleck 2010), which puts about 60 mmHg on a 100 cm³ expander, the pressure
-    /// measured in filled expanders.
+    /// 2003, Comley & Fleck 2010), which alone would put about 60 mmHg on a 100 cm³ expander;
+    /// slab springs of 2 MPa. The slab is ten times stiffer than skin on purpose: linear
+    /// springs squeezed past zero length turn the slab inside out, and under the skin's
+    /// tension over an expander a skin-stiff slab did (found running Table 2); at 2 MPa it
+    /// thins by a few per cent.
     fn default() -> Self {
         LayerParams {
             young: 2.0e6,
@@ -120,10 +124,6 @@ impl LayerParams {
             });
         }
         Ok(())
-    }
-
-    fn shear_modulus(&self) -> f64 {
-        self.young / (2.0 * (1.0 + self.poisson))
     }
 }
 

@@ -12,9 +12,16 @@
 //! - [`ImplantSpec`]: a tissue expander ([`ImplantShape`]: round, rectangular, crescent) of a
 //!   target volume, built as a closed outward mesh ([`Implant`]) by solving for its dome height,
 //!   flat or bent onto the body surface it lies on ([`ImplantFrame`]).
+//! - [`Insertion`]: the run (SPEC A.5 step 4) — the layers against the implant (its own
+//!   mass–spring system with volume preservation, base held by the deeper tissue) in the thesis's
+//!   step order ([`ContactRun`]), the expander filled from flat, a progress callback that can
+//!   cancel — and its [`InsertionOutcome`]: areas, volume difference, implant compression,
+//!   per-vertex displacement and stretch, the patient with the region replaced.
+//! - [`sweep`] and [`volume_for_gain`]: series of runs in parallel and the inverse question
+//!   "which volume gives this area gain".
 //!
 //! Pure scenario logic on top of `tissue-mesh`, `tissue-mss`, `tissue-bvh` and `tissue-collide`:
-//! no threads, no terminal, no file I/O. Units: cm, g, s.
+//! no threads of its own (a sweep uses rayon's pool), no terminal, no file I/O. Units: cm, g, s.
 //!
 //! ```
 //! use tissue_implant::{Layer, LayerParams, TissueLayers};
@@ -52,8 +59,8 @@ pub use insertion::{
     Progress,
 };
 pub use layers::{Layer, LayerParams, TissueLayers};
-pub use planning::{sweep, volume_for_gain, InverseOptions, InverseSearch, PlanningRun};
 pub use outcome::{replace_region, vertex_displacements, vertex_stretch, FieldRange};
+pub use planning::{sweep, volume_for_gain, InverseOptions, InverseSearch, PlanningRun};
 pub use region::{
     default_radius, default_snap_distance, geodesic_distances, select_region, select_region_with,
     snap_to_surface, RegionOptions, RegionRule, RegionSelection, SurfacePoint,

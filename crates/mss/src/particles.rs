@@ -79,8 +79,10 @@ impl Particles {
     /// velocity is kept.
     pub fn release(&mut self, i: u32) -> Result<(), MssError> {
         let n = self.len();
-        let (Some(w), Some(&m)) = (self.inverse_mass.get_mut(i as usize), self.mass.get(i as usize))
-        else {
+        let (Some(w), Some(&m)) = (
+            self.inverse_mass.get_mut(i as usize),
+            self.mass.get(i as usize),
+        ) else {
             return Err(MssError::InvalidParticle {
                 particle: i,
                 what: format!("cannot release it: the system has {n} particles"),
