@@ -5,7 +5,8 @@
 //! 2. velocities of both (damped);
 //! 3. collisions between layer 2 and the body: detection (BVH vs BVH or BVH vs voxels, with
 //!    contact anticipation) and impulses on the velocities;
-//! 4. positions of both, then a position correction so that no layer-2 edge is left through the
+//! 4. positions of both, the slab's thickness guard ([`TissueLayers::hold_thickness`]), then a
+//!    position correction so that no layer-2 edge is left through the
 //!    body (back to the side it had at the start of the step);
 //! 5. the stop check on the summed displacements of both bodies.
 //!
@@ -153,6 +154,8 @@ pub struct StepSummary {
     pub contacts: u32,
     /// Layer-2 edges still through the body after the correction (0 when it held).
     pub remaining_crossings: u32,
+    /// Layer-1 particles held off layer 2 ([`TissueLayers::hold_thickness`]).
+    pub thinned: u32,
 }
 
 /// The tissue layers and a second body (the implant, or the plane press's sphere), stepped
@@ -165,6 +168,7 @@ pub struct ContactRun {
     previous_tissue: Vec<Vec3A>,
     previous_body: Vec<Vec3A>,
     h: f32,
+    normals_scratch: Vec<Vec3A>,
     contact_distance: f32,
     params: RunParams,
     detector: SettleDetector,
@@ -264,6 +268,7 @@ impl ContactRun {
             body,
             collider,
             h,
+            normals_scratch: Vec::new(),
             contact_distance,
             params: params.clone(),
             detector,
@@ -409,6 +414,8 @@ impl ContactRun {
         // Phase 3's contacts cover every pair closer than the contact distance and stopped
         // their approach, so an edge can only have crossed if something moved by a good part
         // of that distance; only then is the (detection-priced) correction run.
+        let thinned = self.layers.hold_thickness(&mut self.normals_scratch);
+        let tissue = self.layers.system_mut();
         let moved = a.max_move + b.max_move;
         let remaining = if moved >= 0.5 * self.contact_distance || !self.params.skip_safe_separation
         {
@@ -438,6 +445,7 @@ impl ContactRun {
             displacement,
             contacts,
             remaining_crossings: remaining,
+            thinned,
         })
     }
 

@@ -22,7 +22,7 @@ use tissue_bvh::{BuildOptions, Bvh, BvhWorkspace, Ray, Triangles};
 use tissue_mesh::{volume_between, TriMesh};
 use tissue_mss::{
     masses_from_triangles, springs_from_triangles, MassSpringSystem, Particles, SheetMaterial,
-    StopReason, VolumePreservation, WATER_DENSITY,
+    StopReason, VolumePreservation, VolumePressure, WATER_DENSITY,
 };
 
 use crate::contact_run::{ContactRun, RunParams, StepSummary};
@@ -43,11 +43,16 @@ pub struct ImplantParams {
     pub shell_thickness: f64,
     /// Density of the fill, g/cm³ (saline: water).
     pub fill_density: f64,
-    /// How hard the fill resists a change of volume: the pressure per relative volume change,
-    /// g/(cm·s²). Volume preservation's `k_v` (eq. 5) is derived from it: a uniform inward
-    /// move `δ` of every vertex changes the volume by `A·δ` and, with `T` triangles of mean area
-    /// `A/T`, produces the pressure `3·k_v·T²·δ/A`, so `k_v = K·A²/(3·T²·V)`.
+    /// Bulk modulus of the fill, g/(cm·s²): the pressure per relative volume change of the
+    /// enclosed fill ([`tissue_mss::VolumePressure`]), which holds the volume itself.
     pub fill_bulk_modulus: f64,
+    /// The stiffness of eq. (5)'s volume preservation, the thesis's, given as a modulus: `k_v`
+    /// is derived so that a uniform inward move `δ` of every vertex would meet the pressure
+    /// `3·k_v·T²·δ/A` (`T` triangles, area `A`), i.e. `k_v = K_r·A²/(3·T²·V)`. Eq. (5) holds
+    /// area-weighted radial lengths, which a dome flattened on its top keeps while losing
+    /// volume (measured: 17 % of a 50 cm³ expander lost at `K_r` = 1 GPa without the fill's
+    /// pressure), so it gives the shape's response and the fill's pressure the volume.
+    pub radial_modulus: f64,
     /// Eq. (5)'s `C` in (0, 1): the weight of a particle's own radial change.
     pub volume_coupling: f64,
 }
@@ -55,18 +60,17 @@ pub struct ImplantParams {
 impl Default for ImplantParams {
     /// A silicone elastomer shell of `E` = 3 MPa (medical silicones are 1–10 MPa), `ν` = 0.45,
     /// 0.05 cm thick (expander shells are about 0.5 mm); saline fill of density 1 g/cm³ and a
-    /// nominal bulk modulus of 300 MPa — below water's 2.2 GPa, which would need a step several
-    /// times smaller. Eq. (5) holds radial lengths, not volume, so the modulus it gives is lower
-    /// than nominal (about an eighth under uniform pressure on a dome with a fixed base, more
-    /// under a load on its top); measured: 2.5 % compression of a 50 cm³ expander under the
-    /// default skin, 1.2 % at 100 cm³. `C` = 0.5.
+    /// bulk modulus of 100 MPa — below water's 2.2 GPa, which would need a smaller step, but
+    /// it holds the volume within `p/K` ≈ 0.1 % under the skin's pressure (≈ 0.1 MPa);
+    /// eq. (5) at a radial modulus of 10 MPa with `C` = 0.5.
     fn default() -> Self {
         ImplantParams {
             shell_young: 3.0e7,
             shell_poisson: 0.45,
             shell_thickness: 0.05,
             fill_density: WATER_DENSITY,
-            fill_bulk_modulus: 3.0e9,
+            fill_bulk_modulus: 1.0e9,
+            radial_modulus: 1.0e8,
             volume_coupling: 0.5,
         }
     }
@@ -79,6 +83,7 @@ impl ImplantParams {
             ("shell_thickness", self.shell_thickness),
             ("fill_density", self.fill_density),
             ("fill_bulk_modulus", self.fill_bulk_modulus),
+            ("radial_modulus", self.radial_modulus),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(ImplantError::InvalidParameter {
@@ -247,7 +252,7 @@ pub fn implant_system(
     let mut system = MassSpringSystem::new(particles, springs)?;
     let area = mesh.area();
     let t = mesh.triangle_count() as f64;
-    let k_v = params.fill_bulk_modulus * area * area / (3.0 * t * t * volume);
+    let k_v = params.radial_modulus * area * area / (3.0 * t * t * volume);
     system.add_volume_preservation(VolumePreservation::new(
         mesh,
         &masses,
@@ -255,6 +260,7 @@ pub fn implant_system(
         k_v as f32,
         params.volume_coupling as f32,
     )?)?;
+    system.add_volume_pressure(VolumePressure::new(mesh, 0, params.fill_bulk_modulus)?)?;
     Ok(system)
 }
 

@@ -65,6 +65,9 @@ pub struct LayerParams {
     pub depth: f64,
     /// Young's modulus of the springs between the layers (the tissue slab), g/(cm·s²).
     pub slab_young: f64,
+    /// The thinnest the slab may be squeezed, as a fraction of `depth` (see
+    /// [`TissueLayers::hold_thickness`]); 0 turns the guard off.
+    pub min_thickness: f64,
     /// Young's modulus of the loose subcutaneous tissue that anchors layer 2, g/(cm·s²).
     pub anchor_young: f64,
 }
@@ -88,6 +91,7 @@ impl Default for LayerParams {
             depth: 1.0,
             anchor_young: 2.0e4,
             slab_young: 2.0e7,
+            min_thickness: 0.25,
         }
     }
 }
@@ -109,6 +113,13 @@ impl LayerParams {
         positive("skin_thickness", self.skin_thickness)?;
         positive("density", self.density)?;
         positive("depth", self.depth)?;
+        if !(0.0..1.0).contains(&self.min_thickness) {
+            return Err(ImplantError::InvalidParameter {
+                name: "min_thickness",
+                value: self.min_thickness,
+                expected: "in [0, 1) (a fraction of the depth)".into(),
+            });
+        }
         if !(self.anchor_young.is_finite() && self.anchor_young >= 0.0) {
             return Err(ImplantError::InvalidParameter {
                 name: "anchor_young",
@@ -135,6 +146,7 @@ pub struct TissueLayers {
     inner: TriMesh,
     normals: Vec<Vec3>,
     boundary: Vec<u32>,
+    min_thickness: f32,
 }
 
 impl TissueLayers {
@@ -290,7 +302,58 @@ impl TissueLayers {
             inner,
             normals,
             boundary,
+            min_thickness: (params.min_thickness * params.depth) as f32,
         })
+    }
+
+    /// The thinnest the slab may be (cm): [`LayerParams::min_thickness`] × depth.
+    pub fn min_thickness(&self) -> f32 {
+        self.min_thickness
+    }
+
+    /// Keeps layer 1 at least [`TissueLayers::min_thickness`] above layer 2, measured along
+    /// layer 2's current vertex normals; returns how many vertices it moved. `scratch` holds
+    /// the normals between calls.
+    ///
+    /// Linear springs let a slab squeezed hard enough pass through zero thickness and turn
+    /// inside out, a state tissue cannot reach (it thins and flows aside). A layer-1 particle
+    /// found closer than the minimum is moved out to it and its velocity towards layer 2
+    /// removed: layer 2 is its support, as the implant is layer 2's.
+    pub fn hold_thickness(&mut self, scratch: &mut Vec<Vec3A>) -> u32 {
+        let min = self.min_thickness;
+        if min <= 0.0 {
+            return 0;
+        }
+        let n = self.normals.len();
+        scratch.clear();
+        scratch.resize(n, Vec3A::ZERO);
+        let (position, velocity, inverse_mass) = self.system.particles_mut().state_mut();
+        for t in self.inner.triangles() {
+            let [a, b, c] = t.map(|r| position[Self::particle(Layer::Inner, r) as usize]);
+            let normal = (b - a).cross(c - a);
+            for &r in t {
+                scratch[r as usize] += normal;
+            }
+        }
+        let mut moved = 0;
+        for (r, normal) in scratch.iter().enumerate() {
+            let outer = Self::particle(Layer::Outer, r as u32) as usize;
+            let inner = Self::particle(Layer::Inner, r as u32) as usize;
+            if inverse_mass[outer] == 0.0 {
+                continue;
+            }
+            let normal = normal.normalize_or_zero();
+            let gap = (position[outer] - position[inner]).dot(normal);
+            if gap < min {
+                position[outer] += normal * (min - gap);
+                let approach = (velocity[outer] - velocity[inner]).dot(normal);
+                if approach < 0.0 {
+                    velocity[outer] -= normal * approach;
+                }
+                moved += 1;
+            }
+        }
+        moved
     }
 
     /// The particle of region vertex `vertex` in `layer`.

@@ -67,6 +67,7 @@ mod error;
 mod layout;
 mod mass;
 mod particles;
+mod pressure;
 #[doc(hidden)]
 pub mod scenes;
 mod spring;
@@ -78,6 +79,7 @@ pub use adaptive::AdaptiveStep;
 pub use error::MssError;
 pub use mass::{masses_from_tets, masses_from_triangles, sheet_mass, WATER_DENSITY};
 pub use particles::Particles;
+pub use pressure::VolumePressure;
 pub use spring::{spring_force, springs_from_triangles, van_gelder, Anchor, SheetMaterial, Spring};
 pub use stop::{RunReport, SettleDetector, StopCriterion, StopReason};
 pub use system::{Integrator, MassSpringSystem, StepReport};

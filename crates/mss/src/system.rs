@@ -4,7 +4,7 @@ use glam::{Vec3, Vec3A};
 
 use crate::layout::{AnchorRecord, Layout};
 use crate::spring::{spring_force, Anchor, Spring};
-use crate::{MssError, Particles, VolumePreservation};
+use crate::{MssError, Particles, VolumePreservation, VolumePressure};
 
 /// How velocities and positions advance.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -75,6 +75,7 @@ pub struct MassSpringSystem {
     springs: Vec<Spring>,
     anchors: Vec<AnchorRecord>,
     volumes: Vec<VolumePreservation>,
+    pressures: Vec<VolumePressure>,
     external: Vec<Vec3A>,
     gravity: Vec3A,
     damping: f32,
@@ -104,6 +105,7 @@ impl MassSpringSystem {
             springs,
             anchors: Vec::new(),
             volumes: Vec::new(),
+            pressures: Vec::new(),
             external: Vec::new(),
             gravity: Vec3A::ZERO,
             damping: 1.0,
@@ -187,7 +189,7 @@ impl MassSpringSystem {
     /// `Kᵢ` and whose mass is `mᵢ` bounds the squared angular frequencies by
     /// `ω² ≤ 2·max Kᵢ/mᵢ`, and symplectic Euler is stable for `ωh < 2`; so
     /// `h < 2/√(2·max Kᵢ/mᵢ)`. Volume preservation adds `cᵢ·k_v·(C + Σⱼ cⱼ/3)` to `Kᵢ` (the
-    /// row sum of its eq. (5) coupling). The bound is exact for two equal masses on one spring,
+    /// row sum of its eq. (5) coupling) and a fill's pressure `K/V₀·|∇ᵢV|·Σⱼ|∇ⱼV|`. The bound is exact for two equal masses on one spring,
     /// and conservative otherwise. Damping makes no difference to it.
     pub fn stable_time_step(&self) -> Option<f32> {
         let mut k = vec![0.0f64; self.particles.len()];
@@ -204,12 +206,24 @@ impl MassSpringSystem {
                 k[p as usize] += f64::from(c) * f64::from(v.k_v) * (f64::from(v.c) + coupling);
             }
         }
+        for p in &self.pressures {
+            for (i, row) in p.row_stiffness() {
+                k[i as usize] += row;
+            }
+        }
         let worst = k
             .iter()
             .zip(&self.particles.inverse_mass)
             .map(|(k, &w)| k * f64::from(w))
             .fold(0.0f64, f64::max);
         (worst > 0.0).then(|| (2.0 / (2.0 * worst).sqrt()) as f32)
+    }
+
+    /// Adds the pressure of an enclosed fill ([`VolumePressure`]).
+    pub fn add_volume_pressure(&mut self, pressure: VolumePressure) -> Result<(), MssError> {
+        pressure.check(self.particles.len())?;
+        self.pressures.push(pressure);
+        Ok(())
     }
 
     /// Gravity (cm/s²), e.g. `(0, 0, -981)`.
@@ -357,6 +371,9 @@ impl MassSpringSystem {
                 }
             });
             add_springs(&springs[layout.far()], position, force, 0);
+        }
+        for p in &self.pressures {
+            p.add_forces(position, force);
         }
         for v in &self.volumes {
             v.add_forces(position, mass, force, &mut self.volume_scratch);
