@@ -1,0 +1,65 @@
+//! End-to-end timing of the thesis's Table 2 runs (a bench binary, not criterion: one run takes
+//! seconds). `cargo bench -p tissue-implant --bench table2 [-- REPEATS]` runs the round 7 cm
+//! implant of 50, 100 and 150 cm³ under the 20 cm plane of 4225 vertices with the default
+//! parameters, `REPEATS` times each (default 5), and prints per volume the median wall time,
+//! the steps, the stop reason and the results (area gain, volume difference, compression).
+#![allow(missing_docs)]
+
+use std::ops::ControlFlow;
+use std::time::Duration;
+
+use glam::Vec3;
+use tissue_implant::{
+    default_radius, place_implant, select_region_with, ImplantShape, ImplantSpec, Insertion,
+    InsertionOutcome, InsertionParams, RegionOptions, RegionRule, TissueLayers,
+};
+
+fn table2_run(volume: f64) -> Result<InsertionOutcome, Box<dyn std::error::Error>> {
+    let patient = tissue_mesh::grid(65, 20.0)?;
+    let selection = select_region_with(
+        &patient,
+        Vec3::ZERO,
+        default_radius(3.5)?,
+        &RegionOptions {
+            rule: RegionRule::TouchesVertex,
+            ..RegionOptions::default()
+        },
+    )?;
+    let params = InsertionParams::default();
+    let layers = TissueLayers::new(selection.mesh(), &params.layers)?;
+    let spec = ImplantSpec::new(ImplantShape::Round { diameter: 7.0 }, volume);
+    let implant = place_implant(&layers, &spec, Vec3::ZERO, Vec3::Z, Vec3::X)?;
+    let mut insertion = Insertion::new(selection.mesh(), &implant, &params)?;
+    Ok(insertion.run(|_| ControlFlow::Continue(()))?)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let repeats: usize = std::env::args()
+        .skip(1)
+        .find_map(|a| a.parse().ok())
+        .unwrap_or(5);
+    println!("Table 2: 20 cm plane (4225 vertices), round 7 cm implant; median of {repeats}");
+    println!("volume  wall(median)  steps  stop        gain cm²  vol.diff cm³  compression");
+    for volume in [50.0, 100.0, 150.0] {
+        let mut times: Vec<Duration> = Vec::new();
+        let mut last = None;
+        for _ in 0..repeats {
+            let out = table2_run(volume)?;
+            times.push(out.wall_time);
+            last = Some(out);
+        }
+        times.sort();
+        if let Some(out) = last {
+            println!(
+                "{volume:>6}  {:>10.3} s  {:>5}  {:<10}  {:>8.2}  {:>12.2}  {:>10.3} %",
+                times[times.len() / 2].as_secs_f64(),
+                out.steps,
+                format!("{:?}", out.stop_reason),
+                out.area_gain,
+                out.volume_difference,
+                100.0 * out.implant_compression
+            );
+        }
+    }
+    Ok(())
+}
