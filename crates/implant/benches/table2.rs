@@ -1,7 +1,7 @@
 //! End-to-end timing of the thesis's Table 2 runs (a bench binary, not criterion: one run takes
 //! seconds). `cargo bench -p tissue-implant --bench table2 [-- REPEATS]` runs the round 7 cm
 //! implant of 50, 100 and 150 cm³ under the 20 cm plane of 4225 vertices with the default
-//! parameters, `REPEATS` times each (default 5), and prints per volume the median wall time,
+//! parameters (or the volumes given after `REPEATS`), `REPEATS` times each (default 5), and prints per volume the median wall time,
 //! the steps, the stop reason and the results (area gain, volume difference, compression).
 #![allow(missing_docs)]
 
@@ -34,13 +34,20 @@ fn table2_run(volume: f64) -> Result<InsertionOutcome, Box<dyn std::error::Error
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let repeats: usize = std::env::args()
+    // Numbers among the arguments (cargo bench adds `--bench`): repeats, then volumes.
+    let numbers: Vec<f64> = std::env::args()
         .skip(1)
-        .find_map(|a| a.parse().ok())
-        .unwrap_or(5);
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    let repeats = numbers.first().map_or(5, |&n| n.max(1.0) as usize);
+    let volumes = if numbers.len() > 1 {
+        numbers[1..].to_vec()
+    } else {
+        vec![50.0, 100.0, 150.0]
+    };
     println!("Table 2: 20 cm plane (4225 vertices), round 7 cm implant; median of {repeats}");
     println!("volume  wall(median)  steps  stop        gain cm²  vol.diff cm³  compression");
-    for volume in [50.0, 100.0, 150.0] {
+    for &volume in &volumes {
         let mut times: Vec<Duration> = Vec::new();
         let mut last = None;
         for _ in 0..repeats {
