@@ -48,6 +48,7 @@ mod geodesic;
 mod insertion;
 mod layers;
 mod outcome;
+mod plane_press;
 mod planning;
 mod region;
 mod shape;
@@ -60,6 +61,7 @@ pub use insertion::{
 };
 pub use layers::{Layer, LayerParams, TissueLayers};
 pub use outcome::{replace_region, vertex_displacements, vertex_stretch, FieldRange};
+pub use plane_press::{plane_press, plane_press_region, PlanePressOutcome, PlanePressParams};
 pub use planning::{sweep, volume_for_gain, InverseOptions, InverseSearch, PlanningRun};
 pub use region::{
     default_radius, default_snap_distance, geodesic_distances, select_region, select_region_with,
