@@ -4,7 +4,8 @@
 //! - The tissue is [`TissueLayers`] with the material of [`LayerParams::default`] (one parameter
 //!   set for every scenario); only the geometry is the scenario's own: the distance between the
 //!   layers, [`PlanePressParams::depth`] (0.05 cm by default — the insertion's 1 cm would put
-//!   layer 2 as deep as the plane is wide).
+//!   layer 2 as deep as the plane is wide). The slab's thickness guard is off by default (see
+//!   [`PlanePressParams::default`]).
 //! - The sphere is **kinematic**: a [`MassSpringSystem`] over its vertices with no springs and
 //!   every particle fixed, given the same constant velocity. Fixed particles with a velocity move
 //!   by it and take no impulse (see the `MassSpringSystem` docs), so the tissue gives way to the
@@ -50,7 +51,8 @@ pub struct PlanePressParams {
     /// The distance between the layers (cm): the scenario's geometry. It replaces
     /// [`LayerParams::depth`] of [`PlanePressParams::layers`].
     pub depth: f64,
-    /// The tissue's material (its `depth` is replaced by [`PlanePressParams::depth`]).
+    /// The tissue's material and the slab's thickness guard (its `depth` is replaced by
+    /// [`PlanePressParams::depth`]).
     pub layers: LayerParams,
     /// Stepping and collisions (the stop criterion is not used: the run ends when the sphere
     /// gets there; its step limit still bounds the run).
@@ -62,24 +64,34 @@ impl Default for PlanePressParams {
     /// 100 cm/s; layers 0.05 cm apart; [`LayerParams::default`]'s material and
     /// [`RunParams::default`].
     ///
+    /// The slab's thickness guard ([`LayerParams::min_thickness`], a numerical safeguard, not
+    /// material) is off: the press squeezes the slab by under 10 %, and at 65² and 129² the
+    /// guard never engages, but at 257² it engages where the sphere's pole meets layer 2 (step
+    /// ≈ 600 at 200 cm/s) and its position projection then feeds energy into the stiff slab
+    /// until the run blows up (1 vertex held, then 5, 57, 292, … 3119 within 200 steps).
+    ///
     /// The speed: the end state should not depend on it, so the sphere must be slow against the
     /// tissue's waves and its damping time (2 ms by default). The run ends with the sphere, not
     /// with the tissue at rest, so whatever the impact at the start set ringing and has not yet
     /// died away is still in the result. The cost is `travel / (speed·h)` steps, and `h` shrinks
     /// with the edge length (1.4 µs at 65², 0.71 µs at 129², 0.35 µs at 257²).
     ///
-    /// Measured at 65² (0.305 cm of travel): the area after lies within 0.67 ± 0.2 % for every
-    /// speed from 50 to 400 cm/s. The volume is more sensitive: 0.0634–0.0640 cm³ at 50–125 cm/s
-    /// but 0.0628–0.0652 cm³ at 150–300 cm/s, where the run (1–2 ms) is shorter than the damping
-    /// time. At 100 cm/s halving the speed changes the area by 0.02 % and the volume by 0.4 %;
-    /// the runs take about 2 200, 4 300 and 8 600 steps at 65², 129², 257².
+    /// Measured at 65² (0.30 cm of travel): the area after lies in 0.6675–0.6718 cm² (±0.3 %)
+    /// for every speed from 50 to 400 cm/s. The volume is more sensitive: 0.0634–0.0640 cm³ at
+    /// 50–125 cm/s but 0.0609–0.0652 cm³ at 150–400 cm/s, where the run (0.8–2 ms) is shorter
+    /// than the damping time. At 100 cm/s halving the speed changes the area by 0.02 % and the
+    /// volume by 0.4 % (129²: 0.03 % and 0.5 %); at 200 cm/s the volume would change by 1.6 %.
+    /// The runs take about 2 200, 4 300 and 8 500 steps at 65², 129², 257².
     fn default() -> Self {
         PlanePressParams {
             sphere_radius: 0.25,
             sphere_resolution: (32, 31),
             speed: 100.0,
             depth: 0.05,
-            layers: LayerParams::default(),
+            layers: LayerParams {
+                min_thickness: 0.0,
+                ..LayerParams::default()
+            },
             run: RunParams::default(),
         }
     }

@@ -2,7 +2,7 @@
 //! run must keep, the region's orientation, cancel and the parameter errors.
 //!
 //! The runs here go at 400 cm/s, four times the default speed, to stay short: the area after
-//! does not depend on the speed (at 65², 0.6676–0.6718 cm² for every speed from 50 to 400 cm/s;
+//! does not depend on the speed (at 65², 0.6675–0.6718 cm² for every speed from 50 to 400 cm/s;
 //! see [`PlanePressParams::default`]), and the invariants hold at any speed.
 
 use std::ops::ControlFlow;
