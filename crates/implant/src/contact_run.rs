@@ -153,7 +153,8 @@ pub struct StepSummary {
     pub displacement: f64,
     /// Contacts found in phase 3.
     pub contacts: u32,
-    /// Layer-2 edges still through the body after the correction (0 when it held).
+    /// Layer-2 edges still through the body after the correction (0 when it held, and 0 when the
+    /// correction was skipped because nothing moved far enough to cross).
     pub remaining_crossings: u32,
     /// Layer-1 particles held off layer 2 ([`TissueLayers::hold_thickness`]).
     pub thinned: u32,
@@ -412,11 +413,11 @@ impl ContactRun {
             .body
             .update_positions(h)
             .map_err(|e| diverged(e, "implant position"))?;
+        let thinned = self.layers.hold_thickness(&mut self.normals_scratch);
+        let tissue = self.layers.system_mut();
         // Phase 3's contacts cover every pair closer than the contact distance and stopped
         // their approach, so an edge can only have crossed if something moved by a good part
         // of that distance; only then is the (detection-priced) correction run.
-        let thinned = self.layers.hold_thickness(&mut self.normals_scratch);
-        let tissue = self.layers.system_mut();
         let moved = a.max_move + b.max_move;
         let remaining = if moved >= 0.5 * self.contact_distance || !self.params.skip_safe_separation
         {

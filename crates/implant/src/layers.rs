@@ -81,7 +81,8 @@ impl Default for LayerParams {
     /// slab springs of 2 MPa. The slab is ten times stiffer than skin on purpose: linear
     /// springs squeezed past zero length turn the slab inside out, and under the skin's
     /// tension over an expander a skin-stiff slab did (found running Table 2); at 2 MPa it
-    /// thins by a few per cent.
+    /// thins by 1–8 % over the top of Table 2's expanders. The thickness guard holds layer 1
+    /// at least a quarter of the depth above layer 2.
     fn default() -> Self {
         LayerParams {
             young: 2.0e6,
@@ -407,7 +408,8 @@ impl TissueLayers {
     }
 
     /// Moves every free particle of both layers `height` (cm) outward along the region's rest
-    /// normals: the thesis's start, with the tissue lifted by the implant's height.
+    /// normals: the thesis's start, with the tissue lifted by the implant's height. (The insertion
+    /// run fills the expander under the resting tissue instead; see `Insertion`.)
     pub fn lift(&mut self, height: f32) -> Result<(), ImplantError> {
         let heights = vec![height; self.normals.len()];
         self.lift_by(&heights)
