@@ -1,0 +1,443 @@
+//! The scenario set-up in one place: region, layers, implant, run — usable without threads.
+//!
+//! [`prepare`] / [`plan`] run one insertion, [`plan_sweep`] a series of implant volumes in
+//! parallel, [`plan_inverse`] the search for the volume of a target area gain. The worker
+//! ([`Handle`](crate::Handle)) calls the same code, so a result from the worker and from these
+//! functions with the same inputs is the same, bit for bit (the runs are deterministic).
+
+use std::ops::ControlFlow;
+use std::time::Duration;
+
+use glam::Vec3;
+use tissue_implant::{
+    default_radius, place_implant, select_region_with, sweep, volume_for_gain, Implant,
+    ImplantError, ImplantShape, ImplantSpec, InsertionOutcome, InsertionParams, InverseOptions,
+    InverseSearch, Progress, RegionOptions, RegionSelection, TissueLayers,
+};
+use tissue_mesh::TriMesh;
+
+use crate::settle::insertion_floor;
+
+/// Where the implant goes on the patient surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// The picked point (cm). It is snapped to the nearest surface point, which becomes the
+    /// region's centre and the implant's centre; a point farther from the surface than
+    /// [`RegionOptions::max_snap_distance`] is refused ([`ImplantError::PointOffSurface`]).
+    pub point: Vec3,
+    /// The outward normal of the body at the point (the implant's dome side).
+    pub normal: Vec3,
+    /// The implant's local `x` direction (a rectangle's length); only its part across `normal`
+    /// is used.
+    pub tangent: Vec3,
+}
+
+impl Placement {
+    /// A placement at `point` facing `normal`, oriented by `tangent`.
+    pub fn new(point: Vec3, normal: Vec3, tangent: Vec3) -> Self {
+        Placement {
+            point,
+            normal,
+            tangent,
+        }
+    }
+}
+
+/// The inputs of one insertion run.
+#[derive(Debug, Clone)]
+pub struct InsertionJob {
+    /// The patient surface (normals out of the body).
+    pub patient: TriMesh,
+    /// Where the implant goes.
+    pub placement: Placement,
+    /// The implant (shape, volume, vertex budget).
+    pub implant: ImplantSpec,
+    /// The region's geodesic radius (cm); `None`: [`default_radius`] of the implant's footprint
+    /// radius ([`footprint_radius`]).
+    pub region_radius: Option<f64>,
+    /// How the region is selected (snap distance, triangle rule).
+    pub region: RegionOptions,
+    /// Tissue, implant and run parameters.
+    pub params: InsertionParams,
+}
+
+impl InsertionJob {
+    /// A job with the default region radius, [`RegionOptions::default`] and
+    /// [`InsertionParams::default`].
+    pub fn new(patient: TriMesh, placement: Placement, implant: ImplantSpec) -> Self {
+        InsertionJob {
+            patient,
+            placement,
+            implant,
+            region_radius: None,
+            region: RegionOptions::default(),
+            params: InsertionParams::default(),
+        }
+    }
+
+    /// The region radius the job uses (cm): [`InsertionJob::region_radius`] or the default.
+    ///
+    /// # Errors
+    /// Those of [`footprint_radius`] and [`default_radius`].
+    pub fn radius(&self) -> Result<f64, ImplantError> {
+        match self.region_radius {
+            Some(r) => Ok(r),
+            None => default_radius(footprint_radius(&self.implant.shape)?),
+        }
+    }
+}
+
+/// A series of insertions that differ only in the implant volume.
+#[derive(Debug, Clone)]
+pub struct SweepJob {
+    /// Everything but the volume (its `implant.volume_cm3` is ignored).
+    pub base: InsertionJob,
+    /// The implant volumes to run (cm³), in the order the results are wanted.
+    pub volumes: Vec<f64>,
+}
+
+/// The search for the implant volume that gives a target area gain ([`volume_for_gain`]).
+#[derive(Debug, Clone)]
+pub struct InverseJob {
+    /// Everything but the volume (its `implant.volume_cm3` is ignored).
+    pub base: InsertionJob,
+    /// The wanted area gain (cm²).
+    pub target_gain: f64,
+    /// The volumes to search between, `(low, high)` (cm³).
+    pub bracket: (f64, f64),
+    /// Tolerances and run budget.
+    pub options: InverseOptions,
+}
+
+/// The plane press of SPEC Table 1 ([`tissue_implant::plane_press`]).
+#[derive(Debug, Clone)]
+pub struct PlanePressJob {
+    /// The region pressed (an open patch; e.g. [`tissue_implant::plane_press_region`]`(65)`'s
+    /// mesh).
+    pub region: TriMesh,
+    /// The press's parameters.
+    pub params: tissue_implant::PlanePressParams,
+}
+
+/// The radius of the smallest circle around the implant's local origin that holds its base
+/// (cm): half the diameter of a round base, the centre-to-corner distance of a rectangle, half
+/// the centre-line length of a crescent (which bounds its tips).
+///
+/// # Errors
+/// [`ImplantError::InvalidParameter`] (`name` `"region_radius"`) for a shape this crate does not
+/// know (give [`InsertionJob::region_radius`] explicitly).
+pub fn footprint_radius(shape: &ImplantShape) -> Result<f64, ImplantError> {
+    match *shape {
+        ImplantShape::Round { diameter } => Ok(0.5 * f64::from(diameter)),
+        ImplantShape::Rectangular {
+            length,
+            width,
+            corner_radius,
+        } => {
+            let r = f64::from(corner_radius);
+            let x = (0.5 * f64::from(length) - r).max(0.0);
+            let y = (0.5 * f64::from(width) - r).max(0.0);
+            Ok(x.hypot(y) + r)
+        }
+        ImplantShape::Crescent { length, .. } => Ok(0.5 * f64::from(length)),
+        _ => Err(ImplantError::InvalidParameter {
+            name: "region_radius",
+            value: f64::NAN,
+            expected: "an explicit region radius (cm) for this implant shape".into(),
+        }),
+    }
+}
+
+/// The region and its tissue layers, shared by every run of a job.
+struct Scene {
+    selection: RegionSelection,
+    layers: TissueLayers,
+}
+
+fn cancelled_check(cancelled: &dyn Fn() -> bool) -> Result<(), ImplantError> {
+    if cancelled() {
+        Err(ImplantError::Cancelled { steps: 0 })
+    } else {
+        Ok(())
+    }
+}
+
+fn scene(job: &InsertionJob, cancelled: &dyn Fn() -> bool) -> Result<Scene, ImplantError> {
+    let _span = tracing::info_span!("app_region").entered();
+    let radius = job.radius()?;
+    let selection = select_region_with(&job.patient, job.placement.point, radius, &job.region)?;
+    cancelled_check(cancelled)?;
+    let layers = TissueLayers::new(selection.mesh(), &job.params.layers)?;
+    cancelled_check(cancelled)?;
+    Ok(Scene { selection, layers })
+}
+
+fn build(
+    scene: &Scene,
+    job: &InsertionJob,
+    spec: &ImplantSpec,
+    cancelled: &dyn Fn() -> bool,
+) -> Result<(Implant, tissue_implant::Insertion), ImplantError> {
+    let _span = tracing::info_span!("app_implant", volume = spec.volume_cm3).entered();
+    let implant = place_implant(
+        &scene.layers,
+        spec,
+        scene.selection.centre().position(),
+        job.placement.normal,
+        job.placement.tangent,
+    )?;
+    cancelled_check(cancelled)?;
+    let insertion = tissue_implant::Insertion::new(scene.selection.mesh(), &implant, &job.params)?;
+    cancelled_check(cancelled)?;
+    Ok((implant, insertion))
+}
+
+/// An insertion set up and ready to run ([`prepare`]).
+#[derive(Debug, Clone)]
+pub struct PreparedInsertion {
+    selection: RegionSelection,
+    implant: Implant,
+    insertion: tissue_implant::Insertion,
+    settle_floor: f64,
+}
+
+impl PreparedInsertion {
+    /// The region of the patient surface.
+    pub fn selection(&self) -> &RegionSelection {
+        &self.selection
+    }
+
+    /// The implant as built on layer 2.
+    pub fn implant(&self) -> &Implant {
+        &self.implant
+    }
+
+    /// The run, not yet started.
+    pub fn insertion(&self) -> &tissue_implant::Insertion {
+        &self.insertion
+    }
+
+    /// The speed floor of the run's stop criterion (cm of summed displacement per step), as the
+    /// library derives it from [`tissue_implant::RunParams::settle_speed`].
+    pub fn settle_floor(&self) -> f64 {
+        self.settle_floor
+    }
+
+    /// Runs to the stop criterion or the step limit; `progress` is called after every step and
+    /// cancels with [`ControlFlow::Break`] ([`ImplantError::Cancelled`]).
+    ///
+    /// # Errors
+    /// Those of [`tissue_implant::Insertion::run`].
+    pub fn run(
+        self,
+        progress: impl FnMut(&Progress) -> ControlFlow<()>,
+    ) -> Result<PlannedInsertion, ImplantError> {
+        let PreparedInsertion {
+            selection,
+            mut insertion,
+            ..
+        } = self;
+        let _span = tracing::info_span!("app_run").entered();
+        let outcome = insertion.run(progress)?;
+        Ok(PlannedInsertion { selection, outcome })
+    }
+}
+
+/// The result of one insertion: the region and the run's outcome.
+#[derive(Debug, Clone)]
+pub struct PlannedInsertion {
+    /// The region of the patient surface that was simulated.
+    pub selection: RegionSelection,
+    /// Areas, volumes, fields and meshes after the run.
+    pub outcome: InsertionOutcome,
+}
+
+impl PlannedInsertion {
+    /// The patient surface with the region replaced by the result.
+    ///
+    /// # Errors
+    /// As [`InsertionOutcome::patient_after`] (a `patient` that is not the job's).
+    pub fn patient_after(&self, patient: &TriMesh) -> Result<TriMesh, ImplantError> {
+        self.outcome.patient_after(patient, &self.selection)
+    }
+}
+
+/// Sets up one insertion: selects the region around the snapped point, builds the tissue
+/// layers, places the implant on layer 2 under the region's centre (frame from
+/// [`Placement::normal`] and [`Placement::tangent`]), and prepares the run.
+///
+/// # Errors
+/// - [`ImplantError::PointOffSurface`], [`ImplantError::EmptyRegion`],
+///   [`ImplantError::RegionCoversSurface`] from the region selection;
+/// - [`ImplantError::FootprintOutsideRegion`] when the implant does not fit under the region;
+/// - [`ImplantError::InvalidParameter`] for a non-positive volume or another parameter out of
+///   range, and the other errors of the library's set-up.
+pub fn prepare(job: &InsertionJob) -> Result<PreparedInsertion, ImplantError> {
+    prepare_with(job, &|| false)
+}
+
+/// [`prepare`] with a cancel check between the set-up phases (a cancel gives
+/// [`ImplantError::Cancelled`] with 0 steps).
+pub(crate) fn prepare_with(
+    job: &InsertionJob,
+    cancelled: &dyn Fn() -> bool,
+) -> Result<PreparedInsertion, ImplantError> {
+    let _span = tracing::info_span!("app_setup").entered();
+    let scene = scene(job, cancelled)?;
+    let (implant, insertion) = build(&scene, job, &job.implant, cancelled)?;
+    let settle_floor = insertion_floor(&insertion, &implant, &job.params.run);
+    Ok(PreparedInsertion {
+        selection: scene.selection,
+        implant,
+        insertion,
+        settle_floor,
+    })
+}
+
+/// Sets up and runs one insertion ([`prepare`], then [`PreparedInsertion::run`]): the
+/// function the `insert` binary calls.
+///
+/// # Errors
+/// Those of [`prepare`] and [`tissue_implant::Insertion::run`].
+pub fn plan(
+    job: &InsertionJob,
+    progress: impl FnMut(&Progress) -> ControlFlow<()>,
+) -> Result<PlannedInsertion, ImplantError> {
+    prepare(job)?.run(progress)
+}
+
+/// One run of a sweep.
+#[derive(Debug, Clone)]
+pub struct SweepRun {
+    /// The implant volume run (cm³).
+    pub volume: f64,
+    /// Its outcome, or why it failed (a failed run does not stop the others).
+    pub result: Result<InsertionOutcome, ImplantError>,
+}
+
+/// The result of a sweep: the region (the same for every run) and one run per volume, in the
+/// order of [`SweepJob::volumes`].
+#[derive(Debug, Clone)]
+pub struct SweepResult {
+    /// The region of the patient surface.
+    pub selection: RegionSelection,
+    /// One entry per volume, in input order.
+    pub runs: Vec<SweepRun>,
+}
+
+/// Runs every volume of `job` in parallel ([`tissue_implant::sweep`], rayon's global pool) on
+/// one region; `progress(run, p)` is called after every step of run `run` (the index into
+/// [`SweepJob::volumes`]) from the thread running it, and cancels that run with
+/// [`ControlFlow::Break`].
+///
+/// # Errors
+/// The region set-up's errors (as [`prepare`]); the errors of single runs are in
+/// [`SweepRun::result`].
+pub fn plan_sweep(
+    job: &SweepJob,
+    progress: impl Fn(usize, &Progress) -> ControlFlow<()> + Sync,
+) -> Result<SweepResult, ImplantError> {
+    sweep_with(job, &|| false, |run, _| {
+        let progress = &progress;
+        move |p: &Progress| progress(run, p)
+    })
+}
+
+/// [`plan_sweep`] with a cancel check before every set-up phase and a per-run observer made by
+/// `observer(run, settle_floor)` once the run is set up.
+pub(crate) fn sweep_with<M, O>(
+    job: &SweepJob,
+    cancelled: &(dyn Fn() -> bool + Sync),
+    observer: O,
+) -> Result<SweepResult, ImplantError>
+where
+    O: Fn(usize, f64) -> M + Sync,
+    M: FnMut(&Progress) -> ControlFlow<()>,
+{
+    let _span = tracing::info_span!("app_sweep", runs = job.volumes.len()).entered();
+    let scene = scene(&job.base, cancelled)?;
+    let indexed: Vec<(usize, f64)> = job.volumes.iter().copied().enumerate().collect();
+    let results = sweep(&indexed, |&(run, volume)| {
+        let _span = tracing::info_span!("app_sweep_run", run, volume).entered();
+        cancelled_check(cancelled)?;
+        let spec = ImplantSpec {
+            volume_cm3: volume,
+            ..job.base.implant
+        };
+        let (implant, mut insertion) = build(&scene, &job.base, &spec, cancelled)?;
+        let observe = observer(
+            run,
+            insertion_floor(&insertion, &implant, &job.base.params.run),
+        );
+        insertion.run(observe)
+    });
+    let runs = job
+        .volumes
+        .iter()
+        .zip(results)
+        .map(|(&volume, result)| SweepRun { volume, result })
+        .collect();
+    Ok(SweepResult {
+        selection: scene.selection,
+        runs,
+    })
+}
+
+/// Searches the volume of [`InverseJob::bracket`] whose run gives [`InverseJob::target_gain`]
+/// ([`volume_for_gain`]: sequential, each run depends on the ones before); `progress(run, p)` is
+/// called after every step of run `run` (0 for the first run of the search) and cancels the
+/// search with [`ControlFlow::Break`].
+///
+/// # Errors
+/// The region set-up's errors (as [`prepare`]), those of [`volume_for_gain`] (e.g.
+/// [`ImplantError::TargetNotBracketed`]) and the first failed run's.
+pub fn plan_inverse(
+    job: &InverseJob,
+    mut progress: impl FnMut(usize, &Progress) -> ControlFlow<()>,
+) -> Result<InverseSearch, ImplantError> {
+    inverse_with(job, &|| false, |event| match event {
+        RunEvent::Start(..) => ControlFlow::Continue(()),
+        RunEvent::Step(run, p) => progress(run, p),
+    })
+}
+
+/// What [`inverse_with`]'s observer sees: a run set up, or a step of it.
+pub(crate) enum RunEvent<'a> {
+    /// Run `run` is set up and about to start; its criterion's speed floor.
+    Start(usize, f64),
+    /// A step of run `run`.
+    Step(usize, &'a Progress),
+}
+
+/// [`plan_inverse`] with a cancel check and an observer of every run's start and steps.
+pub(crate) fn inverse_with(
+    job: &InverseJob,
+    cancelled: &dyn Fn() -> bool,
+    mut observe: impl FnMut(RunEvent<'_>) -> ControlFlow<()>,
+) -> Result<InverseSearch, ImplantError> {
+    let _span = tracing::info_span!("app_inverse", target = job.target_gain).entered();
+    let scene = scene(&job.base, cancelled)?;
+    let mut run = 0usize;
+    volume_for_gain(job.target_gain, job.bracket, &job.options, |volume| {
+        let _span = tracing::info_span!("app_inverse_run", run, volume).entered();
+        let spec = ImplantSpec {
+            volume_cm3: volume,
+            ..job.base.implant
+        };
+        let (implant, mut insertion) = build(&scene, &job.base, &spec, cancelled)?;
+        let this = run;
+        run += 1;
+        let floor = insertion_floor(&insertion, &implant, &job.base.params.run);
+        if observe(RunEvent::Start(this, floor)).is_break() {
+            return Err(ImplantError::Cancelled { steps: 0 });
+        }
+        Ok(insertion
+            .run(|p| observe(RunEvent::Step(this, p)))?
+            .area_gain)
+    })
+}
+
+/// Wall time helper shared with the worker: a duration that never panics on clock oddities.
+pub(crate) fn saturating_elapsed(start: std::time::Instant) -> Duration {
+    std::time::Instant::now().saturating_duration_since(start)
+}
