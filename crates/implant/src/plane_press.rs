@@ -3,7 +3,7 @@
 //!
 //! - The tissue is [`TissueLayers`] with the material of [`LayerParams::default`] (one parameter
 //!   set for every scenario); only the geometry is the scenario's own: the distance between the
-//!   layers, [`PlanePressParams::depth`] (0.05 cm by default — the insertion's 1 cm would put
+//!   layers, [`PlanePressParams::depth`] (0.05 cm by default — the insertion's 0.3 cm would put
 //!   layer 2 as deep as the plane is wide). The slab's thickness guard is off by default (see
 //!   [`PlanePressParams::default`]).
 //! - The sphere is **kinematic**: a [`MassSpringSystem`] over its vertices with no springs and

@@ -65,9 +65,9 @@ fn structure_of_the_model() {
         .count();
     assert_eq!(fixed, 2 * 24);
     assert_eq!(layers.boundary().len(), 24);
-    // Mass = area × skin thickness × density.
+    // Mass = area × (skin thickness + depth) × density: the skin and the slab below it.
     let total: f64 = s.particles().masses().iter().map(|&m| f64::from(m)).sum();
-    let expected = region.area() * p.skin_thickness * p.density;
+    let expected = region.area() * (p.skin_thickness + p.depth) * p.density;
     assert!(
         (total - expected).abs() < 1e-5 * expected,
         "{total} vs {expected}"

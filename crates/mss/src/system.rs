@@ -174,6 +174,18 @@ impl MassSpringSystem {
         Ok(())
     }
 
+    /// Keeps only the anchors whose particle `keep` accepts (the others are removed: the
+    /// particle is no longer held to its target).
+    pub fn retain_anchors(&mut self, mut keep: impl FnMut(u32) -> bool) {
+        self.anchors.retain(|a| keep(a.particle));
+        self.rearrange();
+    }
+
+    /// The anchors' particles, in storage order.
+    pub fn anchored_particles(&self) -> impl Iterator<Item = u32> + '_ {
+        self.anchors.iter().map(|a| a.particle)
+    }
+
     /// Adds volume preservation (eq. 5) for one closed object.
     pub fn add_volume_preservation(&mut self, volume: VolumePreservation) -> Result<(), MssError> {
         volume.check(self.particles.len())?;
@@ -211,6 +223,7 @@ impl MassSpringSystem {
                 k[i as usize] += row;
             }
         }
+
         let worst = k
             .iter()
             .zip(&self.particles.inverse_mass)
@@ -375,6 +388,7 @@ impl MassSpringSystem {
         for p in &self.pressures {
             p.add_forces(position, force);
         }
+
         for v in &self.volumes {
             v.add_forces(position, mass, force, &mut self.volume_scratch);
         }

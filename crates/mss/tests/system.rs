@@ -382,3 +382,30 @@ fn bad_input_is_an_error_naming_the_element() {
     ));
     assert!(s.particles_mut().fix(3).is_err());
 }
+
+#[test]
+fn removed_anchors_no_longer_pull() {
+    // Three particles, each anchored 1 cm below where it is: k·1 cm downwards on each.
+    let p = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let mut s = MassSpringSystem::new(Particles::new(&p, &[1.0; 3]).unwrap(), Vec::new()).unwrap();
+    let anchors: Vec<Anchor> = (0..3)
+        .map(|i| Anchor {
+            particle: i,
+            k: 10.0 * (i + 1) as f32,
+            target: p[i as usize] - Vec3::Z,
+        })
+        .collect();
+    s.add_anchors(&anchors).unwrap();
+    s.retain_anchors(|i| i != 1);
+    assert_eq!(s.anchored_particles().collect::<Vec<_>>().len(), 2);
+    assert!(!s.anchored_particles().any(|i| i == 1));
+    s.compute_forces();
+    let f = s.particles().forces();
+    assert!((f[0].z + 10.0).abs() < 1e-6, "{}", f[0]);
+    assert_eq!(f[1].length(), 0.0);
+    assert!((f[2].z + 30.0).abs() < 1e-6, "{}", f[2]);
+    // The stable step no longer counts the removed anchor's stiffness: with only particle 2's
+    // 30 g/s² left as the stiffest, h = 2/√(2·30).
+    let h = s.stable_time_step().unwrap();
+    assert!((h - 2.0 / 60f32.sqrt()).abs() < 1e-5, "{h}");
+}
