@@ -3,8 +3,8 @@
 //!
 //! - The tissue is [`TissueLayers`] with the material of [`LayerParams::default`] (one parameter
 //!   set for every scenario); only the geometry is the scenario's own: the distance between the
-//!   layers, [`PlanePressParams::depth`] (0.05 cm by default — the insertion's 0.3 cm would put
-//!   layer 2 as deep as the plane is wide). The slab's thickness guard is off by default (see
+//!   layers, [`PlanePressParams::depth`] (0.05 cm by default, the thickness of the thesis's press; the insertion's 0.3 cm would put
+//!   layer 2 a third of the plane's width deep). The slab's thickness guard is off by default (see
 //!   [`PlanePressParams::default`]).
 //! - The sphere is **kinematic**: a [`MassSpringSystem`] over its vertices with no springs and
 //!   every particle fixed, given the same constant velocity. Fixed particles with a velocity move

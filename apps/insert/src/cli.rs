@@ -1,0 +1,464 @@
+//! The command line: flags, their defaults (taken from the libraries), and the long help with the
+//! units, the exit codes and the `--report` JSON contract.
+
+use std::path::PathBuf;
+
+use clap::{Parser, ValueEnum};
+use tissue_implant::{ImplantSpec, InsertionParams, InverseOptions, LayerParams};
+
+/// One kPa in the libraries' unit of stress, g/(cm·s²) (1 Pa = 10 g/(cm·s²)).
+pub const KPA: f64 = 1.0e4;
+
+const ABOUT: &str = "Plan a tissue-expander insertion: an incompressible implant is inserted \
+under a patch of skin on a patient's surface scan; a mass-spring simulation gives the stretched \
+skin, the area gained and the volume.";
+
+const LONG_ABOUT: &str = "\
+Plan a tissue-expander insertion: an incompressible implant is inserted under a patch of skin on \
+a patient's surface scan; a mass-spring simulation (two tissue layers over the implant) gives the \
+stretched skin, the area gained and the volume between the skin before and after.
+
+With no arguments it runs the thesis's Table 2 case: a 100 cm³ round implant of 7 cm diameter \
+under the centre of a flat 20 cm × 20 cm skin patch of 65 × 65 vertices (the plane of \
+fixtures/plane_20cm_65.obj, generated in code), region radius 5.25 cm, region rule \
+touches-vertex, normal +z, tangent +x, every tissue and run parameter at the library's default \
+(the defaults shown below are read from the library), and writes its picture to \
+insert_table2.png in the current directory.
+
+Your own case: give the scan (--mesh, an open surface patch with normals out of the body), its \
+unit (--unit), where the implant goes (--at X,Y,Z or --vertex N) and the implant (--shape, its \
+size, --volume). Example with the chest patch shipped in fixtures/ (decimetres):
+
+  insert --mesh fixtures/makehuman_chest_open.obj --unit dm --vertex 2277 \\
+         --diameter 6.5 --volume 50 --out chest_after.vtk --report chest.json --png chest.png
+
+UNITS. Inside, everything runs in centimetres, grams and seconds. --at is in the mesh's unit; \
+the mesh is scaled to cm on load. Implant sizes, --depth, --radius, --thickness are in cm, \
+--volume in cm³ (= mL), --young in kPa, --density in g/cm³. Output meshes (--out) are written \
+back in the mesh's unit (as are their displacement fields); the --report JSON and the summary \
+are in cm, cm², cm³ and seconds, as their names say.
+
+ORIENTATION. The implant's outward normal is the surface normal at the picked point, snapped to \
+the nearest surface point: the area-weighted vertex normals of the nearest triangle, \
+interpolated with the point's barycentric coordinates. Its tangent (the implant's local x axis: a \
+rectangle's length, a crescent's chord) is --tangent if given, else the world +x axis, or +y when \
+the normal is within 25° of ±x, in both cases projected onto the plane across the normal.";
+
+const AFTER_LONG_HELP: &str = "\
+OUTPUTS (written only after a successful run, all together, each atomically: a cancelled or \
+failed run leaves no output file and no temporary file):
+  --out FILE      the patient surface after the run, format from the extension: .obj .ply .stl \
+.vtk, in the mesh's unit. VTK carries the point fields `displacement` (how far each vertex moved, \
+mesh unit), `stretch` (area after / area before of the skin around the vertex) and `in_region` \
+(1 in the simulated region, 0 outside); displacement and stretch are 0 outside the region. \
+--out may be given several times.
+  --report FILE   JSON, one object (see below).
+  --png FILE      the surface before (grey) and after, coloured by --color with a colour bar; \
+outside the region displacement is 0 and stretch 1.
+  stdout          a summary table (single run), one row per run (--sweep), or the runs and the \
+answer (--target-gain).
+
+REPORT JSON (a contract: fields are only ever added). Single run:
+  tool, version, mode (\"single\"), inputs {...}, and
+  area_before_cm2, area_after_cm2, area_gain_cm2   skin region area before/after, gain
+  volume_difference_cm3                            volume between the skin before and after
+  implant_volume_cm3, implant_volume_end_cm3       implant volume as built, at the end
+  implant_compression                              1 - end/built (a fraction: 0.01 = 1 %)
+  dome_height_cm, max_displacement_cm, max_penetration_cm, boundary_unchanged
+  region_vertices, region_triangles, region_radius_cm
+  steps, max_steps, stop_reason (\"settled\" | \"step_limit\"), time_step_s, wall_time_s
+  inputs: mesh, mesh_generated, unit, cm_per_unit, mesh_vertices, mesh_triangles, at, vertex, \
+point_cm, surface_point_cm, normal, tangent, shape {kind, diameter_cm | length_cm, width_cm, \
+corner_radius_cm | length_cm, width_cm, bend_radius_cm}, volume_cm3, implant_vertices, depth_cm, \
+region_radius_cm, region_rule, young_kpa, poisson, thickness_cm, density_g_cm3, detect, \
+max_steps, time_step_s (null: automatic), fill_time_s.
+  --sweep: mode \"sweep\", inputs (+ sweep_volumes_cm3), runs: [{volume_cm3, and the single \
+run's result fields}].
+  --target-gain: mode \"target-gain\", inputs (+ target_gain_cm2, bracket_cm3), volume_cm3, \
+area_gain_cm2, converged, runs: [{volume_cm3, area_gain_cm2}].
+
+EXIT CODES:
+  0    success
+  2    usage: unknown flag, bad value syntax, missing --at/--vertex with --mesh, missing shape size
+  3    input file: missing, unreadable, or not a supported mesh type (.obj .ply .stl .vtk)
+  4    mesh: malformed file, invalid surface (defects), or a closed surface where an open scan \
+patch is expected
+  5    placement/region: point off the surface, vertex out of range, region empty, region \
+covering the whole surface or too small for the implant, badly shaped triangles at the point
+  6    implant/tissue parameters: non-positive volume or size, a volume the base cannot hold, \
+tissue values out of range, a --target-gain not inside the volume bracket
+  7    the run diverged or failed
+  8    an output could not be written
+  130  interrupted (Ctrl-C): the run is cancelled, nothing is written";
+
+/// The mesh file's unit of length.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Unit {
+    /// Millimetres.
+    Mm,
+    /// Centimetres.
+    Cm,
+    /// Decimetres (the MakeHuman meshes).
+    Dm,
+    /// Metres.
+    M,
+}
+
+impl Unit {
+    /// Centimetres per unit.
+    pub fn cm_per_unit(self) -> f32 {
+        match self {
+            Unit::Mm => 0.1,
+            Unit::Cm => 1.0,
+            Unit::Dm => 10.0,
+            Unit::M => 100.0,
+        }
+    }
+
+    /// The unit's symbol.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Unit::Mm => "mm",
+            Unit::Cm => "cm",
+            Unit::Dm => "dm",
+            Unit::M => "m",
+        }
+    }
+}
+
+/// The implant's base outline.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Shape {
+    /// Circular base: --diameter.
+    Round,
+    /// Rectangular base: --length × --width, corners rounded to --corner-radius.
+    Rectangular,
+    /// Crescent (kidney) base: --length (tip to tip), --width, --bend-radius.
+    Crescent,
+}
+
+/// Which triangles within the region radius form the region.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Rule {
+    /// Every triangle with a corner within the radius (the thesis's rule, Table 2).
+    TouchesVertex,
+    /// Triangles whose mean corner distance is within the radius (area ≈ πr²).
+    Centroid,
+}
+
+/// The collision broad phase.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Detect {
+    /// A bounding-volume hierarchy over both surfaces.
+    Bvh,
+    /// A hierarchy over the tissue, a voxel grid over the implant.
+    Voxels,
+}
+
+/// The field that colours the "after" picture.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ColorBy {
+    /// How far each vertex moved (mesh unit).
+    Displacement,
+    /// Area after / area before of the skin around each vertex.
+    Stretch,
+}
+
+fn default_young_kpa() -> f64 {
+    LayerParams::default().young / KPA
+}
+
+fn default_poisson() -> f64 {
+    LayerParams::default().poisson
+}
+
+fn default_thickness() -> f64 {
+    LayerParams::default().skin_thickness
+}
+
+fn default_density() -> f64 {
+    LayerParams::default().density
+}
+
+fn default_depth() -> f64 {
+    LayerParams::default().depth
+}
+
+fn default_max_steps() -> u64 {
+    InsertionParams::default().run.stop.max_steps
+}
+
+/// Parses `X,Y,Z`.
+fn parse_vec3(s: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!(
+            "expected three comma-separated numbers X,Y,Z, got {s:?}"
+        ));
+    }
+    let mut out = [0.0f32; 3];
+    for (slot, part) in out.iter_mut().zip(&parts) {
+        let v: f32 = part
+            .parse()
+            .map_err(|_| format!("{part:?} is not a number (expected X,Y,Z)"))?;
+        if !v.is_finite() {
+            return Err(format!("{part:?} is not a finite number"));
+        }
+        *slot = v;
+    }
+    Ok(out)
+}
+
+/// Parses `LOW,HIGH`.
+fn parse_pair(s: &str) -> Result<(f64, f64), String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    match parts.as_slice() {
+        [a, b] => {
+            let a: f64 = a
+                .parse()
+                .map_err(|_| format!("{a:?} is not a number (expected LOW,HIGH)"))?;
+            let b: f64 = b
+                .parse()
+                .map_err(|_| format!("{b:?} is not a number (expected LOW,HIGH)"))?;
+            Ok((a, b))
+        }
+        _ => Err(format!(
+            "expected two comma-separated numbers LOW,HIGH, got {s:?}"
+        )),
+    }
+}
+
+/// Parses `WxH`.
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT in pixels, e.g. 1200x600, got {s:?}"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("{w:?} is not a pixel count"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("{h:?} is not a pixel count"))?;
+    if !(16..=8192).contains(&w) || !(16..=8192).contains(&h) {
+        return Err(format!("{w}x{h}: each side must be 16 to 8192 pixels"));
+    }
+    Ok((w, h))
+}
+
+/// Parses an output mesh path: its extension must name a format.
+fn parse_mesh_out(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    match tissue_meshio::SurfaceFormat::from_path(&path) {
+        Some(_) => Ok(path),
+        None => Err(format!(
+            "{s:?}: the extension must be .obj, .ply, .stl or .vtk (it picks the format)"
+        )),
+    }
+}
+
+/// `insert`: the command line.
+#[derive(Debug, Parser)]
+#[command(
+    name = "insert",
+    version,
+    about = ABOUT,
+    long_about = LONG_ABOUT,
+    after_long_help = AFTER_LONG_HELP,
+    after_help = "Units, orientation, outputs, the JSON contract and the exit codes: insert --help",
+    allow_negative_numbers = true
+)]
+pub struct Cli {
+    /// The patient surface: an open scan patch (.obj, .ply, .stl or .vtk) with normals out of the
+    /// body. Default: the Table 2 plane (20 cm, 65 × 65 vertices, cm).
+    #[arg(long, value_name = "FILE", help_heading = "Patient")]
+    pub mesh: Option<PathBuf>,
+
+    /// The mesh file's unit of length; outputs are written back in it [default: cm].
+    #[arg(long, value_enum, requires = "mesh", help_heading = "Patient")]
+    pub unit: Option<Unit>,
+
+    /// Where the implant goes, in the mesh's unit; snapped to the nearest surface point (at most
+    /// 5 % of the mesh's bounding-box diagonal away). Default without --mesh: 0,0,0.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true,
+          conflicts_with = "vertex", help_heading = "Placement")]
+    pub at: Option<[f32; 3]>,
+
+    /// Where the implant goes: a vertex of the mesh, counted from 0 in file order.
+    #[arg(long, value_name = "N", help_heading = "Placement")]
+    pub vertex: Option<u32>,
+
+    /// The implant's local x direction (a rectangle's length), projected across the normal
+    /// [default: +x, or +y when the normal is near ±x].
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true,
+          help_heading = "Placement")]
+    pub tangent: Option<[f32; 3]>,
+
+    /// The implant's base outline.
+    #[arg(long, value_enum, default_value_t = Shape::Round, help_heading = "Implant")]
+    pub shape: Shape,
+
+    /// Round base: diameter (cm).
+    #[arg(
+        long,
+        value_name = "CM",
+        default_value_t = 7.0,
+        help_heading = "Implant"
+    )]
+    pub diameter: f32,
+
+    /// Rectangular base: length along the tangent; crescent: centre-line length tip to tip (cm).
+    #[arg(long, value_name = "CM", help_heading = "Implant")]
+    pub length: Option<f32>,
+
+    /// Rectangular or crescent base: width (cm).
+    #[arg(long, value_name = "CM", help_heading = "Implant")]
+    pub width: Option<f32>,
+
+    /// Rectangular base: corner radius (cm), at most half the shorter side.
+    #[arg(
+        long,
+        value_name = "CM",
+        default_value_t = 0.5,
+        help_heading = "Implant"
+    )]
+    pub corner_radius: f32,
+
+    /// Crescent base: radius of the centre line's arc (cm), at least the width.
+    #[arg(long, value_name = "CM", help_heading = "Implant")]
+    pub bend_radius: Option<f32>,
+
+    /// Implant fill volume (cm³ = mL).
+    #[arg(
+        long,
+        value_name = "CM3",
+        default_value_t = 100.0,
+        help_heading = "Implant"
+    )]
+    pub volume: f64,
+
+    /// Implant mesh size: wanted vertex count (50 to 100000).
+    #[arg(long, value_name = "N", default_value_t = ImplantSpec::DEFAULT_VERTEX_BUDGET,
+          help_heading = "Implant")]
+    pub implant_vertices: u32,
+
+    /// Placement depth: the implant's base lies this far under the skin (cm).
+    #[arg(long, value_name = "CM", default_value_t = default_depth(), help_heading = "Tissue")]
+    pub depth: f64,
+
+    /// Region radius: geodesic distance from the point to the edge of the simulated skin (cm)
+    /// [default: 1.5 × the implant's footprint radius, 5.25 cm for a 7 cm round base].
+    #[arg(long, value_name = "CM", help_heading = "Tissue")]
+    pub radius: Option<f64>,
+
+    /// Which triangles within the radius form the region.
+    #[arg(long, value_enum, default_value_t = Rule::TouchesVertex, help_heading = "Tissue")]
+    pub region_rule: Rule,
+
+    /// Young's modulus of the skin, in kPa (1 kPa = 1000 Pa).
+    #[arg(long, value_name = "KPA", default_value_t = default_young_kpa(),
+          help_heading = "Tissue")]
+    pub young: f64,
+
+    /// Poisson ratio of the skin, in [0, 0.5).
+    #[arg(long, value_name = "NU", default_value_t = default_poisson(), help_heading = "Tissue")]
+    pub poisson: f64,
+
+    /// Skin thickness (cm).
+    #[arg(long, value_name = "CM", default_value_t = default_thickness(),
+          help_heading = "Tissue")]
+    pub thickness: f64,
+
+    /// Tissue density (g/cm³).
+    #[arg(long, value_name = "G_CM3", default_value_t = default_density(),
+          help_heading = "Tissue")]
+    pub density: f64,
+
+    /// Collision detection broad phase.
+    #[arg(long, value_enum, default_value_t = Detect::Bvh, help_heading = "Run")]
+    pub detect: Detect,
+
+    /// Step limit of a run.
+    #[arg(long, value_name = "N", default_value_t = default_max_steps(), help_heading = "Run")]
+    pub max_steps: u64,
+
+    /// Time step (s) [default: automatic, half the stability limit]. A larger step than the
+    /// automatic one may diverge (exit 7).
+    #[arg(long, value_name = "S", help_heading = "Run")]
+    pub time_step: Option<f32>,
+
+    /// Run a series of implant volumes in parallel (cm³, comma-separated) instead of --volume;
+    /// prints one row per run.
+    #[arg(long, value_name = "V1,V2,...", value_delimiter = ',', num_args = 1..,
+          conflicts_with_all = ["target_gain", "out", "png"], help_heading = "Run")]
+    pub sweep: Option<Vec<f64>>,
+
+    /// Find the implant volume that gives this area gain (cm²); prints every run and the answer.
+    #[arg(long, value_name = "CM2", conflicts_with_all = ["out", "png"], help_heading = "Run")]
+    pub target_gain: Option<f64>,
+
+    /// The volumes (cm³) --target-gain searches between [default: a quarter to twice --volume].
+    #[arg(long, value_name = "LOW,HIGH", value_parser = parse_pair, requires = "target_gain",
+          help_heading = "Run")]
+    pub bracket: Option<(f64, f64)>,
+
+    /// --target-gain: stop when a run's gain is within this of the target (cm²).
+    #[arg(long, value_name = "CM2", default_value_t = InverseOptions::default().gain_tolerance,
+          requires = "target_gain", help_heading = "Run")]
+    pub gain_tolerance: f64,
+
+    /// Write the patient surface after the run (.obj, .ply, .stl or .vtk; may be repeated).
+    #[arg(long, value_name = "FILE", value_parser = parse_mesh_out, help_heading = "Outputs")]
+    pub out: Vec<PathBuf>,
+
+    /// Write every result and its inputs as JSON (see the contract in --help).
+    #[arg(long, value_name = "FILE", help_heading = "Outputs")]
+    pub report: Option<PathBuf>,
+
+    /// Write a PNG of the surface before and after, coloured by --color, with a colour bar.
+    #[arg(long, value_name = "FILE", help_heading = "Outputs")]
+    pub png: Option<PathBuf>,
+
+    /// The field that colours the picture.
+    #[arg(long, value_enum, default_value_t = ColorBy::Displacement, help_heading = "Outputs")]
+    pub color: ColorBy,
+
+    /// The picture's size in pixels, WIDTHxHEIGHT.
+    #[arg(long, value_name = "WxH", value_parser = parse_size, default_value = "1200x600",
+          help_heading = "Outputs")]
+    pub png_size: (u32, u32),
+
+    /// No progress on stderr.
+    #[arg(long, short, help_heading = "Outputs")]
+    pub quiet: bool,
+}
+
+impl Cli {
+    /// The mesh unit (cm when not given).
+    pub fn unit(&self) -> Unit {
+        self.unit.unwrap_or(Unit::Cm)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn the_command_is_well_formed() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn value_parsers() {
+        assert_eq!(parse_vec3("1, -2,3.5"), Ok([1.0, -2.0, 3.5]));
+        assert!(parse_vec3("1,2").is_err());
+        assert!(parse_vec3("1,2,nan").is_err());
+        assert_eq!(parse_pair("10,200"), Ok((10.0, 200.0)));
+        assert_eq!(parse_size("640x480"), Ok((640, 480)));
+        assert!(parse_size("0x480").is_err());
+        assert!(parse_mesh_out("a.xyz").is_err());
+    }
+}

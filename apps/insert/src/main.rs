@@ -1,0 +1,66 @@
+//! `insert`: plan a tissue-expander insertion on a patient's surface scan from the command line.
+//!
+//! Command line ([`cli`]) → scenario and tissue-app job ([`setup`]) → the events loop with
+//! progress and Ctrl-C ([`progress`]) → stdout, the mesh, picture and JSON report ([`modes`],
+//! [`output`], [`report`]). Every failure is one line on stderr and a documented exit code
+//! ([`failure`]); see `insert --help` and `apps/insert/README.md`.
+
+mod cli;
+mod failure;
+mod modes;
+mod output;
+mod progress;
+mod report;
+mod setup;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+use crate::cli::Cli;
+use crate::failure::{code, Failure};
+use crate::progress::Interrupt;
+
+fn run(cli: &Cli) -> Result<(), Failure> {
+    let interrupt = Interrupt::install()?;
+    output::check_targets(cli)?;
+    let scenario = setup::scenario(cli)?;
+    interrupt.check()?;
+    let inputs = report::Inputs::new(cli, &scenario, scenario.region_radius()?);
+    if let Some(volumes) = &cli.sweep {
+        modes::sweep(cli, &scenario, &inputs, volumes, &interrupt)
+    } else if let Some(target) = cli.target_gain {
+        modes::target_gain(cli, &scenario, &inputs, target, &interrupt)
+    } else {
+        modes::single(cli, &scenario, &inputs, &interrupt)
+    }
+}
+
+/// Where the demo (no arguments at all) puts its picture.
+const DEMO_PICTURE: &str = "insert_table2.png";
+
+fn main() -> ExitCode {
+    let mut cli = Cli::parse();
+    // With no arguments at all the program is the demo of the README: Table 2 with a picture.
+    let demo = std::env::args_os().len() <= 1;
+    if demo {
+        cli.png = Some(DEMO_PICTURE.into());
+    }
+    match run(&cli) {
+        Ok(()) => {
+            if demo {
+                println!("  picture              {DEMO_PICTURE} (before and after, by displacement)");
+            }
+            ExitCode::SUCCESS
+        }
+        Err(failure) => {
+            let hint = if failure.code == code::USAGE {
+                " (see insert --help)"
+            } else {
+                ""
+            };
+            eprintln!("insert: error: {}{hint}", failure.line());
+            ExitCode::from(failure.code)
+        }
+    }
+}

@@ -1,0 +1,566 @@
+//! The real `insert` binary, end to end: the default Table 2 run against the library, every
+//! output format read back, the picture, a sweep, a target-gain search, each error's exit code and
+//! message, and a Ctrl-C cancel.
+//!
+//! Small cases run on a coarse 12 cm plane of 17 × 17 vertices with a 4 cm implant (under a
+//! second per run); the default Table 2 run takes a few seconds.
+
+use std::io::{BufRead, BufReader};
+use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use serde_json::Value;
+use tissue_app::{InsertionJob, Placement, PlannedInsertion};
+use tissue_implant::{ImplantShape, ImplantSpec, RegionOptions, RegionRule};
+use tissue_mesh::TriMesh;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_insert"))
+}
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures")
+        .join(name)
+}
+
+/// A fresh, empty scratch folder for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tissue-insert-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().unwrap()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// The small test case: a 12 cm plane of 17 × 17 vertices, written in decimetres (so the
+/// program scales it), and the same plane in cm as the program sees it.
+const SMALL_ARGS: [&str; 10] = [
+    "--unit",
+    "dm",
+    "--at",
+    "0,0,0",
+    "--diameter",
+    "4",
+    "--volume",
+    "10",
+    "--implant-vertices",
+    "100",
+];
+
+fn small_plane(dir: &Path) -> (PathBuf, TriMesh) {
+    let cm = tissue_mesh::grid(17, 12.0).unwrap();
+    let dm_positions = cm.positions().iter().map(|&p| p / 10.0).collect();
+    let dm = cm.with_positions(dm_positions).unwrap();
+    let path = dir.join("plane_dm.obj");
+    tissue_meshio::write_obj(&path, &dm).unwrap();
+    // As the program reads and scales it.
+    let read = tissue_meshio::read_surface(&path).unwrap();
+    let scaled = read.positions().iter().map(|&p| p * 10.0).collect();
+    (path, read.with_positions(scaled).unwrap())
+}
+
+fn small_job(patient: TriMesh, volume: f64) -> InsertionJob {
+    let spec =
+        ImplantSpec::new(ImplantShape::Round { diameter: 4.0 }, volume).with_vertex_budget(100);
+    let mut job = InsertionJob::new(patient, Placement::new(Vec3::ZERO, Vec3::Z, Vec3::X), spec);
+    job.region = RegionOptions {
+        rule: RegionRule::TouchesVertex,
+        ..RegionOptions::default()
+    };
+    job
+}
+
+fn plan(job: &InsertionJob) -> PlannedInsertion {
+    tissue_app::plan(job, |_| ControlFlow::Continue(())).unwrap()
+}
+
+fn read_json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-12 * b.abs().max(1.0)
+}
+
+/// The report's results equal the library's run, field by field.
+fn assert_report_matches(report: &Value, planned: &PlannedInsertion) {
+    let o = &planned.outcome;
+    let f = |name: &str| {
+        report[name]
+            .as_f64()
+            .unwrap_or_else(|| panic!("report has no number {name}: {report}"))
+    };
+    assert_eq!(report["steps"].as_u64(), Some(o.steps));
+    for (name, value) in [
+        ("area_before_cm2", o.area_before),
+        ("area_after_cm2", o.area_after),
+        ("area_gain_cm2", o.area_gain),
+        ("volume_difference_cm3", o.volume_difference),
+        ("implant_volume_cm3", o.implant_volume),
+        ("implant_volume_end_cm3", o.implant_volume_after),
+        ("implant_compression", o.implant_compression),
+    ] {
+        assert!(
+            close(f(name), value),
+            "{name}: report {} vs library {value}",
+            f(name)
+        );
+    }
+    // f32 results are written in f32's shortest form.
+    for (name, value) in [
+        ("max_displacement_cm", o.max_displacement),
+        ("time_step_s", o.time_step),
+    ] {
+        assert_eq!(f(name) as f32, value, "{name}");
+    }
+    assert_eq!(
+        report["region_vertices"].as_u64(),
+        Some(planned.selection.mesh().vertex_count() as u64)
+    );
+    assert!(report["stop_reason"].is_string());
+    assert!(f("wall_time_s") >= 0.0);
+    assert!(report["inputs"].is_object());
+}
+
+#[test]
+fn the_default_run_is_table_2_and_matches_the_library() {
+    let dir = scratch("default");
+    let report = dir.join("table2.json");
+    let start = Instant::now();
+    let o = run(&["--report", report.to_str().unwrap()]);
+    let took = start.elapsed();
+    assert_eq!(o.status.code(), Some(0), "stderr: {}", stderr(&o));
+    eprintln!("default run: {took:?}");
+
+    // The Table 2 set-up, as crates/implant/benches/table2.rs has it.
+    let patient = tissue_mesh::grid(65, 20.0).unwrap();
+    let mut job = InsertionJob::new(
+        patient,
+        Placement::new(Vec3::ZERO, Vec3::Z, Vec3::X),
+        ImplantSpec::new(ImplantShape::Round { diameter: 7.0 }, 100.0),
+    );
+    job.region = RegionOptions {
+        rule: RegionRule::TouchesVertex,
+        ..RegionOptions::default()
+    };
+    let planned = plan(&job);
+    let o_lib = &planned.outcome;
+
+    let out = stdout(&o);
+    for expected in [
+        format!("area before          {:.4} cm²", o_lib.area_before),
+        format!("area after           {:.4} cm²", o_lib.area_after),
+        format!("area gain            {:.4} cm²", o_lib.area_gain),
+        format!("volume difference    {:.4} cm³", o_lib.volume_difference),
+        format!(
+            "implant compression  {:.4} %",
+            100.0 * o_lib.implant_compression
+        ),
+        format!("steps                {} of at most", o_lib.steps),
+    ] {
+        assert!(out.contains(&expected), "stdout lacks {expected:?}:\n{out}");
+    }
+    let json = read_json(&report);
+    assert_report_matches(&json, &planned);
+    assert_eq!(json["mode"], "single");
+    let inputs = &json["inputs"];
+    assert_eq!(inputs["mesh_generated"], true);
+    assert_eq!(inputs["mesh_vertices"], 4225);
+    assert_eq!(inputs["volume_cm3"], 100.0);
+    assert_eq!(inputs["region_rule"], "touches-vertex");
+    assert_eq!(inputs["region_radius_cm"], 5.25);
+    assert_eq!(inputs["shape"]["kind"], "round");
+    assert_eq!(inputs["shape"]["diameter_cm"], 7.0);
+    assert_eq!(inputs["normal"], serde_json::json!([0.0, 0.0, 1.0]));
+    assert_eq!(inputs["tangent"], serde_json::json!([1.0, 0.0, 0.0]));
+    assert_eq!(files_in(&dir), vec!["table2.json"]);
+}
+
+#[test]
+fn the_default_plane_is_the_fixture() {
+    let fixture = tissue_meshio::read_surface(fixture("plane_20cm_65.obj")).unwrap();
+    assert_eq!(fixture, tissue_mesh::grid(65, 20.0).unwrap());
+}
+
+#[test]
+fn the_makehuman_fixtures_are_open_patches() {
+    for (name, vertices, triangles) in [
+        ("makehuman_chest_open.obj", 4921, 9632),
+        ("makehuman_head_open.obj", 4257, 8470),
+    ] {
+        let mesh = tissue_meshio::read_surface(fixture(name)).unwrap();
+        assert_eq!(
+            (mesh.vertex_count(), mesh.triangle_count()),
+            (vertices, triangles)
+        );
+        assert!(!mesh.is_closed(), "{name}");
+    }
+}
+
+#[test]
+fn every_output_format_round_trips_and_the_picture_is_drawn() {
+    let dir = scratch("formats");
+    let (mesh, patient) = small_plane(&dir);
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_owned();
+    let (obj, ply, stl, vtk, png, report) = (
+        path("after.obj"),
+        path("after.ply"),
+        path("after.stl"),
+        path("after.vtk"),
+        path("after.png"),
+        path("report.json"),
+    );
+    let mut args = vec!["--mesh", mesh.to_str().unwrap()];
+    args.extend(SMALL_ARGS);
+    args.extend([
+        "--out",
+        &obj,
+        "--out",
+        &ply,
+        "--out",
+        &stl,
+        "--out",
+        &vtk,
+        "--png",
+        &png,
+        "--png-size",
+        "640x360",
+        "--color",
+        "stretch",
+        "--report",
+        &report,
+    ]);
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(0), "stderr: {}", stderr(&o));
+
+    let job = small_job(patient.clone(), 10.0);
+    let planned = plan(&job);
+    assert_report_matches(&read_json(Path::new(&report)), &planned);
+    // The library's result, back in the file's unit (dm).
+    let expected = planned.patient_after(&patient).unwrap();
+    let expected: Vec<Vec3> = expected.positions().iter().map(|&p| p / 10.0).collect();
+    let near =
+        |a: Vec3, b: Vec3| (a - b).abs().max_element() <= 1e-6 * b.abs().max_element().max(1.0);
+    let moved = expected
+        .iter()
+        .zip(tissue_meshio::read_surface(&mesh).unwrap().positions())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(moved > 10, "the run moved only {moved} vertices");
+
+    for file in [&obj, &ply, &vtk] {
+        let back = tissue_meshio::read_surface(file).unwrap();
+        assert_eq!(back.vertex_count(), expected.len(), "{file}");
+        assert_eq!(back.triangles(), patient.triangles(), "{file}");
+        for (v, (&a, &b)) in back.positions().iter().zip(&expected).enumerate() {
+            assert!(near(a, b), "{file}: vertex {v} is {a}, the library's {b}");
+        }
+    }
+    // STL stores corners: compare triangle by triangle.
+    let back = tissue_meshio::read_surface(&stl).unwrap();
+    assert_eq!(back.vertex_count(), expected.len());
+    assert_eq!(back.triangle_count(), patient.triangle_count());
+    for (t, tri) in patient.triangles().iter().enumerate() {
+        let corners = back.corners(t);
+        for (k, &v) in tri.iter().enumerate() {
+            assert!(near(corners[k], expected[v as usize]), "stl triangle {t}");
+        }
+    }
+    // VTK carries the fields, zero outside the region.
+    let data = tissue_meshio::read_vtk(&vtk).unwrap();
+    let field = |name: &str| -> Vec<f32> {
+        let f = data
+            .fields
+            .iter()
+            .find(|f| f.name == name)
+            .unwrap_or_else(|| panic!("no field {name}"));
+        match &f.values {
+            tissue_meshio::PointValues::Scalars(v) => v.clone(),
+            other => panic!("{name} is {other:?}"),
+        }
+    };
+    let (displacement, stretch) = (field("displacement"), field("stretch"));
+    assert_eq!(displacement.len(), expected.len());
+    assert_eq!(stretch.len(), expected.len());
+    let max = displacement.iter().copied().fold(0.0, f32::max);
+    assert!((max - planned.outcome.max_displacement / 10.0).abs() < 1e-6);
+    let in_region = field("in_region");
+    for v in 0..expected.len() {
+        if in_region[v] == 0.0 {
+            assert_eq!((displacement[v], stretch[v]), (0.0, 0.0));
+        } else {
+            assert!(stretch[v] > 0.0);
+        }
+    }
+
+    // The picture: the size asked for, and not blank.
+    let decoder = png::Decoder::new(std::fs::File::open(&png).unwrap());
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height), (640, 360));
+    let channels = info.color_type.samples();
+    let mut colours: Vec<&[u8]> = buf[..info.buffer_size()].chunks(channels).collect();
+    colours.sort_unstable();
+    colours.dedup();
+    assert!(colours.len() > 50, "only {} colours", colours.len());
+
+    // Nothing else left in the folder (no temporary files).
+    assert_eq!(
+        files_in(&dir),
+        vec![
+            "after.obj",
+            "after.ply",
+            "after.png",
+            "after.stl",
+            "after.vtk",
+            "plane_dm.obj",
+            "report.json"
+        ]
+    );
+}
+
+#[test]
+fn a_sweep_prints_one_row_per_run() {
+    let dir = scratch("sweep");
+    let (mesh, _) = small_plane(&dir);
+    let report = dir.join("sweep.json");
+    let mut args = vec!["--mesh", mesh.to_str().unwrap()];
+    args.extend(SMALL_ARGS);
+    args.extend(["--sweep", "5,10", "--report", report.to_str().unwrap()]);
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(0), "stderr: {}", stderr(&o));
+    let out = stdout(&o);
+    let rows: Vec<&str> = out
+        .lines()
+        .filter(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
+        .collect();
+    assert_eq!(rows.len(), 2, "{out}");
+    assert!(rows[0].trim_start().starts_with("5.000"), "{out}");
+    assert!(rows[1].trim_start().starts_with("10.000"), "{out}");
+    let json = read_json(&report);
+    assert_eq!(json["mode"], "sweep");
+    let runs = json["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2);
+    let gain = |i: usize| runs[i]["area_gain_cm2"].as_f64().unwrap();
+    assert!(gain(1) > gain(0), "a larger implant stretches more: {json}");
+}
+
+#[test]
+fn a_target_gain_search_prints_its_runs_and_the_volume() {
+    let dir = scratch("inverse");
+    let (mesh, _) = small_plane(&dir);
+    let mut args = vec!["--mesh", mesh.to_str().unwrap()];
+    args.extend(SMALL_ARGS);
+    args.extend([
+        "--target-gain",
+        "4",
+        "--bracket",
+        "5,20",
+        "--gain-tolerance",
+        "1",
+    ]);
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(0), "stderr: {}", stderr(&o));
+    let out = stdout(&o);
+    let runs = out
+        .lines()
+        .filter(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
+        .count();
+    assert!(runs >= 2, "{out}");
+    let answer = out
+        .lines()
+        .find_map(|l| l.strip_prefix("answer: "))
+        .unwrap_or_else(|| panic!("no answer line:\n{out}"));
+    let volume: f64 = answer.split_whitespace().next().unwrap().parse().unwrap();
+    assert!((5.0..=20.0).contains(&volume), "{answer}");
+    assert!(answer.contains(&format!("{runs} runs")), "{out}");
+}
+
+/// Runs with `args`, expects exit `code` and one `insert: error:` line containing `words`.
+fn assert_fails(args: &[&str], code: i32, words: &[&str]) {
+    let o = run(args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(code), "{args:?}: stderr {err}");
+    let errors: Vec<&str> = err
+        .lines()
+        .filter(|l| l.starts_with("insert: error:"))
+        .collect();
+    assert_eq!(errors.len(), 1, "{args:?}: stderr {err}");
+    for w in words {
+        assert!(
+            errors[0].contains(w),
+            "{args:?}: {:?} lacks {w:?}",
+            errors[0]
+        );
+    }
+    assert!(stdout(&o).is_empty(), "{args:?}: stdout {}", stdout(&o));
+}
+
+#[test]
+fn each_error_has_its_exit_code_and_a_message_that_says_what_to_change() {
+    let dir = scratch("errors");
+    let (small, _) = small_plane(&dir);
+    let small = small.to_str().unwrap();
+    let garbage = dir.join("garbage.obj");
+    std::fs::write(&garbage, "this is not a mesh\nv 1 2\nf 1 2 3\n").unwrap();
+    let cube = fixture("cube_2cm_386.obj");
+    let plane_1cm = fixture("plane_1cm_65.obj");
+    let missing = dir.join("missing.obj");
+
+    assert_fails(
+        &["--mesh", missing.to_str().unwrap(), "--at", "0,0,0"],
+        3,
+        &["cannot read", "--mesh"],
+    );
+    assert_fails(
+        &["--mesh", garbage.to_str().unwrap(), "--at", "0,0,0"],
+        4,
+        &["malformed", "line 2"],
+    );
+    assert_fails(
+        &["--mesh", cube.to_str().unwrap(), "--at", "0,0,1"],
+        4,
+        &["closed surface", "open scan patch"],
+    );
+    assert_fails(&["--at", "0,0,5"], 5, &["from the surface", "--at"]);
+    assert_fails(&["--vertex", "99999"], 5, &["out of range", "4225"]);
+    assert_fails(&["--volume", "0"], 6, &["--volume", "positive"]);
+    assert_fails(&["--volume=-5"], 6, &["--volume", "positive"]);
+    assert_fails(&["--diameter", "0"], 6, &["--diameter", "positive"]);
+    assert_fails(
+        &["--mesh", plane_1cm.to_str().unwrap(), "--at", "0,0,0"],
+        5,
+        &["covers the whole surface", "smaller --radius"],
+    );
+    let mut diverging = vec!["--mesh", small];
+    diverging.extend(SMALL_ARGS);
+    diverging.extend(["--time-step", "1e-3"]);
+    assert_fails(&diverging, 7, &["diverged", "--time-step"]);
+    let nowhere = dir.join("no/such/folder/out.obj");
+    assert_fails(
+        &["--out", nowhere.to_str().unwrap()],
+        8,
+        &["does not exist"],
+    );
+    assert_fails(&["--mesh", small], 2, &["--at", "--vertex"]);
+    // clap's own usage errors: exit 2.
+    assert_eq!(run(&["--no-such-flag"]).status.code(), Some(2));
+    assert_eq!(run(&["--out", "x.xyz"]).status.code(), Some(2));
+    // Nothing was written anywhere in the scratch folder.
+    assert_eq!(files_in(&dir), vec!["garbage.obj", "plane_dm.obj"]);
+}
+
+#[test]
+fn help_documents_units_exit_codes_and_the_report() {
+    let o = run(&["--help"]);
+    assert_eq!(o.status.code(), Some(0));
+    let help = stdout(&o);
+    for needle in [
+        "--young <KPA>",
+        "kPa",
+        "EXIT CODES",
+        "130",
+        "area_gain_cm2",
+        "implant_volume_end_cm3",
+        "wall_time_s",
+        "mesh's unit",
+    ] {
+        assert!(help.contains(needle), "--help lacks {needle:?}");
+    }
+}
+
+#[test]
+fn ctrl_c_cancels_cleanly_and_writes_nothing() {
+    let dir = scratch("cancel");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_owned();
+    let mut child = bin()
+        .args([
+            "--out",
+            &path("after.vtk"),
+            "--report",
+            &path("report.json"),
+            "--png",
+            &path("after.png"),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait for the first progress line: the run has started.
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        let line = lines
+            .next()
+            .unwrap_or_else(|| panic!("stderr closed before the run started"))
+            .unwrap();
+        if line.contains("step ") {
+            break;
+        }
+        assert!(Instant::now() < deadline, "no progress line");
+    }
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    let exit = child.wait().unwrap();
+    assert_eq!(exit.code(), Some(130), "stderr after the signal: {rest:?}");
+    assert!(
+        rest.iter().any(|l| l.contains("interrupted")),
+        "stderr after the signal: {rest:?}"
+    );
+    assert!(files_in(&dir).is_empty(), "left: {:?}", files_in(&dir));
+}
+
+#[test]
+fn the_readme_chest_example_runs_to_completion() {
+    let mesh = fixture("makehuman_chest_open.obj");
+    let dir = scratch("chest");
+    let report = dir.join("chest.json");
+    let o = run(&[
+        "--mesh",
+        mesh.to_str().unwrap(),
+        "--unit",
+        "dm",
+        "--vertex",
+        "2277",
+        "--diameter",
+        "6.5",
+        "--volume",
+        "50",
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "stderr: {}", stderr(&o));
+    let json = read_json(&report);
+    assert_eq!(json["stop_reason"], "settled");
+    assert!(json["area_gain_cm2"].as_f64().unwrap() > 0.0);
+    assert_eq!(json["inputs"]["unit"], "dm");
+}
