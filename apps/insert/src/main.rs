@@ -49,7 +49,9 @@ fn main() -> ExitCode {
     match run(&cli) {
         Ok(()) => {
             if demo {
-                println!("  picture              {DEMO_PICTURE} (before and after, by displacement)");
+                println!(
+                    "  picture              {DEMO_PICTURE} (before and after, by displacement)"
+                );
             }
             ExitCode::SUCCESS
         }
