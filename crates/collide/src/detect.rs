@@ -52,7 +52,7 @@ fn check_bvh(view: &SurfaceView<'_>, bvh: &Bvh) -> Result<(), CollideError> {
 
 /// Candidates per chunk below which the narrow phase stays on the calling thread.
 #[cfg(feature = "parallel")]
-const PARALLEL_MIN: usize = 2048;
+const PARALLEL_MIN: usize = 512;
 
 /// Runs `body` on every candidate, in consecutive chunks (one per rayon thread when there are at
 /// least [`PARALLEL_MIN`] candidates per thread, feature `parallel`), then gathers the chunks'

@@ -90,6 +90,9 @@ pub(crate) struct TrianglePlane {
     longest: f32,
     longest_sq: f32,
     planar: bool,
+    /// Each side's outward normal in the plane, `(end − start) × n` (length: the side's), for
+    /// sides ab, bc, ca.
+    side: [Vec3A; 3],
 }
 
 impl TrianglePlane {
@@ -105,6 +108,7 @@ impl TrianglePlane {
         let planar = nn > 1e-12 * longest_sq * longest_sq && nn.is_finite();
         let len = nn.sqrt();
         let n = if planar { nr / len } else { Vec3A::ZERO };
+        let side = [(b - a).cross(n), (c - b).cross(n), (a - c).cross(n)];
         TrianglePlane {
             a,
             b,
@@ -117,7 +121,24 @@ impl TrianglePlane {
             longest: longest_sq.sqrt(),
             longest_sq,
             planar,
+            side,
         }
+    }
+
+    /// `true` when the triangle has a plane and both `p` and `q` lie beyond one of its sides by
+    /// more than `reach` (measured across the side, in the plane's directions): then the whole
+    /// segment is that far from the triangle, which lies entirely on the inner side.
+    #[inline]
+    fn beyond_a_side(&self, p: Vec3A, q: Vec3A, reach: f32) -> bool {
+        if !self.planar {
+            return false;
+        }
+        let corners = [self.a, self.b, self.c];
+        (0..3).any(|k| {
+            let m = self.side[k];
+            let limit = reach * m.length();
+            (p - corners[k]).dot(m) > limit && (q - corners[k]).dot(m) > limit
+        })
     }
 
     /// The longest side.
@@ -162,6 +183,11 @@ pub(crate) fn edge_against(
         return None;
     }
     if !Aabb::from_segment(p, q).overlaps(&plane.aabb, tolerance) {
+        return None;
+    }
+    // Beyond one of the triangle's sides (by twice the reach, well clear of rounding): the
+    // common exit for an edge resting on a neighbouring triangle.
+    if plane.beyond_a_side(p, q, 2.0 * reach) {
         return None;
     }
     if plane.planar && ((dp > 0.0 && dq < 0.0) || (dp < 0.0 && dq > 0.0)) {

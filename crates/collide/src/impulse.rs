@@ -22,7 +22,7 @@
 use glam::Vec3A;
 
 use crate::bodies::contact_particles;
-use crate::{Bodies, CollideError, Contact};
+use crate::{Bodies, CollideError, Contact, Side};
 
 /// The velocity changes of one contact's five particles.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -153,6 +153,18 @@ pub struct ImpulseWorkspace {
     normal: Vec<f32>,
     friction: Vec<Vec3A>,
     target: Vec<f32>,
+    prepared: Vec<Prepared>,
+}
+
+/// A contact as the sweeps read it: its particles (checked), their weights in the relative
+/// velocity, the velocity change per unit impulse of each (`weight/m`), and `W = Σ weight²/m`.
+#[derive(Debug, Clone, Copy)]
+struct Prepared {
+    side: [Side; 5],
+    particle: [u32; 5],
+    weight: [f32; 5],
+    push: [f32; 5],
+    w_eff: f32,
 }
 
 impl ImpulseWorkspace {
@@ -194,25 +206,37 @@ pub fn apply_impulses(
     ws.friction.clear();
     ws.friction.resize(n, Vec3A::ZERO);
     ws.target.clear();
-    // Targets from the velocities before any impulse; this pass also checks every particle.
+    ws.prepared.clear();
+    // Targets from the velocities before any impulse; this pass also checks every particle, so
+    // the sweeps index the arrays directly.
     for c in contacts {
-        let (v, _, weights) = gather(c, velocities)?;
+        let (v, w, weights) = gather(c, velocities)?;
         let vn = relative(&v, &weights).dot(Vec3A::from(c.normal));
         ws.target.push(if vn < 0.0 {
             -params.restitution * vn
         } else {
             0.0
         });
+        let parts = contact_particles(c);
+        ws.prepared.push(Prepared {
+            side: parts.map(|p| p.0),
+            particle: parts.map(|p| p.1),
+            weight: weights,
+            push: std::array::from_fn(|i| weights[i] * w[i]),
+            w_eff: (0..5).map(|i| weights[i] * weights[i] * w[i]).sum(),
+        });
     }
     for _ in 0..params.sweeps {
-        for (k, c) in contacts.iter().enumerate() {
-            let (v, w, weights) = gather(c, velocities)?;
-            let w_eff: f32 = (0..5).map(|i| weights[i] * weights[i] * w[i]).sum();
+        for (k, (c, p)) in contacts.iter().zip(&ws.prepared).enumerate() {
+            let w_eff = p.w_eff;
             if w_eff.is_nan() || w_eff <= 0.0 {
                 continue;
             }
+            let mut v_rel = Vec3A::ZERO;
+            for i in 0..5 {
+                v_rel += velocities.state(p.side[i])[p.particle[i] as usize] * p.weight[i];
+            }
             let n = Vec3A::from(c.normal);
-            let v_rel = relative(&v, &weights);
             let vn = v_rel.dot(n);
             let lambda = (ws.normal[k] + (ws.target[k] - vn) / w_eff).max(0.0);
             let d_lambda = lambda - ws.normal[k];
@@ -231,9 +255,8 @@ pub fn apply_impulses(
                 ws.friction[k] = ft;
             }
             if j != Vec3A::ZERO {
-                let parts = contact_particles(c);
-                for (i, &(side, particle, weight)) in parts.iter().enumerate() {
-                    velocities.add(side, particle, j * (weight * w[i]));
+                for i in 0..5 {
+                    velocities.add(p.side[i], p.particle[i], j * p.push[i]);
                 }
             }
         }

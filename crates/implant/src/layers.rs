@@ -9,19 +9,14 @@
 //! - Within each layer, one spring per edge with Van Gelder stiffness (eq. 3) from the skin's
 //!   Young's modulus `E`, Poisson ratio `ν` and thickness `t`, rest lengths from that layer's
 //!   geometry.
-//! - Between the layers, derived from a continuum slab of thickness `depth` so that they resist
-//!   compression and shear like the tissue they stand for:
-//!   (`E` here is the slab's modulus, [`LayerParams::slab_young`])
+//! - Between the layers, a continuum slab of thickness `depth` that resists compression and
+//!   shear like the tissue it stands for (`E` here is the slab's modulus,
+//!   [`LayerParams::slab_young`], `G = E/(2(1+ν))`):
 //!   - a *vertical* spring per vertex, `k = E·Aᵢ/depth`, with `Aᵢ` a third of the area of the
 //!     triangles around the vertex (its tributary area): the slab's axial stiffness;
-//!   - two *diagonals* per edge `ab` (`a`–`b′` and `b`–`a′`) of stiffness
-//!     `k = G·Aₑ/(depth·sin²θ)`, `G = E/(2(1+ν))`, `Aₑ` a third of the area of the edge's
-//!     triangles and `θ` the diagonal's angle to the vertical (`sin θ = Lₑ/L_diag`). A shear `u`
-//!     stretches one diagonal and shortens the other by `(u·ê)·sin θ`, so the pair resists with
-//!     `2k·sin²θ·(u·ê)ê = 2·G·Aₑ·(u·ê)ê/depth`. Summed over the edges this is
-//!     `(2G/depth)·Σ Aₑ ê⊗ê·u`, and for a mesh without a preferred direction `Σ Aₑ ê⊗ê = A·I/2`
-//!     (exactly so for each equilateral triangle): the slab's shear stiffness `G·A/depth`.
-//!     Under compression the pair adds `2k·cos²θ` to the vertical springs.
+//!   - a *shear* force per vertex ([`TissueLayers::add_slab_shear`]) pulling layer 1's particle
+//!     back over layer 2's along layer 2's current normal, `k = G·Aᵢ/depth`: a shear `u` of the
+//!     whole slab meets `G·A·u/depth`, and it adds nothing to the compression stiffness.
 //! - Every layer-2 particle has a zero-length anchor to its original position (the deeper tissue
 //!   holding it): `k = E_a·Aᵢ/depth` with `E_a` the modulus of the attachment to the deep
 //!   fascia and muscle (`anchor_young`); lifting layer 2 by `u` costs `E_a·u/depth` per unit
@@ -81,7 +76,7 @@ impl Default for LayerParams {
     /// small strain; Agache et al. 1980, Pailler-Mattei et al. 2008), `ν` = 0.45 (soft tissue is
     /// nearly incompressible), thickness 0.2 cm (dermis 1–4 mm), density 1.1 g/cm³.
     ///
-    /// Depth 0.3 cm: an expander is placed in a pocket right under the skin and a thin layer of
+    /// Depth 0.25 cm: an expander is placed in a pocket right under the skin and a thin layer of
     /// fat (subcutaneous or subgaleal plane; the thesis does not give its depth). Layer 2 is
     /// attached outside the pocket (see `InsertionParams::pocket_margin`) to the deep fascia
     /// and muscle, `E_a` = 0.2 MPa, which also sets layer 2's own in-plane springs. Slab springs
@@ -100,7 +95,7 @@ impl Default for LayerParams {
             poisson: 0.45,
             skin_thickness: 0.2,
             density: 1.1,
-            depth: 0.3,
+            depth: 0.25,
             anchor_young: 2.0e6,
             slab_young: 2.0e7,
             min_thickness: 0.25,
@@ -157,6 +152,10 @@ pub struct TissueLayers {
     outer: TriMesh,
     inner: TriMesh,
     normals: Vec<Vec3>,
+    /// The slab's shear stiffness `G·Aᵢ/depth` per region vertex.
+    shear: Vec<f32>,
+    /// Layer 2's current vertex normals (unnormalised), scratch of `add_slab_shear`.
+    inner_normals: Vec<Vec3A>,
     boundary: Vec<u32>,
     min_thickness: f32,
 }
@@ -287,21 +286,12 @@ impl TissueLayers {
                 ));
             }
         }
+        // The slab's shear: G·Aᵢ/depth per vertex (see TissueLayers::add_slab_shear).
         let g = params.slab_young / (2.0 * (1.0 + params.poisson));
-        let p = &positions;
-        for (&[a, b], &area) in topo.edges().iter().zip(&edge_area) {
-            for (top, bottom) in [(a, b), (b, a)] {
-                let (i, j) = (
-                    Self::particle(Layer::Outer, top),
-                    Self::particle(Layer::Inner, bottom),
-                );
-                let rest = f64::from(p[i as usize].distance(p[j as usize]));
-                let along = f64::from(p[2 * a as usize].distance(p[2 * b as usize]));
-                let sin2 = (along / rest).powi(2);
-                let k = g * area / (params.depth * sin2);
-                springs.push(Spring::new(i, j, rest as f32, k as f32));
-            }
-        }
+        let shear: Vec<f32> = vertex_area
+            .iter()
+            .map(|a| (g * a / params.depth) as f32)
+            .collect();
         let mut system = MassSpringSystem::new(particles, springs)?;
         let anchors: Vec<Anchor> = (0..n as u32)
             .map(|r| Anchor {
@@ -316,9 +306,70 @@ impl TissueLayers {
             outer: region.clone(),
             inner,
             normals,
+            shear,
+            inner_normals: vec![Vec3A::ZERO; n],
             boundary,
             min_thickness: (params.min_thickness * params.depth) as f32,
         })
+    }
+
+    /// All forces on both layers: the system's ([`MassSpringSystem::compute_forces`]) and the
+    /// slab's shear ([`TissueLayers::add_slab_shear`]). Call this, not the system's own, before
+    /// a velocity update.
+    pub fn compute_forces(&mut self) {
+        self.system.compute_forces();
+        self.add_slab_shear();
+    }
+
+    /// Adds the slab's resistance to shear: for every region vertex, the part of the slab
+    /// vector `s = x₁ − x₂` (layer 1's particle minus layer 2's) across layer 2's current normal
+    /// `n` is pulled back, `f₁ = −k·(s − (s·n)n)`, `f₂ = −f₁`, with `k = G·Aᵢ/depth` (`G` the
+    /// slab's shear modulus, `Aᵢ` the vertex's tributary area): a shear `u` of the whole slab
+    /// meets `G·A·u/depth`. Along `n` the vertical springs act. The pair's forces cancel, so
+    /// linear momentum is kept; the force vanishes for any rigid motion of the slab.
+    ///
+    /// Springs between the layers would do this too, but diagonals steep enough to span a deep
+    /// slab from one vertex to its neighbour's partner also resist compression by
+    /// `2·G·Aₑ·(depth/Lₑ)²/depth` per edge: on a fine mesh, far stiffer than the slab itself, and
+    /// that stiffness set the time step.
+    pub fn add_slab_shear(&mut self) {
+        let normals = &mut self.inner_normals;
+        normals.iter_mut().for_each(|n| *n = Vec3A::ZERO);
+        let (position, force) = self.system.particles_mut().positions_and_forces_mut();
+        for t in self.inner.triangles() {
+            let [a, b, c] = t.map(|r| position[Self::particle(Layer::Inner, r) as usize]);
+            let normal = (b - a).cross(c - a);
+            for &r in t {
+                normals[r as usize] += normal;
+            }
+        }
+        for (r, (&k, normal)) in self.shear.iter().zip(normals.iter()).enumerate() {
+            if k == 0.0 {
+                continue;
+            }
+            let outer = Self::particle(Layer::Outer, r as u32) as usize;
+            let inner = outer + 1;
+            let n = normal.normalize_or_zero();
+            let slab = position[outer] - position[inner];
+            let f = (slab - n * slab.dot(n)) * -k;
+            force[outer] += f;
+            force[inner] -= f;
+        }
+    }
+
+    /// The largest stable step of symplectic Euler for the layers (s), the slab's shear included
+    /// ([`MassSpringSystem::stable_time_step_with`]).
+    pub fn stable_time_step(&self) -> Option<f32> {
+        let extra: Vec<(u32, f64)> = self
+            .shear
+            .iter()
+            .enumerate()
+            .flat_map(|(r, &k)| {
+                let outer = Self::particle(Layer::Outer, r as u32);
+                [(outer, f64::from(k)), (outer + 1, f64::from(k))]
+            })
+            .collect();
+        self.system.stable_time_step_with(&extra)
     }
 
     /// The thinnest the slab may be (cm): [`LayerParams::min_thickness`] × depth.

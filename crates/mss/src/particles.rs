@@ -137,6 +137,12 @@ impl Particles {
         (&mut self.position, &mut self.velocity, &self.inverse_mass)
     }
 
+    /// Positions and the forces of the current evaluation (mutable), for forces a caller adds
+    /// between [`crate::MassSpringSystem::compute_forces`] and the velocity update.
+    pub fn positions_and_forces_mut(&mut self) -> (&[Vec3A], &mut [Vec3A]) {
+        (&self.position, &mut self.force)
+    }
+
     /// Forces of the last force evaluation (g·cm/s²).
     pub fn forces(&self) -> &[Vec3A] {
         &self.force

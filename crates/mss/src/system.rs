@@ -204,10 +204,22 @@ impl MassSpringSystem {
     /// row sum of its eq. (5) coupling) and a fill's pressure `K/V₀·|∇ᵢV|·Σⱼ|∇ⱼV|`. The bound is exact for two equal masses on one spring,
     /// and conservative otherwise. Damping makes no difference to it.
     pub fn stable_time_step(&self) -> Option<f32> {
+        self.stable_time_step_with(&[])
+    }
+
+    /// [`MassSpringSystem::stable_time_step`] with `extra` stiffness (g/s²) on some particles:
+    /// forces a caller adds to the system's own (each `(particle, k)` adds `k` to the
+    /// particle's row sum; out-of-range particles are ignored).
+    pub fn stable_time_step_with(&self, extra: &[(u32, f64)]) -> Option<f32> {
         let mut k = vec![0.0f64; self.particles.len()];
+        for &(i, x) in extra {
+            if let Some(row) = k.get_mut(i as usize) {
+                *row += x.abs();
+            }
+        }
         for s in &self.springs {
-            k[s.a as usize] += f64::from(s.k);
-            k[s.b as usize] += f64::from(s.k);
+            k[s.a as usize] += f64::from(s.k).abs();
+            k[s.b as usize] += f64::from(s.k).abs();
         }
         for a in &self.anchors {
             k[a.particle as usize] += f64::from(a.k);
