@@ -7,9 +7,10 @@ use tissue_bvh::{BuildOptions, BuildWorkspace, Bvh, RefitReport, Triangles};
 use tissue_mesh::TriMesh;
 
 use crate::{
-    apply_impulses, correct_positions, detect_bvh_bvh, detect_bvh_voxels, Bodies, CollideError,
-    Contact, ContactParams, CorrectionReport, DetectStats, DetectWorkspace, ImpulseReport,
-    ImpulseWorkspace, ResponseParams, Side, Snapshot, Surface, VoxelGrid,
+    apply_impulses, correct_positions, detect_bvh_bvh, detect_bvh_voxels, edge_triangle, Bodies,
+    CollideError, Contact, ContactParams, CorrectionReport, DetectStats, DetectWorkspace,
+    ImpulseReport, ImpulseWorkspace, ResponseParams, Side, Snapshot, Surface, SurfaceView,
+    VoxelGrid,
 };
 
 /// How surface B is represented for the broad phase.
@@ -40,6 +41,12 @@ pub struct ColliderOptions {
     /// A hierarchy is rebuilt when a refit leaves its [`Bvh::cost`] above this multiple of its
     /// [`Bvh::build_cost`] (`f32::INFINITY`: never).
     pub rebuild_ratio: f32,
+    /// Temporal coherence (cm, ≥ 0; 0 turns it off): a full detection also keeps every pair
+    /// within `tolerance + coherence_margin`, and while no particle of A plus no particle of B
+    /// has moved more than the margin in all since, [`Collider::detect`] only re-tests those
+    /// pairs (no refit, no broad phase). A pair that was farther than `tolerance + margin` can
+    /// only have closed by the two moves, so the contact set is exactly a full detection's.
+    pub coherence_margin: f32,
 }
 
 impl Default for ColliderOptions {
@@ -60,6 +67,7 @@ impl Default for ColliderOptions {
             cell_size: None,
             contact: ContactParams::default(),
             rebuild_ratio: 2.0,
+            coherence_margin: 0.0,
         }
     }
 }
@@ -112,6 +120,14 @@ pub struct Collider {
     impulse_ws: ImpulseWorkspace,
     contacts: Vec<Contact>,
     stats: DetectStats,
+    /// Temporal coherence: the pairs within `tolerance + margin` at the last full detection,
+    /// sorted by key, and the positions then.
+    near: Vec<Contact>,
+    anchor_a: Vec<Vec3A>,
+    anchor_b: Vec<Vec3A>,
+    near_valid: bool,
+    /// Per-thread contacts of a parallel re-test, concatenated in order.
+    retest_chunks: Vec<Vec<Contact>>,
 }
 
 impl Collider {
@@ -122,6 +138,13 @@ impl Collider {
     /// [`CollideError::Bvh`] when a hierarchy cannot be built, the voxel grid's errors.
     pub fn new(a: &TriMesh, b: &TriMesh, options: &ColliderOptions) -> Result<Self, CollideError> {
         options.contact.validate()?;
+        if !(options.coherence_margin.is_finite() && options.coherence_margin >= 0.0) {
+            return Err(CollideError::InvalidParameter {
+                name: "coherence_margin",
+                value: options.coherence_margin,
+                expected: "finite and at least 0 (cm)",
+            });
+        }
         if options.rebuild_ratio.is_nan() || options.rebuild_ratio <= 1.0 {
             return Err(CollideError::InvalidParameter {
                 name: "rebuild_ratio",
@@ -169,6 +192,11 @@ impl Collider {
             impulse_ws: ImpulseWorkspace::new(),
             contacts: Vec::new(),
             stats: DetectStats::default(),
+            near: Vec::new(),
+            anchor_a: Vec::new(),
+            anchor_b: Vec::new(),
+            near_valid: false,
+            retest_chunks: Vec::new(),
         })
     }
 
@@ -264,30 +292,68 @@ impl Collider {
     /// # Errors
     /// As [`Collider::update`].
     pub fn detect(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A]) -> Result<&[Contact], CollideError> {
+        let margin = self.options.coherence_margin;
+        if margin > 0.0
+            && self.near_valid
+            && pos_a.len() == self.anchor_a.len()
+            && pos_b.len() == self.anchor_b.len()
+            && largest_move(pos_a, &self.anchor_a) + largest_move(pos_b, &self.anchor_b) <= margin
+        {
+            let _span = tracing::trace_span!("retest", pairs = self.near.len()).entered();
+            let va = self.a.view(Side::A, pos_a)?;
+            let vb = self.b.view(Side::B, pos_b)?;
+            retest_parallel(
+                &self.near,
+                &va,
+                &vb,
+                self.options.contact.tolerance,
+                &mut self.retest_chunks,
+                &mut self.contacts,
+            );
+            self.stats = DetectStats {
+                candidates: self.near.len() as u32,
+                triangle_pairs: 0,
+                edge_tests: self.near.len() as u32,
+                contacts: self.contacts.len() as u32,
+            };
+            return Ok(&self.contacts);
+        }
         self.update(pos_a, pos_b)?;
         let va = self.a.view(Side::A, pos_a)?;
         let vb = self.b.view(Side::B, pos_b)?;
-        let params = &self.options.contact;
-        self.stats = match &self.broad_b {
-            Broad::Bvh(bvh_b) => detect_bvh_bvh(
-                &va,
-                &self.bvh_a,
-                &vb,
-                bvh_b,
-                params,
-                &mut self.ws,
-                &mut self.contacts,
-            )?,
-            Broad::Voxels(grid) => detect_bvh_voxels(
-                &va,
-                &self.bvh_a,
-                &vb,
-                grid,
-                params,
-                &mut self.ws,
-                &mut self.contacts,
-            )?,
+        let params = ContactParams {
+            tolerance: self.options.contact.tolerance + margin,
+            ..self.options.contact
         };
+        let out = if margin > 0.0 {
+            &mut self.near
+        } else {
+            &mut self.contacts
+        };
+        self.stats = match &self.broad_b {
+            Broad::Bvh(bvh_b) => {
+                detect_bvh_bvh(&va, &self.bvh_a, &vb, bvh_b, &params, &mut self.ws, out)?
+            }
+            Broad::Voxels(grid) => {
+                detect_bvh_voxels(&va, &self.bvh_a, &vb, grid, &params, &mut self.ws, out)?
+            }
+        };
+        if margin > 0.0 {
+            self.anchor_a.clear();
+            self.anchor_a.extend_from_slice(pos_a);
+            self.anchor_b.clear();
+            self.anchor_b.extend_from_slice(pos_b);
+            self.near_valid = true;
+            retest_parallel(
+                &self.near,
+                &va,
+                &vb,
+                self.options.contact.tolerance,
+                &mut self.retest_chunks,
+                &mut self.contacts,
+            );
+            self.stats.contacts = self.contacts.len() as u32;
+        }
         Ok(&self.contacts)
     }
 
@@ -338,6 +404,86 @@ impl Collider {
                 // Only fixed particles left: nothing more can move.
                 return Ok(report);
             }
+        }
+    }
+}
+
+/// The largest distance between `now[i]` and `then[i]`.
+fn largest_move(now: &[Vec3A], then: &[Vec3A]) -> f32 {
+    now.iter()
+        .zip(then)
+        .map(|(a, b)| (*a - *b).length_squared())
+        .fold(0.0f32, f32::max)
+        .sqrt()
+}
+
+/// Pairs per thread below which a re-test stays on the calling thread.
+#[cfg(feature = "parallel")]
+const RETEST_PARALLEL_MIN: usize = 1024;
+
+/// [`retest`] in consecutive chunks, one per rayon thread when the pairs are many enough
+/// (feature `parallel`); the chunks' contacts are concatenated in order, so the result is the
+/// serial one.
+fn retest_parallel(
+    near: &[Contact],
+    a: &SurfaceView<'_>,
+    b: &SurfaceView<'_>,
+    tolerance: f32,
+    chunks: &mut Vec<Vec<Contact>>,
+    out: &mut Vec<Contact>,
+) {
+    #[cfg(feature = "parallel")]
+    {
+        let k = rayon::current_num_threads()
+            .min(near.len() / RETEST_PARALLEL_MIN)
+            .max(1);
+        if k > 1 {
+            use rayon::prelude::*;
+            if chunks.len() < k {
+                chunks.resize_with(k, Vec::new);
+            }
+            let per = near.len().div_ceil(k);
+            chunks[..k]
+                .par_iter_mut()
+                .zip(near.par_chunks(per))
+                .for_each(|(chunk, pairs)| retest(pairs, a, b, tolerance, chunk));
+            out.clear();
+            for chunk in &chunks[..k] {
+                out.extend_from_slice(chunk);
+            }
+            return;
+        }
+    }
+    let _ = chunks;
+    retest(near, a, b, tolerance, out);
+}
+
+/// The contacts among the pairs `near` at the current positions, with the narrow phase's own
+/// test ([`edge_triangle`]: the arithmetic of every detection), in `near`'s (key) order.
+fn retest(
+    near: &[Contact],
+    a: &SurfaceView<'_>,
+    b: &SurfaceView<'_>,
+    tolerance: f32,
+    out: &mut Vec<Contact>,
+) {
+    out.clear();
+    for c in near {
+        let (ev, tv) = match c.edge_side {
+            Side::A => (a, b),
+            Side::B => (b, a),
+        };
+        let [i, j] = c.edge_particles;
+        let (p, q) = (ev.positions()[i as usize], ev.positions()[j as usize]);
+        let [x, y, z] = tv.corners(c.triangle);
+        if let Some(hit) = edge_triangle(p, q, x, y, z, tolerance) {
+            out.push(Contact {
+                s: hit.s,
+                barycentric: hit.barycentric,
+                normal: hit.normal.into(),
+                depth: hit.depth,
+                ..*c
+            });
         }
     }
 }

@@ -280,6 +280,59 @@ fn contacts_are_sorted_deterministic_and_thread_count_independent() {
     assert!(one.windows(2).all(|w| w[0].key() < w[1].key()));
 }
 
+#[test]
+fn temporal_coherence_finds_exactly_the_full_detections_contacts() {
+    // The sphere rises through the 65² press region in small steps while the region sags:
+    // a collider that re-tests the pairs kept within tolerance + margin gives the contacts
+    // of a full detection, bit for bit, at every step, and re-tests most steps.
+    let scene = scenes::plane_press(65, 0.05, 0.0).unwrap();
+    let contact = ContactParams {
+        tolerance: 0.002,
+        shared_particles: false,
+    };
+    let mut full = Collider::new(
+        &scene.region,
+        &scene.sphere,
+        &ColliderOptions {
+            contact,
+            ..ColliderOptions::default()
+        },
+    )
+    .unwrap();
+    let mut coherent = Collider::new(
+        &scene.region,
+        &scene.sphere,
+        &ColliderOptions {
+            contact,
+            coherence_margin: 0.004,
+            ..ColliderOptions::default()
+        },
+    )
+    .unwrap();
+    let (mut pa, mut pb) = (
+        to_vec3a(scene.region.positions()),
+        to_vec3a(scene.sphere.positions()),
+    );
+    let (mut retests, mut total) = (0, 0);
+    for step in 0..60 {
+        for p in &mut pb {
+            p.z += 0.0005;
+        }
+        for p in &mut pa {
+            p.z -= 0.0001 * (1.0 - 4.0 * (p.x * p.x + p.y * p.y)).max(0.0);
+        }
+        let expected = full.detect(&pa, &pb).unwrap().to_vec();
+        let got = coherent.detect(&pa, &pb).unwrap().to_vec();
+        assert_eq!(got, expected, "step {step}");
+        total += expected.len();
+        if coherent.stats().triangle_pairs == 0 {
+            retests += 1;
+        }
+    }
+    assert!(total > 1000, "{total} contacts in all");
+    assert!(retests > 40, "{retests} of 60 steps re-tested");
+}
+
 // --- Edge–triangle cases ---------------------------------------------------------------------
 
 fn unit_triangle() -> [Vec3A; 3] {

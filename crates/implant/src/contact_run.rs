@@ -50,6 +50,11 @@ pub struct RunParams {
     pub contact_distance: Option<f32>,
     /// The automatic contact distance as a fraction of layer 2's mean edge length.
     pub contact_fraction: f32,
+    /// Temporal coherence of the detection, as a multiple of the contact distance
+    /// ([`tissue_collide::ColliderOptions::coherence_margin`]; 0 turns it off): between full
+    /// detections only the pairs then this much closer than the contact distance are re-tested.
+    /// The contacts are the same either way; the work is not.
+    pub coherence: f32,
     /// Collision response: restitution, friction, Gauss–Seidel sweeps, correction settings.
     pub response: ResponseParams,
     /// The stop criterion's window and ratio tolerance (SPEC A.2) and the step limit.
@@ -84,6 +89,7 @@ impl Default for RunParams {
             broad_phase: BroadPhase::BvhBvh,
             contact_distance: None,
             contact_fraction: 0.1,
+            coherence: 1.0,
             response: ResponseParams {
                 friction: 0.3,
                 ..ResponseParams::default()
@@ -135,6 +141,9 @@ impl RunParams {
                 f64::from(self.contact_fraction),
                 "finite and ≥ 0",
             );
+        }
+        if !(self.coherence.is_finite() && self.coherence >= 0.0) {
+            return bad("coherence", f64::from(self.coherence), "finite and ≥ 0");
         }
         if !(self.settle_speed.is_finite() && self.settle_speed >= 0.0) {
             return bad("settle_speed", self.settle_speed, "finite and ≥ 0 (cm/s)");
@@ -256,6 +265,7 @@ impl ContactRun {
                     tolerance: contact_distance,
                     shared_particles: false,
                 },
+                coherence_margin: params.coherence * contact_distance,
                 ..ColliderOptions::default()
             },
         )?;
