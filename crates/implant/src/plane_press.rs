@@ -65,23 +65,19 @@ impl Default for PlanePressParams {
     /// [`RunParams::default`].
     ///
     /// The slab's thickness guard ([`LayerParams::min_thickness`], a numerical safeguard, not
-    /// material) is off: the press squeezes the slab by under 10 %, and at 65² and 129² the
-    /// guard never engages, but at 257² it engages where the sphere's pole meets layer 2 (step
-    /// ≈ 600 at 200 cm/s) and its position projection then feeds energy into the stiff slab
-    /// until the run blows up (1 vertex held, then 5, 57, 292, … 3119 within 200 steps).
+    /// material) is off: the press squeezes the slab by about a third at the sphere's pole
+    /// (0.034 of 0.05 cm at 65²), so a guard at a quarter of the depth would never act. With
+    /// the diagonal springs the slab once had, the guard's position projection fed energy into
+    /// the slab at 257² and the run blew up; it has not been re-tested with the shear force
+    /// that replaced them.
     ///
     /// The speed: the end state should not depend on it, so the sphere must be slow against the
-    /// tissue's waves and its damping time (2 ms by default). The run ends with the sphere, not
-    /// with the tissue at rest, so whatever the impact at the start set ringing and has not yet
-    /// died away is still in the result. The cost is `travel / (speed·h)` steps, and `h` shrinks
-    /// with the edge length (1.4 µs at 65², 0.71 µs at 129², 0.35 µs at 257²).
-    ///
-    /// Measured at 65² (0.30 cm of travel): the area after lies in 0.6675–0.6718 cm² (±0.3 %)
-    /// for every speed from 50 to 400 cm/s. The volume is more sensitive: 0.0634–0.0640 cm³ at
-    /// 50–125 cm/s but 0.0609–0.0652 cm³ at 150–400 cm/s, where the run (0.8–2 ms) is shorter
-    /// than the damping time. At 100 cm/s halving the speed changes the area by 0.02 % and the
-    /// volume by 0.4 % (129²: 0.03 % and 0.5 %); at 200 cm/s the volume would change by 1.6 %.
-    /// The runs take about 2 200, 4 300 and 8 500 steps at 65², 129², 257².
+    /// tissue's waves and its damping time. The run ends with the sphere, not with the tissue at
+    /// rest, so whatever the impact at the start set ringing and has not yet died away is still
+    /// in the result. The cost is `travel / (speed·h)` steps, and `h` shrinks with the edge
+    /// length (1.2 µs at 65², 0.60 µs at 129², 0.30 µs at 257²: 2 571, 5 066 and 10 080 steps).
+    /// Halving the speed changes the area after by 0.06 % and the volume by 0.6 % at 65²
+    /// (`--halving` in the example measures it).
     fn default() -> Self {
         PlanePressParams {
             sphere_radius: 0.25,

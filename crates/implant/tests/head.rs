@@ -180,8 +180,8 @@ fn a_round_expander_on_the_forehead_settles_and_keeps_every_invariant() {
     );
     assert!(out.area_gain > 0.0, "gain {}", out.area_gain);
     // The implant lifted layer 2 by its volume (the tissue's deep face sweeps at least it),
-    // and the skin by nearly as much: on this coarse, curved patch the skin's tension squeezes
-    // the slab over the expander down to the thickness guard, which takes a few cm³ back.
+    // and the skin by at least nearly as much (on this coarse, curved patch the skin's tension
+    // can squeeze the slab over the expander, down to the thickness guard at most).
     assert!(
         inner_rise > 0.95 * out.implant_volume,
         "layer 2 swept {inner_rise} cm³"
