@@ -6,11 +6,11 @@ use glam::Vec3A;
 use tissue_bvh::{BuildOptions, BuildWorkspace, Bvh, RefitReport, Triangles};
 use tissue_mesh::TriMesh;
 
+use crate::edge_triangle::{edge_against, TrianglePlane};
 use crate::{
-    apply_impulses, correct_positions, detect_bvh_bvh, detect_bvh_voxels, edge_triangle, Bodies,
-    CollideError, Contact, ContactParams, CorrectionReport, DetectStats, DetectWorkspace,
-    ImpulseReport, ImpulseWorkspace, ResponseParams, Side, Snapshot, Surface, SurfaceView,
-    VoxelGrid,
+    apply_impulses, correct_positions, detect_bvh_bvh, detect_bvh_voxels, Bodies, CollideError,
+    Contact, ContactParams, CorrectionReport, DetectStats, DetectWorkspace, ImpulseReport,
+    ImpulseWorkspace, ResponseParams, Side, Snapshot, Surface, SurfaceView, VoxelGrid,
 };
 
 /// How surface B is represented for the broad phase.
@@ -128,6 +128,60 @@ pub struct Collider {
     near_valid: bool,
     /// Per-thread contacts of a parallel re-test, concatenated in order.
     retest_chunks: Vec<Vec<Contact>>,
+    /// The re-test's triangle planes: per side, the slot of each triangle's plane in `planes`
+    /// (valid when its stamp is the current one).
+    planes: RetestPlanes,
+}
+
+/// Triangle planes prepared once per re-test for the triangles its pairs name.
+#[derive(Debug, Clone, Default)]
+struct RetestPlanes {
+    slot: [Vec<u32>; 2],
+    stamp: [Vec<u32>; 2],
+    current: u32,
+    planes: Vec<TrianglePlane>,
+}
+
+impl RetestPlanes {
+    /// Prepares the plane of every triangle `near` names, at the current positions.
+    fn prepare(&mut self, near: &[Contact], a: &SurfaceView<'_>, b: &SurfaceView<'_>) {
+        for (k, view) in [a, b].into_iter().enumerate() {
+            let n = view.surface().triangle_count();
+            if self.stamp[k].len() != n {
+                self.stamp[k] = vec![0; n];
+                self.slot[k] = vec![0; n];
+            }
+        }
+        self.current = self.current.wrapping_add(1);
+        if self.current == 0 {
+            self.stamp.iter_mut().for_each(|s| s.fill(0));
+            self.current = 1;
+        }
+        self.planes.clear();
+        for c in near {
+            let (k, view) = match c.edge_side {
+                Side::A => (1, b),
+                Side::B => (0, a),
+            };
+            let t = c.triangle as usize;
+            if self.stamp[k][t] != self.current {
+                self.stamp[k][t] = self.current;
+                self.slot[k][t] = self.planes.len() as u32;
+                let [x, y, z] = view.corners(c.triangle);
+                self.planes.push(TrianglePlane::new(x, y, z));
+            }
+        }
+    }
+
+    /// The plane of the triangle contact `c` names (prepared).
+    #[inline]
+    fn of(&self, c: &Contact) -> &TrianglePlane {
+        let k = match c.edge_side {
+            Side::A => 1,
+            Side::B => 0,
+        };
+        &self.planes[self.slot[k][c.triangle as usize] as usize]
+    }
 }
 
 impl Collider {
@@ -197,6 +251,7 @@ impl Collider {
             anchor_b: Vec::new(),
             near_valid: false,
             retest_chunks: Vec::new(),
+            planes: RetestPlanes::default(),
         })
     }
 
@@ -302,10 +357,12 @@ impl Collider {
             let _span = tracing::trace_span!("retest", pairs = self.near.len()).entered();
             let va = self.a.view(Side::A, pos_a)?;
             let vb = self.b.view(Side::B, pos_b)?;
+            self.planes.prepare(&self.near, &va, &vb);
             retest_parallel(
                 &self.near,
                 &va,
                 &vb,
+                &self.planes,
                 self.options.contact.tolerance,
                 &mut self.retest_chunks,
                 &mut self.contacts,
@@ -344,10 +401,12 @@ impl Collider {
             self.anchor_b.clear();
             self.anchor_b.extend_from_slice(pos_b);
             self.near_valid = true;
+            self.planes.prepare(&self.near, &va, &vb);
             retest_parallel(
                 &self.near,
                 &va,
                 &vb,
+                &self.planes,
                 self.options.contact.tolerance,
                 &mut self.retest_chunks,
                 &mut self.contacts,
@@ -428,6 +487,7 @@ fn retest_parallel(
     near: &[Contact],
     a: &SurfaceView<'_>,
     b: &SurfaceView<'_>,
+    planes: &RetestPlanes,
     tolerance: f32,
     chunks: &mut Vec<Vec<Contact>>,
     out: &mut Vec<Contact>,
@@ -446,7 +506,7 @@ fn retest_parallel(
             chunks[..k]
                 .par_iter_mut()
                 .zip(near.par_chunks(per))
-                .for_each(|(chunk, pairs)| retest(pairs, a, b, tolerance, chunk));
+                .for_each(|(chunk, pairs)| retest(pairs, a, b, planes, tolerance, chunk));
             out.clear();
             for chunk in &chunks[..k] {
                 out.extend_from_slice(chunk);
@@ -455,28 +515,32 @@ fn retest_parallel(
         }
     }
     let _ = chunks;
-    retest(near, a, b, tolerance, out);
+    retest(near, a, b, planes, tolerance, out);
 }
 
 /// The contacts among the pairs `near` at the current positions, with the narrow phase's own
-/// test ([`edge_triangle`]: the arithmetic of every detection), in `near`'s (key) order.
+/// test (the arithmetic of [`edge_triangle`] and of every detection, on the triangle's prepared
+/// plane), in `near`'s (key) order.
 fn retest(
     near: &[Contact],
     a: &SurfaceView<'_>,
     b: &SurfaceView<'_>,
+    planes: &RetestPlanes,
     tolerance: f32,
     out: &mut Vec<Contact>,
 ) {
     out.clear();
     for c in near {
-        let (ev, tv) = match c.edge_side {
-            Side::A => (a, b),
-            Side::B => (b, a),
+        let ev = match c.edge_side {
+            Side::A => a,
+            Side::B => b,
         };
         let [i, j] = c.edge_particles;
         let (p, q) = (ev.positions()[i as usize], ev.positions()[j as usize]);
-        let [x, y, z] = tv.corners(c.triangle);
-        if let Some(hit) = edge_triangle(p, q, x, y, z, tolerance) {
+        let plane = planes.of(c);
+        if let Some(hit) =
+            edge_against(plane, p, q, plane.distance(p), plane.distance(q), tolerance)
+        {
             out.push(Contact {
                 s: hit.s,
                 barycentric: hit.barycentric,

@@ -185,9 +185,9 @@ pub(crate) fn edge_against(
     if !Aabb::from_segment(p, q).overlaps(&plane.aabb, tolerance) {
         return None;
     }
-    // Beyond one of the triangle's sides (by twice the reach, well clear of rounding): the
-    // common exit for an edge resting on a neighbouring triangle.
-    if plane.beyond_a_side(p, q, 2.0 * reach) {
+    // Beyond one of the triangle's sides (by the reach, plus a margin for rounding): the common
+    // exit for an edge resting on a neighbouring triangle.
+    if plane.beyond_a_side(p, q, 1.001 * reach) {
         return None;
     }
     if plane.planar && ((dp > 0.0 && dq < 0.0) || (dp < 0.0 && dq > 0.0)) {
@@ -284,6 +284,12 @@ fn closest_segment_triangle(
     let dq = (tq - q).length_squared();
     if dq < best.0 {
         best = (dq, 1.0, bq, q, tq);
+    }
+    // Both endpoints over the triangle's interior (and, here, not crossing it there): every
+    // point of the segment is over the interior, its distance to the plane is linear along the
+    // segment, so the nearer endpoint is the closest point and no side can be closer.
+    if bp.iter().chain(&bq).all(|&x| x > 0.0) {
+        return best;
     }
     let sides = [(a, b, 0usize), (b, c, 1), (c, a, 2)];
     for (x, y, k) in sides {

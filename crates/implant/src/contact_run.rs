@@ -77,8 +77,8 @@ impl Default for RunParams {
     /// BVH; contacts from a tenth of an edge; inelastic contact with Coulomb friction 0.3
     /// (silicone on tissue; frictionless, the tissue on the flank of Table 2's 150 cm³
     /// expander chattered against its anchors and never settled), 8 Gauss–Seidel sweeps (with
-    /// 4 or 2 the resting contacts chatter and the 100–150 cm³ runs do not settle); window 100
-    /// steps, tolerance 0.01, at most 20 000 steps (the thesis's runs took 2 800–3 300);
+    /// 4 or 2 the resting contacts chatter and the 100–150 cm³ runs do not settle); window 50
+    /// steps (1.6 ms on Table 2), tolerance 0.01, at most 20 000 steps (the thesis's runs took 2 800–3 300);
     /// settled below a mean speed of 5 cm/s (resting contacts jitter at 1–3 cm/s, which the
     /// thesis's ratio test alone never accepts).
     fn default() -> Self {
@@ -95,7 +95,7 @@ impl Default for RunParams {
                 ..ResponseParams::default()
             },
             stop: StopCriterion {
-                window: 100,
+                window: 50,
                 tolerance: 0.01,
                 max_steps: 20_000,
                 floor: 0.0,
