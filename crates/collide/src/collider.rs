@@ -120,17 +120,52 @@ pub struct Collider {
     impulse_ws: ImpulseWorkspace,
     contacts: Vec<Contact>,
     stats: DetectStats,
-    /// Temporal coherence: the pairs within `tolerance + margin` at the last full detection,
-    /// sorted by key, and the positions then.
+    coherence: Coherence,
+}
+
+/// Temporal coherence: the pairs within `tolerance + margin` at the last full detection, sorted
+/// by key, the positions then, and the re-test's scratch.
+#[derive(Debug, Clone, Default)]
+struct Coherence {
     near: Vec<Contact>,
     anchor_a: Vec<Vec3A>,
     anchor_b: Vec<Vec3A>,
-    near_valid: bool,
+    valid: bool,
     /// Per-thread contacts of a parallel re-test, concatenated in order.
-    retest_chunks: Vec<Vec<Contact>>,
-    /// The re-test's triangle planes: per side, the slot of each triangle's plane in `planes`
-    /// (valid when its stamp is the current one).
+    chunks: Vec<Vec<Contact>>,
     planes: RetestPlanes,
+}
+
+impl Coherence {
+    /// Whether every pair closer than the tolerance now is among `near`: no particle of A plus
+    /// no particle of B has moved more than `margin` since the full detection.
+    fn holds(&self, pos_a: &[Vec3A], pos_b: &[Vec3A], margin: f32) -> bool {
+        margin > 0.0
+            && self.valid
+            && pos_a.len() == self.anchor_a.len()
+            && pos_b.len() == self.anchor_b.len()
+            && largest_move(pos_a, &self.anchor_a) + largest_move(pos_b, &self.anchor_b) <= margin
+    }
+
+    /// The contacts among `near` at the views' positions, into `out`.
+    fn retest(
+        &mut self,
+        a: &SurfaceView<'_>,
+        b: &SurfaceView<'_>,
+        tolerance: f32,
+        out: &mut Vec<Contact>,
+    ) {
+        self.planes.prepare(&self.near, a, b);
+        retest_parallel(
+            &self.near,
+            a,
+            b,
+            &self.planes,
+            tolerance,
+            &mut self.chunks,
+            out,
+        );
+    }
 }
 
 /// Triangle planes prepared once per re-test for the triangles its pairs name.
@@ -246,12 +281,7 @@ impl Collider {
             impulse_ws: ImpulseWorkspace::new(),
             contacts: Vec::new(),
             stats: DetectStats::default(),
-            near: Vec::new(),
-            anchor_a: Vec::new(),
-            anchor_b: Vec::new(),
-            near_valid: false,
-            retest_chunks: Vec::new(),
-            planes: RetestPlanes::default(),
+            coherence: Coherence::default(),
         })
     }
 
@@ -348,29 +378,18 @@ impl Collider {
     /// As [`Collider::update`].
     pub fn detect(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A]) -> Result<&[Contact], CollideError> {
         let margin = self.options.coherence_margin;
-        if margin > 0.0
-            && self.near_valid
-            && pos_a.len() == self.anchor_a.len()
-            && pos_b.len() == self.anchor_b.len()
-            && largest_move(pos_a, &self.anchor_a) + largest_move(pos_b, &self.anchor_b) <= margin
-        {
-            let _span = tracing::trace_span!("retest", pairs = self.near.len()).entered();
+        let tolerance = self.options.contact.tolerance;
+        if self.coherence.holds(pos_a, pos_b, margin) {
+            let _span = tracing::trace_span!("retest", pairs = self.coherence.near.len()).entered();
             let va = self.a.view(Side::A, pos_a)?;
             let vb = self.b.view(Side::B, pos_b)?;
-            self.planes.prepare(&self.near, &va, &vb);
-            retest_parallel(
-                &self.near,
-                &va,
-                &vb,
-                &self.planes,
-                self.options.contact.tolerance,
-                &mut self.retest_chunks,
-                &mut self.contacts,
-            );
+            self.coherence
+                .retest(&va, &vb, tolerance, &mut self.contacts);
+            let pairs = self.coherence.near.len() as u32;
             self.stats = DetectStats {
-                candidates: self.near.len() as u32,
+                candidates: pairs,
                 triangle_pairs: 0,
-                edge_tests: self.near.len() as u32,
+                edge_tests: pairs,
                 contacts: self.contacts.len() as u32,
             };
             return Ok(&self.contacts);
@@ -379,11 +398,11 @@ impl Collider {
         let va = self.a.view(Side::A, pos_a)?;
         let vb = self.b.view(Side::B, pos_b)?;
         let params = ContactParams {
-            tolerance: self.options.contact.tolerance + margin,
+            tolerance: tolerance + margin,
             ..self.options.contact
         };
         let out = if margin > 0.0 {
-            &mut self.near
+            &mut self.coherence.near
         } else {
             &mut self.contacts
         };
@@ -396,21 +415,13 @@ impl Collider {
             }
         };
         if margin > 0.0 {
-            self.anchor_a.clear();
-            self.anchor_a.extend_from_slice(pos_a);
-            self.anchor_b.clear();
-            self.anchor_b.extend_from_slice(pos_b);
-            self.near_valid = true;
-            self.planes.prepare(&self.near, &va, &vb);
-            retest_parallel(
-                &self.near,
-                &va,
-                &vb,
-                &self.planes,
-                self.options.contact.tolerance,
-                &mut self.retest_chunks,
-                &mut self.contacts,
-            );
+            let c = &mut self.coherence;
+            c.anchor_a.clear();
+            c.anchor_a.extend_from_slice(pos_a);
+            c.anchor_b.clear();
+            c.anchor_b.extend_from_slice(pos_b);
+            c.valid = true;
+            c.retest(&va, &vb, tolerance, &mut self.contacts);
             self.stats.contacts = self.contacts.len() as u32;
         }
         Ok(&self.contacts)
