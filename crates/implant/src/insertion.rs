@@ -21,8 +21,8 @@ use glam::{Vec3, Vec3A};
 use tissue_bvh::{BuildOptions, Bvh, BvhWorkspace, Ray, Triangles};
 use tissue_mesh::{volume_between, TriMesh};
 use tissue_mss::{
-    masses_from_triangles, springs_from_triangles, MassSpringSystem, Particles, SheetMaterial,
-    StopReason, VolumePreservation, VolumePressure, WATER_DENSITY,
+    masses_from_triangles, springs_from_triangles_floored, MassSpringSystem, Particles,
+    SheetMaterial, StopReason, VolumePreservation, VolumePressure, WATER_DENSITY,
 };
 
 use crate::contact_run::{ContactRun, RunParams, StepSummary};
@@ -279,7 +279,9 @@ pub fn implant_system(
     for v in implant.base() {
         particles.fix(v)?;
     }
-    let springs = springs_from_triangles(
+    // Bent onto a curved body the dome can get very obtuse triangles next to the rim: such an
+    // edge keeps eq. (3)'s shear term.
+    let (springs, floored) = springs_from_triangles_floored(
         mesh,
         &SheetMaterial {
             young: params.shell_young,
@@ -288,6 +290,12 @@ pub fn implant_system(
         },
         0,
     )?;
+    if !floored.is_empty() {
+        tracing::warn!(
+            floored = floored.len(),
+            "obtuse triangles in the bent expander: springs keep only eq. (3)'s shear term"
+        );
+    }
     let mut system = MassSpringSystem::new(particles, springs)?;
     let area = mesh.area();
     let t = mesh.triangle_count() as f64;

@@ -34,7 +34,7 @@
 use glam::{Vec3, Vec3A};
 use tissue_mesh::TriMesh;
 use tissue_mss::{
-    masses_from_triangles, springs_from_triangles, Anchor, MassSpringSystem, Particles,
+    masses_from_triangles, springs_from_triangles_floored, Anchor, MassSpringSystem, Particles,
     SheetMaterial, Spring,
 };
 
@@ -156,6 +156,9 @@ pub struct TissueLayers {
     shear: Vec<f32>,
     /// Layer 2's current vertex normals (unnormalised), scratch of `add_slab_shear`.
     inner_normals: Vec<Vec3A>,
+    /// In-layer springs whose eq. (3) sum was not positive (obtuse triangles), given only the
+    /// shear term.
+    floored: usize,
     boundary: Vec<u32>,
     min_thickness: f32,
 }
@@ -249,13 +252,21 @@ impl TissueLayers {
             young: params.anchor_young.max(f64::MIN_POSITIVE),
             ..material
         };
-        let mut springs: Vec<Spring> =
-            remap(Layer::Outer, springs_from_triangles(region, &material, 0)?)
-                .chain(remap(
-                    Layer::Inner,
-                    springs_from_triangles(&inner, &deep, 0)?,
-                ))
-                .collect();
+        // Scans have obtuse triangles, whose eq. (3) sums can turn negative at ν = 0.45: such
+        // an edge keeps eq. (3)'s shear term ([`springs_from_triangles_floored`]).
+        let (outer_springs, outer_floored) = springs_from_triangles_floored(region, &material, 0)?;
+        let (inner_springs, inner_floored) = springs_from_triangles_floored(&inner, &deep, 0)?;
+        let floored = outer_floored.len() + inner_floored.len();
+        if floored > 0 {
+            tracing::warn!(
+                floored,
+                first = ?outer_floored.first().or(inner_floored.first()),
+                "obtuse triangles: springs keep only eq. (3)'s shear term"
+            );
+        }
+        let mut springs: Vec<Spring> = remap(Layer::Outer, outer_springs)
+            .chain(remap(Layer::Inner, inner_springs))
+            .collect();
 
         // Tributary areas: a third of each triangle to each of its vertices and edges.
         let areas = region.triangle_areas();
@@ -308,6 +319,7 @@ impl TissueLayers {
             normals,
             shear,
             inner_normals: vec![Vec3A::ZERO; n],
+            floored,
             boundary,
             min_thickness: (params.min_thickness * params.depth) as f32,
         })
@@ -370,6 +382,12 @@ impl TissueLayers {
             })
             .collect();
         self.system.stable_time_step_with(&extra)
+    }
+
+    /// How many in-layer springs of very obtuse triangles keep only eq. (3)'s shear term (their
+    /// eq. (3) sum was not positive; see `tissue_mss::springs_from_triangles_floored`).
+    pub fn floored_springs(&self) -> usize {
+        self.floored
     }
 
     /// The thinnest the slab may be (cm): [`LayerParams::min_thickness`] × depth.

@@ -80,7 +80,10 @@ pub use error::MssError;
 pub use mass::{masses_from_tets, masses_from_triangles, sheet_mass, WATER_DENSITY};
 pub use particles::Particles;
 pub use pressure::VolumePressure;
-pub use spring::{spring_force, springs_from_triangles, van_gelder, Anchor, SheetMaterial, Spring};
+pub use spring::{
+    spring_force, springs_from_triangles, springs_from_triangles_floored, van_gelder, Anchor,
+    SheetMaterial, Spring,
+};
 pub use stop::{RunReport, SettleDetector, StopCriterion, StopReason};
 pub use system::{Integrator, MassSpringSystem, StepReport};
 pub use volume::VolumePreservation;

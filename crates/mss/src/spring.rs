@@ -140,30 +140,15 @@ pub fn van_gelder(a: f64, b: f64, c: f64, area: f64, material: &SheetMaterial) -
 /// Springs come in the mesh's edge order.
 ///
 /// Errors if the material is out of range or a stiffness comes out non-positive (a very obtuse
-/// triangle with a large Poisson ratio can make a side's sum negative: remesh, or lower ν).
+/// triangle with a large Poisson ratio can make a side's sum negative: remesh, or lower ν, or
+/// use [`springs_from_triangles_floored`]).
 pub fn springs_from_triangles(
     mesh: &TriMesh,
     material: &SheetMaterial,
     first_particle: u32,
 ) -> Result<Vec<Spring>, MssError> {
-    material.check()?;
+    let (k, _) = edge_stiffness(mesh, material)?;
     let topo = mesh.topology();
-    let mut k = vec![0.0f64; topo.edges().len()];
-    for (t, edges) in topo.triangle_edges().iter().enumerate() {
-        let p = mesh.corners(t).map(|x| x.as_dvec3());
-        // Side s runs from corner s to corner s+1; its opposite sides are the other two.
-        let len = [
-            (p[1] - p[0]).length(),
-            (p[2] - p[1]).length(),
-            (p[0] - p[2]).length(),
-        ];
-        let area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
-        for s in 0..3 {
-            let c = len[s];
-            let (a, b) = (len[(s + 1) % 3], len[(s + 2) % 3]);
-            k[edges[s] as usize] += van_gelder(a, b, c, area, material);
-        }
-    }
     let positions = mesh.positions();
     topo.edges()
         .iter()
@@ -190,4 +175,72 @@ pub fn springs_from_triangles(
             ))
         })
         .collect()
+}
+
+/// [`springs_from_triangles`] for meshes with very obtuse triangles (scans): an edge whose eq. (3)
+/// sum is not positive keeps only the sum of the formula's first, shear term,
+/// `E₂/(1+ν)·2A/c²`, which is positive for every triangle. Eq. (3)'s second term is negative
+/// opposite an obtuse angle, and can outweigh the rest when ν is large.
+///
+/// Returns the springs and the edges (indices in the mesh's edge order) whose stiffness was
+/// replaced. Errors only for a bad material.
+pub fn springs_from_triangles_floored(
+    mesh: &TriMesh,
+    material: &SheetMaterial,
+    first_particle: u32,
+) -> Result<(Vec<Spring>, Vec<u32>), MssError> {
+    let (k, shear) = edge_stiffness(mesh, material)?;
+    let topo = mesh.topology();
+    let positions = mesh.positions();
+    let mut replaced = Vec::new();
+    let springs = topo
+        .edges()
+        .iter()
+        .enumerate()
+        .map(|(e, &[a, b])| {
+            let stiffness = if k[e].is_finite() && k[e] > 0.0 {
+                k[e]
+            } else {
+                replaced.push(e as u32);
+                shear[e]
+            };
+            let rest = positions[a as usize].distance(positions[b as usize]);
+            Spring::new(
+                a + first_particle,
+                b + first_particle,
+                rest,
+                stiffness as f32,
+            )
+        })
+        .collect();
+    Ok((springs, replaced))
+}
+
+/// Per edge: eq. (3) summed over its triangles, and the first term alone.
+fn edge_stiffness(
+    mesh: &TriMesh,
+    material: &SheetMaterial,
+) -> Result<(Vec<f64>, Vec<f64>), MssError> {
+    material.check()?;
+    let topo = mesh.topology();
+    let mut k = vec![0.0f64; topo.edges().len()];
+    let mut shear = vec![0.0f64; topo.edges().len()];
+    let e2 = material.young * material.thickness;
+    for (t, edges) in topo.triangle_edges().iter().enumerate() {
+        let p = mesh.corners(t).map(|x| x.as_dvec3());
+        // Side s runs from corner s to corner s+1; its opposite sides are the other two.
+        let len = [
+            (p[1] - p[0]).length(),
+            (p[2] - p[1]).length(),
+            (p[0] - p[2]).length(),
+        ];
+        let area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
+        for s in 0..3 {
+            let c = len[s];
+            let (a, b) = (len[(s + 1) % 3], len[(s + 2) % 3]);
+            k[edges[s] as usize] += van_gelder(a, b, c, area, material);
+            shear[edges[s] as usize] += e2 / (1.0 + material.poisson) * (2.0 * area / (c * c));
+        }
+    }
+    Ok((k, shear))
 }

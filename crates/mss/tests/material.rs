@@ -131,3 +131,49 @@ fn tet_masses_sum_to_the_total() {
     assert!((sum - total).abs() < 1e-5 * total, "{sum} vs {total}");
     assert!(masses_from_tets(&mesh, 0.0).is_err());
 }
+
+#[test]
+fn floored_springs_keep_the_shear_term_where_eq_3_turns_negative() {
+    use tissue_mss::springs_from_triangles_floored;
+    // One very obtuse triangle (170° at the apex): with ν = 0.45 the long side's eq. (3) sum is
+    // negative, so the strict builder refuses it and the floored one keeps E₂/(1+ν)·2A/c².
+    let apex = 85f64.to_radians();
+    let mesh = tissue_mesh::TriMesh::new(
+        vec![
+            glam::Vec3::new(-apex.sin() as f32, 0.0, 0.0),
+            glam::Vec3::new(apex.sin() as f32, 0.0, 0.0),
+            glam::Vec3::new(0.0, apex.cos() as f32, 0.0),
+        ],
+        vec![[0, 1, 2]],
+    )
+    .unwrap();
+    let material = tissue_mss::SheetMaterial {
+        young: 1.0e6,
+        poisson: 0.45,
+        thickness: 0.1,
+    };
+    assert!(matches!(
+        tissue_mss::springs_from_triangles(&mesh, &material, 0),
+        Err(tissue_mss::MssError::InvalidSpring { .. })
+    ));
+    let (springs, replaced) = springs_from_triangles_floored(&mesh, &material, 0).unwrap();
+    assert_eq!(replaced.len(), 1);
+    let long = springs
+        .iter()
+        .find(|s| (s.a, s.b) == (0, 1))
+        .expect("the long side's spring");
+    let c = 2.0 * apex.sin();
+    let area = 0.5 * c * apex.cos();
+    let expected = 1.0e6 * 0.1 / 1.45 * (2.0 * area / (c * c));
+    assert!(
+        (f64::from(long.k) - expected).abs() < 1e-4 * expected,
+        "{} vs {expected}",
+        long.k
+    );
+    // The other two sides keep eq. (3) exactly, as the strict builder gives them.
+    for s in springs.iter().filter(|s| (s.a, s.b) != (0, 1)) {
+        let (a, b, cc) = (c, 1.0, 1.0);
+        let k = tissue_mss::van_gelder(a, b, cc, area, &material);
+        assert!((f64::from(s.k) - k).abs() < 1e-4 * k, "{} vs {k}", s.k);
+    }
+}
