@@ -1,0 +1,532 @@
+//! The soft body: node arrays, constraints by kind in colour order, construction and access.
+
+use glam::{DVec3, Vec3, Vec3A};
+use tissue_mesh::{TetMesh, ZERO_VOLUME_TOLERANCE};
+
+use crate::colour::{colour_order, greedy_colours};
+use crate::constraint::{CentroidRow, DistanceRow, TetRow};
+use crate::{
+    CentroidVolumeConstraint, DistanceConstraint, Floor, Material, PbdError, StepSettings,
+    TetVolumeConstraint, VolumeConstraintKind,
+};
+
+/// A tetrahedral soft body simulated by position-based dynamics.
+///
+/// Invariants (established by the constructors, kept by every method):
+/// - all node arrays have one entry per node; `inverse_masses[i] == 0` exactly when node `i` is
+///   pinned, attached or carries no tet; otherwise it is `1 / masses[i]`;
+/// - every constraint's nodes are `< node_count`; constraints of a kind are stored colour by
+///   colour, and no two constraints (for volumes: no two tets) of one colour share a node;
+/// - the hot rows mirror the public records, with the per-constraint parameter of the current
+///   [`StepSettings`].
+#[derive(Debug, Clone)]
+pub struct SoftBody {
+    pub(crate) x: Vec<Vec3A>,
+    pub(crate) p: Vec<Vec3A>,
+    pub(crate) v: Vec<Vec3A>,
+    pub(crate) mass: Vec<f32>,
+    pub(crate) w: Vec<f32>,
+
+    pub(crate) distance: Vec<DistanceConstraint>,
+    pub(crate) distance_rows: Vec<DistanceRow>,
+    pub(crate) distance_offsets: Vec<u32>,
+    pub(crate) distance_lambda: Vec<f32>,
+
+    /// Tets in colour order (the order of the volume constraints).
+    pub(crate) tets: Vec<[u32; 4]>,
+    pub(crate) tet_offsets: Vec<u32>,
+    pub(crate) volume_kind: VolumeConstraintKind,
+    pub(crate) tet_volume: Vec<TetVolumeConstraint>,
+    pub(crate) tet_rows: Vec<TetRow>,
+    pub(crate) centroid: Vec<CentroidVolumeConstraint>,
+    pub(crate) centroid_rows: Vec<CentroidRow>,
+    /// One multiplier per volume constraint (1 or 4 per tet).
+    pub(crate) volume_lambda: Vec<f32>,
+
+    pub(crate) floor: Option<Floor>,
+    pub(crate) attachments: Vec<(u32, Vec3A)>,
+    pub(crate) settings: StepSettings,
+    /// Corrected node positions of one colour, for the parallel projection.
+    pub(crate) scratch: Vec<[Vec3A; 4]>,
+    pub(crate) step_count: u64,
+    rest_volume: f64,
+}
+
+fn sixfold_volume(t: [Vec3; 4]) -> f64 {
+    let [a, b, c, d] = t.map(|p| p.as_dvec3());
+    (b - a).cross(c - a).dot(d - a)
+}
+
+impl SoftBody {
+    /// A body on a validated tet mesh.
+    ///
+    /// # Errors
+    /// [`PbdError::InvalidParameter`] for a bad material.
+    pub fn new(mesh: &TetMesh, material: &Material) -> Result<Self, PbdError> {
+        Self::from_tets(mesh.positions(), mesh.tets(), material)
+    }
+
+    /// A body on raw positions (cm) and positively oriented tets: masses from eq. (1) (a quarter
+    /// of each tet's mass `density × volume` to each of its nodes), one distance constraint per
+    /// unique tet edge, the volume constraints of `material.volume`.
+    ///
+    /// # Errors
+    /// [`PbdError::InvalidParameter`] for a bad material, [`PbdError::NonFinite`] for a bad
+    /// position, [`PbdError::NodeOutOfRange`] for a tet index past the nodes,
+    /// [`PbdError::DegenerateTet`] for a flat, inverted or repeated-node tet.
+    pub fn from_tets(
+        positions: &[Vec3],
+        tets: &[[u32; 4]],
+        material: &Material,
+    ) -> Result<Self, PbdError> {
+        material.validate()?;
+        let n = positions.len();
+        if n == 0 || tets.is_empty() || n >= u32::MAX as usize {
+            return Err(PbdError::InvalidParameter {
+                name: "node/tet count",
+                value: n as f64,
+                expected: "at least one node and one tet, fewer than 2³² nodes",
+            });
+        }
+        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(PbdError::NonFinite {
+                node: i as u32,
+                what: "position",
+            });
+        }
+        let mut mass = vec![0.0f64; n];
+        for (t, tet) in tets.iter().enumerate() {
+            if let Some(&node) = tet.iter().find(|&&i| i as usize >= n) {
+                return Err(PbdError::NodeOutOfRange {
+                    element: "tet",
+                    index: t,
+                    node,
+                    count: n,
+                });
+            }
+            let q = tet.map(|i| positions[i as usize]);
+            let six = sixfold_volume(q);
+            let mut longest = 0.0f64;
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    longest = longest.max(q[a].as_dvec3().distance(q[b].as_dvec3()));
+                }
+            }
+            if six.is_nan() || six <= ZERO_VOLUME_TOLERANCE * longest.powi(3) {
+                return Err(PbdError::DegenerateTet {
+                    tet: t,
+                    volume: six / 6.0,
+                });
+            }
+            for &i in tet {
+                mass[i as usize] += material.density as f64 * six / 24.0;
+            }
+        }
+        let rest_volume = tets
+            .iter()
+            .map(|t| sixfold_volume(t.map(|i| positions[i as usize])))
+            .sum::<f64>()
+            / 6.0;
+
+        // Unique edges, sorted by node for locality, then coloured.
+        let mut edges: Vec<[u32; 2]> = Vec::with_capacity(tets.len() * 6);
+        for t in tets {
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    let (i, j) = (t[a].min(t[b]), t[a].max(t[b]));
+                    edges.push([i, j]);
+                }
+            }
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        let (colours, count) = greedy_colours(n, &edges);
+        let (order, distance_offsets) = colour_order(&colours, count);
+        let distance: Vec<DistanceConstraint> = order
+            .iter()
+            .map(|&e| {
+                let [a, b] = edges[e];
+                DistanceConstraint {
+                    nodes: [a, b],
+                    rest_length: positions[a as usize].distance(positions[b as usize]),
+                    stiffness: material.distance_stiffness,
+                    compliance: material.distance_compliance,
+                }
+            })
+            .collect();
+
+        // Tets sorted by their smallest node, then coloured.
+        let mut sorted: Vec<[u32; 4]> = tets.to_vec();
+        sorted.sort_by_key(|t| {
+            let mut k = *t;
+            k.sort_unstable();
+            k
+        });
+        let (colours, count) = greedy_colours(n, &sorted);
+        let (order, tet_offsets) = colour_order(&colours, count);
+        let tets: Vec<[u32; 4]> = order.iter().map(|&t| sorted[t]).collect();
+
+        let (mut tet_volume, mut centroid) = (Vec::new(), Vec::new());
+        match material.volume {
+            VolumeConstraintKind::None => {}
+            VolumeConstraintKind::Classic => {
+                tet_volume = tets
+                    .iter()
+                    .map(|t| TetVolumeConstraint {
+                        nodes: *t,
+                        rest_volume: (sixfold_volume(t.map(|i| positions[i as usize])) / 6.0)
+                            as f32,
+                        stiffness: material.volume_stiffness,
+                        compliance: material.volume_compliance,
+                    })
+                    .collect();
+            }
+            VolumeConstraintKind::Centroid => {
+                for t in &tets {
+                    for j in 0..4 {
+                        let face = [t[(j + 1) & 3], t[(j + 2) & 3], t[(j + 3) & 3]];
+                        let c = face.iter().map(|&i| positions[i as usize]).sum::<Vec3>() / 3.0;
+                        centroid.push(CentroidVolumeConstraint {
+                            face,
+                            apex: t[j],
+                            rest_height: positions[t[j] as usize].distance(c),
+                            stiffness: material.volume_stiffness,
+                            compliance: material.volume_compliance,
+                        });
+                    }
+                }
+            }
+        }
+        let volume_lambda = vec![0.0; tet_volume.len() + centroid.len()];
+        let largest = |offsets: &[u32]| {
+            offsets
+                .windows(2)
+                .map(|w| (w[1] - w[0]) as usize)
+                .max()
+                .unwrap_or(0)
+        };
+        let scratch = vec![[Vec3A::ZERO; 4]; largest(&distance_offsets).max(largest(&tet_offsets))];
+        let mass: Vec<f32> = mass.iter().map(|&m| m as f32).collect();
+        let w = mass
+            .iter()
+            .map(|&m| if m > 0.0 { 1.0 / m } else { 0.0 })
+            .collect();
+        let x: Vec<Vec3A> = positions.iter().map(|&p| p.into()).collect();
+        let mut body = Self {
+            p: x.clone(),
+            v: vec![Vec3A::ZERO; n],
+            x,
+            mass,
+            w,
+            distance_lambda: vec![0.0; distance.len()],
+            distance_rows: Vec::new(),
+            distance,
+            distance_offsets,
+            tets,
+            tet_offsets,
+            volume_kind: material.volume,
+            tet_volume,
+            tet_rows: Vec::new(),
+            centroid,
+            centroid_rows: Vec::new(),
+            volume_lambda,
+            floor: None,
+            attachments: Vec::new(),
+            settings: StepSettings::default(),
+            scratch,
+            step_count: 0,
+            rest_volume,
+        };
+        body.set_settings(StepSettings::default())?;
+        Ok(body)
+    }
+
+    /// Sets how steps are taken and refreshes the constraints' per-step parameters.
+    ///
+    /// # Errors
+    /// [`PbdError::InvalidParameter`] for `dt ≤ 0`, `iterations == 0`, damping outside `[0, 1]`
+    /// or non-finite gravity.
+    pub fn set_settings(&mut self, settings: StepSettings) -> Result<(), PbdError> {
+        settings.validate()?;
+        self.settings = settings;
+        let s = &self.settings;
+        self.distance_rows.clear();
+        self.distance_rows
+            .extend(self.distance.iter().map(|c| DistanceRow {
+                nodes: c.nodes,
+                rest: c.rest_length,
+                param: s.param(c.stiffness, c.compliance),
+            }));
+        self.tet_rows.clear();
+        self.tet_rows.extend(self.tet_volume.iter().map(|c| TetRow {
+            nodes: c.nodes,
+            rest: c.rest_volume,
+            param: s.param(c.stiffness, c.compliance),
+        }));
+        self.centroid_rows.clear();
+        self.centroid_rows
+            .extend(
+                self.tets
+                    .iter()
+                    .zip(self.centroid.chunks_exact(4))
+                    .map(|(t, c)| CentroidRow {
+                        nodes: *t,
+                        rest: [0, 1, 2, 3].map(|j| c[j].rest_height),
+                        param: [0, 1, 2, 3].map(|j| s.param(c[j].stiffness, c[j].compliance)),
+                    }),
+            );
+        Ok(())
+    }
+
+    /// The current step settings.
+    pub fn settings(&self) -> &StepSettings {
+        &self.settings
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.x.len()
+    }
+    /// Node positions `x` (cm).
+    pub fn positions(&self) -> &[Vec3A] {
+        &self.x
+    }
+    /// Node positions at the start of the last step (after [`SoftBody::step`]; the initial ones
+    /// before).
+    pub fn previous_positions(&self) -> &[Vec3A] {
+        &self.p
+    }
+    /// Node velocities (cm/s).
+    pub fn velocities(&self) -> &[Vec3A] {
+        &self.v
+    }
+    /// Node masses (g), from eq. (1); kept when a node is pinned.
+    pub fn masses(&self) -> &[f32] {
+        &self.mass
+    }
+    /// Inverse masses (1/g); 0 = pinned, attached or without tets.
+    pub fn inverse_masses(&self) -> &[f32] {
+        &self.w
+    }
+    /// Tets in the body's (colour) order.
+    pub fn tets(&self) -> &[[u32; 4]] {
+        &self.tets
+    }
+    /// Distance constraints, one per unique tet edge, in colour order.
+    pub fn distance_constraints(&self) -> &[DistanceConstraint] {
+        &self.distance
+    }
+    /// Classic volume constraints (empty unless the material asked for them), in tet order.
+    pub fn tet_volume_constraints(&self) -> &[TetVolumeConstraint] {
+        &self.tet_volume
+    }
+    /// Centroid volume constraints, 4 per tet (apex = tet node 0..3), in tet order.
+    pub fn centroid_volume_constraints(&self) -> &[CentroidVolumeConstraint] {
+        &self.centroid
+    }
+    /// The volume constraint kind.
+    pub fn volume_kind(&self) -> VolumeConstraintKind {
+        self.volume_kind
+    }
+    /// Number of colours of the distance constraints and of the tets (volume constraints).
+    pub fn colour_counts(&self) -> (usize, usize) {
+        (self.distance_offsets.len() - 1, self.tet_offsets.len() - 1)
+    }
+    /// Steps taken since construction.
+    pub fn step_count(&self) -> u64 {
+        self.step_count
+    }
+
+    fn check_len(&self, what: &'static str, got: usize) -> Result<(), PbdError> {
+        if got == self.x.len() {
+            Ok(())
+        } else {
+            Err(PbdError::LengthMismatch {
+                what,
+                got,
+                expected: self.x.len(),
+            })
+        }
+    }
+
+    fn check_node(&self, element: &'static str, node: u32) -> Result<(), PbdError> {
+        if (node as usize) < self.x.len() {
+            Ok(())
+        } else {
+            Err(PbdError::NodeOutOfRange {
+                element,
+                index: node as usize,
+                node,
+                count: self.x.len(),
+            })
+        }
+    }
+
+    /// Moves the nodes (e.g. a deformed start); the rest state is unchanged.
+    ///
+    /// # Errors
+    /// [`PbdError::LengthMismatch`], [`PbdError::NonFinite`].
+    pub fn set_positions(&mut self, positions: &[Vec3]) -> Result<(), PbdError> {
+        self.check_len("positions", positions.len())?;
+        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(PbdError::NonFinite {
+                node: i as u32,
+                what: "position",
+            });
+        }
+        for (x, &q) in self.x.iter_mut().zip(positions) {
+            *x = q.into();
+        }
+        self.p.copy_from_slice(&self.x);
+        Ok(())
+    }
+
+    /// Sets the velocities (cm/s); pinned and attached nodes keep zero.
+    ///
+    /// # Errors
+    /// [`PbdError::LengthMismatch`], [`PbdError::NonFinite`].
+    pub fn set_velocities(&mut self, velocities: &[Vec3]) -> Result<(), PbdError> {
+        self.check_len("velocities", velocities.len())?;
+        if let Some(i) = velocities.iter().position(|p| !p.is_finite()) {
+            return Err(PbdError::NonFinite {
+                node: i as u32,
+                what: "velocity",
+            });
+        }
+        for ((v, &u), &w) in self.v.iter_mut().zip(velocities).zip(&self.w) {
+            *v = if w > 0.0 { u.into() } else { Vec3A::ZERO };
+        }
+        Ok(())
+    }
+
+    /// Pins a node where it is (inverse mass 0, velocity 0).
+    ///
+    /// # Errors
+    /// [`PbdError::NodeOutOfRange`].
+    pub fn pin(&mut self, node: u32) -> Result<(), PbdError> {
+        self.check_node("pin", node)?;
+        self.w[node as usize] = 0.0;
+        self.v[node as usize] = Vec3A::ZERO;
+        Ok(())
+    }
+
+    /// Frees a pinned or attached node again (its attachments are removed).
+    ///
+    /// # Errors
+    /// [`PbdError::NodeOutOfRange`].
+    pub fn unpin(&mut self, node: u32) -> Result<(), PbdError> {
+        self.check_node("pin", node)?;
+        let m = self.mass[node as usize];
+        self.w[node as usize] = if m > 0.0 { 1.0 / m } else { 0.0 };
+        self.attachments.retain(|a| a.0 != node);
+        Ok(())
+    }
+
+    /// Attaches a node to a kinematic point: the node becomes pinned and is moved to `target` at
+    /// the start of every step (its velocity follows). Returns the attachment's id for
+    /// [`SoftBody::set_attachment_target`].
+    ///
+    /// # Errors
+    /// [`PbdError::NodeOutOfRange`], [`PbdError::NonFinite`].
+    pub fn attach(&mut self, node: u32, target: Vec3) -> Result<usize, PbdError> {
+        self.check_node("attachment", node)?;
+        if !target.is_finite() {
+            return Err(PbdError::NonFinite {
+                node,
+                what: "position",
+            });
+        }
+        self.pin(node)?;
+        self.attachments.push((node, target.into()));
+        Ok(self.attachments.len() - 1)
+    }
+
+    /// Moves an attachment's target; the node follows in the next step.
+    ///
+    /// # Errors
+    /// [`PbdError::NoSuchAttachment`], [`PbdError::NonFinite`].
+    pub fn set_attachment_target(&mut self, id: usize, target: Vec3) -> Result<(), PbdError> {
+        let count = self.attachments.len();
+        let a = self
+            .attachments
+            .get_mut(id)
+            .ok_or(PbdError::NoSuchAttachment { id, count })?;
+        if !target.is_finite() {
+            return Err(PbdError::NonFinite {
+                node: a.0,
+                what: "position",
+            });
+        }
+        a.1 = target.into();
+        Ok(())
+    }
+
+    /// Sets or removes the static floor.
+    ///
+    /// # Errors
+    /// [`PbdError::InvalidParameter`] for an axis past 2 or a non-finite height.
+    pub fn set_floor(&mut self, floor: Option<Floor>) -> Result<(), PbdError> {
+        if let Some(f) = floor {
+            if f.axis > 2 {
+                return Err(PbdError::InvalidParameter {
+                    name: "floor.axis",
+                    value: f.axis as f64,
+                    expected: "0, 1 or 2",
+                });
+            }
+            if !f.height.is_finite() {
+                return Err(PbdError::InvalidParameter {
+                    name: "floor.height",
+                    value: f.height as f64,
+                    expected: "finite",
+                });
+            }
+        }
+        self.floor = floor;
+        Ok(())
+    }
+
+    /// Total mass (g), in `f64`.
+    pub fn total_mass(&self) -> f64 {
+        self.mass.iter().map(|&m| m as f64).sum()
+    }
+    /// Current volume, the sum of the tets' signed volumes (cm³), in `f64`.
+    pub fn volume(&self) -> f64 {
+        let x = &self.x;
+        self.tets
+            .iter()
+            .map(|t| sixfold_volume(t.map(|i| Vec3::from(x[i as usize]))))
+            .sum::<f64>()
+            / 6.0
+    }
+    /// Volume at construction (cm³).
+    pub fn rest_volume(&self) -> f64 {
+        self.rest_volume
+    }
+    /// `Σ mᵢ vᵢ` (g·cm/s).
+    pub fn linear_momentum(&self) -> DVec3 {
+        self.mass
+            .iter()
+            .zip(&self.v)
+            .map(|(&m, v)| m as f64 * v.as_dvec3())
+            .sum()
+    }
+    /// `Σ xᵢ × mᵢ vᵢ` about the origin (g·cm²/s).
+    pub fn angular_momentum(&self) -> DVec3 {
+        self.mass
+            .iter()
+            .zip(&self.v)
+            .zip(&self.x)
+            .map(|((&m, v), x)| x.as_dvec3().cross(m as f64 * v.as_dvec3()))
+            .sum()
+    }
+    /// `½ Σ mᵢ |vᵢ|²` (erg).
+    pub fn kinetic_energy(&self) -> f64 {
+        0.5 * self
+            .mass
+            .iter()
+            .zip(&self.v)
+            .map(|(&m, v)| m as f64 * v.as_dvec3().length_squared())
+            .sum::<f64>()
+    }
+}

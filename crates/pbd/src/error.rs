@@ -1,0 +1,73 @@
+//! The one error type of the crate.
+
+/// What can go wrong building or stepping a soft body. Every variant names the element.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PbdError {
+    /// A material or step parameter is out of range.
+    #[error("invalid parameter {name} = {value}: expected {expected}")]
+    InvalidParameter {
+        /// Parameter name, e.g. `"distance_stiffness"` or `"dt"`.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// The accepted range.
+        expected: &'static str,
+    },
+    /// An element (tetrahedron, pin, attachment) refers to a node that does not exist.
+    #[error("{element} {index} refers to node {node}, but the body has {count} nodes")]
+    NodeOutOfRange {
+        /// What refers to the node: `"tet"`, `"pin"`, `"attachment"`.
+        element: &'static str,
+        /// Index of that element (for a pin or attachment, the node itself).
+        index: usize,
+        /// The node index given.
+        node: u32,
+        /// Number of nodes.
+        count: usize,
+    },
+    /// A tetrahedron has (numerically) zero or negative volume, or repeats a node: it cannot carry
+    /// mass or volume constraints. Fix or drop it in the mesh.
+    #[error("tet {tet} is degenerate (signed volume {volume}); it must be positively oriented and not flat")]
+    DegenerateTet {
+        /// Tetrahedron index as given.
+        tet: usize,
+        /// Its signed volume `(b−a)×(c−a)·(d−a)/6`.
+        volume: f64,
+    },
+    /// A node position or velocity given is not finite.
+    #[error("node {node}: {what} is not finite")]
+    NonFinite {
+        /// Node index.
+        node: u32,
+        /// `"position"` or `"velocity"`.
+        what: &'static str,
+    },
+    /// An array given has the wrong length.
+    #[error("{what} has {got} entries but the body has {expected} nodes")]
+    LengthMismatch {
+        /// Which array.
+        what: &'static str,
+        /// Its length.
+        got: usize,
+        /// The node count.
+        expected: usize,
+    },
+    /// No attachment has this id.
+    #[error("attachment {id} does not exist (the body has {count})")]
+    NoSuchAttachment {
+        /// The id given.
+        id: usize,
+        /// Number of attachments.
+        count: usize,
+    },
+    /// A node became non-finite during a step: the step or the stiffness is too large, or the
+    /// input is not finite. Reduce `dt` or raise the compliance.
+    #[error("diverged at step {step}: node {node} became non-finite; reduce dt or the stiffness")]
+    Diverged {
+        /// Step number (0-based, counted since the body was built).
+        step: u64,
+        /// The first node found non-finite.
+        node: u32,
+    },
+}
