@@ -411,6 +411,7 @@ fn bad_inputs_are_errors_naming_the_parameter() {
     };
     assert_eq!(name_of(crescent(3.0, 4.0, 6.0)), "length"); // shorter than wide
     assert_eq!(name_of(crescent(12.0, 7.0, 6.0)), "width"); // wider than the bend radius
+    assert_eq!(name_of(crescent(12.0, 4.5, 6.0)), "width"); // wider than 2/3 of it
     assert_eq!(name_of(crescent(15.0, 4.0, 3.0)), "width");
     assert_eq!(name_of(crescent(17.0, 4.0, 6.0)), "length"); // longer than 4 × the width
     assert_eq!(name_of(crescent(12.0, 4.0, f32::NAN)), "bend_radius");
@@ -455,7 +456,7 @@ proptest::proptest! {
         small in 0.5f32..20.0,
         stretch in 1.0f32..4.0,
         corner in 0.0f32..=1.0,
-        bend in 1.0f32..5.0,
+        bend in 1.5f32..5.0,
         fill in 0.01f64..1.5,
         budget in 50u32..1500,
     ) {
