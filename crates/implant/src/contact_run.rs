@@ -188,7 +188,6 @@ pub struct ContactRun {
     previous_tissue: Vec<Vec3A>,
     previous_body: Vec<Vec3A>,
     h: f32,
-    normals_scratch: Vec<Vec3A>,
     contact_distance: f32,
     params: RunParams,
     detector: SettleDetector,
@@ -289,7 +288,6 @@ impl ContactRun {
             body,
             collider,
             h,
-            normals_scratch: Vec::new(),
             contact_distance,
             params: params.clone(),
             detector,
@@ -432,7 +430,7 @@ impl ContactRun {
             .body
             .update_positions(h)
             .map_err(|e| diverged(e, "implant position"))?;
-        let thinned = self.layers.hold_thickness(&mut self.normals_scratch);
+        let thinned = self.layers.hold_thickness();
         let tissue = self.layers.system_mut();
         // Phase 3's contacts cover every pair closer than the contact distance and stopped
         // their approach, so an edge can only have crossed if something moved by a good part

@@ -61,7 +61,7 @@ impl Default for ImplantParams {
     /// A silicone elastomer shell of `E` = 3 MPa (medical silicones are 1–10 MPa), `ν` = 0.45,
     /// 0.05 cm thick (expander shells are about 0.5 mm); saline fill of density 1 g/cm³ and a
     /// bulk modulus of 10 MPa — far below water's 2.2 GPa, whose breathing mode would set the
-    /// step, but it holds the volume within `p/K` (measured on Table 2's runs: 0.35–0.96 %
+    /// step, but it holds the volume within `p/K` (measured on Table 2's runs: 0.22–0.66 %
     /// lost, against the 2 % allowed);
     /// eq. (5) at a radial modulus of 10 MPa with `C` = 0.5.
     fn default() -> Self {
@@ -135,7 +135,7 @@ impl Default for InsertionParams {
     /// within 0.1 % with 5, 10 and 20 ms fills; at 1.5 ms they start to move); a pocket 0.3 cm wider than the base (surgeons
     /// dissect the pocket a little beyond the expander's edge; the wider the pocket, the more
     /// of the free tissue around the expander rises: 0.5 cm gives Table 2 volume differences
-    /// of 1.16–1.17 × V, 1 cm 1.2–1.25 × V).
+    /// of 1.16–1.17 × V, 1 cm 1.15–1.25 × V).
     fn default() -> Self {
         InsertionParams {
             layers: LayerParams::default(),

@@ -154,7 +154,8 @@ pub struct TissueLayers {
     normals: Vec<Vec3>,
     /// The slab's shear stiffness `G·Aᵢ/depth` per region vertex.
     shear: Vec<f32>,
-    /// Layer 2's current vertex normals (unnormalised), scratch of `add_slab_shear`.
+    /// Layer 2's current vertex normals (unnormalised), scratch of `add_slab_shear` and
+    /// `hold_thickness`.
     inner_normals: Vec<Vec3A>,
     /// In-layer springs whose eq. (3) sum was not positive (obtuse triangles), given only the
     /// shear term.
@@ -345,16 +346,9 @@ impl TissueLayers {
     /// `2·G·Aₑ·(depth/Lₑ)²/depth` per edge: on a fine mesh, far stiffer than the slab itself, and
     /// that stiffness set the time step.
     pub fn add_slab_shear(&mut self) {
-        let normals = &mut self.inner_normals;
-        normals.iter_mut().for_each(|n| *n = Vec3A::ZERO);
         let (position, force) = self.system.particles_mut().positions_and_forces_mut();
-        for t in self.inner.triangles() {
-            let [a, b, c] = t.map(|r| position[Self::particle(Layer::Inner, r) as usize]);
-            let normal = (b - a).cross(c - a);
-            for &r in t {
-                normals[r as usize] += normal;
-            }
-        }
+        accumulate_inner_normals(&self.inner, position, &mut self.inner_normals);
+        let normals = &self.inner_normals;
         for (r, (&k, normal)) in self.shear.iter().zip(normals.iter()).enumerate() {
             if k == 0.0 {
                 continue;
@@ -396,31 +390,22 @@ impl TissueLayers {
     }
 
     /// Keeps layer 1 at least [`TissueLayers::min_thickness`] above layer 2, measured along
-    /// layer 2's current vertex normals; returns how many vertices it moved. `scratch` holds
-    /// the normals between calls.
+    /// layer 2's current vertex normals; returns how many vertices it moved.
     ///
     /// Linear springs let a slab squeezed hard enough pass through zero thickness and turn
     /// inside out, a state tissue cannot reach (it thins and flows aside). A layer-1 particle
     /// found closer than the minimum is moved out to it and its velocity towards layer 2
     /// removed: layer 2 is its support, as the implant is layer 2's.
-    pub fn hold_thickness(&mut self, scratch: &mut Vec<Vec3A>) -> u32 {
+    pub fn hold_thickness(&mut self) -> u32 {
         let min = self.min_thickness;
         if min <= 0.0 {
             return 0;
         }
-        let n = self.normals.len();
-        scratch.clear();
-        scratch.resize(n, Vec3A::ZERO);
         let (position, velocity, inverse_mass) = self.system.particles_mut().state_mut();
-        for t in self.inner.triangles() {
-            let [a, b, c] = t.map(|r| position[Self::particle(Layer::Inner, r) as usize]);
-            let normal = (b - a).cross(c - a);
-            for &r in t {
-                scratch[r as usize] += normal;
-            }
-        }
+        accumulate_inner_normals(&self.inner, position, &mut self.inner_normals);
+        let normals = &self.inner_normals;
         let mut moved = 0;
-        for (r, normal) in scratch.iter().enumerate() {
+        for (r, normal) in normals.iter().enumerate() {
             let outer = Self::particle(Layer::Outer, r as u32) as usize;
             let inner = Self::particle(Layer::Inner, r as u32) as usize;
             if inverse_mass[outer] == 0.0 {
@@ -541,5 +526,18 @@ impl TissueLayers {
             }
         }
         Ok(())
+    }
+}
+
+/// `out[r]` = layer 2's area-weighted (unnormalised) normal at region vertex `r`, from the
+/// interleaved particle `position`s (layer 2's particle of `r` is `2r + 1`).
+fn accumulate_inner_normals(inner: &TriMesh, position: &[Vec3A], out: &mut [Vec3A]) {
+    out.iter_mut().for_each(|n| *n = Vec3A::ZERO);
+    for t in inner.triangles() {
+        let [a, b, c] = t.map(|r| position[TissueLayers::particle(Layer::Inner, r) as usize]);
+        let normal = (b - a).cross(c - a);
+        for &r in t {
+            out[r as usize] += normal;
+        }
     }
 }
