@@ -1,0 +1,286 @@
+//! The driver: check → interior points → insert → carve → build and measure.
+
+use glam::Vec3;
+use tissue_mesh::{TetMesh, TriMesh};
+
+use crate::carve::carve;
+use crate::check::{check_raw, check_surface};
+use crate::delaunay::{Delaunay, DelaunayFailure};
+use crate::improve::improve;
+use crate::inside::RayCaster;
+use crate::lattice::interior_points;
+use crate::order::insertion_order;
+use crate::predicates::P3;
+use crate::quality::QualityReport;
+use crate::TetraError;
+
+/// Options of [`tetrahedralize`]. `TetraOptions::default()` gives about 40 000 tetrahedra for a
+/// 10 000-triangle bunny.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TetraOptions {
+    /// Spacing `a` of the interior BCC lattice (edge of its cubes), in the surface's units (cm).
+    /// `None`: `spacing_factor` × the mean surface edge length.
+    pub spacing: Option<f32>,
+    /// The default spacing as a multiple of the mean surface edge length (used when `spacing`
+    /// is `None`). Default 1.68.
+    pub spacing_factor: f32,
+    /// Interior points are kept at least `clearance · a` away from the surface. Default 0.5.
+    pub clearance: f32,
+    /// Add interior points at all; `false` gives the Delaunay tetrahedralisation of the surface
+    /// vertices alone, carved. Default `true`.
+    pub interior_points: bool,
+    /// Boundary tetrahedra whose radius ratio is below this are peeled off after carving and
+    /// sliver removal (repeatedly, as peeling exposes new ones) when that takes no surface
+    /// triangle off the boundary. Default 0.02; 0 keeps them.
+    pub sliver_radius_ratio: f32,
+    /// Boundary tetrahedra whose radius ratio is below this are peeled off even when that takes
+    /// surface triangles off the boundary. Default 0.001 (dihedral angles of about 0.1°).
+    pub degenerate_radius_ratio: f32,
+}
+
+impl Default for TetraOptions {
+    fn default() -> Self {
+        TetraOptions {
+            spacing: None,
+            spacing_factor: 1.68,
+            clearance: 0.5,
+            interior_points: true,
+            sliver_radius_ratio: 0.02,
+            degenerate_radius_ratio: 0.001,
+        }
+    }
+}
+
+impl TetraOptions {
+    fn validate(&self) -> Result<(), TetraError> {
+        let bad = |what: String| Err(TetraError::InvalidOption { what });
+        if let Some(s) = self.spacing {
+            if !(s.is_finite() && s > 0.0) {
+                return bad(format!("spacing = {s}, must be finite and positive"));
+            }
+        }
+        if !(self.spacing_factor.is_finite() && self.spacing_factor > 0.0) {
+            return bad(format!(
+                "spacing_factor = {}, must be finite and positive",
+                self.spacing_factor
+            ));
+        }
+        if !(self.clearance.is_finite() && (0.0..=2.0).contains(&self.clearance)) {
+            return bad(format!("clearance = {}, must be in [0, 2]", self.clearance));
+        }
+        if !(self.sliver_radius_ratio.is_finite() && (0.0..1.0).contains(&self.sliver_radius_ratio))
+        {
+            return bad(format!(
+                "sliver_radius_ratio = {}, must be in [0, 1)",
+                self.sliver_radius_ratio
+            ));
+        }
+        if !(self.degenerate_radius_ratio.is_finite()
+            && (0.0..1.0).contains(&self.degenerate_radius_ratio))
+        {
+            return bad(format!(
+                "degenerate_radius_ratio = {}, must be in [0, 1)",
+                self.degenerate_radius_ratio
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The result of [`tetrahedralize`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tetrahedralization {
+    /// The tetrahedra. Nodes `0..surface_nodes` are the surface's vertices in its order, the rest
+    /// interior points.
+    pub mesh: TetMesh,
+    /// Its quality, measured against the input surface.
+    pub report: QualityReport,
+    /// The interior lattice spacing used (cm).
+    pub spacing: f32,
+    /// Boundary slivers peeled off.
+    pub slivers_removed: usize,
+}
+
+/// Fills a closed surface with tetrahedra. See the crate doc for the algorithm and guarantees.
+///
+/// # Errors
+/// [`TetraError::OpenSurface`], [`TetraError::NonManifoldVertex`],
+/// [`TetraError::CoincidentVertices`], [`TetraError::InsideOut`], [`TetraError::NoVolume`],
+/// [`TetraError::TooFewPoints`] for a surface that cannot be filled;
+/// [`TetraError::InvalidOption`]; [`TetraError::NumericalFailure`] if the mesher itself fails.
+pub fn tetrahedralize(
+    surface: &TriMesh,
+    options: &TetraOptions,
+) -> Result<Tetrahedralization, TetraError> {
+    let _span = tracing::info_span!(
+        "tetrahedralize",
+        vertices = surface.vertex_count(),
+        triangles = surface.triangle_count()
+    )
+    .entered();
+    options.validate()?;
+    let checked = {
+        let _s = tracing::debug_span!("check").entered();
+        check_surface(surface)?
+    };
+    let n_surface = surface.vertex_count();
+    let spacing = options
+        .spacing
+        .unwrap_or((f64::from(options.spacing_factor) * checked.mean_edge) as f32);
+    if !(spacing.is_finite() && spacing > 0.0) {
+        return Err(TetraError::InvalidOption {
+            what: format!("the spacing came out as {spacing}; give one explicitly"),
+        });
+    }
+    let to_p3 = |p: Vec3| -> P3 { [f64::from(p.x), f64::from(p.y), f64::from(p.z)] };
+    let tris: Vec<[P3; 3]> = surface
+        .triangles()
+        .iter()
+        .map(|t| t.map(|v| to_p3(surface.positions()[v as usize])))
+        .collect();
+    let caster = RayCaster::new(tris.clone());
+
+    let interior = if options.interior_points {
+        let _s = tracing::debug_span!("lattice", spacing).entered();
+        interior_points(
+            &tris,
+            &caster,
+            f64::from(spacing),
+            f64::from(options.clearance),
+        )
+    } else {
+        Vec::new()
+    };
+    tracing::debug!(interior = interior.len(), spacing, "interior points");
+
+    let mut pts: Vec<P3> = surface.positions().iter().map(|&p| to_p3(p)).collect();
+    pts.extend_from_slice(&interior);
+    let candidates: Vec<u32> = (0..pts.len() as u32)
+        .filter(|&i| (i as usize) >= n_surface || checked.used[i as usize])
+        .collect();
+
+    let dt = {
+        let _s = tracing::info_span!("insert", points = candidates.len()).entered();
+        let cand_pts: Vec<P3> = candidates.iter().map(|&i| pts[i as usize]).collect();
+        let order = insertion_order(&cand_pts);
+        let mut dt = Delaunay::new(pts.clone());
+        for &k in &order {
+            dt.insert(candidates[k as usize]).map_err(failure)?;
+        }
+        tracing::debug!(
+            walk_steps = dt.walk_steps,
+            cavity_tets = dt.cavity_tets,
+            "inserted"
+        );
+        dt
+    };
+
+    let (tets, stats) = {
+        let _s = tracing::info_span!("carve").entered();
+        let tets = carve(&dt, &caster);
+        improve(
+            &dt.pts,
+            tets,
+            surface,
+            f64::from(options.sliver_radius_ratio),
+            f64::from(options.degenerate_radius_ratio),
+        )
+    };
+    tracing::debug!(
+        recovered_quads = stats.recovered_quads,
+        sliver_edges_removed = stats.sliver_edges_removed,
+        peeled = stats.peeled,
+        flat_dropped = stats.flat_dropped,
+        "improved"
+    );
+    let slivers_removed = stats.peeled + stats.flat_dropped;
+    if tets.is_empty() {
+        return Err(TetraError::NumericalFailure {
+            stage: "carving",
+            vertex: None,
+            detail: "no tetrahedron lies inside the surface".into(),
+        });
+    }
+
+    let _s = tracing::info_span!("quality").entered();
+    // Renumber: surface vertices keep their numbers; interior points used by a tet follow, in
+    // lattice order.
+    let mut new_index = vec![u32::MAX; pts.len()];
+    for (v, slot) in new_index.iter_mut().enumerate().take(n_surface) {
+        *slot = v as u32;
+    }
+    let mut used_interior = vec![false; pts.len()];
+    for t in &tets {
+        for &v in t {
+            used_interior[v as usize] = v as usize >= n_surface;
+        }
+    }
+    let mut positions: Vec<Vec3> = surface.positions().to_vec();
+    for v in n_surface..pts.len() {
+        if used_interior[v] {
+            new_index[v] = positions.len() as u32;
+            let p = pts[v];
+            positions.push(Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32));
+        }
+    }
+    let tets: Vec<[u32; 4]> = tets
+        .iter()
+        .map(|t| t.map(|v| new_index[v as usize]))
+        .collect();
+    let mesh = TetMesh::new(positions, tets).map_err(|e| TetraError::NumericalFailure {
+        stage: "building the mesh",
+        vertex: None,
+        detail: e.to_string(),
+    })?;
+    let report = QualityReport::measure(&mesh, surface);
+    debug_assert!(checked.volume > 0.0);
+    tracing::info!(
+        tets = report.tets,
+        nodes = report.nodes,
+        volume_ratio = report.volume_ratio,
+        "tetrahedralized"
+    );
+    Ok(Tetrahedralization {
+        mesh,
+        report,
+        spacing,
+        slivers_removed,
+    })
+}
+
+/// [`tetrahedralize`] for raw surface data: validates it first (see [`tissue_mesh::diagnose`]),
+/// naming the defect.
+///
+/// # Errors
+/// As [`tetrahedralize`], plus [`TetraError::NonManifoldEdge`], [`TetraError::DegenerateTriangle`]
+/// and [`TetraError::InvalidSurface`] for data that do not make a [`TriMesh`].
+pub fn tetrahedralize_triangles(
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    options: &TetraOptions,
+) -> Result<Tetrahedralization, TetraError> {
+    check_raw(positions, triangles)?;
+    let surface =
+        TriMesh::new(positions.to_vec(), triangles.to_vec()).map_err(TetraError::InvalidSurface)?;
+    tetrahedralize(&surface, options)
+}
+
+fn failure(f: DelaunayFailure) -> TetraError {
+    let (vertex, detail) = match f {
+        DelaunayFailure::WalkDidNotEnd { point } => {
+            (point, "the point-location walk did not end".to_string())
+        }
+        DelaunayFailure::OutsideSuperTet { point } => (
+            point,
+            "the point lies outside the enclosing tetrahedron".to_string(),
+        ),
+        DelaunayFailure::OpenCavity { point } => {
+            (point, "the cavity had an open boundary".to_string())
+        }
+    };
+    TetraError::NumericalFailure {
+        stage: "inserting points",
+        vertex: Some(vertex),
+        detail,
+    }
+}
