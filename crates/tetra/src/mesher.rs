@@ -14,12 +14,16 @@ use crate::predicates::P3;
 use crate::quality::QualityReport;
 use crate::TetraError;
 
+/// Most lattice points (in the surface's bounding box) a spacing may ask for.
+const MAX_LATTICE_POINTS: f64 = 2e7;
+
 /// Options of [`tetrahedralize`]. `TetraOptions::default()` gives about 40 000 tetrahedra for a
 /// 10 000-triangle bunny.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TetraOptions {
     /// Spacing `a` of the interior BCC lattice (edge of its cubes), in the surface's units (cm).
-    /// `None`: `spacing_factor` × the mean surface edge length.
+    /// `None`: `spacing_factor` × the mean surface edge length. A spacing that would put more
+    /// than 2·10⁷ lattice points in the bounding box is refused.
     pub spacing: Option<f32>,
     /// The default spacing as a multiple of the mean surface edge length (used when `spacing`
     /// is `None`). Default 1.68.
@@ -131,6 +135,21 @@ pub fn tetrahedralize(
         return Err(TetraError::InvalidOption {
             what: format!("the spacing came out as {spacing}; give one explicitly"),
         });
+    }
+    if options.interior_points {
+        let bb = surface.bounding_box();
+        let cells: f64 = (0..3)
+            .map(|k| (f64::from(bb.max[k] - bb.min[k]) / f64::from(spacing)).floor() + 3.0)
+            .product();
+        if 2.0 * cells > MAX_LATTICE_POINTS {
+            return Err(TetraError::InvalidOption {
+                what: format!(
+                    "spacing = {spacing} would put about {:.1e} lattice points in the surface's \
+                     bounding box (at most {MAX_LATTICE_POINTS:.0e}); use a larger spacing",
+                    2.0 * cells
+                ),
+            });
+        }
     }
     let to_p3 = |p: Vec3| -> P3 { [f64::from(p.x), f64::from(p.y), f64::from(p.z)] };
     let tris: Vec<[P3; 3]> = surface

@@ -428,6 +428,11 @@ fn bad_options_are_refused() {
             degenerate_radius_ratio: -0.1,
             ..TetraOptions::default()
         },
+        // 10⁹ lattice points: refused up front rather than exhausting memory.
+        TetraOptions {
+            spacing: Some(2e-3),
+            ..TetraOptions::default()
+        },
     ] {
         let e = tetrahedralize(&s, &opts).unwrap_err();
         assert!(matches!(e, TetraError::InvalidOption { .. }), "{e:?}");
