@@ -109,6 +109,38 @@ impl<'a> Bodies<'a> {
         Ok((x, w))
     }
 
+    /// How many distinct particles the sides hold together (one array counts once).
+    #[inline]
+    pub(crate) fn particle_count(&self) -> usize {
+        match self {
+            Bodies::Two { a, b } => a.state.len() + b.state.len(),
+            Bodies::One(p) => p.state.len(),
+        }
+    }
+
+    /// A dense index of particle `i` of `side` below [`Bodies::particle_count`], the same for
+    /// both sides of [`Bodies::One`].
+    #[inline]
+    pub(crate) fn key(&self, side: Side, i: u32) -> usize {
+        match (self, side) {
+            (Bodies::Two { a, .. }, Side::B) => a.state.len() + i as usize,
+            _ => i as usize,
+        }
+    }
+
+    /// Sets particle `i` of `side` (checked by a preceding [`Bodies::get`]).
+    #[inline]
+    pub(crate) fn set(&mut self, side: Side, i: u32, value: Vec3A) {
+        let p = match (self, side) {
+            (Bodies::Two { a, .. }, Side::A) => a,
+            (Bodies::Two { b, .. }, Side::B) => b,
+            (Bodies::One(p), _) => p,
+        };
+        if let Some(x) = p.state.get_mut(i as usize) {
+            *x = value;
+        }
+    }
+
     /// Adds `delta` to particle `i` of `side` (checked by a preceding [`Bodies::get`]).
     #[inline]
     pub(crate) fn add(&mut self, side: Side, i: u32, delta: Vec3A) {

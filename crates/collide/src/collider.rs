@@ -46,6 +46,8 @@ pub struct ColliderOptions {
     /// has moved more than the margin in all since, [`Collider::detect`] only re-tests those
     /// pairs (no refit, no broad phase). A pair that was farther than `tolerance + margin` can
     /// only have closed by the two moves, so the contact set is exactly a full detection's.
+    /// The same bound, per pair (its distance then minus its edge's and its triangle's largest
+    /// particle move since), skips re-testing pairs still out of reach.
     pub coherence_margin: f32,
 }
 
@@ -130,6 +132,9 @@ struct Coherence {
     near: Vec<Contact>,
     anchor_a: Vec<Vec3A>,
     anchor_b: Vec<Vec3A>,
+    /// How far each particle has moved from its anchor (as of the last [`Coherence::holds`]).
+    moved_a: Vec<f32>,
+    moved_b: Vec<f32>,
     valid: bool,
     /// Per-thread contacts of a parallel re-test, concatenated in order.
     chunks: Vec<Vec<Contact>>,
@@ -139,12 +144,30 @@ struct Coherence {
 impl Coherence {
     /// Whether every pair closer than the tolerance now is among `near`: no particle of A plus
     /// no particle of B has moved more than `margin` since the full detection.
-    fn holds(&self, pos_a: &[Vec3A], pos_b: &[Vec3A], margin: f32) -> bool {
+    /// Also records each particle's move, which [`Coherence::retest`] uses to skip pairs that
+    /// cannot have come within reach.
+    fn holds(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A], margin: f32) -> bool {
         margin > 0.0
             && self.valid
             && pos_a.len() == self.anchor_a.len()
             && pos_b.len() == self.anchor_b.len()
-            && largest_move(pos_a, &self.anchor_a) + largest_move(pos_b, &self.anchor_b) <= margin
+            && moves(pos_a, &self.anchor_a, &mut self.moved_a)
+                + moves(pos_b, &self.anchor_b, &mut self.moved_b)
+                <= margin
+    }
+
+    /// Anchors the positions of a full detection (every particle's move is then 0).
+    fn anchor(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A]) {
+        for (anchor, moved, pos) in [
+            (&mut self.anchor_a, &mut self.moved_a, pos_a),
+            (&mut self.anchor_b, &mut self.moved_b, pos_b),
+        ] {
+            anchor.clear();
+            anchor.extend_from_slice(pos);
+            moved.clear();
+            moved.resize(pos.len(), 0.0);
+        }
+        self.valid = true;
     }
 
     /// The contacts among `near` at the views' positions, into `out`.
@@ -156,11 +179,16 @@ impl Coherence {
         out: &mut Vec<Contact>,
     ) {
         self.planes.prepare(&self.near, a, b);
+        let moved = Moved {
+            a: &self.moved_a,
+            b: &self.moved_b,
+        };
         retest_parallel(
             &self.near,
             a,
             b,
             &self.planes,
+            moved,
             tolerance,
             &mut self.chunks,
             out,
@@ -416,11 +444,7 @@ impl Collider {
         };
         if margin > 0.0 {
             let c = &mut self.coherence;
-            c.anchor_a.clear();
-            c.anchor_a.extend_from_slice(pos_a);
-            c.anchor_b.clear();
-            c.anchor_b.extend_from_slice(pos_b);
-            c.valid = true;
+            c.anchor(pos_a, pos_b);
             c.retest(&va, &vb, tolerance, &mut self.contacts);
             self.stats.contacts = self.contacts.len() as u32;
         }
@@ -478,13 +502,42 @@ impl Collider {
     }
 }
 
-/// The largest distance between `now[i]` and `then[i]`.
-fn largest_move(now: &[Vec3A], then: &[Vec3A]) -> f32 {
-    now.iter()
-        .zip(then)
-        .map(|(a, b)| (*a - *b).length_squared())
-        .fold(0.0f32, f32::max)
-        .sqrt()
+/// The distances between `now[i]` and `then[i]`, into `moved` (resized to match); returns the
+/// largest.
+fn moves(now: &[Vec3A], then: &[Vec3A], moved: &mut Vec<f32>) -> f32 {
+    moved.resize(now.len(), 0.0);
+    let mut largest = 0.0f32;
+    for ((m, a), b) in moved.iter_mut().zip(now).zip(then) {
+        *m = (*a - *b).length();
+        largest = largest.max(*m);
+    }
+    largest
+}
+
+/// Each particle's move since the last full detection, per side.
+#[derive(Debug, Clone, Copy)]
+struct Moved<'a> {
+    a: &'a [f32],
+    b: &'a [f32],
+}
+
+impl Moved<'_> {
+    /// A lower bound of how near pair `c` can be now, from its distance at the full detection
+    /// (0 when it crossed): a segment (triangle) whose corners each moved at most `m` has every
+    /// point within `m` of where it was, so the distance fell by at most the largest move of
+    /// the edge's particles plus that of the triangle's.
+    #[inline]
+    fn distance_bound(&self, c: &Contact) -> f32 {
+        let (edge, tri) = match c.edge_side {
+            Side::A => (self.a, self.b),
+            Side::B => (self.b, self.a),
+        };
+        let [i, j] = c.edge_particles;
+        let [x, y, z] = c.triangle_particles;
+        let edge_move = edge[i as usize].max(edge[j as usize]);
+        let tri_move = tri[x as usize].max(tri[y as usize]).max(tri[z as usize]);
+        (-c.depth).max(0.0) - edge_move - tri_move
+    }
 }
 
 /// Pairs per thread below which a re-test stays on the calling thread.
@@ -494,11 +547,13 @@ const RETEST_PARALLEL_MIN: usize = 1024;
 /// [`retest`] in consecutive chunks, one per rayon thread when the pairs are many enough
 /// (feature `parallel`); the chunks' contacts are concatenated in order, so the result is the
 /// serial one.
+#[allow(clippy::too_many_arguments)]
 fn retest_parallel(
     near: &[Contact],
     a: &SurfaceView<'_>,
     b: &SurfaceView<'_>,
     planes: &RetestPlanes,
+    moved: Moved<'_>,
     tolerance: f32,
     chunks: &mut Vec<Vec<Contact>>,
     out: &mut Vec<Contact>,
@@ -517,7 +572,7 @@ fn retest_parallel(
             chunks[..k]
                 .par_iter_mut()
                 .zip(near.par_chunks(per))
-                .for_each(|(chunk, pairs)| retest(pairs, a, b, planes, tolerance, chunk));
+                .for_each(|(chunk, pairs)| retest(pairs, a, b, planes, moved, tolerance, chunk));
             out.clear();
             for chunk in &chunks[..k] {
                 out.extend_from_slice(chunk);
@@ -526,7 +581,7 @@ fn retest_parallel(
         }
     }
     let _ = chunks;
-    retest(near, a, b, planes, tolerance, out);
+    retest(near, a, b, planes, moved, tolerance, out);
 }
 
 /// The contacts among the pairs `near` at the current positions, with the narrow phase's own
@@ -537,6 +592,7 @@ fn retest(
     a: &SurfaceView<'_>,
     b: &SurfaceView<'_>,
     planes: &RetestPlanes,
+    moved: Moved<'_>,
     tolerance: f32,
     out: &mut Vec<Contact>,
 ) {
@@ -549,6 +605,12 @@ fn retest(
         let [i, j] = c.edge_particles;
         let (p, q) = (ev.positions()[i as usize], ev.positions()[j as usize]);
         let plane = planes.of(c);
+        // Still out of reach by the bound (with room for the test's rounding, which the reach
+        // itself allows 10⁻⁶ of the scale): the test would find nothing.
+        let scale = plane.longest().max((q - p).length());
+        if moved.distance_bound(c) > 1.001 * tolerance + 1e-5 * scale {
+            continue;
+        }
         if let Some(hit) =
             edge_against(plane, p, q, plane.distance(p), plane.distance(q), tolerance)
         {

@@ -227,7 +227,11 @@ pub(crate) fn edge_against(
             return None;
         }
     }
-    let (dist2, s, bary, on_edge, on_tri) = closest_segment_triangle(p, q, a, b, c);
+    let (dist2, s, bary, on_edge, on_tri) = if plane.planar {
+        closest_segment_planar(plane, p, q, dp, dq)
+    } else {
+        closest_segment_triangle(p, q, a, b, c)
+    };
     if dist2.is_nan() || dist2 > reach * reach {
         return None;
     }
@@ -266,6 +270,65 @@ fn normalized(b: [f32; 3]) -> [f32; 3] {
     } else {
         [1.0 / 3.0; 3]
     }
+}
+
+/// [`closest_segment_triangle`] on a prepared plane (`dp`, `dq` the endpoints' plane distances),
+/// for a segment that does not cross the triangle's interior: the same closest pair from fewer
+/// candidates.
+///
+/// Each endpoint whose projection on the plane lies inside the triangle (on the inner side of
+/// all three sides) is a candidate at its plane distance; each side beyond which the projection
+/// of at least one endpoint lies is tested against the segment. No other side can hold the
+/// closest point: the closest point `y` of the triangle to a segment point `x` lies on side `k`
+/// only if `x`'s projection is beyond side `k`'s line (or `y` is a corner, which the other side
+/// through it then covers), and the segment's projection is beyond the line only if an endpoint's
+/// is. A segment crossing the plane does so outside the triangle here, so an interior closest
+/// point is still at an endpoint. Without a crossing, no point of the segment (and no side,
+/// which lies in the plane) is nearer than the nearer endpoint's plane distance: when that
+/// endpoint projects inside, it is the answer.
+fn closest_segment_planar(
+    plane: &TrianglePlane,
+    p: Vec3A,
+    q: Vec3A,
+    dp: f32,
+    dq: f32,
+) -> (f32, f32, [f32; 3], Vec3A, Vec3A) {
+    let corners = [plane.a, plane.b, plane.c];
+    // How far beyond each side's line (scaled by the side's length) each endpoint projects.
+    let out_p: [f32; 3] = std::array::from_fn(|k| (p - corners[k]).dot(plane.side[k]));
+    let out_q: [f32; 3] = std::array::from_fn(|k| (q - corners[k]).dot(plane.side[k]));
+    // Barycentric weights of a projection: corner a's is the (scaled) distance inside side bc.
+    let bary = |o: [f32; 3]| [-o[1] / plane.len, -o[2] / plane.len, -o[0] / plane.len];
+    let inside = |o: [f32; 3]| o.iter().all(|&x| x <= 0.0);
+    let mut best = (f32::INFINITY, 0.0, [1.0 / 3.0; 3], p, p);
+    if inside(out_p) {
+        best = (dp * dp, 0.0, bary(out_p), p, p - plane.n * dp);
+    }
+    if inside(out_q) && dq * dq < best.0 {
+        best = (dq * dq, 1.0, bary(out_q), q, q - plane.n * dq);
+    }
+    // Without a sign change, no point of the segment is nearer the plane (in which the sides
+    // lie) than the nearer endpoint: when that endpoint projects inside, no side can be closer.
+    let one_side = !((dp > 0.0 && dq < 0.0) || (dp < 0.0 && dq > 0.0));
+    if one_side && best.0 <= (dp * dp).min(dq * dq) {
+        return best;
+    }
+    let ends = [(plane.a, plane.b), (plane.b, plane.c), (plane.c, plane.a)];
+    for k in 0..3 {
+        if out_p[k] <= 0.0 && out_q[k] <= 0.0 {
+            continue;
+        }
+        let (x, y) = ends[k];
+        let (s, t, on_seg, on_side) = closest_segment_segment(p, q, x, y);
+        let d = (on_seg - on_side).length_squared();
+        if d < best.0 {
+            let mut bary = [0.0; 3];
+            bary[k] = 1.0 - t;
+            bary[(k + 1) % 3] = t;
+            best = (d, s, bary, on_seg, on_side);
+        }
+    }
+    best
 }
 
 /// Closest points of segment `pq` and triangle `abc` when the segment does not cross the
@@ -377,6 +440,59 @@ mod tests {
             closest_segment_segment(Vec3A::Y, Vec3A::Y, Vec3A::ZERO, Vec3A::new(2.0, 0.0, 0.0));
         assert_eq!(t, 0.0);
         assert_eq!(c2, Vec3A::ZERO);
+    }
+
+    /// Deterministic pseudo-random points (xorshift), so the check needs no dependency.
+    fn points(seed: &mut u64, n: usize, scale: f32) -> Vec<Vec3A> {
+        (0..n)
+            .map(|_| {
+                Vec3A::from_array(std::array::from_fn(|_| {
+                    *seed ^= *seed << 13;
+                    *seed ^= *seed >> 7;
+                    *seed ^= *seed << 17;
+                    ((*seed >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * scale
+                }))
+            })
+            .collect()
+    }
+
+    #[test]
+    fn planar_closest_pair_matches_the_five_candidate_search() {
+        let mut seed = 0x9E37_79B9_7F4A_7C15u64;
+        let mut tested = 0;
+        for _ in 0..20_000 {
+            let v = points(&mut seed, 5, 2.0);
+            let (p, q, a, b, c) = (v[0], v[1], v[2], v[3], v[4]);
+            let plane = TrianglePlane::new(a, b, c);
+            let (dp, dq) = (plane.distance(p), plane.distance(q));
+            if !plane.planar {
+                continue;
+            }
+            // A segment crossing the triangle's interior takes the crossing branch instead.
+            if (dp > 0.0 && dq < 0.0) || (dp < 0.0 && dq > 0.0) {
+                let x = p + (q - p) * (dp / (dp - dq));
+                let (_, bary) = closest_point_on_triangle(x, a, b, c);
+                if bary.iter().all(|&w| w > 1e-4) {
+                    continue;
+                }
+            }
+            tested += 1;
+            let fast = closest_segment_planar(&plane, p, q, dp, dq);
+            let slow = closest_segment_triangle(p, q, a, b, c);
+            let scale = plane.longest.max((q - p).length());
+            assert!(
+                (fast.0.sqrt() - slow.0.sqrt()).abs() <= 1e-5 * scale,
+                "{p} {q} / {a} {b} {c}: {} vs {}",
+                fast.0.sqrt(),
+                slow.0.sqrt()
+            );
+            // The reported points are on the segment and the triangle, at that distance.
+            let on_seg = p + (q - p) * fast.1;
+            let on_tri = a * fast.2[0] + b * fast.2[1] + c * fast.2[2];
+            assert!((on_seg - fast.3).length() <= 1e-5 * scale);
+            assert!((on_tri - fast.4).length() <= 1e-5 * scale);
+        }
+        assert!(tested > 10_000, "{tested}");
     }
 
     #[test]

@@ -90,10 +90,17 @@ pub struct ResponseParams {
     pub separation: f32,
     /// Rounds of detect-then-correct in [`crate::Collider::separate`] (≥ 1).
     pub max_iterations: u32,
+    /// Warm start, in `[0, 1]`: each contact that was also among the previous call's contacts
+    /// (same [`Contact::key`]) starts from this fraction of the impulses it ended with there,
+    /// applied before the sweeps (Catto's accumulated impulses). A contact resting under a
+    /// steady load then starts near its answer, so the sweeps converge and it does not jitter.
+    /// 0 starts every contact from zero.
+    pub warm_start: f32,
 }
 
 impl Default for ResponseParams {
-    /// Inelastic (`e = 0`), frictionless, 8 sweeps, separation 10⁻⁴ cm, 32 correction rounds.
+    /// Inelastic (`e = 0`), frictionless, 8 sweeps, separation 10⁻⁴ cm, 32 correction rounds,
+    /// no warm start.
     fn default() -> Self {
         ResponseParams {
             restitution: 0.0,
@@ -101,6 +108,7 @@ impl Default for ResponseParams {
             sweeps: 8,
             separation: 1e-4,
             max_iterations: 32,
+            warm_start: 0.0,
         }
     }
 }
@@ -133,6 +141,9 @@ impl ResponseParams {
         if self.max_iterations == 0 {
             return bad("max_iterations", 0.0, "at least 1");
         }
+        if !(0.0..=1.0).contains(&self.warm_start) {
+            return bad("warm_start", self.warm_start, "in [0, 1]");
+        }
         Ok(())
     }
 }
@@ -146,25 +157,36 @@ pub struct ImpulseReport {
     pub normal_impulse: f32,
 }
 
-/// Per-contact scratch of [`apply_impulses`] (accumulated impulses and targets), kept by the
-/// caller so that a step allocates nothing once it has grown to the largest contact count.
+/// Per-contact scratch of [`apply_impulses`] (accumulated impulses and targets) and the compact
+/// copy of the velocities the contacts touch, kept by the caller so that a step allocates nothing
+/// once it has grown to the largest contact count.
 #[derive(Debug, Clone, Default)]
 pub struct ImpulseWorkspace {
     normal: Vec<f32>,
     friction: Vec<Vec3A>,
     target: Vec<f32>,
     prepared: Vec<Prepared>,
+    /// Per particle ([`Bodies::key`]): its slot in `velocity`, or `u32::MAX`. All `u32::MAX`
+    /// between calls.
+    slot: Vec<u32>,
+    /// The velocities of the particles the contacts touch, in first-touched order, and whose
+    /// they are.
+    velocity: Vec<Vec3A>,
+    owner: Vec<(Side, u32)>,
+    /// The last call's contacts (sorted by key) and the impulses they ended with.
+    previous: Vec<((Side, u32, u32), f32, Vec3A)>,
 }
 
-/// A contact as the sweeps read it: its particles (checked), their weights in the relative
-/// velocity, the velocity change per unit impulse of each (`weight/m`), and `W = Σ weight²/m`.
+/// A contact as the sweeps read it: its particles' slots in the compact velocities, their weights
+/// in the relative velocity, the velocity change per unit impulse of each (`weight/m`),
+/// `W = Σ weight²/m` and the normal.
 #[derive(Debug, Clone, Copy)]
 struct Prepared {
-    side: [Side; 5],
-    particle: [u32; 5],
+    slot: [u32; 5],
     weight: [f32; 5],
     push: [f32; 5],
     w_eff: f32,
+    normal: Vec3A,
 }
 
 impl ImpulseWorkspace {
@@ -205,38 +227,27 @@ pub fn apply_impulses(
     ws.normal.resize(n, 0.0);
     ws.friction.clear();
     ws.friction.resize(n, Vec3A::ZERO);
-    ws.target.clear();
-    ws.prepared.clear();
-    // Targets from the velocities before any impulse; this pass also checks every particle, so
-    // the sweeps index the arrays directly.
-    for c in contacts {
-        let (v, w, weights) = gather(c, velocities)?;
-        let vn = relative(&v, &weights).dot(Vec3A::from(c.normal));
-        ws.target.push(if vn < 0.0 {
-            -params.restitution * vn
-        } else {
-            0.0
-        });
-        let parts = contact_particles(c);
-        ws.prepared.push(Prepared {
-            side: parts.map(|p| p.0),
-            particle: parts.map(|p| p.1),
-            weight: weights,
-            push: std::array::from_fn(|i| weights[i] * w[i]),
-            w_eff: (0..5).map(|i| weights[i] * weights[i] * w[i]).sum(),
-        });
+    if let Err(e) = prepare(contacts, velocities, params, ws) {
+        release_slots(velocities, ws);
+        return Err(e);
     }
+    if params.warm_start > 0.0 {
+        warm_start(contacts, params, ws);
+    }
+    // The sweeps run on the compact velocities (a few thousand, cache-resident): the same
+    // arithmetic in the same order as on the bodies' arrays.
+    let v = &mut ws.velocity;
     for _ in 0..params.sweeps {
-        for (k, (c, p)) in contacts.iter().zip(&ws.prepared).enumerate() {
+        for (k, p) in ws.prepared.iter().enumerate() {
             let w_eff = p.w_eff;
             if w_eff.is_nan() || w_eff <= 0.0 {
                 continue;
             }
             let mut v_rel = Vec3A::ZERO;
             for i in 0..5 {
-                v_rel += velocities.state(p.side[i])[p.particle[i] as usize] * p.weight[i];
+                v_rel += v[p.slot[i] as usize] * p.weight[i];
             }
-            let n = Vec3A::from(c.normal);
+            let n = p.normal;
             let vn = v_rel.dot(n);
             let lambda = (ws.normal[k] + (ws.target[k] - vn) / w_eff).max(0.0);
             let d_lambda = lambda - ws.normal[k];
@@ -256,15 +267,122 @@ pub fn apply_impulses(
             }
             if j != Vec3A::ZERO {
                 for i in 0..5 {
-                    velocities.add(p.side[i], p.particle[i], j * p.push[i]);
+                    v[p.slot[i] as usize] += j * p.push[i];
                 }
             }
         }
+    }
+    for (&(side, i), &vel) in ws.owner.iter().zip(&ws.velocity) {
+        velocities.set(side, i, vel);
+    }
+    release_slots(velocities, ws);
+    ws.previous.clear();
+    if params.warm_start > 0.0 {
+        ws.previous.extend(
+            contacts
+                .iter()
+                .zip(ws.normal.iter().zip(&ws.friction))
+                .map(|(c, (&l, &f))| (c.key(), l, f)),
+        );
     }
     Ok(ImpulseReport {
         active: ws.normal.iter().filter(|&&l| l > 0.0).count() as u32,
         normal_impulse: ws.normal.iter().sum(),
     })
+}
+
+/// Checks every contact's particles, computes the targets from the velocities before any
+/// impulse, and gathers the touched velocities into the workspace's compact copy.
+fn prepare(
+    contacts: &[Contact],
+    velocities: &Bodies<'_>,
+    params: &ResponseParams,
+    ws: &mut ImpulseWorkspace,
+) -> Result<(), CollideError> {
+    ws.target.clear();
+    ws.prepared.clear();
+    ws.velocity.clear();
+    ws.owner.clear();
+    let count = velocities.particle_count();
+    if ws.slot.len() != count {
+        ws.slot.clear();
+        ws.slot.resize(count, u32::MAX);
+    }
+    for c in contacts {
+        let (v, w, weights) = gather(c, velocities)?;
+        let normal = Vec3A::from(c.normal);
+        let vn = relative(&v, &weights).dot(normal);
+        ws.target.push(if vn < 0.0 {
+            -params.restitution * vn
+        } else {
+            0.0
+        });
+        let parts = contact_particles(c);
+        let mut slot = [0u32; 5];
+        for (k, &(side, i, _)) in parts.iter().enumerate() {
+            let key = velocities.key(side, i);
+            if ws.slot[key] == u32::MAX {
+                ws.slot[key] = ws.velocity.len() as u32;
+                ws.velocity.push(v[k]);
+                ws.owner.push((side, i));
+            }
+            slot[k] = ws.slot[key];
+        }
+        ws.prepared.push(Prepared {
+            slot,
+            weight: weights,
+            push: std::array::from_fn(|i| weights[i] * w[i]),
+            w_eff: (0..5).map(|i| weights[i] * weights[i] * w[i]).sum(),
+            normal,
+        });
+    }
+    Ok(())
+}
+
+/// Starts each contact that the previous call also had from `warm_start` × the impulses it ended
+/// with (both lists are sorted by key), applied to the compact velocities. The friction impulse
+/// keeps its direction and stays within the cone; momentum is conserved as by any impulse.
+fn warm_start(contacts: &[Contact], params: &ResponseParams, ws: &mut ImpulseWorkspace) {
+    let mut prev = ws.previous.iter().peekable();
+    for (k, c) in contacts.iter().enumerate() {
+        let key = c.key();
+        while prev.next_if(|p| p.0 < key).is_some() {}
+        let Some(&&(_, lambda, friction)) = prev.peek() else {
+            break;
+        };
+        if lambda.is_nan() || friction.is_nan() {
+            continue;
+        }
+        let p = &ws.prepared[k];
+        if prev.peek().map(|p| p.0) != Some(key) || p.w_eff.is_nan() || p.w_eff <= 0.0 {
+            continue;
+        }
+        let lambda = params.warm_start * lambda;
+        // Only the part of the old friction impulse that is tangential to the new normal, within
+        // the cone.
+        let mut ft = friction - p.normal * friction.dot(p.normal);
+        ft *= params.warm_start;
+        let limit = params.friction * lambda;
+        let len = ft.length();
+        if len > limit {
+            ft *= if len > 0.0 { limit / len } else { 0.0 };
+        }
+        ws.normal[k] = lambda;
+        ws.friction[k] = ft;
+        let j = p.normal * lambda + ft;
+        if j != Vec3A::ZERO {
+            for i in 0..5 {
+                ws.velocity[p.slot[i] as usize] += j * p.push[i];
+            }
+        }
+    }
+}
+
+/// Marks every slot free again (the workspace's invariant between calls).
+fn release_slots(velocities: &Bodies<'_>, ws: &mut ImpulseWorkspace) {
+    for &(side, i) in &ws.owner {
+        ws.slot[velocities.key(side, i)] = u32::MAX;
+    }
 }
 
 /// Velocities, inverse masses and weights of a contact's five particles.

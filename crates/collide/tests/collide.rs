@@ -737,6 +737,98 @@ fn apply_impulses_conserves_momentum_over_many_contacts() {
     assert!((total(&all) - before).length() < 1e-4 * before.length());
 }
 
+#[test]
+fn warm_start_conserves_momentum_and_holds_a_steadily_loaded_contact_with_one_sweep() {
+    // The plane press region resting on the sphere, pressed down by a steady load each step
+    // (the velocity gravity would add): with one sweep per step, a cold start leaves the
+    // contacts approaching (the shared particles' impulses fight each other), while warm
+    // starting from the last step's impulses converges over the steps to a resting contact.
+    let scene = scenes::plane_press(65, 0.05, 0.03).unwrap();
+    let (pa, pb) = (
+        to_vec3a(scene.region.positions()),
+        to_vec3a(scene.sphere.positions()),
+    );
+    let inv_a: Vec<f32> = vec![1.0; pa.len()];
+    let inv_b: Vec<f32> = vec![0.0; pb.len()];
+    let run = |warm_start: f32| -> (f64, f64) {
+        let mut c =
+            Collider::new(&scene.region, &scene.sphere, &ColliderOptions::default()).unwrap();
+        let params = ResponseParams {
+            sweeps: 1,
+            warm_start,
+            ..ResponseParams::default()
+        };
+        let contacts = c.detect(&pa, &pb).unwrap().to_vec();
+        assert!(contacts.len() > 20);
+        let mut va = vec![Vec3A::ZERO; pa.len()];
+        let mut vb = vec![Vec3A::ZERO; pb.len()];
+        let mut worst = 0.0f64;
+        let mut momentum_error = 0.0f64;
+        for _ in 0..30 {
+            // A steady load on the region's particles; the velocities are not integrated, so
+            // every step sees the same contacts and the same load.
+            va.iter_mut().for_each(|v| *v = Vec3A::new(0.0, 0.0, -1.0));
+            let before: glam::DVec3 = va.iter().map(|v| v.as_dvec3()).sum();
+            let report = c
+                .apply_impulses(&mut Bodies::two(&mut va, &inv_a, &mut vb, &inv_b), &params)
+                .unwrap();
+            // The sphere is fixed: the region's momentum changes by the total normal impulse
+            // along the normals, so compare with what the impulses report instead: the
+            // region's particles only ever gain (never lose) upward momentum.
+            let after: glam::DVec3 = va.iter().map(|v| v.as_dvec3()).sum();
+            momentum_error = momentum_error.max((after.z - before.z).min(0.0).abs());
+            assert!(report.normal_impulse.is_finite());
+            worst = contacts
+                .iter()
+                .map(|k| {
+                    let v = (1.0 - k.s) * va[k.edge_particles[0] as usize]
+                        + k.s * va[k.edge_particles[1] as usize];
+                    f64::from(v.dot(Vec3A::from(k.normal)).min(0.0).abs())
+                })
+                .fold(0.0, f64::max);
+        }
+        (worst, momentum_error)
+    };
+    let (cold, _) = run(0.0);
+    let (warm, momentum_error) = run(1.0);
+    assert!(momentum_error < 1e-6, "{momentum_error}");
+    assert!(cold > 0.05, "cold start, one sweep: approach {cold}");
+    assert!(warm < 0.2 * cold, "warm {warm} vs cold {cold}");
+
+    // Momentum with two free bodies is conserved with warm-started impulses too.
+    let mut c = Collider::new(&scene.region, &scene.sphere, &ColliderOptions::default()).unwrap();
+    c.detect(&pa, &pb).unwrap();
+    let mut rng = Rng::new(5);
+    let inv_a: Vec<f32> = pa.iter().map(|_| rng.range(0.5, 2.0)).collect();
+    let inv_b: Vec<f32> = pb.iter().map(|_| rng.range(0.5, 2.0)).collect();
+    let params = ResponseParams {
+        friction: 0.3,
+        warm_start: 1.0,
+        ..ResponseParams::default()
+    };
+    let momentum = |va: &[Vec3A], vb: &[Vec3A]| -> glam::DVec3 {
+        va.iter()
+            .zip(&inv_a)
+            .chain(vb.iter().zip(&inv_b))
+            .map(|(v, w)| (*v / *w).as_dvec3())
+            .sum()
+    };
+    for _ in 0..3 {
+        let mut va = vec![Vec3A::new(0.0, 0.0, -3.0); pa.len()];
+        let mut vb = vec![Vec3A::new(0.5, 0.0, 5.0); pb.len()];
+        let before = momentum(&va, &vb);
+        c.apply_impulses(&mut Bodies::two(&mut va, &inv_a, &mut vb, &inv_b), &params)
+            .unwrap();
+        let after = momentum(&va, &vb);
+        assert!((after - before).length() < 1e-4 * before.length());
+    }
+    let bad = ResponseParams {
+        warm_start: 1.5,
+        ..ResponseParams::default()
+    };
+    assert!(bad.validate().is_err());
+}
+
 // --- Position correction and the drop test ------------------------------------------------------
 
 /// Generalised winding number of a closed mesh around `p` (≈ 1 inside, ≈ 0 outside).

@@ -76,8 +76,10 @@ impl Default for RunParams {
     /// agree within 0.1 % between 1 and 4 ms, and settle in 40 % of the steps at 1 ms); BVH vs
     /// BVH; contacts from a tenth of an edge; inelastic contact with Coulomb friction 0.3
     /// (silicone on tissue; frictionless, the tissue on the flank of Table 2's 150 cm³
-    /// expander chattered against its anchors and never settled), 8 Gauss–Seidel sweeps (with
-    /// 4 or 2 the resting contacts chatter and the 100–150 cm³ runs do not settle); window 50
+    /// expander chattered against its anchors and never settled), 8 Gauss–Seidel sweeps
+    /// warm-started from the last step's impulses (cold-started, with 4 or 2 sweeps the resting
+    /// contacts chatter and the 100–150 cm³ runs do not settle, and even with 8 a 175 cm³ run
+    /// hit the step limit; warm-started, 40–175 cm³ all settle in 346–449 steps); window 50
     /// steps (1.6 ms on Table 2), tolerance 0.01, at most 20 000 steps (the thesis's runs took 2 800–3 300);
     /// settled below a mean speed of 5 cm/s (resting contacts jitter at 1–3 cm/s, which the
     /// thesis's ratio test alone never accepts).
@@ -92,6 +94,7 @@ impl Default for RunParams {
             coherence: 1.0,
             response: ResponseParams {
                 friction: 0.3,
+                warm_start: 1.0,
                 ..ResponseParams::default()
             },
             stop: StopCriterion {
