@@ -40,12 +40,12 @@ pub struct ContactParams {
 }
 
 impl Default for ContactParams {
-    /// Margin 0, detection 0.05 cm, `μ_s = 0.5`, `μ_k = 0.4` (wet tissue on steel is of that
+    /// Margin 0, detection 0.1 cm, `μ_s = 0.5`, `μ_k = 0.4` (wet tissue on steel is of that
     /// order), continuous.
     fn default() -> Self {
         Self {
             margin: 0.0,
-            detection: 0.05,
+            detection: 0.1,
             static_friction: 0.5,
             kinetic_friction: 0.4,
             continuous: true,
@@ -134,6 +134,8 @@ pub(crate) struct ContactState {
     /// Capacity `node_count × (colliders + tools)`, reserved when one is added: a node has at
     /// most one contact per collider or tool, so a step never grows it.
     contacts: Vec<Contact>,
+    /// Iterations projected since the contacts were generated.
+    iteration: u32,
 }
 
 /// A node's sweep against a collider marches in steps of this many cells.
@@ -152,6 +154,7 @@ impl ContactState {
     /// predictions, `w` the inverse masses (nodes with `w = 0` get none).
     pub(crate) fn generate(&mut self, x: &[Vec3A], p: &[Vec3A], w: &[f32]) {
         self.contacts.clear();
+        self.iteration = 0;
         if self.colliders.is_empty() && self.tools.is_empty() {
             return;
         }
@@ -165,12 +168,12 @@ impl ContactState {
             colliders,
             tools,
             contacts,
+            ..
         } = self;
         for (ci, (collider, params)) in colliders.iter().enumerate() {
             let reach = params.margin + params.detection;
             let (lo, hi) = collider.bounds();
             let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
-            let step = MARCH * collider.cell_size();
             for (i, ((&xi, &pi), &wi)) in x.iter().zip(p).zip(w).enumerate() {
                 if wi <= 0.0 {
                     continue;
@@ -178,39 +181,16 @@ impl ContactState {
                 if pi.min(xi).cmpgt(hi).any() || pi.max(xi).cmplt(lo).any() {
                     continue;
                 }
-                let dist = pi.distance(xi);
-                let samples = if params.continuous && dist > step {
-                    (dist / step).ceil().min(MAX_SAMPLES) as usize
-                } else {
-                    1
-                };
-                for s in 1..=samples {
-                    let at = if samples == 1 {
-                        pi
-                    } else {
-                        xi + (pi - xi) * (s as f32 / samples as f32)
-                    };
-                    let Some((phi, grad)) = collider.probe(at) else {
-                        continue;
-                    };
-                    if phi >= reach {
-                        continue;
-                    }
-                    let len = grad.length();
-                    let normal = if len > 1e-6 {
-                        grad / len
-                    } else if pi.distance_squared(xi) > 0.0 {
-                        (xi - pi).normalize()
-                    } else {
-                        break;
-                    };
+                if let Some((normal, point)) =
+                    collider_plane(collider, xi, pi, reach, params.continuous)
+                {
                     push(
                         contacts,
                         Contact {
                             node: i as u32,
                             source: ContactSource::Collider(ci),
                             normal,
-                            point: at - normal * phi,
+                            point,
                             margin: params.margin,
                             surface_motion: Vec3A::ZERO,
                             static_friction: params.static_friction,
@@ -219,7 +199,6 @@ impl ContactState {
                             friction_correction: 0.0,
                         },
                     );
-                    break;
                 }
             }
         }
@@ -293,6 +272,101 @@ impl ContactState {
             p[i] = q;
         }
     }
+}
+
+impl ContactState {
+    /// After the last iteration: every free node still closer than the margin to a collider (at
+    /// `p`) or a tool (at its new pose) is put back on the surface: for a collider onto the plane
+    /// where its path from `x` went in (or, if it started inside, the nearest surface's); for a
+    /// tool radially from the core. Such
+    /// a node had no contact because its prediction was beyond `margin + detection` and the
+    /// body's constraints pushed it in during the iterations; it gets no friction this step.
+    fn resolve_remaining(&self, p: &mut [Vec3A], x: &[Vec3A], w: &[f32]) {
+        for (collider, params) in &self.colliders {
+            for ((q, &xi), &wi) in p.iter_mut().zip(x).zip(w) {
+                if wi <= 0.0 {
+                    continue;
+                }
+                let Some((phi, _)) = collider.probe(*q) else {
+                    continue;
+                };
+                if phi >= params.margin {
+                    continue;
+                }
+                // Entered during this step: the plane where the path from x went in; else the
+                // surface nearest to where it is.
+                let from = match collider.probe(xi) {
+                    Some((phi_x, _)) if phi_x < params.margin => *q,
+                    _ => xi,
+                };
+                if let Some((n, point)) = collider_plane(collider, from, *q, params.margin, true) {
+                    let c = n.dot(*q - point) - params.margin;
+                    if c < 0.0 {
+                        *q -= c * n;
+                    }
+                }
+            }
+        }
+        for (tool, params) in &self.tools {
+            let keep = tool.shape.radius() + params.margin;
+            let (lo, hi) = tool.swept_bounds(&tool.pose, &tool.pose, params.margin);
+            for (q, &wi) in p.iter_mut().zip(w) {
+                if wi <= 0.0 || q.cmplt(lo).any() || q.cmpgt(hi).any() {
+                    continue;
+                }
+                let local = tool.pose.inverse_transform_point((*q).into());
+                let core = tool.shape.closest_core_point(local);
+                let d = local.distance(core);
+                if d < keep && d > 1e-6 {
+                    let out = core + (local - core) * (keep / d);
+                    *q = tool.pose.transform_point(out).into();
+                }
+            }
+        }
+    }
+}
+
+/// The contact plane `(n, q)` of a node moving from `x` to `p` with a collider: at the first
+/// point of the path (sampled every half cell when `continuous`, else `p` alone) where
+/// `φ < threshold`, the normalised gradient `n` and the surface point `q = s − φ n`. A node that
+/// enters a thin collider during the step so gets the normal of the side it came from.
+fn collider_plane(
+    collider: &VoxelCollider,
+    x: Vec3A,
+    p: Vec3A,
+    threshold: f32,
+    continuous: bool,
+) -> Option<(Vec3A, Vec3A)> {
+    let step = MARCH * collider.cell_size();
+    let dist = p.distance(x);
+    let samples = if continuous && dist > step {
+        (dist / step).ceil().min(MAX_SAMPLES) as usize
+    } else {
+        1
+    };
+    for s in 1..=samples {
+        let at = if s == samples {
+            p
+        } else {
+            x + (p - x) * (s as f32 / samples as f32)
+        };
+        let Some((phi, grad)) = collider.probe(at) else {
+            continue;
+        };
+        if phi >= threshold {
+            continue;
+        }
+        let len = grad.length();
+        let normal = if len > 1e-6 {
+            grad / len
+        } else if dist > 0.0 {
+            (x - p) / dist
+        } else {
+            return None;
+        };
+        return Some((normal, at - normal * phi));
+    }
+    None
 }
 
 /// Appends a contact within the reserved capacity (one per node and source), so that a step
@@ -435,6 +509,10 @@ impl SoftBody {
     /// iteration).
     pub(crate) fn project_contacts(&mut self) {
         self.collision.project(&mut self.p, &self.x);
+        self.collision.iteration += 1;
+        if self.collision.iteration == self.settings.iterations {
+            self.collision.resolve_remaining(&mut self.p, &self.x, &self.w);
+        }
     }
 }
 
