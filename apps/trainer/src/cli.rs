@@ -28,8 +28,9 @@ const AFTER_LONG_HELP: &str = "\
 OUTPUT: a summary on stdout: the organ, the steps, the per-step wall time (median, p99, max) \
 over all steps and over the tool steps, the volume drift V/V0 - 1 at the end and its largest \
 magnitude. With --frames DIR (created if missing): the organ's surface every --every steps and \
-at the end, frame_STEP.vtk (with point field `displacement`, cm) or frame_STEP.obj (--format), \
-and with --png frame_STEP.png (coloured by displacement, the probe in grey). Each file is \
+at the end, frame_STEP.vtk (with point field `displacement`, cm: from the shape as loaded during \
+the settling, from the settled shape afterwards) or frame_STEP.obj (--format), and with --png \
+frame_STEP.png (coloured by that displacement, the probe in grey). Each file is \
 written atomically.
 
 EXIT CODES:
@@ -97,7 +98,7 @@ pub struct Cli {
     #[arg(long, value_enum, default_value_t = Volume::Classic)]
     pub volume: Volume,
     /// PBD stiffness of the distance constraints, in [0, 1].
-    #[arg(long, value_name = "K", default_value_t = 0.5)]
+    #[arg(long, value_name = "K", default_value_t = 1.0)]
     pub stiffness: f32,
     /// Voxel size of the tray collider (cm).
     #[arg(long, value_name = "CM", default_value_t = 0.5)]

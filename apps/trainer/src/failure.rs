@@ -41,7 +41,10 @@ impl Failure {
 
     /// The message on one line.
     pub fn line(&self) -> String {
-        self.message.split_whitespace().collect::<Vec<_>>().join(" ")
+        self.message
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ")
     }
 
     /// Reading the organ failed.
@@ -68,10 +71,9 @@ impl Failure {
                 code::RUN,
                 format!("{e} (lower --dt or --stiffness, or raise --iterations)"),
             ),
-            PbdError::DegenerateTet { .. } | PbdError::NodeOutOfRange { .. } => Failure::new(
-                code::MESH,
-                format!("the organ mesh is not usable: {e}"),
-            ),
+            PbdError::DegenerateTet { .. } | PbdError::NodeOutOfRange { .. } => {
+                Failure::new(code::MESH, format!("the organ mesh is not usable: {e}"))
+            }
             PbdError::InvalidParameter { name, .. } => {
                 let flag = match *name {
                     "dt" => " (--dt)",

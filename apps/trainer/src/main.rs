@@ -43,7 +43,11 @@ fn main_inner(cli: &Cli) -> Result<(), Failure> {
         cli.dt,
         cli.iterations,
         cli.volume,
-        if cli.parallel { ", colour-parallel" } else { "" }
+        if cli.parallel {
+            ", colour-parallel"
+        } else {
+            ""
+        }
     );
     println!(
         "  step time     median {}, p99 {}, max {} (all {} steps)",

@@ -60,6 +60,9 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
                     ),
                 )
             })?;
+            if let Some(f) = frames.as_mut() {
+                f.settled(scene);
+            }
             start = Vec3::new(xz[0], top + 0.5 + radius, xz[1]);
             end = Vec3::new(xz[0], top - cli.depth + radius, xz[1]);
             set_pose(&mut scene.body, scene.tool, start)?;
@@ -68,10 +71,11 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
             let tip = if step <= settle + press {
                 start.lerp(end, (step - settle) as f32 / press as f32)
             } else {
-                along(&scene.waypoints, (step - settle - press) as f32 / drag as f32).map_or(
-                    end,
-                    |[x, z]| Vec3::new(x, end.y, z),
+                along(
+                    &scene.waypoints,
+                    (step - settle - press) as f32 / drag as f32,
                 )
+                .map_or(end, |[x, z]| Vec3::new(x, end.y, z))
             };
             set_pose(&mut scene.body, scene.tool, tip)?;
         }
@@ -137,18 +141,20 @@ struct Frames {
     /// Body node of each surface vertex.
     nodes: Vec<u32>,
     surface: TriMesh,
+    /// Where displacements are measured from.
     rest: Vec<Vec3>,
     probe: TriMesh,
     camera: Camera,
     scale: ColorScale,
     written: usize,
+    /// What `rest` is: "rest" (as loaded) or "settled" (after the settling steps).
+    since: &'static str,
 }
 
 impl Frames {
     fn new(cli: &Cli, scene: &Scene, dir: &Path) -> Result<Self, Failure> {
-        std::fs::create_dir_all(dir).map_err(|e| {
-            Failure::output(&format!("frames folder {}", dir.display()), e)
-        })?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| Failure::output(&format!("frames folder {}", dir.display()), e))?;
         let faces = scene.mesh.boundary_faces();
         let mut local = vec![u32::MAX; scene.mesh.vertex_count()];
         let mut nodes = Vec::new();
@@ -174,8 +180,7 @@ impl Frames {
                 format!("the organ's boundary is not a valid surface for the frames: {e}"),
             )
         })?;
-        let probe = capsule_mesh(&scene.probe)
-            .map_err(|e| Failure::output("probe picture", e))?;
+        let probe = capsule_mesh(&scene.probe).map_err(|e| Failure::output("probe picture", e))?;
         let b = surface.bounding_box();
         let pad = Vec3::splat(0.15 * b.size().max_element());
         let bounds = Aabb {
@@ -197,7 +202,15 @@ impl Frames {
             camera,
             scale,
             written: 0,
+            since: "rest",
         })
+    }
+
+    /// From now on displacements are measured from the current (settled) shape.
+    fn settled(&mut self, scene: &Scene) {
+        let x = scene.body.positions();
+        self.rest = self.nodes.iter().map(|&n| x[n as usize].into()).collect();
+        self.since = "settled";
     }
 
     fn write(&mut self, scene: &Scene, step: usize, time: Option<f64>) -> Result<(), Failure> {
@@ -246,8 +259,8 @@ impl Frames {
                 )
                 .map_err(|e| Failure::output("probe picture", e))?;
             let png = stem.with_extension("png");
-            let mut image = Image::new(640, 480, Rgb::WHITE)
-                .map_err(|e| Failure::output("picture", e))?;
+            let mut image =
+                Image::new(640, 480, Rgb::WHITE).map_err(|e| Failure::output("picture", e))?;
             let viewport = Viewport::full(&image);
             render(
                 &mut image,
@@ -260,10 +273,12 @@ impl Frames {
                 ],
             )
             .map_err(|e| Failure::output("picture", e))?;
-            let label = match time {
-                Some(t) => format!("step {step}  t = {t:.2} s  displacement 0 - {:.1} cm", self.scale.max()),
-                None => format!("step 0  displacement 0 - {:.1} cm", self.scale.max()),
-            };
+            let label = format!(
+                "step {step} t {:.2} s, moved 0-{:.1} cm since {}",
+                time.unwrap_or(0.0),
+                self.scale.max(),
+                self.since
+            );
             draw_text(&mut image, 10, 10, &label, 2, Rgb::BLACK);
             image
                 .write_png(&png)

@@ -36,7 +36,9 @@ impl std::fmt::Display for Source {
 /// The default organ: the shipped bunny from the current directory or the source tree, else a
 /// box.
 fn default_source() -> Source {
-    let from_source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(BUNNY);
+    let from_source = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(BUNNY);
     for stem in [PathBuf::from(BUNNY), from_source] {
         if stem.with_extension("node").exists() {
             return Source::File(stem);

@@ -47,7 +47,10 @@ fn number_after(text: &str, line_start: &str, key: &str) -> f64 {
         .lines()
         .find(|l| l.trim_start().starts_with(line_start))
         .unwrap_or_else(|| panic!("no line {line_start:?} in\n{text}"));
-    let rest = &line[line.find(key).unwrap_or_else(|| panic!("no {key:?} in {line}")) + key.len()..];
+    let rest = &line[line
+        .find(key)
+        .unwrap_or_else(|| panic!("no {key:?} in {line}"))
+        + key.len()..];
     let num: String = rest
         .trim_start()
         .chars()
@@ -87,7 +90,10 @@ fn a_small_box_runs_and_writes_frames_and_a_summary() {
     let text = stdout(&out);
     assert!(out.status.success(), "{}\n{text}", stderr(&out));
     assert!(text.contains("generated tet box of 6×6×6 cells"), "{text}");
-    assert!(text.contains("20 steps (settle 6, press 6, drag 8)"), "{text}");
+    assert!(
+        text.contains("20 steps (settle 6, press 6, drag 8)"),
+        "{text}"
+    );
     let median = number_after(&text, "step time", "median");
     let p99 = number_after(&text, "step time", "p99");
     let max = number_after(&text, "step time", "max");
@@ -143,7 +149,8 @@ fn vtk_frames_carry_the_displacement_field() {
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(files_in(&dir), ["frame_00000.vtk", "frame_00006.vtk"]);
-    let vtk = std::fs::read_to_string(dir.join("frame_00006.vtk")).unwrap_or_else(|e| panic!("{e}"));
+    let vtk =
+        std::fs::read_to_string(dir.join("frame_00006.vtk")).unwrap_or_else(|e| panic!("{e}"));
     assert!(vtk.contains("displacement"), "no displacement field");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -169,7 +176,12 @@ fn bad_input_gives_one_line_and_its_exit_code() {
             "--dt",
         ),
         (
-            vec!["--box".into(), "2".into(), "--tool-radius".into(), "0".into()],
+            vec![
+                "--box".into(),
+                "2".into(),
+                "--tool-radius".into(),
+                "0".into(),
+            ],
             6,
             "--tool-radius",
         ),
@@ -193,7 +205,11 @@ fn bad_input_gives_one_line_and_its_exit_code() {
             "not over the organ",
         ),
         (vec!["--every".into(), "0".into()], 2, "--every"),
-        (vec!["--box".into(), "2".into(), "--waypoint".into(), "1".into()], 2, "X,Z"),
+        (
+            vec!["--box".into(), "2".into(), "--waypoint".into(), "1".into()],
+            2,
+            "X,Z",
+        ),
     ];
     for (args, code, words) in cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();

@@ -511,7 +511,8 @@ impl SoftBody {
         self.collision.project(&mut self.p, &self.x);
         self.collision.iteration += 1;
         if self.collision.iteration == self.settings.iterations {
-            self.collision.resolve_remaining(&mut self.p, &self.x, &self.w);
+            self.collision
+                .resolve_remaining(&mut self.p, &self.x, &self.w);
         }
     }
 }
