@@ -65,6 +65,31 @@
 //! assert!(body.positions().iter().all(|p| p.y >= -1.0));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! ## Example: a block on a voxel tray, pressed by a probe
+//! ```
+//! use glam::Vec3;
+//! use tissue_mesh::{tet_box, TetMesh};
+//! use tissue_pbd::{ContactParams, Material, OrientedBox, Pose, SoftBody, ToolShape, VoxelCollider};
+//!
+//! // A 4 × 2 × 4 cm block standing on the tray's top, y = 0.
+//! let (p, t) = tet_box(8, 4, 8, Vec3::new(4.0, 2.0, 4.0))?.into_parts();
+//! let block = TetMesh::new(p.iter().map(|p| *p + Vec3::Y).collect(), t)?;
+//! let mut body = SoftBody::new(&block, &Material::default())?;
+//! let tray = VoxelCollider::from_box(OrientedBox::tray(0.0, 0.0, 0.0, 20.0, 20.0, 2.0), 0.5)?;
+//! body.add_collider(tray, ContactParams::default())?;
+//! // A vertical probe of radius 0.3 cm, tip at the pose's origin, pushed 0.5 cm into the top.
+//! let probe = ToolShape::Capsule { a: Vec3::ZERO, b: Vec3::new(0.0, 5.0, 0.0), radius: 0.3 };
+//! let id = body.add_tool(probe, Pose::from_translation(Vec3::new(0.0, 2.5, 0.0)), ContactParams::default())?;
+//! for i in 1..=20 {
+//!     body.set_tool_pose(id, Pose::from_translation(Vec3::new(0.0, 2.5 - 0.04 * i as f32, 0.0)))?;
+//!     body.step()?;
+//! }
+//! let tool = body.tool(id)?;
+//! assert!(body.positions().iter().all(|p| p.y >= -1e-4 && tool.signed_distance((*p).into()) >= -1e-3));
+//! assert!(!body.contacts().is_empty());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 #![forbid(unsafe_code)]
 #![warn(
     clippy::unwrap_used,

@@ -1,5 +1,6 @@
 //! One step, in the order of Müller et al.: external forces → prediction → attachments →
-//! `K` × (distance, volume, floor projection) → velocity and position update → rigid-mode damping.
+//! contact generation → `K` × (distance, volume, floor projection, contacts) → velocity and
+//! position update → rigid-mode damping.
 
 use glam::{DMat3, DVec3, Vec3A};
 use rayon::prelude::*;
