@@ -45,6 +45,8 @@ pub struct SoftBody {
 
     pub(crate) floor: Option<Floor>,
     pub(crate) attachments: Vec<(u32, Vec3A)>,
+    /// Colliders, tools and this step's contacts (`contact.rs`).
+    pub(crate) collision: crate::contact::ContactState,
     pub(crate) settings: StepSettings,
     /// Corrected node positions of one colour, for the parallel projection.
     pub(crate) scratch: Vec<[Vec3A; 4]>,
@@ -232,6 +234,7 @@ impl SoftBody {
             volume_lambda,
             floor: None,
             attachments: Vec::new(),
+            collision: Default::default(),
             settings: StepSettings::default(),
             scratch,
             step_count: 0,

@@ -70,4 +70,47 @@ pub enum PbdError {
         /// The first node found non-finite.
         node: u32,
     },
+    /// A collider shape cannot be voxelised: the message says which shape (its index in the list
+    /// given to [`crate::VoxelCollider::new`]) and why.
+    #[error("collider shape {shape}: {reason}")]
+    InvalidColliderShape {
+        /// Index of the shape in the list given.
+        shape: usize,
+        /// What is wrong and how to fix it.
+        reason: &'static str,
+    },
+    /// A collider mesh is not closed, so inside and outside are undefined.
+    #[error("collider shape {shape}: the mesh is not closed ({boundary_edges} boundary edges); a static collider needs a closed surface to tell inside from outside: close the holes, or use boxes")]
+    ColliderMeshNotClosed {
+        /// Index of the shape in the list given.
+        shape: usize,
+        /// Number of edges used by one triangle only.
+        boundary_edges: usize,
+    },
+    /// The voxel grid would be too large.
+    #[error("the collider's voxel grid would have {corners} corners (limit {limit}) at cell size {cell_size} cm; use a larger cell size")]
+    ColliderTooLarge {
+        /// Grid corners needed.
+        corners: u64,
+        /// The largest grid accepted.
+        limit: u64,
+        /// The cell size given (cm).
+        cell_size: f32,
+    },
+    /// A tool primitive is degenerate or has a bad size.
+    #[error("tool: {reason}")]
+    InvalidTool {
+        /// What is wrong and how to fix it.
+        reason: &'static str,
+    },
+    /// No collider (`what = "collider"`) or tool (`what = "tool"`) has this id.
+    #[error("{what} {id} does not exist (the body has {count})")]
+    NoSuchContactSource {
+        /// `"collider"` or `"tool"`.
+        what: &'static str,
+        /// The id given.
+        id: usize,
+        /// How many there are.
+        count: usize,
+    },
 }

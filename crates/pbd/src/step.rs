@@ -1,5 +1,6 @@
 //! One step, in the order of Müller et al.: external forces → prediction → attachments →
-//! `K` × (distance, volume, floor projection) → velocity and position update → rigid-mode damping.
+//! contact generation → `K` × (distance, volume, floor projection, contacts) → velocity and
+//! position update → rigid-mode damping.
 
 use glam::{DMat3, DVec3, Vec3A};
 use rayon::prelude::*;
@@ -76,8 +77,10 @@ fn project_kind<R: Sync, const N: usize, const L: usize>(
 impl SoftBody {
     /// Advances the body by one step of the current [`crate::StepSettings`]:
     /// 1. `v += Δt·g` for free nodes (`w·f_ext` with `f_ext = m g`);
-    /// 2. `p = x + Δt·v`; attached nodes take their targets;
-    /// 3. `K` times: distance constraints, volume constraints, floor (Gauss–Seidel, colour order);
+    /// 2. `p = x + Δt·v`; attached nodes take their targets; contacts with colliders and tools are
+    ///    generated for the predictions (see [`crate::Contact`]);
+    /// 3. `K` times: distance constraints, volume constraints, floor (Gauss–Seidel, colour order),
+    ///    then the contacts with friction;
     ///    XPBD multipliers start at 0 each step;
     /// 4. `v = (1 − c)(p − x)/Δt` (`c` the linear damping, default 0), `x = p` (the old `x` becomes [`SoftBody::previous_positions`]);
     /// 5. rigid-mode damping of the free nodes.
@@ -104,6 +107,8 @@ impl SoftBody {
         for &(node, target) in &self.attachments {
             self.p[node as usize] = target;
         }
+        // Contacts with colliders and tools for the predictions (contact.rs).
+        self.generate_contacts();
         let xpbd = s.solver == Solver::Xpbd;
         if xpbd {
             self.distance_lambda.fill(0.0);
@@ -117,6 +122,8 @@ impl SoftBody {
                 } else {
                     self.project_once::<false>();
                 }
+                // Contacts last, so that the positions of each iteration satisfy them (contact.rs).
+                self.project_contacts();
             }
         }
         let scale = (1.0 - s.linear_damping) / dt;

@@ -1,0 +1,159 @@
+//! The command line: flags, defaults, units and exit codes.
+
+use std::path::PathBuf;
+
+use clap::{Parser, ValueEnum};
+
+const ABOUT: &str = "Headless surgical-trainer run: an organ settles on a tray, a probe presses \
+into it and drags along a path; prints per-step timing and the volume drift, writes surface \
+frames and pictures.";
+
+const LONG_ABOUT: &str = "\
+Headless surgical-trainer run (position-based dynamics, tissue-pbd): a tetrahedral organ is \
+scaled to --size, centred above the origin and set on a 2 cm thick tray (a static voxel collider \
+with friction) whose top is the plane y = 0; gravity is -y. It settles for --settle-steps, then a \
+vertical probe (a capsule of --tool-radius, tip down) comes down over the first --waypoint and \
+presses --depth cm below the organ's top there in --press-steps, then drags along the waypoints \
+(a polyline at constant height) in --drag-steps.
+
+With no arguments it runs the bunny of ../shared/meshes/bunny_10k_tet42k (9217 nodes, 42117 tets, \
+10 cm) when that folder is there (looked up from the current directory, then from the source \
+tree), else a generated 10 x 10 x 10-cell tet box, at the issue's benchmark step: dt = 10 ms, \
+K = 10 iterations.
+
+UNITS: centimetres, grams, seconds. --size, --depth, --tool-radius, --cell, the waypoints in cm \
+(x and z of the tray plane, the organ centred at x = z = 0); --dt in s.";
+
+const AFTER_LONG_HELP: &str = "\
+OUTPUT: a summary on stdout: the organ, the steps, the per-step wall time (median, p99, max) \
+over all steps and over the tool steps, the volume drift V/V0 - 1 at the end and its largest \
+magnitude. With --frames DIR (created if missing): the organ's surface every --every steps and \
+at the end, frame_STEP.vtk (with point field `displacement`, cm: from the shape as loaded during \
+the settling, from the settled shape afterwards) or frame_STEP.obj (--format), and with --png \
+frame_STEP.png (coloured by that displacement, the probe in grey). Each file is \
+written atomically.
+
+EXIT CODES:
+  0  success
+  2  bad command line
+  3  the organ file is missing, unreadable or of an unsupported type
+  4  the organ mesh is malformed or invalid
+  5  surface meshing (--surface) is not available yet
+  6  a parameter is out of range, or the first waypoint is not over the organ
+  7  the simulation diverged
+  8  an output could not be written";
+
+/// Which volume constraint the organ carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Volume {
+    /// One classic tet-volume constraint per tet.
+    Classic,
+    /// The slides' centroid constraint, four per tet.
+    Centroid,
+    /// None (distance constraints only).
+    None,
+}
+
+/// Format of the surface frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FrameFormat {
+    /// Legacy VTK polydata with the `displacement` point field (ParaView).
+    Vtk,
+    /// Wavefront OBJ.
+    Obj,
+}
+
+/// `trainer` arguments.
+#[derive(Debug, Parser)]
+#[command(
+    name = "trainer",
+    version,
+    allow_negative_numbers = true,
+    about = ABOUT,
+    long_about = LONG_ABOUT,
+    after_long_help = AFTER_LONG_HELP
+)]
+pub struct Cli {
+    /// The organ: a TetGen mesh (its stem, .node or .ele) or a .vtk tet grid [default: the shipped
+    /// bunny, else a generated box].
+    #[arg(long, value_name = "PATH", conflicts_with_all = ["surface", "box_cells"])]
+    pub organ: Option<PathBuf>,
+    /// A closed surface (.obj, .ply, .stl) to tetrahedralise first. Not available yet: the tet
+    /// mesher (tissue-tetra) is being written.
+    #[arg(long, value_name = "FILE", conflicts_with = "box_cells")]
+    pub surface: Option<PathBuf>,
+    /// Use a generated tet box of N × N × N cells as the organ.
+    #[arg(long = "box", value_name = "N", value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub box_cells: Option<u32>,
+    /// Largest extent of the organ after scaling (cm).
+    #[arg(long, value_name = "CM", default_value_t = 10.0)]
+    pub size: f32,
+    /// Time step (s).
+    #[arg(long, value_name = "S", default_value_t = 0.01)]
+    pub dt: f32,
+    /// Gauss–Seidel iterations K per step.
+    #[arg(long, value_name = "K", default_value_t = 10)]
+    pub iterations: u32,
+    /// Volume constraint.
+    #[arg(long, value_enum, default_value_t = Volume::Classic)]
+    pub volume: Volume,
+    /// PBD stiffness of the distance constraints, in [0, 1].
+    #[arg(long, value_name = "K", default_value_t = 1.0)]
+    pub stiffness: f32,
+    /// Voxel size of the tray collider (cm).
+    #[arg(long, value_name = "CM", default_value_t = 0.5)]
+    pub cell: f32,
+    /// Friction coefficient (static and kinetic) of the tray and the probe.
+    #[arg(long, value_name = "MU", default_value_t = 0.5)]
+    pub friction: f32,
+    /// Radius of the probe (cm).
+    #[arg(long, value_name = "CM", default_value_t = 0.4)]
+    pub tool_radius: f32,
+    /// How far below the organ's top the probe's tip presses (cm).
+    #[arg(long, value_name = "CM", default_value_t = 1.5)]
+    pub depth: f32,
+    /// A point X,Z (cm) of the drag path on the tray plane; give two or more in order [default:
+    /// from -size/4,0 to size/4,0].
+    #[arg(long = "waypoint", value_name = "X,Z", value_parser = parse_xz, allow_hyphen_values = true)]
+    pub waypoints: Vec<[f32; 2]>,
+    /// Steps to let the organ settle on the tray.
+    #[arg(long, value_name = "N", default_value_t = 100)]
+    pub settle_steps: u32,
+    /// Steps to press the probe in.
+    #[arg(long, value_name = "N", default_value_t = 50)]
+    pub press_steps: u32,
+    /// Steps to drag the probe along the path.
+    #[arg(long, value_name = "N", default_value_t = 100)]
+    pub drag_steps: u32,
+    /// Write surface frames into this folder (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub frames: Option<PathBuf>,
+    /// Write a frame every N steps.
+    #[arg(long, value_name = "N", default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
+    pub every: u32,
+    /// Format of the surface frames.
+    #[arg(long, value_enum, default_value_t = FrameFormat::Vtk)]
+    pub format: FrameFormat,
+    /// Also write a PNG picture with each frame.
+    #[arg(long, requires = "frames")]
+    pub png: bool,
+    /// Project constraints colour-parallel on all cores (bit-identical to serial).
+    #[arg(long)]
+    pub parallel: bool,
+}
+
+fn parse_xz(s: &str) -> Result<[f32; 2], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 2 {
+        return Err(format!("expected X,Z (two numbers in cm), got {s:?}"));
+    }
+    let mut out = [0.0f32; 2];
+    for (o, p) in out.iter_mut().zip(&parts) {
+        *o = p
+            .parse::<f32>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("{p:?} is not a finite number"))?;
+    }
+    Ok(out)
+}

@@ -1,0 +1,103 @@
+//! `trainer`: a headless surgical-trainer run from the command line.
+//!
+//! Command line ([`cli`]) → the organ on the tray with a probe ([`scene`]) → settle, press, drag
+//! with per-step timing, volume drift and frames ([`run`]) → a summary on stdout. Every failure is
+//! one line on stderr and a documented exit code ([`failure`]); see `trainer --help`.
+
+mod cli;
+mod failure;
+mod run;
+mod scene;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+use crate::cli::Cli;
+use crate::failure::Failure;
+
+fn ms(s: f64) -> String {
+    format!("{:.2} ms", s * 1e3)
+}
+
+fn main_inner(cli: &Cli) -> Result<(), Failure> {
+    let mut scene = scene::build(cli)?;
+    let (nodes, tets) = (scene.mesh.vertex_count(), scene.mesh.tet_count());
+    println!("trainer: {}", scene.source);
+    println!(
+        "  organ         {nodes} nodes, {tets} tets, {:.1} cm, {:.0} g, V0 = {:.1} cm³",
+        cli.size,
+        scene.body.total_mass(),
+        scene.body.rest_volume()
+    );
+    let summary = run::run(cli, &mut scene)?;
+    let all = &summary.step_seconds;
+    let tool = &all[summary.tool_from.min(all.len())..];
+    let (m, p, x) = run::percentiles(all);
+    println!(
+        "  run           {} steps (settle {}, press {}, drag {}), dt = {} s, K = {}, {:?} volume{}",
+        all.len(),
+        cli.settle_steps,
+        cli.press_steps,
+        cli.drag_steps,
+        cli.dt,
+        cli.iterations,
+        cli.volume,
+        if cli.parallel {
+            ", colour-parallel"
+        } else {
+            ""
+        }
+    );
+    println!(
+        "  step time     median {}, p99 {}, max {} (all {} steps)",
+        ms(m),
+        ms(p),
+        ms(x),
+        all.len()
+    );
+    if !tool.is_empty() {
+        let (m, p, x) = run::percentiles(tool);
+        println!(
+            "  with probe    median {}, p99 {}, max {} ({} steps)",
+            ms(m),
+            ms(p),
+            ms(x),
+            tool.len()
+        );
+    }
+    println!(
+        "  volume drift  {:+.3} % at the end (V/V0 = {:.4}), largest |drift| {:.3} %",
+        (summary.volume_ratio - 1.0) * 100.0,
+        summary.volume_ratio,
+        summary.worst_drift * 100.0
+    );
+    println!(
+        "  contacts      {} with the tray, {} with the probe (last step)",
+        summary.contacts.0, summary.contacts.1
+    );
+    if let Some(dir) = &cli.frames {
+        println!(
+            "  frames        {} written to {}",
+            summary.frames,
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match main_inner(&cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(failure) => {
+            let hint = if failure.code == failure::code::USAGE {
+                " (see trainer --help)"
+            } else {
+                ""
+            };
+            eprintln!("trainer: error: {}{hint}", failure.line());
+            ExitCode::from(failure.code)
+        }
+    }
+}

@@ -1,0 +1,231 @@
+//! The real `trainer` binary on a small generated box: the summary, the frames, and the exit code
+//! and one-line message of each kind of bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_trainer"))
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("trainer did not start: {e}"))
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A fresh, empty scratch folder for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tissue-trainer-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+    dir
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .map(|e| {
+            e.unwrap_or_else(|e| panic!("{e}"))
+                .file_name()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    names.sort();
+    names
+}
+
+/// A number after `key` in the summary, e.g. the median after "median ".
+fn number_after(text: &str, line_start: &str, key: &str) -> f64 {
+    let line = text
+        .lines()
+        .find(|l| l.trim_start().starts_with(line_start))
+        .unwrap_or_else(|| panic!("no line {line_start:?} in\n{text}"));
+    let rest = &line[line
+        .find(key)
+        .unwrap_or_else(|| panic!("no {key:?} in {line}"))
+        + key.len()..];
+    let num: String = rest
+        .trim_start()
+        .chars()
+        .take_while(|c| c.is_ascii_digit() || *c == '.' || *c == '-' || *c == '+')
+        .collect();
+    num.parse()
+        .unwrap_or_else(|e| panic!("{num:?} after {key:?} in {line}: {e}"))
+}
+
+#[test]
+fn a_small_box_runs_and_writes_frames_and_a_summary() {
+    let dir = scratch("box");
+    let frames = dir.join("frames");
+    let out = run(&[
+        "--box",
+        "6",
+        "--size",
+        "6",
+        "--settle-steps",
+        "6",
+        "--press-steps",
+        "6",
+        "--drag-steps",
+        "8",
+        "--waypoint",
+        "-1,0",
+        "--waypoint",
+        "1,0.5",
+        "--frames",
+        frames.to_str().unwrap_or_default(),
+        "--every",
+        "5",
+        "--format",
+        "obj",
+        "--png",
+    ]);
+    let text = stdout(&out);
+    assert!(out.status.success(), "{}\n{text}", stderr(&out));
+    assert!(text.contains("generated tet box of 6×6×6 cells"), "{text}");
+    assert!(
+        text.contains("20 steps (settle 6, press 6, drag 8)"),
+        "{text}"
+    );
+    let median = number_after(&text, "step time", "median");
+    let p99 = number_after(&text, "step time", "p99");
+    let max = number_after(&text, "step time", "max");
+    assert!(median > 0.0 && median <= p99 && p99 <= max, "{text}");
+    number_after(&text, "with probe", "median");
+    let drift = number_after(&text, "volume drift", "drift");
+    assert!(drift.abs() < 50.0, "{text}");
+    assert!(number_after(&text, "contacts", "contacts") > 0.0, "{text}");
+    // Frames at steps 0, 5, 10, 15 and the last (20): OBJ and PNG each, nothing else.
+    let expected: Vec<String> = [0, 5, 10, 15, 20]
+        .iter()
+        .flat_map(|s| [format!("frame_{s:05}.obj"), format!("frame_{s:05}.png")])
+        .collect::<std::collections::BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    assert_eq!(files_in(&frames), expected);
+    assert!(text.contains("5 written"), "{text}");
+    let obj = tissue_meshio::read_surface(frames.join("frame_00020.obj"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    // The boundary of a 6³-cell box: 6 faces × 36 cells × 2 triangles.
+    assert_eq!(obj.triangle_count(), 6 * 36 * 2);
+    let png = std::fs::read(frames.join("frame_00020.png")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"));
+    // The probe pressed in and dragged: the top moved.
+    let before = tissue_meshio::read_surface(frames.join("frame_00000.obj"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let moved = before
+        .positions()
+        .iter()
+        .zip(obj.positions())
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0f32, f32::max);
+    assert!(moved > 0.3, "the probe did not deform the box ({moved} cm)");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn vtk_frames_carry_the_displacement_field() {
+    let dir = scratch("vtk");
+    let out = run(&[
+        "--box",
+        "3",
+        "--settle-steps",
+        "2",
+        "--press-steps",
+        "2",
+        "--drag-steps",
+        "2",
+        "--frames",
+        dir.to_str().unwrap_or_default(),
+        "--every",
+        "100",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(files_in(&dir), ["frame_00000.vtk", "frame_00006.vtk"]);
+    let vtk =
+        std::fs::read_to_string(dir.join("frame_00006.vtk")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(vtk.contains("displacement"), "no displacement field");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_input_gives_one_line_and_its_exit_code() {
+    let dir = scratch("bad");
+    let missing = dir.join("nothing_here.node");
+    let cases: Vec<(Vec<String>, i32, &str)> = vec![
+        (
+            vec!["--organ".into(), missing.display().to_string()],
+            3,
+            "cannot read the organ",
+        ),
+        (
+            vec!["--surface".into(), "liver.obj".into()],
+            5,
+            "surface meshing not available yet",
+        ),
+        (
+            vec!["--box".into(), "2".into(), "--dt".into(), "-1".into()],
+            6,
+            "--dt",
+        ),
+        (
+            vec![
+                "--box".into(),
+                "2".into(),
+                "--tool-radius".into(),
+                "0".into(),
+            ],
+            6,
+            "--tool-radius",
+        ),
+        (
+            vec!["--box".into(), "2".into(), "--cell".into(), "0".into()],
+            6,
+            "--cell",
+        ),
+        (
+            vec![
+                "--box".into(),
+                "2".into(),
+                "--settle-steps".into(),
+                "1".into(),
+                "--waypoint".into(),
+                "50,50".into(),
+                "--waypoint".into(),
+                "60,50".into(),
+            ],
+            6,
+            "not over the organ",
+        ),
+        (vec!["--every".into(), "0".into()], 2, "--every"),
+        (
+            vec!["--box".into(), "2".into(), "--waypoint".into(), "1".into()],
+            2,
+            "X,Z",
+        ),
+    ];
+    for (args, code, words) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = run(&args);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(code), "{args:?}: {err}");
+        assert!(err.contains(words), "{args:?}: {err}");
+        if code != 2 {
+            assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+            assert!(err.starts_with("trainer: error: "), "{err}");
+        }
+    }
+    // A surface file where a tet mesh is expected.
+    let obj = dir.join("surface.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap_or_else(|e| panic!("{e}"));
+    let out = run(&["--organ", obj.to_str().unwrap_or_default()]);
+    assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
+    let _ = std::fs::remove_dir_all(&dir);
+}

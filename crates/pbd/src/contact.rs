@@ -1,0 +1,531 @@
+//! Contacts of a body's nodes with static [`VoxelCollider`]s and kinematic [`Tool`]s: generated
+//! once per step after the prediction, projected in each of the `K` iterations after the body's
+//! own constraints, with friction.
+//!
+//! Each contact is an inequality on one node, `C(p) = n·(p − q) − margin ≥ 0`, with the normal
+//! `n` and surface point `q` fixed for the step (the plane of the surface where the node's path
+//! met it), projected only when `C < 0`: `p ← p − C n`. Friction follows Macklin et al. 2014
+//! ("Unified particle physics", §6.1) and limits the node's tangential displacement relative to
+//! the surface since the start of the step, `Δx_t = ((p − x) − Δq)_⊥n` (`Δq` the surface's own
+//! motion, zero for a static collider): with `d` the normal correction accumulated over the
+//! iterations so far, `Δx_t` is removed entirely while `|Δx_t| + r ≤ μ_s d` (static; `r` the
+//! tangential correction already made), and otherwise reduced by `μ_k d − r` (kinetic), so that
+//! over a step the tangential correction is at most `μ_k` times the normal one, as Coulomb's law
+//! for impulses. A collider or tool has no mass: only the node moves.
+
+use std::sync::Arc;
+
+use glam::Vec3A;
+
+use crate::tool::{check_pose, sweep_node, Pose, Tool, ToolShape};
+use crate::{PbdError, SoftBody, VoxelCollider};
+
+/// How a body's nodes meet one collider or tool (cm).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactParams {
+    /// Distance kept between the nodes and the surface (cm), `≥ 0`.
+    pub margin: f32,
+    /// Nodes whose path comes within `margin + detection` of the surface get a contact for the
+    /// step, inactive while `C ≥ 0`, so that the iterations can not push them in unseen (cm),
+    /// `≥ 0`.
+    pub detection: f32,
+    /// Static friction coefficient `μ_s ≥ 0`.
+    pub static_friction: f32,
+    /// Kinetic friction coefficient `μ_k ≥ 0`.
+    pub kinetic_friction: f32,
+    /// Sweep the motion of the step (nodes from `x` to `p`; tools from their old to their new
+    /// pose) so that fast motion does not tunnel through thin parts. When `false` only the
+    /// predicted positions and the tool's new pose are tested.
+    pub continuous: bool,
+}
+
+impl Default for ContactParams {
+    /// Margin 0, detection 0.1 cm, `μ_s = 0.5`, `μ_k = 0.4` (wet tissue on steel is of that
+    /// order), continuous.
+    fn default() -> Self {
+        Self {
+            margin: 0.0,
+            detection: 0.1,
+            static_friction: 0.5,
+            kinetic_friction: 0.4,
+            continuous: true,
+        }
+    }
+}
+
+impl ContactParams {
+    /// The defaults without friction.
+    pub fn frictionless() -> Self {
+        Self {
+            static_friction: 0.0,
+            kinetic_friction: 0.0,
+            ..Self::default()
+        }
+    }
+
+    fn validate(&self) -> Result<(), PbdError> {
+        for (name, v) in [
+            ("margin", self.margin),
+            ("detection", self.detection),
+            ("static_friction", self.static_friction),
+            ("kinetic_friction", self.kinetic_friction),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(PbdError::InvalidParameter {
+                    name,
+                    value: v as f64,
+                    expected: "finite and ≥ 0",
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What a contact is with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactSource {
+    /// The collider of this id ([`SoftBody::add_collider`]).
+    Collider(usize),
+    /// The tool of this id ([`SoftBody::add_tool`]).
+    Tool(usize),
+}
+
+/// One node's contact for the current step: the inequality `n·(p − q) − margin ≥ 0`, cardinality
+/// 1, with what the iterations did to it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// The node.
+    pub node: u32,
+    /// The collider or tool.
+    pub source: ContactSource,
+    /// Outward unit normal `n` of the surface.
+    pub normal: Vec3A,
+    /// The surface point `q` (cm).
+    pub point: Vec3A,
+    /// The distance kept (cm).
+    pub margin: f32,
+    /// The surface's own displacement over the step (cm; zero for a collider).
+    pub surface_motion: Vec3A,
+    /// `μ_s`.
+    pub static_friction: f32,
+    /// `μ_k`.
+    pub kinetic_friction: f32,
+    /// Normal correction accumulated over the iterations (cm).
+    pub normal_correction: f32,
+    /// Tangential (friction) correction accumulated over the iterations (cm).
+    pub friction_correction: f32,
+}
+
+impl Contact {
+    /// Equality or inequality.
+    pub const KIND: crate::ConstraintKind = crate::ConstraintKind::Inequality;
+    /// `C` at `positions` (negative: inside).
+    pub fn value(&self, positions: &[Vec3A]) -> f32 {
+        self.normal.dot(positions[self.node as usize] - self.point) - self.margin
+    }
+}
+
+/// The colliders, tools and this step's contacts of a body.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct ContactState {
+    colliders: Vec<(Arc<VoxelCollider>, ContactParams)>,
+    tools: Vec<(Tool, ContactParams)>,
+    /// Capacity `node_count × (colliders + tools)`, reserved when one is added: a node has at
+    /// most one contact per collider or tool, so a step never grows it.
+    contacts: Vec<Contact>,
+    /// Iterations projected since the contacts were generated.
+    iteration: u32,
+}
+
+/// A node's sweep against a collider marches in steps of this many cells.
+const MARCH: f32 = 0.5;
+/// At most this many samples per node and collider.
+const MAX_SAMPLES: f32 = 64.0;
+
+impl ContactState {
+    fn reserve(&mut self, nodes: usize) {
+        let need = nodes * (self.colliders.len() + self.tools.len());
+        self.contacts
+            .reserve_exact(need.saturating_sub(self.contacts.len()));
+    }
+
+    /// Generates this step's contacts: `x` the positions at the start of the step, `p` the
+    /// predictions, `w` the inverse masses (nodes with `w = 0` get none).
+    pub(crate) fn generate(&mut self, x: &[Vec3A], p: &[Vec3A], w: &[f32]) {
+        self.contacts.clear();
+        self.iteration = 0;
+        if self.colliders.is_empty() && self.tools.is_empty() {
+            return;
+        }
+        let _span = tracing::debug_span!(
+            "collide",
+            colliders = self.colliders.len(),
+            tools = self.tools.len()
+        )
+        .entered();
+        let Self {
+            colliders,
+            tools,
+            contacts,
+            ..
+        } = self;
+        for (ci, (collider, params)) in colliders.iter().enumerate() {
+            let reach = params.margin + params.detection;
+            let (lo, hi) = collider.bounds();
+            let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+            for (i, ((&xi, &pi), &wi)) in x.iter().zip(p).zip(w).enumerate() {
+                if wi <= 0.0 {
+                    continue;
+                }
+                if pi.min(xi).cmpgt(hi).any() || pi.max(xi).cmplt(lo).any() {
+                    continue;
+                }
+                if let Some((normal, point)) =
+                    collider_plane(collider, xi, pi, reach, params.continuous)
+                {
+                    push(
+                        contacts,
+                        Contact {
+                            node: i as u32,
+                            source: ContactSource::Collider(ci),
+                            normal,
+                            point,
+                            margin: params.margin,
+                            surface_motion: Vec3A::ZERO,
+                            static_friction: params.static_friction,
+                            kinetic_friction: params.kinetic_friction,
+                            normal_correction: 0.0,
+                            friction_correction: 0.0,
+                        },
+                    );
+                }
+            }
+        }
+        for (ti, (tool, params)) in tools.iter_mut().enumerate() {
+            let reach = params.margin + params.detection;
+            let from = if params.continuous {
+                tool.start
+            } else {
+                tool.pose
+            };
+            let to = tool.pose;
+            let (lo, hi) = tool.swept_bounds(&from, &to, reach);
+            for (i, ((&xi, &pi), &wi)) in x.iter().zip(p).zip(w).enumerate() {
+                if wi <= 0.0 {
+                    continue;
+                }
+                let start = if params.continuous { xi } else { pi };
+                if pi.min(start).cmpgt(hi).any() || pi.max(start).cmplt(lo).any() {
+                    continue;
+                }
+                if let Some(hit) = sweep_node(&tool.shape, &from, &to, start, pi, reach) {
+                    push(
+                        contacts,
+                        Contact {
+                            node: i as u32,
+                            source: ContactSource::Tool(ti),
+                            normal: hit.normal,
+                            point: hit.point,
+                            margin: params.margin,
+                            surface_motion: hit.motion,
+                            static_friction: params.static_friction,
+                            kinetic_friction: params.kinetic_friction,
+                            normal_correction: 0.0,
+                            friction_correction: 0.0,
+                        },
+                    );
+                }
+            }
+            tool.last_sweep = (tool.start, tool.pose);
+            tool.start = tool.pose;
+        }
+    }
+
+    /// Projects every contact once (one Gauss–Seidel sweep in generation order), with friction
+    /// relative to the start-of-step positions `x`.
+    pub(crate) fn project(&mut self, p: &mut [Vec3A], x: &[Vec3A]) {
+        for c in &mut self.contacts {
+            let i = c.node as usize;
+            let mut q = p[i];
+            let value = c.normal.dot(q - c.point) - c.margin;
+            if value < 0.0 {
+                q -= value * c.normal;
+                c.normal_correction -= value;
+            }
+            if c.normal_correction > 0.0 && (c.static_friction > 0.0 || c.kinetic_friction > 0.0) {
+                let dx = (q - x[i]) - c.surface_motion;
+                let tangential = dx - c.normal * c.normal.dot(dx);
+                let len = tangential.length();
+                if len > 0.0 {
+                    if len + c.friction_correction <= c.static_friction * c.normal_correction {
+                        q -= tangential;
+                        c.friction_correction += len;
+                    } else {
+                        let r = (c.kinetic_friction * c.normal_correction - c.friction_correction)
+                            .clamp(0.0, len);
+                        q -= tangential * (r / len);
+                        c.friction_correction += r;
+                    }
+                }
+            }
+            p[i] = q;
+        }
+    }
+}
+
+impl ContactState {
+    /// After the last iteration: every free node still closer than the margin to a collider (at
+    /// `p`) or a tool (at its new pose) is put back on the surface: for a collider onto the plane
+    /// where its path from `x` went in (or, if it started inside, the nearest surface's); for a
+    /// tool radially from the core. Such
+    /// a node had no contact because its prediction was beyond `margin + detection` and the
+    /// body's constraints pushed it in during the iterations; it gets no friction this step.
+    fn resolve_remaining(&self, p: &mut [Vec3A], x: &[Vec3A], w: &[f32]) {
+        for (collider, params) in &self.colliders {
+            for ((q, &xi), &wi) in p.iter_mut().zip(x).zip(w) {
+                if wi <= 0.0 {
+                    continue;
+                }
+                let Some((phi, _)) = collider.probe(*q) else {
+                    continue;
+                };
+                if phi >= params.margin {
+                    continue;
+                }
+                // Entered during this step: the plane where the path from x went in; else the
+                // surface nearest to where it is.
+                let from = match collider.probe(xi) {
+                    Some((phi_x, _)) if phi_x < params.margin => *q,
+                    _ => xi,
+                };
+                if let Some((n, point)) = collider_plane(collider, from, *q, params.margin, true) {
+                    let c = n.dot(*q - point) - params.margin;
+                    if c < 0.0 {
+                        *q -= c * n;
+                    }
+                }
+            }
+        }
+        for (tool, params) in &self.tools {
+            let keep = tool.shape.radius() + params.margin;
+            let (lo, hi) = tool.swept_bounds(&tool.pose, &tool.pose, params.margin);
+            for (q, &wi) in p.iter_mut().zip(w) {
+                if wi <= 0.0 || q.cmplt(lo).any() || q.cmpgt(hi).any() {
+                    continue;
+                }
+                let local = tool.pose.inverse_transform_point((*q).into());
+                let core = tool.shape.closest_core_point(local);
+                let d = local.distance(core);
+                if d < keep && d > 1e-6 {
+                    let out = core + (local - core) * (keep / d);
+                    *q = tool.pose.transform_point(out).into();
+                }
+            }
+        }
+    }
+}
+
+/// The contact plane `(n, q)` of a node moving from `x` to `p` with a collider: at the first
+/// point of the path (sampled every half cell when `continuous`, else `p` alone) where
+/// `φ < threshold`, the normalised gradient `n` and the surface point `q = s − φ n`. A node that
+/// enters a thin collider during the step so gets the normal of the side it came from.
+fn collider_plane(
+    collider: &VoxelCollider,
+    x: Vec3A,
+    p: Vec3A,
+    threshold: f32,
+    continuous: bool,
+) -> Option<(Vec3A, Vec3A)> {
+    let step = MARCH * collider.cell_size();
+    let dist = p.distance(x);
+    let samples = if continuous && dist > step {
+        (dist / step).ceil().min(MAX_SAMPLES) as usize
+    } else {
+        1
+    };
+    for s in 1..=samples {
+        let at = if s == samples {
+            p
+        } else {
+            x + (p - x) * (s as f32 / samples as f32)
+        };
+        let Some((phi, grad)) = collider.probe(at) else {
+            continue;
+        };
+        if phi >= threshold {
+            continue;
+        }
+        let len = grad.length();
+        let normal = if len > 1e-6 {
+            grad / len
+        } else if dist > 0.0 {
+            (x - p) / dist
+        } else {
+            return None;
+        };
+        return Some((normal, at - normal * phi));
+    }
+    None
+}
+
+/// Appends a contact within the reserved capacity (one per node and source), so that a step
+/// never grows the buffer.
+fn push(contacts: &mut Vec<Contact>, c: Contact) {
+    if contacts.len() < contacts.capacity() {
+        contacts.push(c);
+    }
+}
+
+/// Contacts, colliders and tools of a body.
+impl SoftBody {
+    /// Adds a static collider (shared between bodies through the [`Arc`]) and returns its id.
+    /// Reserves the contact buffer (outside the step, so steps stay allocation-free).
+    ///
+    /// # Errors
+    /// [`PbdError::InvalidParameter`] for a negative or non-finite parameter, or when
+    /// `margin + detection` exceeds the collider's [`VoxelCollider::reach`] (build it with a
+    /// larger reach).
+    pub fn add_collider(
+        &mut self,
+        collider: impl Into<Arc<VoxelCollider>>,
+        params: ContactParams,
+    ) -> Result<usize, PbdError> {
+        let collider = collider.into();
+        check_reach(&collider, &params)?;
+        self.collision.colliders.push((collider, params));
+        self.collision.reserve(self.x.len());
+        Ok(self.collision.colliders.len() - 1)
+    }
+
+    /// Changes how the nodes meet a collider.
+    ///
+    /// # Errors
+    /// [`PbdError::NoSuchContactSource`], and as [`SoftBody::add_collider`].
+    pub fn set_collider_params(
+        &mut self,
+        id: usize,
+        params: ContactParams,
+    ) -> Result<(), PbdError> {
+        let count = self.collision.colliders.len();
+        let entry = self
+            .collision
+            .colliders
+            .get_mut(id)
+            .ok_or(PbdError::NoSuchContactSource {
+                what: "collider",
+                id,
+                count,
+            })?;
+        check_reach(&entry.0, &params)?;
+        entry.1 = params;
+        Ok(())
+    }
+
+    /// The colliders and their contact parameters, by id.
+    pub fn colliders(&self) -> impl ExactSizeIterator<Item = (&VoxelCollider, &ContactParams)> {
+        self.collision.colliders.iter().map(|(c, p)| (&**c, p))
+    }
+
+    /// Adds a kinematic tool at `pose` and returns its id. Reserves the contact buffer.
+    ///
+    /// # Errors
+    /// [`PbdError::InvalidTool`] for a degenerate shape or a bad pose,
+    /// [`PbdError::InvalidParameter`] for bad contact parameters.
+    pub fn add_tool(
+        &mut self,
+        shape: ToolShape,
+        pose: Pose,
+        params: ContactParams,
+    ) -> Result<usize, PbdError> {
+        params.validate()?;
+        self.collision.tools.push((Tool::new(shape, pose)?, params));
+        self.collision.reserve(self.x.len());
+        Ok(self.collision.tools.len() - 1)
+    }
+
+    /// Moves a tool: the next step sweeps it from its pose at the last step to `pose`.
+    ///
+    /// # Errors
+    /// [`PbdError::NoSuchContactSource`], [`PbdError::InvalidTool`] for a non-finite pose or a
+    /// rotation that is not a unit quaternion.
+    pub fn set_tool_pose(&mut self, id: usize, pose: Pose) -> Result<(), PbdError> {
+        check_pose(&pose)?;
+        self.tool_mut(id)?.0.pose = pose;
+        Ok(())
+    }
+
+    /// Changes how the nodes meet a tool.
+    ///
+    /// # Errors
+    /// [`PbdError::NoSuchContactSource`], [`PbdError::InvalidParameter`].
+    pub fn set_tool_params(&mut self, id: usize, params: ContactParams) -> Result<(), PbdError> {
+        params.validate()?;
+        self.tool_mut(id)?.1 = params;
+        Ok(())
+    }
+
+    /// A tool by id (its shape, pose and last sweep).
+    ///
+    /// # Errors
+    /// [`PbdError::NoSuchContactSource`].
+    pub fn tool(&self, id: usize) -> Result<&Tool, PbdError> {
+        let count = self.collision.tools.len();
+        self.collision
+            .tools
+            .get(id)
+            .map(|t| &t.0)
+            .ok_or(PbdError::NoSuchContactSource {
+                what: "tool",
+                id,
+                count,
+            })
+    }
+
+    fn tool_mut(&mut self, id: usize) -> Result<&mut (Tool, ContactParams), PbdError> {
+        let count = self.collision.tools.len();
+        self.collision
+            .tools
+            .get_mut(id)
+            .ok_or(PbdError::NoSuchContactSource {
+                what: "tool",
+                id,
+                count,
+            })
+    }
+
+    /// The contacts of the last step, in projection order (by collider, then tool; by node
+    /// within each), with the corrections the iterations made.
+    pub fn contacts(&self) -> &[Contact] {
+        &self.collision.contacts
+    }
+
+    /// Step phase: contacts for the predictions (after attachments).
+    pub(crate) fn generate_contacts(&mut self) {
+        self.collision.generate(&self.x, &self.p, &self.w);
+    }
+
+    /// Step phase: one projection of every contact (after the body's constraints, in each
+    /// iteration).
+    pub(crate) fn project_contacts(&mut self) {
+        self.collision.project(&mut self.p, &self.x);
+        self.collision.iteration += 1;
+        if self.collision.iteration == self.settings.iterations {
+            self.collision
+                .resolve_remaining(&mut self.p, &self.x, &self.w);
+        }
+    }
+}
+
+fn check_reach(collider: &VoxelCollider, params: &ContactParams) -> Result<(), PbdError> {
+    params.validate()?;
+    let reach = params.margin + params.detection;
+    if reach > collider.reach() {
+        return Err(PbdError::InvalidParameter {
+            name: "margin + detection",
+            value: reach as f64,
+            expected: "at most the collider's reach (VoxelCollider::new's `reach`)",
+        });
+    }
+    Ok(())
+}
