@@ -38,7 +38,7 @@ EXIT CODES:
   2  bad command line
   3  the organ file is missing, unreadable or of an unsupported type
   4  the organ mesh is malformed or invalid
-  5  surface meshing (--surface) is not available yet
+  5  the surface (--surface) cannot be tetrahedralised (open, non-manifold, inside out, ...)
   6  a parameter is out of range, or the first waypoint is not over the organ
   7  the simulation diverged
   8  an output could not be written";
@@ -78,8 +78,8 @@ pub struct Cli {
     /// bunny, else a generated box].
     #[arg(long, value_name = "PATH", conflicts_with_all = ["surface", "box_cells"])]
     pub organ: Option<PathBuf>,
-    /// A closed surface (.obj, .ply, .stl) to tetrahedralise first. Not available yet: the tet
-    /// mesher (tissue-tetra) is being written.
+    /// A closed surface (.obj, .ply, .stl) to tetrahedralise first (tissue-tetra: the surface
+    /// vertices become nodes, interior nodes on a lattice about 1.7 surface edges apart).
     #[arg(long, value_name = "FILE", conflicts_with = "box_cells")]
     pub surface: Option<PathBuf>,
     /// Use a generated tet box of N × N × N cells as the organ.

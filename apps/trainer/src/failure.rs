@@ -11,8 +11,8 @@ pub mod code {
     pub const INPUT: u8 = 3;
     /// The organ mesh is malformed or invalid.
     pub const MESH: u8 = 4;
-    /// Surface meshing is not available yet.
-    pub const NOT_AVAILABLE: u8 = 5;
+    /// The surface (`--surface`) cannot be tetrahedralised.
+    pub const MESHING: u8 = 5;
     /// A parameter is out of range.
     pub const PARAMETERS: u8 = 6;
     /// The simulation diverged.

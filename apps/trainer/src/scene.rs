@@ -22,6 +22,8 @@ pub enum Source {
     File(PathBuf),
     /// A generated box of N³ cells.
     Box(u32),
+    /// A closed surface, tetrahedralised by `tissue-tetra` (with its quality report).
+    Surface(PathBuf, Box<tissue_tetra::QualityReport>),
 }
 
 impl std::fmt::Display for Source {
@@ -29,6 +31,18 @@ impl std::fmt::Display for Source {
         match self {
             Source::File(p) => write!(f, "{}", p.display()),
             Source::Box(n) => write!(f, "generated tet box of {n}×{n}×{n} cells"),
+            Source::Surface(p, report) => write!(
+                f,
+                "{} tetrahedralised: {} tets, {} nodes ({} interior), dihedral {:.1}°–{:.1}°, \
+                 volume {:.4} of the surface's",
+                p.display(),
+                report.tets,
+                report.nodes,
+                report.interior_nodes,
+                report.min_dihedral_deg,
+                report.max_dihedral_deg,
+                report.volume_ratio
+            ),
         }
     }
 }
@@ -68,25 +82,39 @@ pub struct Scene {
 
 /// Loads the organ, scales and places it, builds the body, the tray and the probe (parked above).
 pub fn build(cli: &Cli) -> Result<Scene, Failure> {
-    if let Some(surface) = &cli.surface {
-        return Err(Failure::new(
-            code::NOT_AVAILABLE,
-            format!(
-                "surface meshing not available yet: {} would have to be tetrahedralised (the \
-                 tissue-tetra crate is being written); give a tet mesh with --organ",
-                surface.display()
+    let (source, raw) = match (&cli.surface, &cli.organ, cli.box_cells) {
+        (Some(p), _, _) => {
+            let surface = tissue_meshio::read_surface(p).map_err(|e| Failure::from_mesh_io(&e))?;
+            let tets =
+                tissue_tetra::tetrahedralize(&surface, &tissue_tetra::TetraOptions::default())
+                    .map_err(|e| {
+                        Failure::new(
+                            code::MESHING,
+                            format!("{} cannot be tetrahedralised: {e}", p.display()),
+                        )
+                    })?;
+            (Source::Surface(p.clone(), Box::new(tets.report)), tets.mesh)
+        }
+        (None, Some(p), _) => (
+            Source::File(p.clone()),
+            tissue_meshio::read_tets(p).map_err(|e| Failure::from_mesh_io(&e))?,
+        ),
+        (None, None, cells) => match cells.map_or_else(default_source, Source::Box) {
+            Source::Box(n) => (
+                Source::Box(n),
+                tet_box(n, n, n, Vec3::ONE)
+                    .map_err(|e| Failure::new(code::PARAMETERS, format!("--box: {e}")))?,
             ),
-        ));
-    }
-    let source = match (&cli.organ, cli.box_cells) {
-        (Some(p), _) => Source::File(p.clone()),
-        (None, Some(n)) => Source::Box(n),
-        (None, None) => default_source(),
-    };
-    let raw = match &source {
-        Source::File(p) => tissue_meshio::read_tets(p).map_err(|e| Failure::from_mesh_io(&e))?,
-        Source::Box(n) => tet_box(*n, *n, *n, Vec3::ONE)
-            .map_err(|e| Failure::new(code::PARAMETERS, format!("--box: {e}")))?,
+            source => {
+                let raw = match &source {
+                    Source::File(p) | Source::Surface(p, _) => {
+                        tissue_meshio::read_tets(p).map_err(|e| Failure::from_mesh_io(&e))?
+                    }
+                    Source::Box(_) => return Err(Failure::new(code::INPUT, "no organ")),
+                };
+                (source, raw)
+            }
+        },
     };
     if !(cli.size.is_finite() && cli.size > 0.0) {
         return Err(Failure::new(

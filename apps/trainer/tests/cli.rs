@@ -131,6 +131,34 @@ fn a_small_box_runs_and_writes_frames_and_a_summary() {
 }
 
 #[test]
+fn a_closed_surface_is_tetrahedralised_and_runs() {
+    // A cube surface written as OBJ: --surface meshes it with tissue-tetra and runs the scenario.
+    let dir = scratch("surface");
+    let cube = tissue_mesh::subdivided_cube(4, 2.0).unwrap_or_else(|e| panic!("{e}"));
+    let obj = dir.join("cube.obj");
+    tissue_meshio::write_surface(&obj, &cube).unwrap_or_else(|e| panic!("{e}"));
+    let out = run(&[
+        "--surface",
+        obj.to_str().unwrap_or_default(),
+        "--size",
+        "4",
+        "--settle-steps",
+        "4",
+        "--press-steps",
+        "4",
+        "--drag-steps",
+        "4",
+    ]);
+    let text = stdout(&out);
+    assert!(out.status.success(), "{}\n{text}", stderr(&out));
+    assert!(text.contains("tetrahedralised"), "{text}");
+    assert!(text.contains("12 steps"), "{text}");
+    let drift = number_after(&text, "volume drift", "drift");
+    assert!(drift.abs() < 50.0, "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn vtk_frames_carry_the_displacement_field() {
     let dir = scratch("vtk");
     let out = run(&[
@@ -166,9 +194,12 @@ fn bad_input_gives_one_line_and_its_exit_code() {
             "cannot read the organ",
         ),
         (
-            vec!["--surface".into(), "liver.obj".into()],
-            5,
-            "surface meshing not available yet",
+            vec![
+                "--surface".into(),
+                dir.join("missing.obj").display().to_string(),
+            ],
+            3,
+            "cannot read",
         ),
         (
             vec!["--box".into(), "2".into(), "--dt".into(), "-1".into()],
@@ -227,5 +258,11 @@ fn bad_input_gives_one_line_and_its_exit_code() {
     std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap_or_else(|e| panic!("{e}"));
     let out = run(&["--organ", obj.to_str().unwrap_or_default()]);
     assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
+    // An open surface cannot be tetrahedralised: exit 5, naming a boundary edge.
+    let out = run(&["--surface", obj.to_str().unwrap_or_default()]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(5), "{err}");
+    assert!(err.contains("cannot be tetrahedralised"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
