@@ -1,10 +1,11 @@
-//! The soft body: node arrays, constraints by kind in colour order, construction and access.
+//! The soft body: node arrays, constraints by kind block by block, construction and access.
 
 use glam::{DVec3, Vec3, Vec3A};
 use tissue_mesh::{TetMesh, ZERO_VOLUME_TOLERANCE};
 
 use crate::colour::{colour_order, greedy_colours};
 use crate::constraint::{CentroidRow, DistanceRow, TetRow};
+use crate::partition::{bisection_order, Tree};
 use crate::{
     CentroidVolumeConstraint, DistanceConstraint, Floor, Material, PbdError, StepSettings,
     TetVolumeConstraint, VolumeConstraintKind,
@@ -15,8 +16,11 @@ use crate::{
 /// Invariants (established by the constructors, kept by every method):
 /// - all node arrays have one entry per node; `inverse_masses[i] == 0` exactly when node `i` is
 ///   pinned, attached or carries no tet; otherwise it is `1 / masses[i]`;
-/// - every constraint's nodes are `< node_count`; constraints of a kind are stored colour by
-///   colour, and no two constraints (for volumes: no two tets) of one colour share a node;
+/// - every constraint's nodes are `< node_count`; constraints of a kind are stored block by block
+///   of the domain decomposition (`crate::partition`, post order) and colour by colour within a
+///   block; no two constraints (for volumes: no two tets) of one colour of a block share a node;
+/// - the public node arrays are in the caller's order; the projection works on copies in solver
+///   order (`order[s]` = caller's index), refreshed at the start of every step;
 /// - the hot rows mirror the public records, with the per-constraint parameter of the current
 ///   [`StepSettings`].
 #[derive(Debug, Clone)]
@@ -27,14 +31,22 @@ pub struct SoftBody {
     pub(crate) mass: Vec<f32>,
     pub(crate) w: Vec<f32>,
 
+    /// Solver order of the nodes: `order[s]` is the caller's index of solver node `s`.
+    pub(crate) order: Vec<u32>,
+    /// Predicted positions `p` and inverse masses in solver order, for the projection.
+    pub(crate) q: Vec<Vec3A>,
+    pub(crate) qw: Vec<f32>,
+    /// The block tree (heap numbering), see [`Block`].
+    pub(crate) blocks: Vec<Block>,
+    /// Most colours in any block: distances, tets.
+    pub(crate) colours: (usize, usize),
+
     pub(crate) distance: Vec<DistanceConstraint>,
     pub(crate) distance_rows: Vec<DistanceRow>,
-    pub(crate) distance_offsets: Vec<u32>,
     pub(crate) distance_lambda: Vec<f32>,
 
-    /// Tets in colour order (the order of the volume constraints).
+    /// Tets in projection order (the order of the volume constraints), caller's node indices.
     pub(crate) tets: Vec<[u32; 4]>,
-    pub(crate) tet_offsets: Vec<u32>,
     pub(crate) volume_kind: VolumeConstraintKind,
     pub(crate) tet_volume: Vec<TetVolumeConstraint>,
     pub(crate) tet_rows: Vec<TetRow>,
@@ -46,10 +58,52 @@ pub struct SoftBody {
     pub(crate) floor: Option<Floor>,
     pub(crate) attachments: Vec<(u32, Vec3A)>,
     pub(crate) settings: StepSettings,
-    /// Corrected node positions of one colour, for the parallel projection.
-    pub(crate) scratch: Vec<[Vec3A; 4]>,
     pub(crate) step_count: u64,
     rest_volume: f64,
+}
+
+/// One block of the domain decomposition (see [`crate::partition`]). Its rows are stored in
+/// post order, so the rows of its subtree are one contiguous range: `distance` and `tets` are
+/// `[subtree start, own start, end)` into the row arrays.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Block {
+    /// Solver node range `[start, mid, end)`; the children own `[start, mid)` and `[mid, end)`.
+    pub nodes: [u32; 3],
+    pub distance: [u32; 3],
+    pub tets: [u32; 3],
+}
+
+/// Lays out `items` (solver node indices) block by block in post order; within a block, greedily
+/// coloured (so that consecutive projections rarely depend on each other) and in the given order
+/// within a colour. Returns the order of the items, each block's `[start, end)` (by heap index)
+/// and the most colours in any block.
+fn arrange<const N: usize>(
+    tree: &Tree,
+    post: &[usize],
+    items: &[[u32; N]],
+) -> (Vec<usize>, Vec<[u32; 2]>, usize) {
+    let mut by_block: Vec<Vec<usize>> = vec![Vec::new(); tree.block_count()];
+    for (i, item) in items.iter().enumerate() {
+        by_block[tree.block_of(item)].push(i);
+    }
+    let mut order = Vec::with_capacity(items.len());
+    let mut ranges = vec![[0u32; 2]; tree.block_count()];
+    let mut most = 0;
+    for &h in post {
+        let start = tree.range(h)[0] as u32;
+        let local: Vec<[u32; N]> = by_block[h]
+            .iter()
+            .map(|&i| items[i].map(|n| n - start))
+            .collect();
+        let [_, _, end] = tree.range(h);
+        let (colours, count) = greedy_colours(end - start as usize, &local);
+        let (within, _) = colour_order(&colours, count);
+        most = most.max(count as usize);
+        ranges[h][0] = order.len() as u32;
+        order.extend(within.iter().map(|&k| by_block[h][k]));
+        ranges[h][1] = order.len() as u32;
+    }
+    (order, ranges, most)
 }
 
 fn sixfold_volume(t: [Vec3; 4]) -> f64 {
@@ -128,24 +182,71 @@ impl SoftBody {
             .sum::<f64>()
             / 6.0;
 
-        // Unique edges, sorted by node for locality, then coloured.
+        // Solver order of the nodes and the block tree over it (crate::partition).
+        let order = bisection_order(positions);
+        let mut rank = vec![0u32; n];
+        for (s, &o) in order.iter().enumerate() {
+            rank[o as usize] = s as u32;
+        }
+        let tree = Tree::for_nodes(n);
+        let post = tree.post_order();
+
+        // Unique edges in solver indices, sorted by node for locality, then laid out by block.
         let mut edges: Vec<[u32; 2]> = Vec::with_capacity(tets.len() * 6);
         for t in tets {
+            let t = t.map(|i| rank[i as usize]);
             for a in 0..4 {
                 for b in a + 1..4 {
-                    let (i, j) = (t[a].min(t[b]), t[a].max(t[b]));
-                    edges.push([i, j]);
+                    edges.push([t[a].min(t[b]), t[a].max(t[b])]);
                 }
             }
         }
         edges.sort_unstable();
         edges.dedup();
-        let (colours, count) = greedy_colours(n, &edges);
-        let (order, distance_offsets) = colour_order(&colours, count);
-        let distance: Vec<DistanceConstraint> = order
+        let (edge_order, distance_ranges, distance_colours) = arrange(&tree, &post, &edges);
+
+        // Tets (solver indices, orientation kept) sorted by their smallest node, laid out by block.
+        let mut sorted: Vec<[u32; 4]> = tets.iter().map(|t| t.map(|i| rank[i as usize])).collect();
+        sorted.sort_by_key(|t| {
+            let mut k = *t;
+            k.sort_unstable();
+            k
+        });
+        let (tet_order, tet_ranges, tet_colours) = arrange(&tree, &post, &sorted);
+
+        let blocks: Vec<Block> = (0..tree.block_count())
+            .map(|h| {
+                let [start, mid, end] = tree.range(h).map(|i| i as u32);
+                // Post order: a subtree's rows start where its leftmost leaf's do.
+                let mut leaf = h;
+                while !tree.is_leaf(leaf) {
+                    leaf = 2 * leaf + 1;
+                }
+                Block {
+                    nodes: [start, mid, end],
+                    distance: [
+                        distance_ranges[leaf][0],
+                        distance_ranges[h][0],
+                        distance_ranges[h][1],
+                    ],
+                    tets: [tet_ranges[leaf][0], tet_ranges[h][0], tet_ranges[h][1]],
+                }
+            })
+            .collect();
+        // Rows index the node range of their block; records keep the caller's node indices.
+        let block_start = |rows: &[[u32; 2]]| {
+            let mut start = vec![0u32; rows.iter().map(|r| r[1]).max().unwrap_or(0) as usize];
+            for (h, r) in rows.iter().enumerate() {
+                start[r[0] as usize..r[1] as usize].fill(blocks[h].nodes[0]);
+            }
+            start
+        };
+        let (edge_base, tet_base) = (block_start(&distance_ranges), block_start(&tet_ranges));
+        let original = |i: u32| order[i as usize];
+        let distance: Vec<DistanceConstraint> = edge_order
             .iter()
             .map(|&e| {
-                let [a, b] = edges[e];
+                let [a, b] = edges[e].map(original);
                 DistanceConstraint {
                     nodes: [a, b],
                     rest_length: positions[a as usize].distance(positions[b as usize]),
@@ -154,19 +255,25 @@ impl SoftBody {
                 }
             })
             .collect();
-
-        // Tets sorted by their smallest node, then coloured.
-        let mut sorted: Vec<[u32; 4]> = tets.to_vec();
-        sorted.sort_by_key(|t| {
-            let mut k = *t;
-            k.sort_unstable();
-            k
-        });
-        let (colours, count) = greedy_colours(n, &sorted);
-        let (order, tet_offsets) = colour_order(&colours, count);
-        let tets: Vec<[u32; 4]> = order.iter().map(|&t| sorted[t]).collect();
+        let distance_rows: Vec<DistanceRow> = edge_order
+            .iter()
+            .zip(&edge_base)
+            .zip(&distance)
+            .map(|((&e, &base), c)| DistanceRow {
+                nodes: edges[e].map(|i| i - base),
+                rest: c.rest_length,
+                param: 0.0,
+            })
+            .collect();
+        let solver_tets: Vec<[u32; 4]> = tet_order
+            .iter()
+            .zip(&tet_base)
+            .map(|(&t, &base)| sorted[t].map(|i| i - base))
+            .collect();
+        let tets: Vec<[u32; 4]> = tet_order.iter().map(|&t| sorted[t].map(original)).collect();
 
         let (mut tet_volume, mut centroid) = (Vec::new(), Vec::new());
+        let (mut tet_rows, mut centroid_rows) = (Vec::new(), Vec::new());
         match material.volume {
             VolumeConstraintKind::None => {}
             VolumeConstraintKind::Classic => {
@@ -178,6 +285,15 @@ impl SoftBody {
                             as f32,
                         stiffness: material.volume_stiffness,
                         compliance: material.volume_compliance,
+                    })
+                    .collect();
+                tet_rows = solver_tets
+                    .iter()
+                    .zip(&tet_volume)
+                    .map(|(&nodes, c)| TetRow {
+                        nodes,
+                        rest: c.rest_volume,
+                        param: 0.0,
                     })
                     .collect();
             }
@@ -195,17 +311,18 @@ impl SoftBody {
                         });
                     }
                 }
+                centroid_rows = solver_tets
+                    .iter()
+                    .zip(centroid.chunks_exact(4))
+                    .map(|(&nodes, c)| CentroidRow {
+                        nodes,
+                        rest: [0, 1, 2, 3].map(|j| c[j].rest_height),
+                        param: [0.0; 4],
+                    })
+                    .collect();
             }
         }
         let volume_lambda = vec![0.0; tet_volume.len() + centroid.len()];
-        let largest = |offsets: &[u32]| {
-            offsets
-                .windows(2)
-                .map(|w| (w[1] - w[0]) as usize)
-                .max()
-                .unwrap_or(0)
-        };
-        let scratch = vec![[Vec3A::ZERO; 4]; largest(&distance_offsets).max(largest(&tet_offsets))];
         let mass: Vec<f32> = mass.iter().map(|&m| m as f32).collect();
         let w = mass
             .iter()
@@ -218,22 +335,24 @@ impl SoftBody {
             x,
             mass,
             w,
+            order,
+            q: vec![Vec3A::ZERO; n],
+            qw: vec![0.0; n],
+            blocks,
             distance_lambda: vec![0.0; distance.len()],
-            distance_rows: Vec::new(),
+            distance_rows,
             distance,
-            distance_offsets,
             tets,
-            tet_offsets,
+            colours: (distance_colours, tet_colours),
             volume_kind: material.volume,
             tet_volume,
-            tet_rows: Vec::new(),
+            tet_rows,
             centroid,
-            centroid_rows: Vec::new(),
+            centroid_rows,
             volume_lambda,
             floor: None,
             attachments: Vec::new(),
             settings: StepSettings::default(),
-            scratch,
             step_count: 0,
             rest_volume,
         };
@@ -250,31 +369,19 @@ impl SoftBody {
         settings.validate()?;
         self.settings = settings;
         let s = &self.settings;
-        self.distance_rows.clear();
-        self.distance_rows
-            .extend(self.distance.iter().map(|c| DistanceRow {
-                nodes: c.nodes,
-                rest: c.rest_length,
-                param: s.param(c.stiffness, c.compliance),
-            }));
-        self.tet_rows.clear();
-        self.tet_rows.extend(self.tet_volume.iter().map(|c| TetRow {
-            nodes: c.nodes,
-            rest: c.rest_volume,
-            param: s.param(c.stiffness, c.compliance),
-        }));
-        self.centroid_rows.clear();
-        self.centroid_rows
-            .extend(
-                self.tets
-                    .iter()
-                    .zip(self.centroid.chunks_exact(4))
-                    .map(|(t, c)| CentroidRow {
-                        nodes: *t,
-                        rest: [0, 1, 2, 3].map(|j| c[j].rest_height),
-                        param: [0, 1, 2, 3].map(|j| s.param(c[j].stiffness, c[j].compliance)),
-                    }),
-            );
+        for (row, c) in self.distance_rows.iter_mut().zip(&self.distance) {
+            row.param = s.param(c.stiffness, c.compliance);
+        }
+        for (row, c) in self.tet_rows.iter_mut().zip(&self.tet_volume) {
+            row.param = s.param(c.stiffness, c.compliance);
+        }
+        for (row, c) in self
+            .centroid_rows
+            .iter_mut()
+            .zip(self.centroid.chunks_exact(4))
+        {
+            row.param = [0, 1, 2, 3].map(|j| s.param(c[j].stiffness, c[j].compliance));
+        }
         Ok(())
     }
 
@@ -308,11 +415,11 @@ impl SoftBody {
     pub fn inverse_masses(&self) -> &[f32] {
         &self.w
     }
-    /// Tets in the body's (colour) order.
+    /// Tets in the body's projection order (block by block, by colour within a block).
     pub fn tets(&self) -> &[[u32; 4]] {
         &self.tets
     }
-    /// Distance constraints, one per unique tet edge, in colour order.
+    /// Distance constraints, one per unique tet edge, in projection order.
     pub fn distance_constraints(&self) -> &[DistanceConstraint] {
         &self.distance
     }
@@ -328,9 +435,14 @@ impl SoftBody {
     pub fn volume_kind(&self) -> VolumeConstraintKind {
         self.volume_kind
     }
-    /// Number of colours of the distance constraints and of the tets (volume constraints).
+    /// Number of colours of the distance constraints and of the tets (volume constraints): the
+    /// most in any block of the domain decomposition (each block is coloured on its own).
     pub fn colour_counts(&self) -> (usize, usize) {
-        (self.distance_offsets.len() - 1, self.tet_offsets.len() - 1)
+        self.colours
+    }
+    /// Number of blocks of the domain decomposition (`2^d − 1`, fixed by the node count).
+    pub fn block_count(&self) -> usize {
+        self.blocks.len()
     }
     /// Steps taken since construction.
     pub fn step_count(&self) -> u64 {

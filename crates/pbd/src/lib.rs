@@ -8,7 +8,7 @@
 //!   four per tet) or none. Pins, kinematic attachments, a static [`Floor`].
 //! - [`StepSettings`] / [`Solver`]: `Δt`, `K` Gauss–Seidel iterations, PBD with raw or linearised
 //!   stiffness (`k' = 1 − (1 − k)^{1/K}`), or XPBD (compliance `α`, `α̃ = α/Δt²`), gravity,
-//!   rigid-mode damping, serial or colour-parallel projection.
+//!   rigid-mode damping, serial or parallel projection (same result).
 //! - [`PbdError`]: bad input, naming the element.
 //!
 //! ## Units
@@ -25,13 +25,21 @@
 //!
 //! ## Invariants and determinism
 //! - Architecture Invariant: a step allocates nothing; every buffer is made in the constructor.
-//! - Constraints are greedily graph-coloured at construction (distances by edge, volume
-//!   constraints by tet) and stored colour by colour; within a colour no two share a node. The
-//!   serial Gauss–Seidel sweep runs in this stored order. The parallel mode projects each colour
-//!   at once on rayon's pool; since a colour's constraints are independent this is the same
-//!   computation, so **serial and colour-parallel are bit-identical, for any thread count**. The
-//!   price is the order: a sweep in colour order is not the sweep in mesh order that a naive
-//!   Gauss–Seidel would do (it converges about as fast; results differ at float level).
+//! - Domain decomposition (module `partition`), fixed by the mesh alone: at construction the
+//!   nodes are renumbered by recursive coordinate bisection, and a binary tree of blocks is laid
+//!   over the renumbered nodes (each block a contiguous node range, its children the two halves,
+//!   leaves of at most 640 nodes, so a leaf's sweep runs in L1). Each constraint belongs to the
+//!   deepest block holding all its nodes; within a block constraints are greedily coloured and
+//!   stored colour by colour. The public API keeps the caller's node order: a step copies the
+//!   predicted positions into solver order, projects, and copies them back.
+//! - One iteration is one Gauss–Seidel sweep in a fixed order: the blocks in post order (left
+//!   subtree, right subtree, then the block's own constraints: distances, then volumes), then the
+//!   floor. The parallel mode runs the two subtrees of a block at the same time (`rayon::join`
+//!   on disjoint `split_at_mut` slices; one fork–join tree per iteration, no write-back); every
+//!   node sees the same projections in the same order as in the serial sweep, so **serial and
+//!   parallel are bit-identical, for any thread count**. The price is the order: it is not the
+//!   mesh order a naive Gauss–Seidel would use (it converges about as fast; results differ at
+//!   float level), and it changes with the node count and positions given.
 //! - No I/O; meshes come in as [`tissue_mesh::TetMesh`] or raw arrays.
 //!
 //! ## Example: a cube resting on a floor keeps its volume
@@ -64,6 +72,7 @@ mod body;
 mod colour;
 mod constraint;
 mod error;
+mod partition;
 mod settings;
 mod step;
 

@@ -1,74 +1,111 @@
 //! One step, in the order of Müller et al.: external forces → prediction → attachments →
 //! `K` × (distance, volume, floor projection) → velocity and position update → rigid-mode damping.
 
-use glam::{DMat3, DVec3, Vec3A};
-use rayon::prelude::*;
-
-use crate::constraint::{project_centroid, project_distance, project_tet_volume};
+use crate::body::Block;
+use crate::constraint::{
+    project_centroid, project_distance, project_tet_volume, CentroidRow, DistanceRow, TetRow,
+};
 use crate::{PbdError, SoftBody, Solver, VolumeConstraintKind};
+use glam::{DMat3, DVec3, Vec3A};
 
-/// Colours with fewer constraints than this are projected serially even in parallel mode (same
-/// result; saves a fork–join).
-const PARALLEL_MIN: usize = 1024;
-/// Constraints per rayon task. Results do not depend on it.
-const CHUNK: usize = 256;
-
-/// Projects all constraints of one kind once, colour by colour. `L` multipliers per row.
-///
-/// Serial and parallel give bit-identical results: a colour's constraints share no node, so
-/// projecting each on the positions from before the colour (parallel: computed into `scratch`,
-/// then written back) is what projecting them one after another does.
-#[allow(clippy::too_many_arguments)]
-fn project_kind<R: Sync, const N: usize, const L: usize>(
+/// Projects `rows` once, in order (Gauss–Seidel), on `p`/`w` (the node range of their block).
+/// `L` multipliers per row.
+#[inline(never)]
+fn project_rows<R, const N: usize, const L: usize>(
     rows: &[R],
-    offsets: &[u32],
     lambda: &mut [f32],
     p: &mut [Vec3A],
     w: &[f32],
-    scratch: &mut [[Vec3A; 4]],
-    parallel: bool,
-    nodes: impl Fn(&R) -> [u32; N] + Sync,
-    kernel: impl Fn(&mut [Vec3A; N], [f32; N], &R, &mut [f32]) + Sync,
+    nodes: impl Fn(&R) -> [u32; N],
+    kernel: impl Fn(&mut [Vec3A; N], [f32; N], &R, &mut [f32]),
 ) {
-    let serial = |rows: &[R], lambda: &mut [f32], p: &mut [Vec3A]| {
-        for (r, lam) in rows.iter().zip(lambda.chunks_exact_mut(L)) {
-            let ids = nodes(r);
-            let mut q = ids.map(|i| p[i as usize]);
-            kernel(&mut q, ids.map(|i| w[i as usize]), r, lam);
-            for k in 0..N {
-                p[ids[k] as usize] = q[k];
-            }
+    for (r, lam) in rows.iter().zip(lambda.chunks_exact_mut(L)) {
+        let ids = nodes(r);
+        let mut q = ids.map(|i| p[i as usize]);
+        kernel(&mut q, ids.map(|i| w[i as usize]), r, lam);
+        for k in 0..N {
+            p[ids[k] as usize] = q[k];
         }
-    };
-    if !parallel {
-        serial(rows, lambda, p);
-        return;
     }
-    for range in offsets.windows(2) {
-        let (s, e) = (range[0] as usize, range[1] as usize);
-        let (rows, lambda) = (&rows[s..e], &mut lambda[s * L..e * L]);
-        if e - s < PARALLEL_MIN {
-            serial(rows, lambda, p);
-            continue;
-        }
-        let out = &mut scratch[..e - s];
-        let read: &[Vec3A] = p;
-        rows.par_chunks(CHUNK)
-            .zip(lambda.par_chunks_mut(CHUNK * L))
-            .zip(out.par_chunks_mut(CHUNK))
-            .for_each(|((rows, lambda), out)| {
-                for ((r, lam), o) in rows.iter().zip(lambda.chunks_exact_mut(L)).zip(out) {
-                    let ids = nodes(r);
-                    let mut q = ids.map(|i| read[i as usize]);
-                    kernel(&mut q, ids.map(|i| w[i as usize]), r, lam);
-                    o[..N].copy_from_slice(&q);
-                }
-            });
-        for (r, o) in rows.iter().zip(out.iter()) {
-            let ids = nodes(r);
-            for k in 0..N {
-                p[ids[k] as usize] = o[k];
+}
+
+/// One Gauss–Seidel sweep over the block tree (see [`crate::partition`]).
+struct Sweep<'a> {
+    blocks: &'a [Block],
+    distance: &'a [DistanceRow],
+    tet: &'a [TetRow],
+    centroid: &'a [CentroidRow],
+    kind: VolumeConstraintKind,
+    parallel: bool,
+}
+
+impl Sweep<'_> {
+    /// Projects the constraints of block `h`'s subtree: both children (at the same time in
+    /// parallel mode: they touch disjoint node ranges), then the block's own constraints. `p`,
+    /// `w` are the block's node range, `ld`, `lv` the multipliers of its subtree's rows.
+    fn block<const XPBD: bool>(
+        &self,
+        h: usize,
+        p: &mut [Vec3A],
+        w: &[f32],
+        ld: &mut [f32],
+        lv: &mut [f32],
+    ) {
+        let b = self.blocks[h];
+        let per_tet = match self.kind {
+            VolumeConstraintKind::None => 0,
+            VolumeConstraintKind::Classic => 1,
+            VolumeConstraintKind::Centroid => 4,
+        };
+        let (ld, lv) = if 2 * h + 1 < self.blocks.len() {
+            let (l, r) = (self.blocks[2 * h + 1], self.blocks[2 * h + 2]);
+            let (pl, pr) = p.split_at_mut((b.nodes[1] - b.nodes[0]) as usize);
+            let (wl, wr) = w.split_at((b.nodes[1] - b.nodes[0]) as usize);
+            let (ldl, rest) = ld.split_at_mut((l.distance[2] - b.distance[0]) as usize);
+            let (ldr, ld) = rest.split_at_mut((r.distance[2] - l.distance[2]) as usize);
+            let (lvl, rest) = lv.split_at_mut((l.tets[2] - b.tets[0]) as usize * per_tet);
+            let (lvr, lv) = rest.split_at_mut((r.tets[2] - l.tets[2]) as usize * per_tet);
+            if self.parallel {
+                rayon::join(
+                    || self.block::<XPBD>(2 * h + 1, pl, wl, ldl, lvl),
+                    || self.block::<XPBD>(2 * h + 2, pr, wr, ldr, lvr),
+                );
+            } else {
+                self.block::<XPBD>(2 * h + 1, pl, wl, ldl, lvl);
+                self.block::<XPBD>(2 * h + 2, pr, wr, ldr, lvr);
             }
+            (ld, lv)
+        } else {
+            (ld, lv)
+        };
+        let [_, ds, de] = b.distance.map(|i| i as usize);
+        let [_, ts, te] = b.tets.map(|i| i as usize);
+        project_rows::<_, 2, 1>(
+            &self.distance[ds..de],
+            ld,
+            p,
+            w,
+            |r| r.nodes,
+            |q, w, r, l| project_distance::<XPBD>(q, w, r, &mut l[0]),
+        );
+        match self.kind {
+            VolumeConstraintKind::None => {}
+            VolumeConstraintKind::Classic => project_rows::<_, 4, 1>(
+                &self.tet[ts..te],
+                lv,
+                p,
+                w,
+                |r| r.nodes,
+                |q, w, r, l| project_tet_volume::<XPBD>(q, w, r, &mut l[0]),
+            ),
+            VolumeConstraintKind::Centroid => project_rows::<_, 4, 4>(
+                &self.centroid[ts..te],
+                lv,
+                p,
+                w,
+                |r| r.nodes,
+                project_centroid::<XPBD>,
+            ),
         }
     }
 }
@@ -77,7 +114,8 @@ impl SoftBody {
     /// Advances the body by one step of the current [`crate::StepSettings`]:
     /// 1. `v += Δt·g` for free nodes (`w·f_ext` with `f_ext = m g`);
     /// 2. `p = x + Δt·v`; attached nodes take their targets;
-    /// 3. `K` times: distance constraints, volume constraints, floor (Gauss–Seidel, colour order);
+    /// 3. `K` times: distance and volume constraints block by block, then the floor (Gauss–Seidel
+    ///    in the order of the crate docs, in solver node order);
     ///    XPBD multipliers start at 0 each step;
     /// 4. `v = (1 − c)(p − x)/Δt` (`c` the linear damping, default 0), `x = p` (the old `x` becomes [`SoftBody::previous_positions`]);
     /// 5. rigid-mode damping of the free nodes.
@@ -104,6 +142,11 @@ impl SoftBody {
         for &(node, target) in &self.attachments {
             self.p[node as usize] = target;
         }
+        // The projection works in solver order (crate::partition).
+        for ((q, qw), &o) in self.q.iter_mut().zip(&mut self.qw).zip(&self.order) {
+            *q = self.p[o as usize];
+            *qw = self.w[o as usize];
+        }
         let xpbd = s.solver == Solver::Xpbd;
         if xpbd {
             self.distance_lambda.fill(0.0);
@@ -118,6 +161,9 @@ impl SoftBody {
                     self.project_once::<false>();
                 }
             }
+        }
+        for (q, &o) in self.q.iter().zip(&self.order) {
+            self.p[o as usize] = *q;
         }
         let scale = (1.0 - s.linear_damping) / dt;
         for ((v, p), x) in self.v.iter_mut().zip(&self.p).zip(&self.x) {
@@ -143,45 +189,18 @@ impl SoftBody {
         Ok(())
     }
 
+    /// One sweep over all constraints, then the floor. `p` and `w` are in solver order.
     fn project_once<const XPBD: bool>(&mut self) {
-        let par = self.settings.parallel;
-        let (p, w, scratch) = (&mut self.p, &self.w, &mut self.scratch);
-        project_kind::<_, 2, 1>(
-            &self.distance_rows,
-            &self.distance_offsets,
-            &mut self.distance_lambda,
-            p,
-            w,
-            scratch,
-            par,
-            |r| r.nodes,
-            |q, w, r, l| project_distance::<XPBD>(q, w, r, &mut l[0]),
-        );
-        match self.volume_kind {
-            VolumeConstraintKind::None => {}
-            VolumeConstraintKind::Classic => project_kind::<_, 4, 1>(
-                &self.tet_rows,
-                &self.tet_offsets,
-                &mut self.volume_lambda,
-                p,
-                w,
-                scratch,
-                par,
-                |r| r.nodes,
-                |q, w, r, l| project_tet_volume::<XPBD>(q, w, r, &mut l[0]),
-            ),
-            VolumeConstraintKind::Centroid => project_kind::<_, 4, 4>(
-                &self.centroid_rows,
-                &self.tet_offsets,
-                &mut self.volume_lambda,
-                p,
-                w,
-                scratch,
-                par,
-                |r| r.nodes,
-                project_centroid::<XPBD>,
-            ),
+        let (p, w) = (&mut self.q, &self.qw);
+        Sweep {
+            blocks: &self.blocks,
+            distance: &self.distance_rows,
+            tet: &self.tet_rows,
+            centroid: &self.centroid_rows,
+            kind: self.volume_kind,
+            parallel: self.settings.parallel,
         }
+        .block::<XPBD>(0, p, w, &mut self.distance_lambda, &mut self.volume_lambda);
         if let Some(f) = self.floor {
             for (p, &w) in p.iter_mut().zip(w) {
                 if w > 0.0 && p[f.axis] < f.height {
