@@ -1,10 +1,10 @@
 //! The soft body: node arrays, constraints by kind block by block, construction and access.
 
-use glam::{DVec3, Vec3, Vec3A};
+use glam::{DVec3, Vec3, Vec3A, Vec4};
 use tissue_mesh::{TetMesh, ZERO_VOLUME_TOLERANCE};
 
 use crate::colour::{colour_order, greedy_colours};
-use crate::constraint::{CentroidRow, DistanceRow, TetRow};
+use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch};
 use crate::partition::{bisection_order, Tree};
 use crate::{
     CentroidVolumeConstraint, DistanceConstraint, Floor, Material, PbdError, StepSettings,
@@ -21,8 +21,8 @@ use crate::{
 ///   block; no two constraints (for volumes: no two tets) of one colour of a block share a node;
 /// - the public node arrays are in the caller's order; the projection works on copies in solver
 ///   order (`order[s]` = caller's index), refreshed at the start of every step;
-/// - the hot rows mirror the public records, with the per-constraint parameter of the current
-///   [`StepSettings`].
+/// - the hot batches (4 constraints each, see `crate::constraint`) mirror the public records,
+///   with the per-constraint parameter of the current [`StepSettings`].
 #[derive(Debug, Clone)]
 pub struct SoftBody {
     pub(crate) x: Vec<Vec3A>,
@@ -33,8 +33,9 @@ pub struct SoftBody {
 
     /// Solver order of the nodes: `order[s]` is the caller's index of solver node `s`.
     pub(crate) order: Vec<u32>,
-    /// Predicted positions `p` and inverse masses in solver order, for the projection.
-    pub(crate) q: Vec<Vec3A>,
+    /// Predicted positions `p` (xyz) with the inverse mass (w), in solver order, for the
+    /// projection; and the inverse masses alone, also in solver order.
+    pub(crate) q: Vec<Vec4>,
     pub(crate) qw: Vec<f32>,
     /// The block tree (heap numbering), see [`Block`].
     pub(crate) blocks: Vec<Block>,
@@ -42,18 +43,23 @@ pub struct SoftBody {
     pub(crate) colours: (usize, usize),
 
     pub(crate) distance: Vec<DistanceConstraint>,
-    pub(crate) distance_rows: Vec<DistanceRow>,
-    pub(crate) distance_lambda: Vec<f32>,
+    pub(crate) distance_batches: Vec<DistanceBatch>,
+    /// The record (index into `distance`) of each lane of each batch.
+    pub(crate) distance_lanes: Vec<[u32; 4]>,
+    /// One multiplier per lane (XPBD).
+    pub(crate) distance_lambda: Vec<Vec4>,
 
     /// Tets in projection order (the order of the volume constraints), caller's node indices.
     pub(crate) tets: Vec<[u32; 4]>,
     pub(crate) volume_kind: VolumeConstraintKind,
     pub(crate) tet_volume: Vec<TetVolumeConstraint>,
-    pub(crate) tet_rows: Vec<TetRow>,
+    pub(crate) tet_batches: Vec<TetBatch>,
     pub(crate) centroid: Vec<CentroidVolumeConstraint>,
-    pub(crate) centroid_rows: Vec<CentroidRow>,
-    /// One multiplier per volume constraint (1 or 4 per tet).
-    pub(crate) volume_lambda: Vec<f32>,
+    pub(crate) centroid_batches: Vec<CentroidBatch>,
+    /// The tet (index into `tets`) of each lane of each volume batch.
+    pub(crate) tet_lanes: Vec<[u32; 4]>,
+    /// One multiplier per lane and volume constraint (1 or 4 per tet).
+    pub(crate) volume_lambda: Vec<Vec4>,
 
     pub(crate) floor: Option<Floor>,
     pub(crate) attachments: Vec<(u32, Vec3A)>,
@@ -62,9 +68,9 @@ pub struct SoftBody {
     rest_volume: f64,
 }
 
-/// One block of the domain decomposition (see [`crate::partition`]). Its rows are stored in
-/// post order, so the rows of its subtree are one contiguous range: `distance` and `tets` are
-/// `[subtree start, own start, end)` into the row arrays.
+/// One block of the domain decomposition (see [`crate::partition`]). Its batches are stored in
+/// post order, so the batches of its subtree are one contiguous range: `distance` and `tets`
+/// are `[subtree start, own start, end)` into the batch arrays.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Block {
     /// Solver node range `[start, mid, end)`; the children own `[start, mid)` and `[mid, end)`.
@@ -73,37 +79,55 @@ pub(crate) struct Block {
     pub tets: [u32; 3],
 }
 
+/// How the constraints of one kind are laid out.
+struct Layout {
+    /// Item index of each record, in projection order.
+    records: Vec<usize>,
+    /// Record index of each lane of each batch (padding lanes repeat lane 0).
+    lanes: Vec<[u32; 4]>,
+    /// Batch range `[start, end)` of each block, by heap index.
+    ranges: Vec<[u32; 2]>,
+    /// The most colours in any block.
+    colours: usize,
+}
+
 /// Lays out `items` (solver node indices) block by block in post order; within a block, greedily
-/// coloured (so that consecutive projections rarely depend on each other) and in the given order
-/// within a colour. Returns the order of the items, each block's `[start, end)` (by heap index)
-/// and the most colours in any block.
-fn arrange<const N: usize>(
-    tree: &Tree,
-    post: &[usize],
-    items: &[[u32; N]],
-) -> (Vec<usize>, Vec<[u32; 2]>, usize) {
+/// coloured and in the given order within a colour; each colour cut into batches of 4.
+fn arrange<const N: usize>(tree: &Tree, post: &[usize], items: &[[u32; N]]) -> Layout {
     let mut by_block: Vec<Vec<usize>> = vec![Vec::new(); tree.block_count()];
     for (i, item) in items.iter().enumerate() {
         by_block[tree.block_of(item)].push(i);
     }
-    let mut order = Vec::with_capacity(items.len());
-    let mut ranges = vec![[0u32; 2]; tree.block_count()];
-    let mut most = 0;
+    let mut out = Layout {
+        records: Vec::with_capacity(items.len()),
+        lanes: Vec::with_capacity(items.len() / 4 + post.len()),
+        ranges: vec![[0u32; 2]; tree.block_count()],
+        colours: 0,
+    };
     for &h in post {
-        let start = tree.range(h)[0] as u32;
+        let [start, _, end] = tree.range(h);
         let local: Vec<[u32; N]> = by_block[h]
             .iter()
-            .map(|&i| items[i].map(|n| n - start))
+            .map(|&i| items[i].map(|n| n - start as u32))
             .collect();
-        let [_, _, end] = tree.range(h);
-        let (colours, count) = greedy_colours(end - start as usize, &local);
-        let (within, _) = colour_order(&colours, count);
-        most = most.max(count as usize);
-        ranges[h][0] = order.len() as u32;
-        order.extend(within.iter().map(|&k| by_block[h][k]));
-        ranges[h][1] = order.len() as u32;
+        let (colours, count) = greedy_colours(end - start, &local);
+        let (within, offsets) = colour_order(&colours, count);
+        out.colours = out.colours.max(count as usize);
+        out.ranges[h][0] = out.lanes.len() as u32;
+        for colour in offsets.windows(2) {
+            for batch in within[colour[0] as usize..colour[1] as usize].chunks(4) {
+                let first = out.records.len() as u32;
+                out.records.extend(batch.iter().map(|&k| by_block[h][k]));
+                let mut lanes = [first; 4];
+                for (l, lane) in lanes.iter_mut().enumerate().take(batch.len()) {
+                    *lane = first + l as u32;
+                }
+                out.lanes.push(lanes);
+            }
+        }
+        out.ranges[h][1] = out.lanes.len() as u32;
     }
-    (order, ranges, most)
+    out
 }
 
 fn sixfold_volume(t: [Vec3; 4]) -> f64 {
@@ -203,7 +227,7 @@ impl SoftBody {
         }
         edges.sort_unstable();
         edges.dedup();
-        let (edge_order, distance_ranges, distance_colours) = arrange(&tree, &post, &edges);
+        let dl = arrange(&tree, &post, &edges);
 
         // Tets (solver indices, orientation kept) sorted by their smallest node, laid out by block.
         let mut sorted: Vec<[u32; 4]> = tets.iter().map(|t| t.map(|i| rank[i as usize])).collect();
@@ -212,38 +236,36 @@ impl SoftBody {
             k.sort_unstable();
             k
         });
-        let (tet_order, tet_ranges, tet_colours) = arrange(&tree, &post, &sorted);
+        let tl = arrange(&tree, &post, &sorted);
 
         let blocks: Vec<Block> = (0..tree.block_count())
             .map(|h| {
                 let [start, mid, end] = tree.range(h).map(|i| i as u32);
-                // Post order: a subtree's rows start where its leftmost leaf's do.
+                // Post order: a subtree's batches start where its leftmost leaf's do.
                 let mut leaf = h;
                 while !tree.is_leaf(leaf) {
                     leaf = 2 * leaf + 1;
                 }
                 Block {
                     nodes: [start, mid, end],
-                    distance: [
-                        distance_ranges[leaf][0],
-                        distance_ranges[h][0],
-                        distance_ranges[h][1],
-                    ],
-                    tets: [tet_ranges[leaf][0], tet_ranges[h][0], tet_ranges[h][1]],
+                    distance: [dl.ranges[leaf][0], dl.ranges[h][0], dl.ranges[h][1]],
+                    tets: [tl.ranges[leaf][0], tl.ranges[h][0], tl.ranges[h][1]],
                 }
             })
             .collect();
-        // Rows index the node range of their block; records keep the caller's node indices.
-        let block_start = |rows: &[[u32; 2]]| {
-            let mut start = vec![0u32; rows.iter().map(|r| r[1]).max().unwrap_or(0) as usize];
-            for (h, r) in rows.iter().enumerate() {
-                start[r[0] as usize..r[1] as usize].fill(blocks[h].nodes[0]);
+        // The node range start of each batch's block: batches index that range.
+        let batch_base = |ranges: &[[u32; 2]], count: usize| {
+            let mut base = vec![0u32; count];
+            for (h, r) in ranges.iter().enumerate() {
+                base[r[0] as usize..r[1] as usize].fill(blocks[h].nodes[0]);
             }
-            start
+            base
         };
-        let (edge_base, tet_base) = (block_start(&distance_ranges), block_start(&tet_ranges));
         let original = |i: u32| order[i as usize];
-        let distance: Vec<DistanceConstraint> = edge_order
+
+        // Records in projection order, caller's node indices.
+        let distance: Vec<DistanceConstraint> = dl
+            .records
             .iter()
             .map(|&e| {
                 let [a, b] = edges[e].map(original);
@@ -255,25 +277,33 @@ impl SoftBody {
                 }
             })
             .collect();
-        let distance_rows: Vec<DistanceRow> = edge_order
+        let distance_batches: Vec<DistanceBatch> = dl
+            .lanes
             .iter()
-            .zip(&edge_base)
-            .zip(&distance)
-            .map(|((&e, &base), c)| DistanceRow {
-                nodes: edges[e].map(|i| i - base),
-                rest: c.rest_length,
-                param: 0.0,
+            .zip(batch_base(&dl.ranges, dl.lanes.len()))
+            .map(|(lanes, base)| DistanceBatch {
+                nodes: [0, 1].map(|k| lanes.map(|r| edges[dl.records[r as usize]][k] - base)),
+                rest: Vec4::from_array(lanes.map(|r| distance[r as usize].rest_length)),
+                param: Vec4::ZERO,
             })
             .collect();
-        let solver_tets: Vec<[u32; 4]> = tet_order
+        let tets: Vec<[u32; 4]> = tl
+            .records
             .iter()
-            .zip(&tet_base)
-            .map(|(&t, &base)| sorted[t].map(|i| i - base))
+            .map(|&t| sorted[t].map(original))
             .collect();
-        let tets: Vec<[u32; 4]> = tet_order.iter().map(|&t| sorted[t].map(original)).collect();
+        let tet_nodes: Vec<[[u32; 4]; 4]> = tl
+            .lanes
+            .iter()
+            .zip(batch_base(&tl.ranges, tl.lanes.len()))
+            .map(|(lanes, base)| {
+                [0, 1, 2, 3].map(|k| lanes.map(|r| sorted[tl.records[r as usize]][k] - base))
+            })
+            .collect();
 
         let (mut tet_volume, mut centroid) = (Vec::new(), Vec::new());
-        let (mut tet_rows, mut centroid_rows) = (Vec::new(), Vec::new());
+        let (mut tet_batches, mut centroid_batches) = (Vec::new(), Vec::new());
+        let mut volume_lambda = Vec::new();
         match material.volume {
             VolumeConstraintKind::None => {}
             VolumeConstraintKind::Classic => {
@@ -287,15 +317,16 @@ impl SoftBody {
                         compliance: material.volume_compliance,
                     })
                     .collect();
-                tet_rows = solver_tets
+                tet_batches = tet_nodes
                     .iter()
-                    .zip(&tet_volume)
-                    .map(|(&nodes, c)| TetRow {
+                    .zip(&tl.lanes)
+                    .map(|(&nodes, lanes)| TetBatch {
                         nodes,
-                        rest: c.rest_volume,
-                        param: 0.0,
+                        rest: Vec4::from_array(lanes.map(|r| tet_volume[r as usize].rest_volume)),
+                        param: Vec4::ZERO,
                     })
                     .collect();
+                volume_lambda = vec![Vec4::ZERO; tl.lanes.len()];
             }
             VolumeConstraintKind::Centroid => {
                 for t in &tets {
@@ -311,18 +342,22 @@ impl SoftBody {
                         });
                     }
                 }
-                centroid_rows = solver_tets
+                centroid_batches = tet_nodes
                     .iter()
-                    .zip(centroid.chunks_exact(4))
-                    .map(|(&nodes, c)| CentroidRow {
+                    .zip(&tl.lanes)
+                    .map(|(&nodes, lanes)| CentroidBatch {
                         nodes,
-                        rest: [0, 1, 2, 3].map(|j| c[j].rest_height),
-                        param: [0.0; 4],
+                        rest: [0, 1, 2, 3].map(|j| {
+                            Vec4::from_array(
+                                lanes.map(|r| centroid[4 * r as usize + j].rest_height),
+                            )
+                        }),
+                        param: [Vec4::ZERO; 4],
                     })
                     .collect();
+                volume_lambda = vec![Vec4::ZERO; 4 * tl.lanes.len()];
             }
         }
-        let volume_lambda = vec![0.0; tet_volume.len() + centroid.len()];
         let mass: Vec<f32> = mass.iter().map(|&m| m as f32).collect();
         let w = mass
             .iter()
@@ -336,19 +371,21 @@ impl SoftBody {
             mass,
             w,
             order,
-            q: vec![Vec3A::ZERO; n],
+            q: vec![Vec4::ZERO; n],
             qw: vec![0.0; n],
             blocks,
-            distance_lambda: vec![0.0; distance.len()],
-            distance_rows,
+            colours: (dl.colours, tl.colours),
+            distance_lambda: vec![Vec4::ZERO; distance_batches.len()],
+            distance_batches,
+            distance_lanes: dl.lanes,
             distance,
             tets,
-            colours: (distance_colours, tet_colours),
             volume_kind: material.volume,
             tet_volume,
-            tet_rows,
+            tet_batches,
             centroid,
-            centroid_rows,
+            centroid_batches,
+            tet_lanes: tl.lanes,
             volume_lambda,
             floor: None,
             attachments: Vec::new(),
@@ -369,18 +406,25 @@ impl SoftBody {
         settings.validate()?;
         self.settings = settings;
         let s = &self.settings;
-        for (row, c) in self.distance_rows.iter_mut().zip(&self.distance) {
-            row.param = s.param(c.stiffness, c.compliance);
+        for (b, lanes) in self.distance_batches.iter_mut().zip(&self.distance_lanes) {
+            b.param = Vec4::from_array(lanes.map(|r| {
+                let c = &self.distance[r as usize];
+                s.param(c.stiffness, c.compliance)
+            }));
         }
-        for (row, c) in self.tet_rows.iter_mut().zip(&self.tet_volume) {
-            row.param = s.param(c.stiffness, c.compliance);
+        for (b, lanes) in self.tet_batches.iter_mut().zip(&self.tet_lanes) {
+            b.param = Vec4::from_array(lanes.map(|r| {
+                let c = &self.tet_volume[r as usize];
+                s.param(c.stiffness, c.compliance)
+            }));
         }
-        for (row, c) in self
-            .centroid_rows
-            .iter_mut()
-            .zip(self.centroid.chunks_exact(4))
-        {
-            row.param = [0, 1, 2, 3].map(|j| s.param(c[j].stiffness, c[j].compliance));
+        for (b, lanes) in self.centroid_batches.iter_mut().zip(&self.tet_lanes) {
+            b.param = [0, 1, 2, 3].map(|j| {
+                Vec4::from_array(lanes.map(|r| {
+                    let c = &self.centroid[4 * r as usize + j];
+                    s.param(c.stiffness, c.compliance)
+                }))
+            });
         }
         Ok(())
     }

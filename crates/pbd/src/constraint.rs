@@ -1,5 +1,7 @@
-//! Constraint records (public, one `Vec` per kind) and their projection kernels (pure functions
-//! on local copies of the node positions).
+//! Constraint records (public, one `Vec` per kind) and their projection kernels: pure functions
+//! on local copies of the nodes of four constraints at once (structure of arrays, one constraint
+//! per lane of a `Vec4`; the nodes carry their inverse mass in `w`), gathered and scattered with
+//! 4×4 transposes.
 //!
 //! Projection of one constraint `C` (Müller et al.): `Δp_i = −s·w_i·∇_i C`,
 //! `s = k·C / Σ_j w_j |∇_j C|²`. XPBD (Macklin et al.) replaces the stiffness by a compliance:
@@ -7,7 +9,7 @@
 //! it is the PBD projection with `k = 1`. Both conserve linear and angular momentum (the
 //! gradients of a translation- and rotation-invariant `C` sum to zero and have zero torque).
 
-use glam::Vec3A;
+use glam::{Mat4, Vec3A, Vec4};
 
 /// Whether a constraint holds as `C = 0` or as `C ≥ 0` (projected only when `C < 0`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -118,121 +120,217 @@ impl Floor {
     pub const KIND: ConstraintKind = ConstraintKind::Inequality;
 }
 
-/// Hot record of a distance constraint: 16 bytes, `param` is `k'` (PBD) or `α̃` (XPBD).
-#[derive(Debug, Clone, Copy, Default)]
+/// Four constraints of one kind projected at once, one per lane of a `Vec4` (structure of
+/// arrays). The lanes of a batch share no node (they come from one colour of one block); a colour
+/// whose size is not a multiple of 4 fills its last batch with copies of that batch's lane 0,
+/// which compute exactly what lane 0 computes and write the same values back.
+///
+/// `nodes[k][lane]`: node `k` of the lane's constraint, an index into the node range of the
+/// batch's block. `param` is `k`, `k'` or `α̃` per lane (see [`crate::StepSettings`]).
+#[derive(Debug, Clone, Copy)]
 #[repr(C)]
-pub(crate) struct DistanceRow {
-    pub nodes: [u32; 2],
-    pub rest: f32,
-    pub param: f32,
+pub(crate) struct DistanceBatch {
+    pub nodes: [[u32; 4]; 2],
+    pub rest: Vec4,
+    pub param: Vec4,
 }
 
-/// Hot record of a classic volume constraint: 24 bytes.
-#[derive(Debug, Clone, Copy, Default)]
+/// Four classic volume constraints: rest volumes `V₀`.
+#[derive(Debug, Clone, Copy)]
 #[repr(C)]
-pub(crate) struct TetRow {
-    pub nodes: [u32; 4],
-    pub rest: f32,
-    pub param: f32,
+pub(crate) struct TetBatch {
+    pub nodes: [[u32; 4]; 4],
+    pub rest: Vec4,
+    pub param: Vec4,
 }
 
-/// Hot record of the four centroid constraints of one tet (apex `j` = node `j`): 48 bytes.
-#[derive(Debug, Clone, Copy, Default)]
+/// The centroid constraints of four tets, `rest[j]`/`param[j]` for apex `j` = node `j`.
+#[derive(Debug, Clone, Copy)]
 #[repr(C)]
-pub(crate) struct CentroidRow {
-    pub nodes: [u32; 4],
-    pub rest: [f32; 4],
-    pub param: [f32; 4],
+pub(crate) struct CentroidBatch {
+    pub nodes: [[u32; 4]; 4],
+    pub rest: [Vec4; 4],
+    pub param: [Vec4; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<DistanceRow>() == 16);
-const _: () = assert!(std::mem::size_of::<TetRow>() == 24);
-const _: () = assert!(std::mem::size_of::<CentroidRow>() == 48);
+const _: () = assert!(std::mem::size_of::<DistanceBatch>() == 64);
+const _: () = assert!(std::mem::size_of::<TetBatch>() == 96);
+const _: () = assert!(std::mem::size_of::<CentroidBatch>() == 192);
+
+/// Four points, one per lane: `x`, `y`, `z` as lanes of `Vec4`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct P4 {
+    pub x: Vec4,
+    pub y: Vec4,
+    pub z: Vec4,
+}
+
+impl P4 {
+    pub(crate) const ZERO: Self = Self {
+        x: Vec4::ZERO,
+        y: Vec4::ZERO,
+        z: Vec4::ZERO,
+    };
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+    #[inline(always)]
+    fn scale(self, s: Vec4) -> Self {
+        Self {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+    #[inline(always)]
+    fn dot(self, o: Self) -> Vec4 {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    #[inline(always)]
+    fn cross(self, o: Self) -> Self {
+        Self {
+            x: self.y * o.z - self.z * o.y,
+            y: self.z * o.x - self.x * o.z,
+            z: self.x * o.y - self.y * o.x,
+        }
+    }
+}
+
+/// Lane-wise square root.
+#[inline(always)]
+fn sqrt4(v: Vec4) -> Vec4 {
+    Vec4::from_array(v.to_array().map(f32::sqrt))
+}
+
+/// Loads the nodes `ids` (xyz = position, w = inverse mass) into lanes.
+#[inline(always)]
+pub(crate) fn gather(p: &[Vec4], ids: &[u32; 4]) -> (P4, Vec4) {
+    let m = Mat4::from_cols(
+        p[ids[0] as usize],
+        p[ids[1] as usize],
+        p[ids[2] as usize],
+        p[ids[3] as usize],
+    )
+    .transpose();
+    (
+        P4 {
+            x: m.x_axis,
+            y: m.y_axis,
+            z: m.z_axis,
+        },
+        m.w_axis,
+    )
+}
+
+/// Stores lanes back to the nodes `ids` (lane 3 last; duplicate lanes hold equal values).
+#[inline(always)]
+pub(crate) fn scatter(p: &mut [Vec4], ids: &[u32; 4], q: P4, w: Vec4) {
+    let m = Mat4::from_cols(q.x, q.y, q.z, w).transpose();
+    p[ids[0] as usize] = m.x_axis;
+    p[ids[1] as usize] = m.y_axis;
+    p[ids[2] as usize] = m.z_axis;
+    p[ids[3] as usize] = m.w_axis;
+}
 
 /// Below this length (cm) a distance or centroid constraint has no usable direction and is
 /// skipped for the iteration.
 const MIN_LENGTH: f32 = 1e-12;
 
-/// The multiplier step `Δλ` shared by PBD (`α̃ = 0`, `k` = `param`) and XPBD (`α̃` = `param`).
+/// The step `s` along the (unnormalised) gradient direction, 0 in the lanes not `valid`: PBD
+/// `s = −k·C / (Σw|∇C|² · scale)`, XPBD `Δλ = (−C − α̃λ) / (Σw|∇C|² + α̃)`, `s = Δλ / scale`
+/// (`scale` = the length that normalises the direction, 1 for the volume).
 #[inline(always)]
-fn delta_lambda<const XPBD: bool>(c: f32, denom: f32, param: f32, lambda: &mut f32) -> f32 {
-    if XPBD {
+fn step<const XPBD: bool>(
+    c: Vec4,
+    denom: Vec4,
+    scale: Vec4,
+    param: Vec4,
+    valid: glam::BVec4A,
+    lambda: &mut Vec4,
+) -> Vec4 {
+    let s = if XPBD {
         let dl = (-c - param * *lambda) / (denom + param);
-        *lambda += dl;
-        dl
+        *lambda = Vec4::select(valid, *lambda + dl, *lambda);
+        dl / scale
     } else {
-        -param * c / denom
-    }
+        -(param * c) / (denom * scale)
+    };
+    Vec4::select(valid, s, Vec4::ZERO)
 }
 
-/// Projects one distance constraint on local copies `q` of its nodes.
+/// Projects four distance constraints (`C = |p₁ − p₂| − d`) on their gathered nodes.
 #[inline(always)]
 pub(crate) fn project_distance<const XPBD: bool>(
-    q: &mut [Vec3A; 2],
-    w: [f32; 2],
-    row: &DistanceRow,
-    lambda: &mut f32,
+    q: &mut [P4; 2],
+    w: &[Vec4; 2],
+    b: &DistanceBatch,
+    lambda: &mut [Vec4],
 ) {
-    let d = q[0] - q[1];
-    let len = d.length();
+    let d = q[0].sub(q[1]);
+    let len = sqrt4(d.dot(d));
     let denom = w[0] + w[1];
-    if denom <= 0.0 || len < MIN_LENGTH {
-        return;
-    }
-    let n = d / len;
-    let dl = delta_lambda::<XPBD>(len - row.rest, denom, row.param, lambda);
-    q[0] += (w[0] * dl) * n;
-    q[1] -= (w[1] * dl) * n;
+    let valid = denom.cmpgt(Vec4::ZERO) & len.cmpge(Vec4::splat(MIN_LENGTH));
+    let s = step::<XPBD>(len - b.rest, denom, len, b.param, valid, &mut lambda[0]);
+    q[0] = q[0].add(d.scale(w[0] * s));
+    q[1] = q[1].sub(d.scale(w[1] * s));
 }
 
-/// Projects one classic tet-volume constraint on local copies `q` of its nodes.
+/// Projects four classic tet-volume constraints on their gathered nodes.
 #[inline(always)]
 pub(crate) fn project_tet_volume<const XPBD: bool>(
-    q: &mut [Vec3A; 4],
-    w: [f32; 4],
-    row: &TetRow,
-    lambda: &mut f32,
+    q: &mut [P4; 4],
+    w: &[Vec4; 4],
+    b: &TetBatch,
+    lambda: &mut [Vec4],
 ) {
-    let (e1, e2, e3) = (q[1] - q[0], q[2] - q[0], q[3] - q[0]);
-    let g1 = e2.cross(e3) / 6.0;
-    let g2 = e3.cross(e1) / 6.0;
-    let g3 = e1.cross(e2) / 6.0;
-    let g0 = -(g1 + g2 + g3);
-    let c = e3.dot(g3) - row.rest;
-    let denom = w[0] * g0.length_squared()
-        + w[1] * g1.length_squared()
-        + w[2] * g2.length_squared()
-        + w[3] * g3.length_squared();
-    if denom <= f32::MIN_POSITIVE {
-        return;
-    }
-    let dl = delta_lambda::<XPBD>(c, denom, row.param, lambda);
-    q[0] += (w[0] * dl) * g0;
-    q[1] += (w[1] * dl) * g1;
-    q[2] += (w[2] * dl) * g2;
-    q[3] += (w[3] * dl) * g3;
+    let (e1, e2, e3) = (q[1].sub(q[0]), q[2].sub(q[0]), q[3].sub(q[0]));
+    let sixth = Vec4::splat(1.0 / 6.0);
+    let g1 = e2.cross(e3).scale(sixth);
+    let g2 = e3.cross(e1).scale(sixth);
+    let g3 = e1.cross(e2).scale(sixth);
+    let g0 = g1.add(g2).add(g3).scale(Vec4::NEG_ONE);
+    let c = e3.dot(g3) - b.rest;
+    let denom = w[0] * g0.dot(g0) + w[1] * g1.dot(g1) + w[2] * g2.dot(g2) + w[3] * g3.dot(g3);
+    let valid = denom.cmpgt(Vec4::splat(f32::MIN_POSITIVE));
+    let s = step::<XPBD>(c, denom, Vec4::ONE, b.param, valid, &mut lambda[0]);
+    q[0] = q[0].add(g0.scale(w[0] * s));
+    q[1] = q[1].add(g1.scale(w[1] * s));
+    q[2] = q[2].add(g2.scale(w[2] * s));
+    q[3] = q[3].add(g3.scale(w[3] * s));
 }
 
-/// Projects the four centroid constraints of one tet, apex 0, 1, 2, 3 in turn (Gauss–Seidel), on
-/// local copies `q` of its nodes.
+/// Projects the four centroid constraints of four tets, apex 0, 1, 2, 3 in turn (Gauss–Seidel),
+/// on their gathered nodes.
 ///
 /// `∇_s C = n`, `∇_{p_i} C = −n/3` (`n = (s−c)/|s−c|`), so `Σ w|∇C|² = w_s + (w₁+w₂+w₃)/9` and,
 /// with `g = (s−c)(1 − h₀/|s−c|)k'`, `Δp_i = 3w_i/W'·g`, `Δs = −9w_s/W'·g` where
 /// `W' = w₁+w₂+w₃+9w_s`. (The slides print `W = w₁+w₂+w₃+w_s`, which over-corrects by
 /// `W'/W`, 3× for equal masses, and diverges for `k' > 2/3`.)
-// Not inlined: inlined into the sweep's loop it ran 1.5× slower on the bunny (Zen 5).
-#[inline(never)]
+#[inline(always)]
 pub(crate) fn project_centroid<const XPBD: bool>(
-    q: &mut [Vec3A; 4],
-    w: [f32; 4],
-    row: &CentroidRow,
-    lambda: &mut [f32],
+    q: &mut [P4; 4],
+    w: &[Vec4; 4],
+    b: &CentroidBatch,
+    lambda: &mut [Vec4],
 ) {
     // Unrolled with constant indices so that `q` stays in registers.
-    centroid_apex::<XPBD, 0, 1, 2, 3>(q, w, row, lambda);
-    centroid_apex::<XPBD, 1, 2, 3, 0>(q, w, row, lambda);
-    centroid_apex::<XPBD, 2, 3, 0, 1>(q, w, row, lambda);
-    centroid_apex::<XPBD, 3, 0, 1, 2>(q, w, row, lambda);
+    centroid_apex::<XPBD, 0, 1, 2, 3>(q, w, b, lambda);
+    centroid_apex::<XPBD, 1, 2, 3, 0>(q, w, b, lambda);
+    centroid_apex::<XPBD, 2, 3, 0, 1>(q, w, b, lambda);
+    centroid_apex::<XPBD, 3, 0, 1, 2>(q, w, b, lambda);
 }
 
 #[inline(always)]
@@ -243,91 +341,160 @@ fn centroid_apex<
     const B: usize,
     const C: usize,
 >(
-    q: &mut [Vec3A; 4],
-    w: [f32; 4],
-    row: &CentroidRow,
-    lambda: &mut [f32],
+    q: &mut [P4; 4],
+    w: &[Vec4; 4],
+    b: &CentroidBatch,
+    lambda: &mut [Vec4],
 ) {
-    let c = (q[A] + q[B] + q[C]) * (1.0 / 3.0);
-    let d = q[J] - c;
-    let len = d.length();
-    let denom = w[J] + (w[A] + w[B] + w[C]) * (1.0 / 9.0);
-    if denom <= 0.0 || len < MIN_LENGTH {
-        return;
-    }
-    let dl = delta_lambda::<XPBD>(len - row.rest[J], denom, row.param[J], &mut lambda[J]);
-    let step = d * (dl / len);
-    q[J] += w[J] * step;
-    let face = step * (1.0 / 3.0);
-    q[A] -= w[A] * face;
-    q[B] -= w[B] * face;
-    q[C] -= w[C] * face;
+    let third = Vec4::splat(1.0 / 3.0);
+    let d = q[J].sub(q[A].add(q[B]).add(q[C]).scale(third));
+    let len = sqrt4(d.dot(d));
+    let denom = w[J] + (w[A] + w[B] + w[C]) * Vec4::splat(1.0 / 9.0);
+    let valid = denom.cmpgt(Vec4::ZERO) & len.cmpge(Vec4::splat(MIN_LENGTH));
+    let s = step::<XPBD>(
+        len - b.rest[J],
+        denom,
+        len,
+        b.param[J],
+        valid,
+        &mut lambda[J],
+    );
+    let step = d.scale(s);
+    q[J] = q[J].add(step.scale(w[J]));
+    let face = step.scale(third);
+    q[A] = q[A].sub(face.scale(w[A]));
+    q[B] = q[B].sub(face.scale(w[B]));
+    q[C] = q[C].sub(face.scale(w[C]));
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// Lane 0 holds the constraint; the other lanes copy it (as padding does).
+    fn lanes<const N: usize>(q: [Vec3A; N], w: [f32; N]) -> ([P4; N], [Vec4; N]) {
+        (
+            q.map(|p| P4 {
+                x: Vec4::splat(p.x),
+                y: Vec4::splat(p.y),
+                z: Vec4::splat(p.z),
+            }),
+            w.map(Vec4::splat),
+        )
+    }
+
+    fn lane0<const N: usize>(q: &[P4; N]) -> [Vec3A; N] {
+        q.map(|p| Vec3A::new(p.x.x, p.y.x, p.z.x))
+    }
+
+    const W: [f32; 4] = [1.0, 0.5, 2.0, 0.25];
+    const Q: [Vec3A; 4] = [
+        Vec3A::new(0.0, 0.0, 0.0),
+        Vec3A::new(1.2, 0.1, 0.0),
+        Vec3A::new(0.1, 0.9, 0.2),
+        Vec3A::new(0.2, 0.1, 1.3),
+    ];
+
     #[test]
     fn one_projection_satisfies_each_constraint_with_unit_stiffness() {
-        let w = [1.0, 0.5, 2.0, 0.25];
-        let mut q = [
-            Vec3A::new(0.0, 0.0, 0.0),
-            Vec3A::new(1.2, 0.1, 0.0),
-            Vec3A::new(0.1, 0.9, 0.2),
-            Vec3A::new(0.2, 0.1, 1.3),
-        ];
-        let row = DistanceRow {
-            nodes: [0, 1],
-            rest: 0.7,
-            param: 1.0,
+        let b = DistanceBatch {
+            nodes: [[0; 4]; 2],
+            rest: Vec4::splat(0.7),
+            param: Vec4::ONE,
         };
-        let mut pair = [q[0], q[1]];
-        project_distance::<false>(&mut pair, [w[0], w[1]], &row, &mut 0.0);
+        let (mut q, w) = lanes([Q[0], Q[1]], [W[0], W[1]]);
+        project_distance::<false>(&mut q, &w, &b, &mut [Vec4::ZERO]);
+        let pair = lane0(&q);
         assert!(((pair[0] - pair[1]).length() - 0.7).abs() < 1e-5);
 
-        let row = TetRow {
-            nodes: [0, 1, 2, 3],
-            rest: 0.1,
-            param: 1.0,
+        let b = TetBatch {
+            nodes: [[0; 4]; 4],
+            rest: Vec4::splat(0.1),
+            param: Vec4::ONE,
         };
-        let mut t = q;
-        project_tet_volume::<false>(&mut t, w, &row, &mut 0.0);
+        let (mut q, w) = lanes(Q, W);
+        project_tet_volume::<false>(&mut q, &w, &b, &mut [Vec4::ZERO]);
+        let t = lane0(&q);
         let vol = (t[1] - t[0]).cross(t[2] - t[0]).dot(t[3] - t[0]) / 6.0;
         // Linearised: one step lands close, not exactly.
         assert!((vol - 0.1).abs() < 0.02, "{vol}");
 
         // One centroid constraint (apex 0) alone is exactly satisfied: it is linear along n.
-        let row = CentroidRow {
-            nodes: [0, 1, 2, 3],
-            rest: [0.5; 4],
-            param: [1.0, 0.0, 0.0, 0.0],
+        let b = CentroidBatch {
+            nodes: [[0; 4]; 4],
+            rest: [Vec4::splat(0.5); 4],
+            param: [Vec4::ONE, Vec4::ZERO, Vec4::ZERO, Vec4::ZERO],
         };
-        project_centroid::<false>(&mut q, w, &row, &mut [0.0; 4]);
+        let (mut q, w) = lanes(Q, W);
+        project_centroid::<false>(&mut q, &w, &b, &mut [Vec4::ZERO; 4]);
+        let q = lane0(&q);
         let h = (q[0] - (q[1] + q[2] + q[3]) / 3.0).length();
         assert!((h - 0.5).abs() < 1e-5, "{h}");
     }
 
     #[test]
     fn centroid_projection_conserves_momentum() {
-        let w = [1.0, 0.5, 2.0, 0.25];
-        let q0 = [
-            Vec3A::new(0.0, 0.0, 0.0),
-            Vec3A::new(1.2, 0.1, 0.0),
-            Vec3A::new(0.1, 0.9, 0.2),
-            Vec3A::new(0.2, 0.1, 1.3),
-        ];
-        let mut q = q0;
-        let row = CentroidRow {
-            nodes: [0, 1, 2, 3],
-            rest: [0.3, 0.4, 0.5, 0.6],
-            param: [0.7; 4],
+        let b = CentroidBatch {
+            nodes: [[0; 4]; 4],
+            rest: [0.3, 0.4, 0.5, 0.6].map(Vec4::splat),
+            param: [Vec4::splat(0.7); 4],
         };
-        project_centroid::<false>(&mut q, w, &row, &mut [0.0; 4]);
+        let (mut q, w) = lanes(Q, W);
+        project_centroid::<false>(&mut q, &w, &b, &mut [Vec4::ZERO; 4]);
+        let q = lane0(&q);
         let mut p = Vec3A::ZERO;
         for i in 0..4 {
-            p += (q[i] - q0[i]) / w[i];
+            p += (q[i] - Q[i]) / W[i];
         }
         assert!(p.length() < 1e-5, "{p}");
+    }
+
+    #[test]
+    fn lanes_are_independent_and_gather_scatter_round_trip() {
+        // Four different distance constraints in one batch give, lane by lane, what each gives
+        // alone in lane 0 (the padding invariant: a lane's result depends on its lane only).
+        let p: Vec<Vec4> = (0..8)
+            .map(|i| {
+                Vec4::new(
+                    i as f32 * 0.3,
+                    (i * i) as f32 * 0.1,
+                    1.0 - i as f32,
+                    0.5 + i as f32,
+                )
+            })
+            .collect();
+        let nodes = [[0, 2, 4, 6], [1, 3, 5, 7]];
+        let b = DistanceBatch {
+            nodes,
+            rest: Vec4::new(0.1, 0.2, 0.3, 0.4),
+            param: Vec4::new(1.0, 0.5, 0.25, 0.8),
+        };
+        let mut all = p.clone();
+        let (a, wa) = gather(&all, &nodes[0]);
+        let (c, wc) = gather(&all, &nodes[1]);
+        let mut q = [a, c];
+        project_distance::<false>(&mut q, &[wa, wc], &b, &mut [Vec4::ZERO]);
+        scatter(&mut all, &nodes[0], q[0], wa);
+        scatter(&mut all, &nodes[1], q[1], wc);
+        for lane in 0..4 {
+            let one = DistanceBatch {
+                nodes: [[nodes[0][lane]; 4], [nodes[1][lane]; 4]],
+                rest: Vec4::splat(b.rest[lane]),
+                param: Vec4::splat(b.param[lane]),
+            };
+            let mut alone = p.clone();
+            let (a, wa) = gather(&alone, &one.nodes[0]);
+            let (c, wc) = gather(&alone, &one.nodes[1]);
+            let mut q = [a, c];
+            project_distance::<false>(&mut q, &[wa, wc], &one, &mut [Vec4::ZERO]);
+            scatter(&mut alone, &one.nodes[0], q[0], wa);
+            scatter(&mut alone, &one.nodes[1], q[1], wc);
+            for ids in &nodes {
+                let n = ids[lane] as usize;
+                assert_eq!(alone[n].to_array(), all[n].to_array());
+                assert_eq!(all[n].w, p[n].w, "inverse mass kept");
+            }
+            assert_ne!(all[nodes[0][lane] as usize], p[nodes[0][lane] as usize]);
+        }
     }
 }

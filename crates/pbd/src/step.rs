@@ -3,28 +3,31 @@
 
 use crate::body::Block;
 use crate::constraint::{
-    project_centroid, project_distance, project_tet_volume, CentroidRow, DistanceRow, TetRow,
+    gather, project_centroid, project_distance, project_tet_volume, scatter, CentroidBatch,
+    DistanceBatch, TetBatch, P4,
 };
 use crate::{PbdError, SoftBody, Solver, VolumeConstraintKind};
-use glam::{DMat3, DVec3, Vec3A};
+use glam::{DMat3, DVec3, Vec3A, Vec4};
 
-/// Projects `rows` once, in order (Gauss–Seidel), on `p`/`w` (the node range of their block).
-/// `L` multipliers per row.
-#[inline(never)]
-fn project_rows<R, const N: usize, const L: usize>(
-    rows: &[R],
-    lambda: &mut [f32],
-    p: &mut [Vec3A],
-    w: &[f32],
-    nodes: impl Fn(&R) -> [u32; N],
-    kernel: impl Fn(&mut [Vec3A; N], [f32; N], &R, &mut [f32]),
+/// Projects `batches` once, in order (Gauss–Seidel; the 4 lanes of a batch share no node), on
+/// `p` (the node range of their block). `L` multipliers per batch.
+#[inline(always)]
+fn project_batches<B, const N: usize, const L: usize>(
+    batches: &[B],
+    lambda: &mut [Vec4],
+    p: &mut [Vec4],
+    nodes: impl Fn(&B) -> &[[u32; 4]; N],
+    kernel: impl Fn(&mut [P4; N], &[Vec4; N], &B, &mut [Vec4]),
 ) {
-    for (r, lam) in rows.iter().zip(lambda.chunks_exact_mut(L)) {
-        let ids = nodes(r);
-        let mut q = ids.map(|i| p[i as usize]);
-        kernel(&mut q, ids.map(|i| w[i as usize]), r, lam);
+    for (b, lam) in batches.iter().zip(lambda.chunks_exact_mut(L)) {
+        let ids = nodes(b);
+        let (mut q, mut w) = ([P4::ZERO; N], [Vec4::ZERO; N]);
         for k in 0..N {
-            p[ids[k] as usize] = q[k];
+            (q[k], w[k]) = gather(p, &ids[k]);
+        }
+        kernel(&mut q, &w, b, lam);
+        for k in 0..N {
+            scatter(p, &ids[k], q[k], w[k]);
         }
     }
 }
@@ -32,25 +35,18 @@ fn project_rows<R, const N: usize, const L: usize>(
 /// One Gauss–Seidel sweep over the block tree (see [`crate::partition`]).
 struct Sweep<'a> {
     blocks: &'a [Block],
-    distance: &'a [DistanceRow],
-    tet: &'a [TetRow],
-    centroid: &'a [CentroidRow],
+    distance: &'a [DistanceBatch],
+    tet: &'a [TetBatch],
+    centroid: &'a [CentroidBatch],
     kind: VolumeConstraintKind,
     parallel: bool,
 }
 
 impl Sweep<'_> {
     /// Projects the constraints of block `h`'s subtree: both children (at the same time in
-    /// parallel mode: they touch disjoint node ranges), then the block's own constraints. `p`,
-    /// `w` are the block's node range, `ld`, `lv` the multipliers of its subtree's rows.
-    fn block<const XPBD: bool>(
-        &self,
-        h: usize,
-        p: &mut [Vec3A],
-        w: &[f32],
-        ld: &mut [f32],
-        lv: &mut [f32],
-    ) {
+    /// parallel mode: they touch disjoint node ranges), then the block's own constraints. `p` is
+    /// the block's node range, `ld`, `lv` the multipliers of its subtree's batches.
+    fn block<const XPBD: bool>(&self, h: usize, p: &mut [Vec4], ld: &mut [Vec4], lv: &mut [Vec4]) {
         let b = self.blocks[h];
         let per_tet = match self.kind {
             VolumeConstraintKind::None => 0,
@@ -60,19 +56,18 @@ impl Sweep<'_> {
         let (ld, lv) = if 2 * h + 1 < self.blocks.len() {
             let (l, r) = (self.blocks[2 * h + 1], self.blocks[2 * h + 2]);
             let (pl, pr) = p.split_at_mut((b.nodes[1] - b.nodes[0]) as usize);
-            let (wl, wr) = w.split_at((b.nodes[1] - b.nodes[0]) as usize);
             let (ldl, rest) = ld.split_at_mut((l.distance[2] - b.distance[0]) as usize);
             let (ldr, ld) = rest.split_at_mut((r.distance[2] - l.distance[2]) as usize);
             let (lvl, rest) = lv.split_at_mut((l.tets[2] - b.tets[0]) as usize * per_tet);
             let (lvr, lv) = rest.split_at_mut((r.tets[2] - l.tets[2]) as usize * per_tet);
             if self.parallel {
                 rayon::join(
-                    || self.block::<XPBD>(2 * h + 1, pl, wl, ldl, lvl),
-                    || self.block::<XPBD>(2 * h + 2, pr, wr, ldr, lvr),
+                    || self.block::<XPBD>(2 * h + 1, pl, ldl, lvl),
+                    || self.block::<XPBD>(2 * h + 2, pr, ldr, lvr),
                 );
             } else {
-                self.block::<XPBD>(2 * h + 1, pl, wl, ldl, lvl);
-                self.block::<XPBD>(2 * h + 2, pr, wr, ldr, lvr);
+                self.block::<XPBD>(2 * h + 1, pl, ldl, lvl);
+                self.block::<XPBD>(2 * h + 2, pr, ldr, lvr);
             }
             (ld, lv)
         } else {
@@ -80,30 +75,27 @@ impl Sweep<'_> {
         };
         let [_, ds, de] = b.distance.map(|i| i as usize);
         let [_, ts, te] = b.tets.map(|i| i as usize);
-        project_rows::<_, 2, 1>(
+        project_batches::<_, 2, 1>(
             &self.distance[ds..de],
             ld,
             p,
-            w,
-            |r| r.nodes,
-            |q, w, r, l| project_distance::<XPBD>(q, w, r, &mut l[0]),
+            |b| &b.nodes,
+            project_distance::<XPBD>,
         );
         match self.kind {
             VolumeConstraintKind::None => {}
-            VolumeConstraintKind::Classic => project_rows::<_, 4, 1>(
+            VolumeConstraintKind::Classic => project_batches::<_, 4, 1>(
                 &self.tet[ts..te],
                 lv,
                 p,
-                w,
-                |r| r.nodes,
-                |q, w, r, l| project_tet_volume::<XPBD>(q, w, r, &mut l[0]),
+                |b| &b.nodes,
+                project_tet_volume::<XPBD>,
             ),
-            VolumeConstraintKind::Centroid => project_rows::<_, 4, 4>(
+            VolumeConstraintKind::Centroid => project_batches::<_, 4, 4>(
                 &self.centroid[ts..te],
                 lv,
                 p,
-                w,
-                |r| r.nodes,
+                |b| &b.nodes,
                 project_centroid::<XPBD>,
             ),
         }
@@ -144,13 +136,13 @@ impl SoftBody {
         }
         // The projection works in solver order (crate::partition).
         for ((q, qw), &o) in self.q.iter_mut().zip(&mut self.qw).zip(&self.order) {
-            *q = self.p[o as usize];
             *qw = self.w[o as usize];
+            *q = self.p[o as usize].extend(*qw);
         }
         let xpbd = s.solver == Solver::Xpbd;
         if xpbd {
-            self.distance_lambda.fill(0.0);
-            self.volume_lambda.fill(0.0);
+            self.distance_lambda.fill(Vec4::ZERO);
+            self.volume_lambda.fill(Vec4::ZERO);
         }
         {
             let _span = tracing::trace_span!("project", iterations = s.iterations).entered();
@@ -163,7 +155,7 @@ impl SoftBody {
             }
         }
         for (q, &o) in self.q.iter().zip(&self.order) {
-            self.p[o as usize] = *q;
+            self.p[o as usize] = q.truncate().into();
         }
         let scale = (1.0 - s.linear_damping) / dt;
         for ((v, p), x) in self.v.iter_mut().zip(&self.p).zip(&self.x) {
@@ -194,13 +186,13 @@ impl SoftBody {
         let (p, w) = (&mut self.q, &self.qw);
         Sweep {
             blocks: &self.blocks,
-            distance: &self.distance_rows,
-            tet: &self.tet_rows,
-            centroid: &self.centroid_rows,
+            distance: &self.distance_batches,
+            tet: &self.tet_batches,
+            centroid: &self.centroid_batches,
             kind: self.volume_kind,
             parallel: self.settings.parallel,
         }
-        .block::<XPBD>(0, p, w, &mut self.distance_lambda, &mut self.volume_lambda);
+        .block::<XPBD>(0, p, &mut self.distance_lambda, &mut self.volume_lambda);
         if let Some(f) = self.floor {
             for (p, &w) in p.iter_mut().zip(w) {
                 if w > 0.0 && p[f.axis] < f.height {
