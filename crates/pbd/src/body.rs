@@ -4,7 +4,7 @@ use glam::{DVec3, Vec3, Vec3A, Vec4};
 use tissue_mesh::{TetMesh, ZERO_VOLUME_TOLERANCE};
 
 use crate::colour::{colour_order, greedy_colours};
-use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch};
+use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
 use crate::partition::{bisection_order, Tree};
 use crate::{
     CentroidVolumeConstraint, DistanceConstraint, Floor, Material, PbdError, StepSettings,
@@ -45,9 +45,9 @@ pub struct SoftBody {
     pub(crate) distance: Vec<DistanceConstraint>,
     pub(crate) distance_batches: Vec<DistanceBatch>,
     /// The record (index into `distance`) of each lane of each batch.
-    pub(crate) distance_lanes: Vec<[u32; 4]>,
+    pub(crate) distance_lanes: Vec<[u32; LANES]>,
     /// One multiplier per lane (XPBD).
-    pub(crate) distance_lambda: Vec<Vec4>,
+    pub(crate) distance_lambda: Vec<F>,
 
     /// Tets in projection order (the order of the volume constraints), caller's node indices.
     pub(crate) tets: Vec<[u32; 4]>,
@@ -57,9 +57,9 @@ pub struct SoftBody {
     pub(crate) centroid: Vec<CentroidVolumeConstraint>,
     pub(crate) centroid_batches: Vec<CentroidBatch>,
     /// The tet (index into `tets`) of each lane of each volume batch.
-    pub(crate) tet_lanes: Vec<[u32; 4]>,
+    pub(crate) tet_lanes: Vec<[u32; LANES]>,
     /// One multiplier per lane and volume constraint (1 or 4 per tet).
-    pub(crate) volume_lambda: Vec<Vec4>,
+    pub(crate) volume_lambda: Vec<F>,
 
     pub(crate) floor: Option<Floor>,
     pub(crate) attachments: Vec<(u32, Vec3A)>,
@@ -84,7 +84,7 @@ struct Layout {
     /// Item index of each record, in projection order.
     records: Vec<usize>,
     /// Record index of each lane of each batch (padding lanes repeat lane 0).
-    lanes: Vec<[u32; 4]>,
+    lanes: Vec<[u32; LANES]>,
     /// Batch range `[start, end)` of each block, by heap index.
     ranges: Vec<[u32; 2]>,
     /// The most colours in any block.
@@ -92,7 +92,7 @@ struct Layout {
 }
 
 /// Lays out `items` (solver node indices) block by block in post order; within a block, greedily
-/// coloured and in the given order within a colour; each colour cut into batches of 4.
+/// coloured and in the given order within a colour; each colour cut into batches of [`LANES`].
 fn arrange<const N: usize>(tree: &Tree, post: &[usize], items: &[[u32; N]]) -> Layout {
     let mut by_block: Vec<Vec<usize>> = vec![Vec::new(); tree.block_count()];
     for (i, item) in items.iter().enumerate() {
@@ -100,7 +100,7 @@ fn arrange<const N: usize>(tree: &Tree, post: &[usize], items: &[[u32; N]]) -> L
     }
     let mut out = Layout {
         records: Vec::with_capacity(items.len()),
-        lanes: Vec::with_capacity(items.len() / 4 + post.len()),
+        lanes: Vec::with_capacity(items.len() / LANES + post.len()),
         ranges: vec![[0u32; 2]; tree.block_count()],
         colours: 0,
     };
@@ -115,10 +115,10 @@ fn arrange<const N: usize>(tree: &Tree, post: &[usize], items: &[[u32; N]]) -> L
         out.colours = out.colours.max(count as usize);
         out.ranges[h][0] = out.lanes.len() as u32;
         for colour in offsets.windows(2) {
-            for batch in within[colour[0] as usize..colour[1] as usize].chunks(4) {
+            for batch in within[colour[0] as usize..colour[1] as usize].chunks(LANES) {
                 let first = out.records.len() as u32;
                 out.records.extend(batch.iter().map(|&k| by_block[h][k]));
-                let mut lanes = [first; 4];
+                let mut lanes = [first; LANES];
                 for (l, lane) in lanes.iter_mut().enumerate().take(batch.len()) {
                     *lane = first + l as u32;
                 }
@@ -283,8 +283,8 @@ impl SoftBody {
             .zip(batch_base(&dl.ranges, dl.lanes.len()))
             .map(|(lanes, base)| DistanceBatch {
                 nodes: [0, 1].map(|k| lanes.map(|r| edges[dl.records[r as usize]][k] - base)),
-                rest: Vec4::from_array(lanes.map(|r| distance[r as usize].rest_length)),
-                param: Vec4::ZERO,
+                rest: F::from_lanes(lanes.map(|r| distance[r as usize].rest_length)),
+                param: F::ZERO,
             })
             .collect();
         let tets: Vec<[u32; 4]> = tl
@@ -292,7 +292,7 @@ impl SoftBody {
             .iter()
             .map(|&t| sorted[t].map(original))
             .collect();
-        let tet_nodes: Vec<[[u32; 4]; 4]> = tl
+        let tet_nodes: Vec<[[u32; LANES]; 4]> = tl
             .lanes
             .iter()
             .zip(batch_base(&tl.ranges, tl.lanes.len()))
@@ -322,11 +322,11 @@ impl SoftBody {
                     .zip(&tl.lanes)
                     .map(|(&nodes, lanes)| TetBatch {
                         nodes,
-                        rest: Vec4::from_array(lanes.map(|r| tet_volume[r as usize].rest_volume)),
-                        param: Vec4::ZERO,
+                        rest: F::from_lanes(lanes.map(|r| tet_volume[r as usize].rest_volume)),
+                        param: F::ZERO,
                     })
                     .collect();
-                volume_lambda = vec![Vec4::ZERO; tl.lanes.len()];
+                volume_lambda = vec![F::ZERO; tl.lanes.len()];
             }
             VolumeConstraintKind::Centroid => {
                 for t in &tets {
@@ -348,14 +348,12 @@ impl SoftBody {
                     .map(|(&nodes, lanes)| CentroidBatch {
                         nodes,
                         rest: [0, 1, 2, 3].map(|j| {
-                            Vec4::from_array(
-                                lanes.map(|r| centroid[4 * r as usize + j].rest_height),
-                            )
+                            F::from_lanes(lanes.map(|r| centroid[4 * r as usize + j].rest_height))
                         }),
-                        param: [Vec4::ZERO; 4],
+                        param: [F::ZERO; 4],
                     })
                     .collect();
-                volume_lambda = vec![Vec4::ZERO; 4 * tl.lanes.len()];
+                volume_lambda = vec![F::ZERO; 4 * tl.lanes.len()];
             }
         }
         let mass: Vec<f32> = mass.iter().map(|&m| m as f32).collect();
@@ -375,7 +373,7 @@ impl SoftBody {
             qw: vec![0.0; n],
             blocks,
             colours: (dl.colours, tl.colours),
-            distance_lambda: vec![Vec4::ZERO; distance_batches.len()],
+            distance_lambda: vec![F::ZERO; distance_batches.len()],
             distance_batches,
             distance_lanes: dl.lanes,
             distance,
@@ -407,20 +405,20 @@ impl SoftBody {
         self.settings = settings;
         let s = &self.settings;
         for (b, lanes) in self.distance_batches.iter_mut().zip(&self.distance_lanes) {
-            b.param = Vec4::from_array(lanes.map(|r| {
+            b.param = F::from_lanes(lanes.map(|r| {
                 let c = &self.distance[r as usize];
                 s.param(c.stiffness, c.compliance)
             }));
         }
         for (b, lanes) in self.tet_batches.iter_mut().zip(&self.tet_lanes) {
-            b.param = Vec4::from_array(lanes.map(|r| {
+            b.param = F::from_lanes(lanes.map(|r| {
                 let c = &self.tet_volume[r as usize];
                 s.param(c.stiffness, c.compliance)
             }));
         }
         for (b, lanes) in self.centroid_batches.iter_mut().zip(&self.tet_lanes) {
             b.param = [0, 1, 2, 3].map(|j| {
-                Vec4::from_array(lanes.map(|r| {
+                F::from_lanes(lanes.map(|r| {
                     let c = &self.centroid[4 * r as usize + j];
                     s.param(c.stiffness, c.compliance)
                 }))

@@ -1,7 +1,7 @@
 //! Constraint records (public, one `Vec` per kind) and their projection kernels: pure functions
-//! on local copies of the nodes of four constraints at once (structure of arrays, one constraint
-//! per lane of a `Vec4`; the nodes carry their inverse mass in `w`), gathered and scattered with
-//! 4×4 transposes.
+//! on local copies of the nodes of [`LANES`] constraints at once (structure of arrays, one
+//! constraint per `f32` lane; the nodes carry their inverse mass in `w`), gathered and scattered
+//! with 4×4 transposes.
 //!
 //! Projection of one constraint `C` (Müller et al.): `Δp_i = −s·w_i·∇_i C`,
 //! `s = k·C / Σ_j w_j |∇_j C|²`. XPBD (Macklin et al.) replaces the stiffness by a compliance:
@@ -9,7 +9,7 @@
 //! it is the PBD projection with `k = 1`. Both conserve linear and angular momentum (the
 //! gradients of a translation- and rotation-invariant `C` sum to zero and have zero torque).
 
-use glam::{Mat4, Vec3A, Vec4};
+use glam::{BVec4A, Mat4, Vec3A, Vec4};
 
 /// Whether a constraint holds as `C = 0` or as `C ≥ 0` (projected only when `C < 0`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -120,56 +120,168 @@ impl Floor {
     pub const KIND: ConstraintKind = ConstraintKind::Inequality;
 }
 
-/// Four constraints of one kind projected at once, one per lane of a `Vec4` (structure of
-/// arrays). The lanes of a batch share no node (they come from one colour of one block); a colour
-/// whose size is not a multiple of 4 fills its last batch with copies of that batch's lane 0,
-/// which compute exactly what lane 0 computes and write the same values back.
+/// `Vec4`s per lane group: a batch holds [`LANES`] `= 4·M` constraints, one per `f32` lane. Two
+/// `Vec4`s per value let the CPU overlap two independent chains of SSE operations.
+pub(crate) const M: usize = 2;
+/// Constraints per batch.
+pub(crate) const LANES: usize = 4 * M;
+
+/// One `f32` per lane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct F(pub [Vec4; M]);
+
+/// One boolean per lane.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Mask([BVec4A; M]);
+
+macro_rules! lanewise {
+    ($trait:ident, $fn:ident, $op:tt) => {
+        impl std::ops::$trait for F {
+            type Output = F;
+            #[inline(always)]
+            fn $fn(self, o: F) -> F {
+                let mut r = self.0;
+                for (r, o) in r.iter_mut().zip(o.0) {
+                    *r $op o;
+                }
+                F(r)
+            }
+        }
+    };
+}
+lanewise!(Add, add, +=);
+lanewise!(Sub, sub, -=);
+lanewise!(Mul, mul, *=);
+lanewise!(Div, div, /=);
+
+impl std::ops::Neg for F {
+    type Output = F;
+    #[inline(always)]
+    fn neg(self) -> F {
+        let mut r = self.0;
+        for r in &mut r {
+            *r = -*r;
+        }
+        F(r)
+    }
+}
+
+impl std::ops::BitAnd for Mask {
+    type Output = Mask;
+    #[inline(always)]
+    fn bitand(self, o: Mask) -> Mask {
+        let mut r = self.0;
+        for (r, o) in r.iter_mut().zip(o.0) {
+            *r &= o;
+        }
+        Mask(r)
+    }
+}
+
+impl F {
+    pub(crate) const ZERO: F = F([Vec4::ZERO; M]);
+    #[cfg(test)]
+    pub(crate) const ONE: F = F([Vec4::ONE; M]);
+    #[inline(always)]
+    pub(crate) fn splat(v: f32) -> F {
+        F([Vec4::splat(v); M])
+    }
+    /// The lanes from an array.
+    pub(crate) fn from_lanes(a: [f32; LANES]) -> F {
+        F(std::array::from_fn(|m| {
+            Vec4::new(a[4 * m], a[4 * m + 1], a[4 * m + 2], a[4 * m + 3])
+        }))
+    }
+    /// Lane `i`.
+    #[cfg(test)]
+    pub(crate) fn lane(self, i: usize) -> f32 {
+        self.0[i / 4][i % 4]
+    }
+    #[inline(always)]
+    fn sqrt(self) -> F {
+        let mut r = self.0;
+        for r in &mut r {
+            *r = Vec4::new(r.x.sqrt(), r.y.sqrt(), r.z.sqrt(), r.w.sqrt());
+        }
+        F(r)
+    }
+    #[inline(always)]
+    fn cmpgt(self, o: F) -> Mask {
+        let mut r = [BVec4A::FALSE; M];
+        for (r, (a, b)) in r.iter_mut().zip(self.0.into_iter().zip(o.0)) {
+            *r = a.cmpgt(b);
+        }
+        Mask(r)
+    }
+    #[inline(always)]
+    fn cmpge(self, o: F) -> Mask {
+        let mut r = [BVec4A::FALSE; M];
+        for (r, (a, b)) in r.iter_mut().zip(self.0.into_iter().zip(o.0)) {
+            *r = a.cmpge(b);
+        }
+        Mask(r)
+    }
+    /// `if mask { a } else { b }` per lane.
+    #[inline(always)]
+    fn select(mask: Mask, a: F, b: F) -> F {
+        let mut r = b.0;
+        for ((r, m), a) in r.iter_mut().zip(mask.0).zip(a.0) {
+            *r = Vec4::select(m, a, *r);
+        }
+        F(r)
+    }
+}
+
+/// [`LANES`] constraints of one kind projected at once, one per lane (structure of arrays). The
+/// lanes of a batch share no node (they come from one colour of one block); a colour whose size
+/// is not a multiple of [`LANES`] fills its last batch with copies of that batch's lane 0, which
+/// compute exactly what lane 0 computes and write the same values back.
 ///
 /// `nodes[k][lane]`: node `k` of the lane's constraint, an index into the node range of the
 /// batch's block. `param` is `k`, `k'` or `α̃` per lane (see [`crate::StepSettings`]).
 #[derive(Debug, Clone, Copy)]
 #[repr(C)]
 pub(crate) struct DistanceBatch {
-    pub nodes: [[u32; 4]; 2],
-    pub rest: Vec4,
-    pub param: Vec4,
+    pub nodes: [[u32; LANES]; 2],
+    pub rest: F,
+    pub param: F,
 }
 
-/// Four classic volume constraints: rest volumes `V₀`.
+/// Classic volume constraints: rest volumes `V₀`.
 #[derive(Debug, Clone, Copy)]
 #[repr(C)]
 pub(crate) struct TetBatch {
-    pub nodes: [[u32; 4]; 4],
-    pub rest: Vec4,
-    pub param: Vec4,
+    pub nodes: [[u32; LANES]; 4],
+    pub rest: F,
+    pub param: F,
 }
 
-/// The centroid constraints of four tets, `rest[j]`/`param[j]` for apex `j` = node `j`.
+/// The centroid constraints of [`LANES`] tets, `rest[j]`/`param[j]` for apex `j` = node `j`.
 #[derive(Debug, Clone, Copy)]
 #[repr(C)]
 pub(crate) struct CentroidBatch {
-    pub nodes: [[u32; 4]; 4],
-    pub rest: [Vec4; 4],
-    pub param: [Vec4; 4],
+    pub nodes: [[u32; LANES]; 4],
+    pub rest: [F; 4],
+    pub param: [F; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<DistanceBatch>() == 64);
-const _: () = assert!(std::mem::size_of::<TetBatch>() == 96);
-const _: () = assert!(std::mem::size_of::<CentroidBatch>() == 192);
+const _: () = assert!(std::mem::size_of::<DistanceBatch>() == 16 * LANES);
+const _: () = assert!(std::mem::size_of::<TetBatch>() == 24 * LANES);
+const _: () = assert!(std::mem::size_of::<CentroidBatch>() == 48 * LANES);
 
-/// Four points, one per lane: `x`, `y`, `z` as lanes of `Vec4`.
+/// [`LANES`] points, one per lane.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct P4 {
-    pub x: Vec4,
-    pub y: Vec4,
-    pub z: Vec4,
+    pub x: F,
+    pub y: F,
+    pub z: F,
 }
 
 impl P4 {
     pub(crate) const ZERO: Self = Self {
-        x: Vec4::ZERO,
-        y: Vec4::ZERO,
-        z: Vec4::ZERO,
+        x: F::ZERO,
+        y: F::ZERO,
+        z: F::ZERO,
     };
     #[inline(always)]
     fn add(self, o: Self) -> Self {
@@ -188,7 +300,7 @@ impl P4 {
         }
     }
     #[inline(always)]
-    fn scale(self, s: Vec4) -> Self {
+    fn scale(self, s: F) -> Self {
         Self {
             x: self.x * s,
             y: self.y * s,
@@ -196,7 +308,7 @@ impl P4 {
         }
     }
     #[inline(always)]
-    fn dot(self, o: Self) -> Vec4 {
+    fn dot(self, o: Self) -> F {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
     #[inline(always)]
@@ -209,80 +321,70 @@ impl P4 {
     }
 }
 
-/// Lane-wise square root.
-#[inline(always)]
-fn sqrt4(v: Vec4) -> Vec4 {
-    Vec4::from_array(v.to_array().map(f32::sqrt))
-}
-
 /// Loads the nodes `ids` (xyz = position, w = inverse mass) into lanes.
 #[inline(always)]
-pub(crate) fn gather(p: &[Vec4], ids: &[u32; 4]) -> (P4, Vec4) {
-    let m = Mat4::from_cols(
-        p[ids[0] as usize],
-        p[ids[1] as usize],
-        p[ids[2] as usize],
-        p[ids[3] as usize],
-    )
-    .transpose();
-    (
-        P4 {
-            x: m.x_axis,
-            y: m.y_axis,
-            z: m.z_axis,
-        },
-        m.w_axis,
-    )
+pub(crate) fn gather(p: &[Vec4], ids: &[u32; LANES]) -> (P4, F) {
+    let (mut q, mut w) = (P4::ZERO, F::ZERO);
+    for m in 0..M {
+        let t = Mat4::from_cols(
+            p[ids[4 * m] as usize],
+            p[ids[4 * m + 1] as usize],
+            p[ids[4 * m + 2] as usize],
+            p[ids[4 * m + 3] as usize],
+        )
+        .transpose();
+        q.x.0[m] = t.x_axis;
+        q.y.0[m] = t.y_axis;
+        q.z.0[m] = t.z_axis;
+        w.0[m] = t.w_axis;
+    }
+    (q, w)
 }
 
-/// Stores lanes back to the nodes `ids` (lane 3 last; duplicate lanes hold equal values).
+/// Stores lanes back to the nodes `ids` (in lane order; duplicate lanes hold equal values).
 #[inline(always)]
-pub(crate) fn scatter(p: &mut [Vec4], ids: &[u32; 4], q: P4, w: Vec4) {
-    let m = Mat4::from_cols(q.x, q.y, q.z, w).transpose();
-    p[ids[0] as usize] = m.x_axis;
-    p[ids[1] as usize] = m.y_axis;
-    p[ids[2] as usize] = m.z_axis;
-    p[ids[3] as usize] = m.w_axis;
+pub(crate) fn scatter(p: &mut [Vec4], ids: &[u32; LANES], q: P4, w: F) {
+    for m in 0..M {
+        let t = Mat4::from_cols(q.x.0[m], q.y.0[m], q.z.0[m], w.0[m]).transpose();
+        p[ids[4 * m] as usize] = t.x_axis;
+        p[ids[4 * m + 1] as usize] = t.y_axis;
+        p[ids[4 * m + 2] as usize] = t.z_axis;
+        p[ids[4 * m + 3] as usize] = t.w_axis;
+    }
 }
 
 /// Below this length (cm) a distance or centroid constraint has no usable direction and is
 /// skipped for the iteration.
 const MIN_LENGTH: f32 = 1e-12;
 
-/// The step `s` along the (unnormalised) gradient direction, 0 in the lanes not `valid`: PBD
-/// `s = −k·C / (Σw|∇C|² · scale)`, XPBD `Δλ = (−C − α̃λ) / (Σw|∇C|² + α̃)`, `s = Δλ / scale`
-/// (`scale` = the length that normalises the direction, 1 for the volume).
+/// The step `s` along the direction `∇C · scale` that the kernel moves along, 0 in the lanes not
+/// `valid`: PBD `s = −k·C / (Σw|∇C|² · scale)`, XPBD `Δλ = (−C − α̃λ) / (Σw|∇C|² + α̃)`,
+/// `s = Δλ / scale` (`scale`: the length `|d|` for a distance direction `d`, 6 for the volume's
+/// six-fold gradients).
 #[inline(always)]
-fn step<const XPBD: bool>(
-    c: Vec4,
-    denom: Vec4,
-    scale: Vec4,
-    param: Vec4,
-    valid: glam::BVec4A,
-    lambda: &mut Vec4,
-) -> Vec4 {
+fn step<const XPBD: bool>(c: F, denom: F, scale: F, param: F, valid: Mask, lambda: &mut F) -> F {
     let s = if XPBD {
         let dl = (-c - param * *lambda) / (denom + param);
-        *lambda = Vec4::select(valid, *lambda + dl, *lambda);
+        *lambda = F::select(valid, *lambda + dl, *lambda);
         dl / scale
     } else {
         -(param * c) / (denom * scale)
     };
-    Vec4::select(valid, s, Vec4::ZERO)
+    F::select(valid, s, F::ZERO)
 }
 
 /// Projects four distance constraints (`C = |p₁ − p₂| − d`) on their gathered nodes.
 #[inline(always)]
 pub(crate) fn project_distance<const XPBD: bool>(
     q: &mut [P4; 2],
-    w: &[Vec4; 2],
+    w: &[F; 2],
     b: &DistanceBatch,
-    lambda: &mut [Vec4],
+    lambda: &mut [F],
 ) {
     let d = q[0].sub(q[1]);
-    let len = sqrt4(d.dot(d));
+    let len = d.dot(d).sqrt();
     let denom = w[0] + w[1];
-    let valid = denom.cmpgt(Vec4::ZERO) & len.cmpge(Vec4::splat(MIN_LENGTH));
+    let valid = denom.cmpgt(F::ZERO) & len.cmpge(F::splat(MIN_LENGTH));
     let s = step::<XPBD>(len - b.rest, denom, len, b.param, valid, &mut lambda[0]);
     q[0] = q[0].add(d.scale(w[0] * s));
     q[1] = q[1].sub(d.scale(w[1] * s));
@@ -292,21 +394,22 @@ pub(crate) fn project_distance<const XPBD: bool>(
 #[inline(always)]
 pub(crate) fn project_tet_volume<const XPBD: bool>(
     q: &mut [P4; 4],
-    w: &[Vec4; 4],
+    w: &[F; 4],
     b: &TetBatch,
-    lambda: &mut [Vec4],
+    lambda: &mut [F],
 ) {
     let (e1, e2, e3) = (q[1].sub(q[0]), q[2].sub(q[0]), q[3].sub(q[0]));
-    let sixth = Vec4::splat(1.0 / 6.0);
-    let g1 = e2.cross(e3).scale(sixth);
-    let g2 = e3.cross(e1).scale(sixth);
-    let g3 = e1.cross(e2).scale(sixth);
-    let g0 = g1.add(g2).add(g3).scale(Vec4::NEG_ONE);
-    let c = e3.dot(g3) - b.rest;
-    let denom = w[0] * g0.dot(g0) + w[1] * g1.dot(g1) + w[2] * g2.dot(g2) + w[3] * g3.dot(g3);
-    let valid = denom.cmpgt(Vec4::splat(f32::MIN_POSITIVE));
-    let s = step::<XPBD>(c, denom, Vec4::ONE, b.param, valid, &mut lambda[0]);
-    q[0] = q[0].add(g0.scale(w[0] * s));
+    // Six times the gradients: ∇ᵢC = gᵢ/6 (i = 1, 2, 3), ∇₀C = −g₀/6.
+    let g1 = e2.cross(e3);
+    let g2 = e3.cross(e1);
+    let g3 = e1.cross(e2);
+    let g0 = g1.add(g2).add(g3);
+    let c = e3.dot(g3) * F::splat(1.0 / 6.0) - b.rest;
+    let denom = (w[0] * g0.dot(g0) + w[1] * g1.dot(g1) + w[2] * g2.dot(g2) + w[3] * g3.dot(g3))
+        * F::splat(1.0 / 36.0);
+    let valid = denom.cmpgt(F::splat(f32::MIN_POSITIVE));
+    let s = step::<XPBD>(c, denom, F::splat(6.0), b.param, valid, &mut lambda[0]);
+    q[0] = q[0].sub(g0.scale(w[0] * s));
     q[1] = q[1].add(g1.scale(w[1] * s));
     q[2] = q[2].add(g2.scale(w[2] * s));
     q[3] = q[3].add(g3.scale(w[3] * s));
@@ -322,9 +425,9 @@ pub(crate) fn project_tet_volume<const XPBD: bool>(
 #[inline(always)]
 pub(crate) fn project_centroid<const XPBD: bool>(
     q: &mut [P4; 4],
-    w: &[Vec4; 4],
+    w: &[F; 4],
     b: &CentroidBatch,
-    lambda: &mut [Vec4],
+    lambda: &mut [F],
 ) {
     // Unrolled with constant indices so that `q` stays in registers.
     centroid_apex::<XPBD, 0, 1, 2, 3>(q, w, b, lambda);
@@ -342,15 +445,15 @@ fn centroid_apex<
     const C: usize,
 >(
     q: &mut [P4; 4],
-    w: &[Vec4; 4],
+    w: &[F; 4],
     b: &CentroidBatch,
-    lambda: &mut [Vec4],
+    lambda: &mut [F],
 ) {
-    let third = Vec4::splat(1.0 / 3.0);
+    let third = F::splat(1.0 / 3.0);
     let d = q[J].sub(q[A].add(q[B]).add(q[C]).scale(third));
-    let len = sqrt4(d.dot(d));
-    let denom = w[J] + (w[A] + w[B] + w[C]) * Vec4::splat(1.0 / 9.0);
-    let valid = denom.cmpgt(Vec4::ZERO) & len.cmpge(Vec4::splat(MIN_LENGTH));
+    let len = d.dot(d).sqrt();
+    let denom = w[J] + (w[A] + w[B] + w[C]) * F::splat(1.0 / 9.0);
+    let valid = denom.cmpgt(F::ZERO) & len.cmpge(F::splat(MIN_LENGTH));
     let s = step::<XPBD>(
         len - b.rest[J],
         denom,
@@ -372,19 +475,19 @@ mod tests {
     use super::*;
 
     /// Lane 0 holds the constraint; the other lanes copy it (as padding does).
-    fn lanes<const N: usize>(q: [Vec3A; N], w: [f32; N]) -> ([P4; N], [Vec4; N]) {
+    fn lanes<const N: usize>(q: [Vec3A; N], w: [f32; N]) -> ([P4; N], [F; N]) {
         (
             q.map(|p| P4 {
-                x: Vec4::splat(p.x),
-                y: Vec4::splat(p.y),
-                z: Vec4::splat(p.z),
+                x: F::splat(p.x),
+                y: F::splat(p.y),
+                z: F::splat(p.z),
             }),
-            w.map(Vec4::splat),
+            w.map(F::splat),
         )
     }
 
     fn lane0<const N: usize>(q: &[P4; N]) -> [Vec3A; N] {
-        q.map(|p| Vec3A::new(p.x.x, p.y.x, p.z.x))
+        q.map(|p| Vec3A::new(p.x.lane(0), p.y.lane(0), p.z.lane(0)))
     }
 
     const W: [f32; 4] = [1.0, 0.5, 2.0, 0.25];
@@ -398,22 +501,22 @@ mod tests {
     #[test]
     fn one_projection_satisfies_each_constraint_with_unit_stiffness() {
         let b = DistanceBatch {
-            nodes: [[0; 4]; 2],
-            rest: Vec4::splat(0.7),
-            param: Vec4::ONE,
+            nodes: [[0; LANES]; 2],
+            rest: F::splat(0.7),
+            param: F::ONE,
         };
         let (mut q, w) = lanes([Q[0], Q[1]], [W[0], W[1]]);
-        project_distance::<false>(&mut q, &w, &b, &mut [Vec4::ZERO]);
+        project_distance::<false>(&mut q, &w, &b, &mut [F::ZERO]);
         let pair = lane0(&q);
         assert!(((pair[0] - pair[1]).length() - 0.7).abs() < 1e-5);
 
         let b = TetBatch {
-            nodes: [[0; 4]; 4],
-            rest: Vec4::splat(0.1),
-            param: Vec4::ONE,
+            nodes: [[0; LANES]; 4],
+            rest: F::splat(0.1),
+            param: F::ONE,
         };
         let (mut q, w) = lanes(Q, W);
-        project_tet_volume::<false>(&mut q, &w, &b, &mut [Vec4::ZERO]);
+        project_tet_volume::<false>(&mut q, &w, &b, &mut [F::ZERO]);
         let t = lane0(&q);
         let vol = (t[1] - t[0]).cross(t[2] - t[0]).dot(t[3] - t[0]) / 6.0;
         // Linearised: one step lands close, not exactly.
@@ -421,12 +524,12 @@ mod tests {
 
         // One centroid constraint (apex 0) alone is exactly satisfied: it is linear along n.
         let b = CentroidBatch {
-            nodes: [[0; 4]; 4],
-            rest: [Vec4::splat(0.5); 4],
-            param: [Vec4::ONE, Vec4::ZERO, Vec4::ZERO, Vec4::ZERO],
+            nodes: [[0; LANES]; 4],
+            rest: [F::splat(0.5); 4],
+            param: [F::ONE, F::ZERO, F::ZERO, F::ZERO],
         };
         let (mut q, w) = lanes(Q, W);
-        project_centroid::<false>(&mut q, &w, &b, &mut [Vec4::ZERO; 4]);
+        project_centroid::<false>(&mut q, &w, &b, &mut [F::ZERO; 4]);
         let q = lane0(&q);
         let h = (q[0] - (q[1] + q[2] + q[3]) / 3.0).length();
         assert!((h - 0.5).abs() < 1e-5, "{h}");
@@ -435,12 +538,12 @@ mod tests {
     #[test]
     fn centroid_projection_conserves_momentum() {
         let b = CentroidBatch {
-            nodes: [[0; 4]; 4],
-            rest: [0.3, 0.4, 0.5, 0.6].map(Vec4::splat),
-            param: [Vec4::splat(0.7); 4],
+            nodes: [[0; LANES]; 4],
+            rest: [0.3, 0.4, 0.5, 0.6].map(F::splat),
+            param: [F::splat(0.7); 4],
         };
         let (mut q, w) = lanes(Q, W);
-        project_centroid::<false>(&mut q, &w, &b, &mut [Vec4::ZERO; 4]);
+        project_centroid::<false>(&mut q, &w, &b, &mut [F::ZERO; 4]);
         let q = lane0(&q);
         let mut p = Vec3A::ZERO;
         for i in 0..4 {
@@ -451,9 +554,9 @@ mod tests {
 
     #[test]
     fn lanes_are_independent_and_gather_scatter_round_trip() {
-        // Four different distance constraints in one batch give, lane by lane, what each gives
-        // alone in lane 0 (the padding invariant: a lane's result depends on its lane only).
-        let p: Vec<Vec4> = (0..8)
+        // Different distance constraints in one batch give, lane by lane, what each gives alone
+        // (the padding invariant: a lane's result depends on its lane only).
+        let p: Vec<Vec4> = (0..2 * LANES)
             .map(|i| {
                 Vec4::new(
                     i as f32 * 0.3,
@@ -463,32 +566,31 @@ mod tests {
                 )
             })
             .collect();
-        let nodes = [[0, 2, 4, 6], [1, 3, 5, 7]];
+        let nodes: [[u32; LANES]; 2] =
+            [0, 1].map(|k| std::array::from_fn(|lane| (2 * lane + k) as u32));
         let b = DistanceBatch {
             nodes,
-            rest: Vec4::new(0.1, 0.2, 0.3, 0.4),
-            param: Vec4::new(1.0, 0.5, 0.25, 0.8),
+            rest: F::from_lanes(std::array::from_fn(|l| 0.1 * (l + 1) as f32)),
+            param: F::from_lanes(std::array::from_fn(|l| 1.0 - 0.1 * l as f32)),
+        };
+        let project = |p: &mut Vec<Vec4>, b: &DistanceBatch| {
+            let (a, wa) = gather(p, &b.nodes[0]);
+            let (c, wc) = gather(p, &b.nodes[1]);
+            let mut q = [a, c];
+            project_distance::<false>(&mut q, &[wa, wc], b, &mut [F::ZERO]);
+            scatter(p, &b.nodes[0], q[0], wa);
+            scatter(p, &b.nodes[1], q[1], wc);
         };
         let mut all = p.clone();
-        let (a, wa) = gather(&all, &nodes[0]);
-        let (c, wc) = gather(&all, &nodes[1]);
-        let mut q = [a, c];
-        project_distance::<false>(&mut q, &[wa, wc], &b, &mut [Vec4::ZERO]);
-        scatter(&mut all, &nodes[0], q[0], wa);
-        scatter(&mut all, &nodes[1], q[1], wc);
-        for lane in 0..4 {
+        project(&mut all, &b);
+        for lane in 0..LANES {
             let one = DistanceBatch {
-                nodes: [[nodes[0][lane]; 4], [nodes[1][lane]; 4]],
-                rest: Vec4::splat(b.rest[lane]),
-                param: Vec4::splat(b.param[lane]),
+                nodes: [[nodes[0][lane]; LANES], [nodes[1][lane]; LANES]],
+                rest: F::splat(b.rest.lane(lane)),
+                param: F::splat(b.param.lane(lane)),
             };
             let mut alone = p.clone();
-            let (a, wa) = gather(&alone, &one.nodes[0]);
-            let (c, wc) = gather(&alone, &one.nodes[1]);
-            let mut q = [a, c];
-            project_distance::<false>(&mut q, &[wa, wc], &one, &mut [Vec4::ZERO]);
-            scatter(&mut alone, &one.nodes[0], q[0], wa);
-            scatter(&mut alone, &one.nodes[1], q[1], wc);
+            project(&mut alone, &one);
             for ids in &nodes {
                 let n = ids[lane] as usize;
                 assert_eq!(alone[n].to_array(), all[n].to_array());

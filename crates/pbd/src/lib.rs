@@ -30,11 +30,12 @@
 //!   over the renumbered nodes (each block a contiguous node range, its children the two halves,
 //!   leaves of at most 640 nodes, so a leaf's sweep runs in L1). Each constraint belongs to the
 //!   deepest block holding all its nodes; within a block constraints are greedily coloured and
-//!   stored colour by colour, in batches of four that are projected at once (one constraint per
-//!   SIMD lane; the last batch of a colour is filled up with copies of its lane 0, which compute
-//!   and write back exactly what lane 0 does), so projecting a batch is projecting its four
-//!   constraints one after another. The public API keeps the caller's node order: a step copies the
-//!   predicted positions into solver order, projects, and copies them back.
+//!   stored colour by colour, in batches of eight that are projected at once (one constraint per
+//!   SIMD lane, two `Vec4`s per value; the last batch of a colour is filled up with copies of its
+//!   lane 0, which compute and write back exactly what lane 0 does), so projecting a batch is
+//!   projecting its eight constraints one after another. The public API keeps the caller's node
+//!   order: a step copies the predicted positions into solver order, projects, and copies them
+//!   back.
 //! - One iteration is one Gauss–Seidel sweep in a fixed order: the blocks in post order (left
 //!   subtree, right subtree, then the block's own constraints: distances, then volumes), then the
 //!   floor. The parallel mode runs the two subtrees of a block at the same time (`rayon::join`

@@ -4,7 +4,7 @@
 use crate::body::Block;
 use crate::constraint::{
     gather, project_centroid, project_distance, project_tet_volume, scatter, CentroidBatch,
-    DistanceBatch, TetBatch, P4,
+    DistanceBatch, TetBatch, F, LANES, P4,
 };
 use crate::{PbdError, SoftBody, Solver, VolumeConstraintKind};
 use glam::{DMat3, DVec3, Vec3A, Vec4};
@@ -14,14 +14,14 @@ use glam::{DMat3, DVec3, Vec3A, Vec4};
 #[inline(always)]
 fn project_batches<B, const N: usize, const L: usize>(
     batches: &[B],
-    lambda: &mut [Vec4],
+    lambda: &mut [F],
     p: &mut [Vec4],
-    nodes: impl Fn(&B) -> &[[u32; 4]; N],
-    kernel: impl Fn(&mut [P4; N], &[Vec4; N], &B, &mut [Vec4]),
+    nodes: impl Fn(&B) -> &[[u32; LANES]; N],
+    kernel: impl Fn(&mut [P4; N], &[F; N], &B, &mut [F]),
 ) {
     for (b, lam) in batches.iter().zip(lambda.chunks_exact_mut(L)) {
         let ids = nodes(b);
-        let (mut q, mut w) = ([P4::ZERO; N], [Vec4::ZERO; N]);
+        let (mut q, mut w) = ([P4::ZERO; N], [F::ZERO; N]);
         for k in 0..N {
             (q[k], w[k]) = gather(p, &ids[k]);
         }
@@ -46,7 +46,7 @@ impl Sweep<'_> {
     /// Projects the constraints of block `h`'s subtree: both children (at the same time in
     /// parallel mode: they touch disjoint node ranges), then the block's own constraints. `p` is
     /// the block's node range, `ld`, `lv` the multipliers of its subtree's batches.
-    fn block<const XPBD: bool>(&self, h: usize, p: &mut [Vec4], ld: &mut [Vec4], lv: &mut [Vec4]) {
+    fn block<const XPBD: bool>(&self, h: usize, p: &mut [Vec4], ld: &mut [F], lv: &mut [F]) {
         let b = self.blocks[h];
         let per_tet = match self.kind {
             VolumeConstraintKind::None => 0,
@@ -141,8 +141,8 @@ impl SoftBody {
         }
         let xpbd = s.solver == Solver::Xpbd;
         if xpbd {
-            self.distance_lambda.fill(Vec4::ZERO);
-            self.volume_lambda.fill(Vec4::ZERO);
+            self.distance_lambda.fill(F::ZERO);
+            self.volume_lambda.fill(F::ZERO);
         }
         {
             let _span = tracing::trace_span!("project", iterations = s.iterations).entered();
