@@ -33,6 +33,8 @@ pub struct SoftBody {
 
     /// Solver order of the nodes: `order[s]` is the caller's index of solver node `s`.
     pub(crate) order: Vec<u32>,
+    /// Its inverse: `rank[i]` is the solver index of the caller's node `i`.
+    pub(crate) rank: Vec<u32>,
     /// Predicted positions `p` (xyz) with the inverse mass (w), in solver order, for the
     /// projection; and the inverse masses alone, also in solver order.
     pub(crate) q: Vec<Vec4>,
@@ -369,6 +371,7 @@ impl SoftBody {
             mass,
             w,
             order,
+            rank,
             q: vec![Vec4::ZERO; n],
             qw: vec![0.0; n],
             blocks,

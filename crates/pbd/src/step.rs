@@ -73,6 +73,11 @@ impl Sweep<'_> {
         } else {
             (ld, lv)
         };
+        self.own::<XPBD>(&b, p, ld, lv);
+    }
+
+    /// Projects the block's own constraints: distances, then volumes.
+    fn own<const XPBD: bool>(&self, b: &Block, p: &mut [Vec4], ld: &mut [F], lv: &mut [F]) {
         let [_, ds, de] = b.distance.map(|i| i as usize);
         let [_, ts, te] = b.tets.map(|i| i as usize);
         project_batches::<_, 2, 1>(
@@ -120,24 +125,18 @@ impl SoftBody {
         let _span = tracing::debug_span!("pbd_step", step = self.step_count).entered();
         let s = self.settings;
         let (dt, g) = (s.dt, Vec3A::from(s.gravity));
-        for ((p, v), (x, &w)) in self
-            .p
-            .iter_mut()
-            .zip(&mut self.v)
-            .zip(self.x.iter().zip(&self.w))
-        {
+        // 1–2, straight into solver order (crate::partition): the projection works on `q`.
+        for ((q, qw), &o) in self.q.iter_mut().zip(&mut self.qw).zip(&self.order) {
+            let (o, w) = (o as usize, self.w[o as usize]);
             if w > 0.0 {
-                *v += dt * g;
+                self.v[o] += dt * g;
             }
-            *p = *x + dt * *v;
+            *qw = w;
+            *q = (self.x[o] + dt * self.v[o]).extend(w);
         }
         for &(node, target) in &self.attachments {
-            self.p[node as usize] = target;
-        }
-        // The projection works in solver order (crate::partition).
-        for ((q, qw), &o) in self.q.iter_mut().zip(&mut self.qw).zip(&self.order) {
-            *qw = self.w[o as usize];
-            *q = self.p[o as usize].extend(*qw);
+            let s = self.rank[node as usize] as usize;
+            self.q[s] = target.extend(self.qw[s]);
         }
         let xpbd = s.solver == Solver::Xpbd;
         if xpbd {
@@ -154,16 +153,20 @@ impl SoftBody {
                 }
             }
         }
-        for (q, &o) in self.q.iter().zip(&self.order) {
-            self.p[o as usize] = q.truncate().into();
-        }
+        // 4, back in the caller's order, gathering the rigid-mode sums of step 5 on the way.
         let scale = (1.0 - s.linear_damping) / dt;
-        for ((v, p), x) in self.v.iter_mut().zip(&self.p).zip(&self.x) {
-            *v = (*p - *x) * scale;
+        let mut rigid = RigidSums::default();
+        for (q, &o) in self.q.iter().zip(&self.order) {
+            let o = o as usize;
+            let (p, x) = (Vec3A::from(q.truncate()), self.x[o]);
+            let v = (p - x) * scale;
+            (self.p[o], self.x[o], self.v[o]) = (x, p, v);
+            if s.damping > 0.0 && self.w[o] > 0.0 {
+                rigid.add(self.mass[o], p, v);
+            }
         }
-        std::mem::swap(&mut self.x, &mut self.p);
         if s.damping > 0.0 {
-            self.damp_rigid_modes(s.damping);
+            self.damp_rigid_modes(s.damping, &rigid);
         }
         let step = self.step_count;
         self.step_count += 1;
@@ -204,44 +207,26 @@ impl SoftBody {
 
     /// Rigid-mode damping (Müller et al.): with `x_cm`, `v_cm`, `L = Σ rᵢ × mᵢvᵢ`,
     /// `I = Σ r̃ᵢ r̃ᵢᵀ mᵢ`, `ω = I⁻¹L`: `vᵢ += k (v_cm + ω × rᵢ − vᵢ)` over the free nodes. Keeps
-    /// their linear and angular momentum; damps everything else by `(1 − k)`.
-    fn damp_rigid_modes(&mut self, k: f32) {
+    /// their linear and angular momentum; damps everything else by `(1 − k)`. `sums` are the
+    /// free nodes' raw moments; about the centre of mass (`Σ mᵢrᵢ = 0`)
+    /// `L = Σ mᵢ xᵢ × vᵢ − x_cm × Σ mᵢvᵢ` and `Σ mᵢ rᵢrᵢᵀ = Σ mᵢ xᵢxᵢᵀ − M x_cm x_cmᵀ`.
+    fn damp_rigid_modes(&mut self, k: f32, sums: &RigidSums) {
         let _span = tracing::trace_span!("damp").entered();
-        let (mut m_sum, mut mx, mut mv) = (0.0f64, DVec3::ZERO, DVec3::ZERO);
-        for ((&m, &w), (x, v)) in self
-            .mass
-            .iter()
-            .zip(&self.w)
-            .zip(self.x.iter().zip(&self.v))
-        {
-            if w > 0.0 {
-                let m = m as f64;
-                m_sum += m;
-                mx += m * x.as_dvec3();
-                mv += m * v.as_dvec3();
-            }
-        }
-        if m_sum <= 0.0 {
+        if sums.m <= 0.0 {
             return;
         }
-        let (x_cm, v_cm) = (mx / m_sum, mv / m_sum);
-        let (mut l, mut inertia) = (DVec3::ZERO, DMat3::ZERO);
-        for ((&m, &w), (x, v)) in self
-            .mass
-            .iter()
-            .zip(&self.w)
-            .zip(self.x.iter().zip(&self.v))
-        {
-            if w > 0.0 {
-                let m = m as f64;
-                let r = x.as_dvec3() - x_cm;
-                l += r.cross(m * v.as_dvec3());
-                // r̃ r̃ᵀ = |r|² 1 − r rᵀ.
-                inertia += m
-                    * (DMat3::from_diagonal(DVec3::splat(r.length_squared()))
-                        - DMat3::from_cols(r * r.x, r * r.y, r * r.z));
-            }
-        }
+        let (x_cm, v_cm) = (sums.mx / sums.m, sums.mv / sums.m);
+        let l = sums.mxv - x_cm.cross(sums.mv);
+        // Σ m r rᵀ, then I = tr(·) 1 − (·).
+        let [xx, yy, zz, xy, xz, yz] = sums.mxx;
+        let c = sums.m * x_cm;
+        let rr = DMat3::from_cols(
+            DVec3::new(xx, xy, xz) - c * x_cm.x,
+            DVec3::new(xy, yy, yz) - c * x_cm.y,
+            DVec3::new(xz, yz, zz) - c * x_cm.z,
+        );
+        let trace = rr.x_axis.x + rr.y_axis.y + rr.z_axis.z;
+        let inertia = DMat3::from_diagonal(DVec3::splat(trace)) - rr;
         let det = inertia.determinant();
         let scale = inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z;
         let omega = if det.abs() > 1e-12 * scale.powi(3) {
@@ -249,12 +234,41 @@ impl SoftBody {
         } else {
             DVec3::ZERO
         };
-        let (v_cm, omega, x_cm, k) = (v_cm.as_vec3a(), omega.as_vec3a(), x_cm.as_vec3a(), k);
+        let (v_cm, omega, x_cm) = (v_cm.as_vec3a(), omega.as_vec3a(), x_cm.as_vec3a());
         for ((v, x), &w) in self.v.iter_mut().zip(&self.x).zip(&self.w) {
             if w > 0.0 {
                 let rigid = v_cm + omega.cross(*x - x_cm);
                 *v += k * (rigid - *v);
             }
         }
+    }
+}
+
+/// Raw moments of the free nodes for the rigid-mode damping, in `f64`: `Σm`, `Σmx`, `Σmv`,
+/// `Σ m x xᵀ` (xx, yy, zz, xy, xz, yz) and `Σ m x × v`.
+#[derive(Debug, Default)]
+struct RigidSums {
+    m: f64,
+    mx: DVec3,
+    mv: DVec3,
+    mxx: [f64; 6],
+    mxv: DVec3,
+}
+
+impl RigidSums {
+    #[inline]
+    fn add(&mut self, m: f32, x: Vec3A, v: Vec3A) {
+        let (m, x, v) = (m as f64, x.as_dvec3(), v.as_dvec3());
+        let (mx, mv) = (m * x, m * v);
+        self.m += m;
+        self.mx += mx;
+        self.mv += mv;
+        self.mxx[0] += mx.x * x.x;
+        self.mxx[1] += mx.y * x.y;
+        self.mxx[2] += mx.z * x.z;
+        self.mxx[3] += mx.x * x.y;
+        self.mxx[4] += mx.x * x.z;
+        self.mxx[5] += mx.y * x.z;
+        self.mxv += x.cross(mv);
     }
 }
