@@ -180,16 +180,21 @@ impl SoftBody {
                 }
             }
         }
-        // 4, back in the caller's order, gathering the rigid-mode sums of step 5 on the way.
+        // 4, back in the caller's order (walked in that order: `q` is the array still in
+        // cache), gathering the rigid-mode sums of step 5 on the way.
         let scale = (1.0 - s.linear_damping) / dt;
         let mut rigid = RigidSums::default();
-        for (q, &o) in self.q.iter().zip(&self.order) {
-            let o = o as usize;
-            let (p, x) = (Vec3A::from(q.truncate()), self.x[o]);
-            let v = (p - x) * scale;
-            (self.p[o], self.x[o], self.v[o]) = (x, p, v);
-            if s.damping > 0.0 && self.w[o] > 0.0 {
-                rigid.add(self.mass[o], p, v);
+        for ((x, prev), (v, (&r, (&m, &w)))) in self.x.iter_mut().zip(&mut self.p).zip(
+            self.v
+                .iter_mut()
+                .zip(self.rank.iter().zip(self.mass.iter().zip(&self.w))),
+        ) {
+            let p = Vec3A::from(self.q[r as usize].truncate());
+            *v = (p - *x) * scale;
+            *prev = *x;
+            *x = p;
+            if s.damping > 0.0 && w > 0.0 {
+                rigid.add(m, p, *v);
             }
         }
         if s.damping > 0.0 {
