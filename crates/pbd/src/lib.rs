@@ -28,7 +28,7 @@
 //! - Solver order (module `partition`), fixed by the mesh alone, never by the thread count: at
 //!   construction the nodes are renumbered by recursive coordinate bisection, and a binary tree
 //!   of blocks is laid over the renumbered nodes: each block a contiguous node range, its
-//!   children its two halves, leaves of at most 640 nodes (a leaf's positions fit in L1). Each
+//!   children its two halves, leaves of at most 1280 nodes (a leaf's positions fit in L1). Each
 //!   constraint belongs to the deepest block holding all its nodes. The public API keeps the
 //!   caller's node order: a step predicts straight into a solver-order buffer and copies the
 //!   result back; node indices in records and errors are the caller's.
