@@ -19,9 +19,9 @@ use crate::{
 /// - every constraint's nodes are `< node_count`; constraints of a kind are stored block by block
 ///   of the domain decomposition (`crate::partition`, post order) and colour by colour within a
 ///   block; no two constraints (for volumes: no two tets) of one colour of a block share a node;
-/// - the public node arrays are in the caller's order; the projection works on copies in solver
-///   order (`order[s]` = caller's index), refreshed at the start of every step;
-/// - the hot batches (4 constraints each, see `crate::constraint`) mirror the public records,
+/// - the public node arrays are in the caller's order; the projection works on a copy in solver
+///   order (`order[s]` = caller's index, `rank` its inverse), made at the start of every step;
+/// - the hot batches (8 constraints each, see `crate::constraint`) mirror the public records,
 ///   with the per-constraint parameter of the current [`StepSettings`].
 #[derive(Debug, Clone)]
 pub struct SoftBody {

@@ -373,7 +373,7 @@ fn step<const XPBD: bool>(c: F, denom: F, scale: F, param: F, valid: Mask, lambd
     F::select(valid, s, F::ZERO)
 }
 
-/// Projects four distance constraints (`C = |p₁ − p₂| − d`) on their gathered nodes.
+/// Projects a batch of distance constraints (`C = |p₁ − p₂| − d`) on their gathered nodes.
 #[inline(always)]
 pub(crate) fn project_distance<const XPBD: bool>(
     q: &mut [P4; 2],
@@ -390,7 +390,7 @@ pub(crate) fn project_distance<const XPBD: bool>(
     q[1] = q[1].sub(d.scale(w[1] * s));
 }
 
-/// Projects four classic tet-volume constraints on their gathered nodes.
+/// Projects a batch of classic tet-volume constraints on their gathered nodes.
 #[inline(always)]
 pub(crate) fn project_tet_volume<const XPBD: bool>(
     q: &mut [P4; 4],
@@ -415,8 +415,8 @@ pub(crate) fn project_tet_volume<const XPBD: bool>(
     q[3] = q[3].add(g3.scale(w[3] * s));
 }
 
-/// Projects the four centroid constraints of four tets, apex 0, 1, 2, 3 in turn (Gauss–Seidel),
-/// on their gathered nodes.
+/// Projects the four centroid constraints of each tet of a batch, apex 0, 1, 2, 3 in turn
+/// (Gauss–Seidel), on their gathered nodes.
 ///
 /// `∇_s C = n`, `∇_{p_i} C = −n/3` (`n = (s−c)/|s−c|`), so `Σ w|∇C|² = w_s + (w₁+w₂+w₃)/9` and,
 /// with `g = (s−c)(1 − h₀/|s−c|)k'`, `Δp_i = 3w_i/W'·g`, `Δs = −9w_s/W'·g` where
