@@ -228,6 +228,8 @@ impl SoftBody {
             parallel: self.settings.parallel,
         }
         .block::<XPBD>(0, p, &mut self.distance_lambda, &mut self.volume_lambda);
+        // Per-node projections from here on: `p` (xyz; w = inverse mass) and `w` are in solver
+        // order, the caller's node `i` is `p[self.rank[i]]`.
         if let Some(f) = self.floor {
             for (p, &w) in p.iter_mut().zip(w) {
                 if w > 0.0 && p[f.axis] < f.height {
