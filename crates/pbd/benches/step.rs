@@ -1,8 +1,10 @@
 //! One PBD step on the bunny of `../shared/meshes` (42k tets, scaled to 10 cm; a 20×20×20-cell
 //! tet box of 48k tets when the folder is missing): distance + volume constraints, 10 % of the
-//! nodes pinned, gravity, no contacts, dt = 10 ms. Serial Gauss–Seidel at K = 1, 5, 10, 20 for
-//! both volume constraints, and colour-parallel on a 2-thread pool at K = 10. Throughput is in
-//! constraint projections (constraints × K), so criterion's "elem/s" inverts to ns/projection.
+//! nodes pinned, gravity, no contacts, dt = 10 ms. K = 1, 5, 10, 20 for both volume constraints,
+//! serial (`serial`) and parallel on a 2-thread pool (`par2`; same results). Throughput is in
+//! constraint projections (constraints × K), so criterion's "elem/s" inverts to ns/projection;
+//! a table of medians in ms/step and ns/projection (over `SUMMARY_STEPS` steps each, measured
+//! back to back after criterion's runs) closes the output.
 #![allow(missing_docs, clippy::print_stderr)]
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -64,36 +66,73 @@ fn projections(b: &SoftBody, k: u32) -> u64 {
         * k as u64
 }
 
+/// Steps per configuration for the closing table.
+const SUMMARY_STEPS: usize = 60;
+
 fn step(c: &mut Criterion) {
     let mesh = mesh();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("pool");
+    let kinds = [
+        VolumeConstraintKind::Classic,
+        VolumeConstraintKind::Centroid,
+    ];
+    let modes = [("serial", false), ("par2", true)];
     let mut group = c.benchmark_group("pbd_step");
     group.sample_size(20);
     group.measurement_time(std::time::Duration::from_secs(3));
     group.warm_up_time(std::time::Duration::from_millis(500));
-    for volume in [
-        VolumeConstraintKind::Classic,
-        VolumeConstraintKind::Centroid,
-    ] {
-        for k in [1u32, 5, 10, 20] {
-            let mut b = body(&mesh, volume, k, false);
-            group.throughput(Throughput::Elements(projections(&b, k)));
-            group.bench_function(
-                BenchmarkId::new(format!("{volume:?}/serial"), format!("K{k}")),
-                |bench| bench.iter(|| b.step().expect("stable")),
-            );
+    for volume in kinds {
+        for (mode, parallel) in modes {
+            for k in [1u32, 5, 10, 20] {
+                let mut b = body(&mesh, volume, k, parallel);
+                group.throughput(Throughput::Elements(projections(&b, k)));
+                group.bench_function(
+                    BenchmarkId::new(format!("{volume:?}/{mode}"), format!("K{k}")),
+                    |bench| pool.install(|| bench.iter(|| b.step().expect("stable"))),
+                );
+            }
         }
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .expect("pool");
-        let mut b = body(&mesh, volume, 10, true);
-        group.throughput(Throughput::Elements(projections(&b, 10)));
-        group.bench_function(
-            BenchmarkId::new(format!("{volume:?}/colour2"), "K10"),
-            |bench| pool.install(|| bench.iter(|| b.step().expect("stable"))),
-        );
     }
     group.finish();
+
+    eprintln!(
+        "\npbd_step summary: median of {SUMMARY_STEPS} steps (wall clock; check the machine load)"
+    );
+    eprintln!(
+        "{:<10} {:<7} {:>3} {:>9} {:>8} {:>12}",
+        "volume", "mode", "K", "ms/step", "ns/proj", "projections"
+    );
+    for volume in kinds {
+        for (mode, parallel) in modes {
+            for k in [1u32, 5, 10, 20] {
+                let mut b = body(&mesh, volume, k, parallel);
+                let mut times: Vec<f64> = pool.install(|| {
+                    (0..SUMMARY_STEPS)
+                        .map(|_| {
+                            let t = std::time::Instant::now();
+                            b.step().expect("stable");
+                            t.elapsed().as_secs_f64()
+                        })
+                        .collect()
+                });
+                times.sort_by(f64::total_cmp);
+                let median = times[SUMMARY_STEPS / 2];
+                let n = projections(&b, k);
+                eprintln!(
+                    "{:<10} {:<7} {:>3} {:>9.3} {:>8.2} {:>12}",
+                    format!("{volume:?}"),
+                    mode,
+                    k,
+                    median * 1e3,
+                    median * 1e9 / n as f64,
+                    n
+                );
+            }
+        }
+    }
 }
 
 criterion_group!(benches, step);

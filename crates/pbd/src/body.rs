@@ -1,10 +1,11 @@
-//! The soft body: node arrays, constraints by kind in colour order, construction and access.
+//! The soft body: node arrays, constraints by kind block by block, construction and access.
 
-use glam::{DVec3, Vec3, Vec3A};
+use glam::{DVec3, Vec3, Vec3A, Vec4};
 use tissue_mesh::{TetMesh, ZERO_VOLUME_TOLERANCE};
 
 use crate::colour::{colour_order, greedy_colours};
-use crate::constraint::{CentroidRow, DistanceRow, TetRow};
+use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
+use crate::partition::{bisection_order, Tree};
 use crate::{
     CentroidVolumeConstraint, DistanceConstraint, Floor, Material, PbdError, StepSettings,
     TetVolumeConstraint, VolumeConstraintKind,
@@ -15,10 +16,13 @@ use crate::{
 /// Invariants (established by the constructors, kept by every method):
 /// - all node arrays have one entry per node; `inverse_masses[i] == 0` exactly when node `i` is
 ///   pinned, attached or carries no tet; otherwise it is `1 / masses[i]`;
-/// - every constraint's nodes are `< node_count`; constraints of a kind are stored colour by
-///   colour, and no two constraints (for volumes: no two tets) of one colour share a node;
-/// - the hot rows mirror the public records, with the per-constraint parameter of the current
-///   [`StepSettings`].
+/// - every constraint's nodes are `< node_count`; constraints of a kind are stored block by block
+///   of the domain decomposition (`crate::partition`, post order) and colour by colour within a
+///   block; no two constraints (for volumes: no two tets) of one colour of a block share a node;
+/// - the public node arrays are in the caller's order; the projection works on a copy in solver
+///   order (`order[s]` = caller's index, `rank` its inverse), made at the start of every step;
+/// - the hot batches (8 constraints each, see `crate::constraint`) mirror the public records,
+///   with the per-constraint parameter of the current [`StepSettings`].
 #[derive(Debug, Clone)]
 pub struct SoftBody {
     pub(crate) x: Vec<Vec3A>,
@@ -27,31 +31,107 @@ pub struct SoftBody {
     pub(crate) mass: Vec<f32>,
     pub(crate) w: Vec<f32>,
 
-    pub(crate) distance: Vec<DistanceConstraint>,
-    pub(crate) distance_rows: Vec<DistanceRow>,
-    pub(crate) distance_offsets: Vec<u32>,
-    pub(crate) distance_lambda: Vec<f32>,
+    /// Solver order of the nodes: `order[s]` is the caller's index of solver node `s`.
+    pub(crate) order: Vec<u32>,
+    /// Its inverse: `rank[i]` is the solver index of the caller's node `i`.
+    pub(crate) rank: Vec<u32>,
+    /// Predicted positions `p` (xyz) with the inverse mass (w), in solver order, for the
+    /// projection; and the inverse masses alone, also in solver order.
+    pub(crate) q: Vec<Vec4>,
+    pub(crate) qw: Vec<f32>,
+    /// The block tree (heap numbering), see [`Block`].
+    pub(crate) blocks: Vec<Block>,
+    /// Most colours in any block: distances, tets.
+    pub(crate) colours: (usize, usize),
 
-    /// Tets in colour order (the order of the volume constraints).
+    pub(crate) distance: Vec<DistanceConstraint>,
+    pub(crate) distance_batches: Vec<DistanceBatch>,
+    /// The record (index into `distance`) of each lane of each batch.
+    pub(crate) distance_lanes: Vec<[u32; LANES]>,
+    /// One multiplier per lane (XPBD).
+    pub(crate) distance_lambda: Vec<F>,
+
+    /// Tets in projection order (the order of the volume constraints), caller's node indices.
     pub(crate) tets: Vec<[u32; 4]>,
-    pub(crate) tet_offsets: Vec<u32>,
     pub(crate) volume_kind: VolumeConstraintKind,
     pub(crate) tet_volume: Vec<TetVolumeConstraint>,
-    pub(crate) tet_rows: Vec<TetRow>,
+    pub(crate) tet_batches: Vec<TetBatch>,
     pub(crate) centroid: Vec<CentroidVolumeConstraint>,
-    pub(crate) centroid_rows: Vec<CentroidRow>,
-    /// One multiplier per volume constraint (1 or 4 per tet).
-    pub(crate) volume_lambda: Vec<f32>,
+    pub(crate) centroid_batches: Vec<CentroidBatch>,
+    /// The tet (index into `tets`) of each lane of each volume batch.
+    pub(crate) tet_lanes: Vec<[u32; LANES]>,
+    /// One multiplier per lane and volume constraint (1 or 4 per tet).
+    pub(crate) volume_lambda: Vec<F>,
 
     pub(crate) floor: Option<Floor>,
     pub(crate) attachments: Vec<(u32, Vec3A)>,
     /// Colliders, tools and this step's contacts (`contact.rs`).
     pub(crate) collision: crate::contact::ContactState,
     pub(crate) settings: StepSettings,
-    /// Corrected node positions of one colour, for the parallel projection.
-    pub(crate) scratch: Vec<[Vec3A; 4]>,
     pub(crate) step_count: u64,
     rest_volume: f64,
+}
+
+/// One block of the domain decomposition (see [`crate::partition`]). Its batches are stored in
+/// post order, so the batches of its subtree are one contiguous range: `distance` and `tets`
+/// are `[subtree start, own start, end)` into the batch arrays.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Block {
+    /// Solver node range `[start, mid, end)`; the children own `[start, mid)` and `[mid, end)`.
+    pub nodes: [u32; 3],
+    pub distance: [u32; 3],
+    pub tets: [u32; 3],
+}
+
+/// How the constraints of one kind are laid out.
+struct Layout {
+    /// Item index of each record, in projection order.
+    records: Vec<usize>,
+    /// Record index of each lane of each batch (padding lanes repeat lane 0).
+    lanes: Vec<[u32; LANES]>,
+    /// Batch range `[start, end)` of each block, by heap index.
+    ranges: Vec<[u32; 2]>,
+    /// The most colours in any block.
+    colours: usize,
+}
+
+/// Lays out `items` (solver node indices) block by block in post order; within a block, greedily
+/// coloured and in the given order within a colour; each colour cut into batches of [`LANES`].
+fn arrange<const N: usize>(tree: &Tree, post: &[usize], items: &[[u32; N]]) -> Layout {
+    let mut by_block: Vec<Vec<usize>> = vec![Vec::new(); tree.block_count()];
+    for (i, item) in items.iter().enumerate() {
+        by_block[tree.block_of(item)].push(i);
+    }
+    let mut out = Layout {
+        records: Vec::with_capacity(items.len()),
+        lanes: Vec::with_capacity(items.len() / LANES + post.len()),
+        ranges: vec![[0u32; 2]; tree.block_count()],
+        colours: 0,
+    };
+    for &h in post {
+        let [start, _, end] = tree.range(h);
+        let local: Vec<[u32; N]> = by_block[h]
+            .iter()
+            .map(|&i| items[i].map(|n| n - start as u32))
+            .collect();
+        let (colours, count) = greedy_colours(end - start, &local);
+        let (within, offsets) = colour_order(&colours, count);
+        out.colours = out.colours.max(count as usize);
+        out.ranges[h][0] = out.lanes.len() as u32;
+        for colour in offsets.windows(2) {
+            for batch in within[colour[0] as usize..colour[1] as usize].chunks(LANES) {
+                let first = out.records.len() as u32;
+                out.records.extend(batch.iter().map(|&k| by_block[h][k]));
+                let mut lanes = [first; LANES];
+                for (l, lane) in lanes.iter_mut().enumerate().take(batch.len()) {
+                    *lane = first + l as u32;
+                }
+                out.lanes.push(lanes);
+            }
+        }
+        out.ranges[h][1] = out.lanes.len() as u32;
+    }
+    out
 }
 
 fn sixfold_volume(t: [Vec3; 4]) -> f64 {
@@ -130,24 +210,69 @@ impl SoftBody {
             .sum::<f64>()
             / 6.0;
 
-        // Unique edges, sorted by node for locality, then coloured.
+        // Solver order of the nodes and the block tree over it (crate::partition).
+        let order = bisection_order(positions);
+        let mut rank = vec![0u32; n];
+        for (s, &o) in order.iter().enumerate() {
+            rank[o as usize] = s as u32;
+        }
+        let tree = Tree::for_nodes(n);
+        let post = tree.post_order();
+
+        // Unique edges in solver indices, sorted by node for locality, then laid out by block.
         let mut edges: Vec<[u32; 2]> = Vec::with_capacity(tets.len() * 6);
         for t in tets {
+            let t = t.map(|i| rank[i as usize]);
             for a in 0..4 {
                 for b in a + 1..4 {
-                    let (i, j) = (t[a].min(t[b]), t[a].max(t[b]));
-                    edges.push([i, j]);
+                    edges.push([t[a].min(t[b]), t[a].max(t[b])]);
                 }
             }
         }
         edges.sort_unstable();
         edges.dedup();
-        let (colours, count) = greedy_colours(n, &edges);
-        let (order, distance_offsets) = colour_order(&colours, count);
-        let distance: Vec<DistanceConstraint> = order
+        let dl = arrange(&tree, &post, &edges);
+
+        // Tets (solver indices, orientation kept) sorted by their smallest node, laid out by block.
+        let mut sorted: Vec<[u32; 4]> = tets.iter().map(|t| t.map(|i| rank[i as usize])).collect();
+        sorted.sort_by_key(|t| {
+            let mut k = *t;
+            k.sort_unstable();
+            k
+        });
+        let tl = arrange(&tree, &post, &sorted);
+
+        let blocks: Vec<Block> = (0..tree.block_count())
+            .map(|h| {
+                let [start, mid, end] = tree.range(h).map(|i| i as u32);
+                // Post order: a subtree's batches start where its leftmost leaf's do.
+                let mut leaf = h;
+                while !tree.is_leaf(leaf) {
+                    leaf = 2 * leaf + 1;
+                }
+                Block {
+                    nodes: [start, mid, end],
+                    distance: [dl.ranges[leaf][0], dl.ranges[h][0], dl.ranges[h][1]],
+                    tets: [tl.ranges[leaf][0], tl.ranges[h][0], tl.ranges[h][1]],
+                }
+            })
+            .collect();
+        // The node range start of each batch's block: batches index that range.
+        let batch_base = |ranges: &[[u32; 2]], count: usize| {
+            let mut base = vec![0u32; count];
+            for (h, r) in ranges.iter().enumerate() {
+                base[r[0] as usize..r[1] as usize].fill(blocks[h].nodes[0]);
+            }
+            base
+        };
+        let original = |i: u32| order[i as usize];
+
+        // Records in projection order, caller's node indices.
+        let distance: Vec<DistanceConstraint> = dl
+            .records
             .iter()
             .map(|&e| {
-                let [a, b] = edges[e];
+                let [a, b] = edges[e].map(original);
                 DistanceConstraint {
                     nodes: [a, b],
                     rest_length: positions[a as usize].distance(positions[b as usize]),
@@ -156,19 +281,33 @@ impl SoftBody {
                 }
             })
             .collect();
-
-        // Tets sorted by their smallest node, then coloured.
-        let mut sorted: Vec<[u32; 4]> = tets.to_vec();
-        sorted.sort_by_key(|t| {
-            let mut k = *t;
-            k.sort_unstable();
-            k
-        });
-        let (colours, count) = greedy_colours(n, &sorted);
-        let (order, tet_offsets) = colour_order(&colours, count);
-        let tets: Vec<[u32; 4]> = order.iter().map(|&t| sorted[t]).collect();
+        let distance_batches: Vec<DistanceBatch> = dl
+            .lanes
+            .iter()
+            .zip(batch_base(&dl.ranges, dl.lanes.len()))
+            .map(|(lanes, base)| DistanceBatch {
+                nodes: [0, 1].map(|k| lanes.map(|r| edges[dl.records[r as usize]][k] - base)),
+                rest: F::from_lanes(lanes.map(|r| distance[r as usize].rest_length)),
+                param: F::ZERO,
+            })
+            .collect();
+        let tets: Vec<[u32; 4]> = tl
+            .records
+            .iter()
+            .map(|&t| sorted[t].map(original))
+            .collect();
+        let tet_nodes: Vec<[[u32; LANES]; 4]> = tl
+            .lanes
+            .iter()
+            .zip(batch_base(&tl.ranges, tl.lanes.len()))
+            .map(|(lanes, base)| {
+                [0, 1, 2, 3].map(|k| lanes.map(|r| sorted[tl.records[r as usize]][k] - base))
+            })
+            .collect();
 
         let (mut tet_volume, mut centroid) = (Vec::new(), Vec::new());
+        let (mut tet_batches, mut centroid_batches) = (Vec::new(), Vec::new());
+        let mut volume_lambda = Vec::new();
         match material.volume {
             VolumeConstraintKind::None => {}
             VolumeConstraintKind::Classic => {
@@ -182,6 +321,16 @@ impl SoftBody {
                         compliance: material.volume_compliance,
                     })
                     .collect();
+                tet_batches = tet_nodes
+                    .iter()
+                    .zip(&tl.lanes)
+                    .map(|(&nodes, lanes)| TetBatch {
+                        nodes,
+                        rest: F::from_lanes(lanes.map(|r| tet_volume[r as usize].rest_volume)),
+                        param: F::ZERO,
+                    })
+                    .collect();
+                volume_lambda = vec![F::ZERO; tl.lanes.len()];
             }
             VolumeConstraintKind::Centroid => {
                 for t in &tets {
@@ -197,17 +346,20 @@ impl SoftBody {
                         });
                     }
                 }
+                centroid_batches = tet_nodes
+                    .iter()
+                    .zip(&tl.lanes)
+                    .map(|(&nodes, lanes)| CentroidBatch {
+                        nodes,
+                        rest: [0, 1, 2, 3].map(|j| {
+                            F::from_lanes(lanes.map(|r| centroid[4 * r as usize + j].rest_height))
+                        }),
+                        param: [F::ZERO; 4],
+                    })
+                    .collect();
+                volume_lambda = vec![F::ZERO; 4 * tl.lanes.len()];
             }
         }
-        let volume_lambda = vec![0.0; tet_volume.len() + centroid.len()];
-        let largest = |offsets: &[u32]| {
-            offsets
-                .windows(2)
-                .map(|w| (w[1] - w[0]) as usize)
-                .max()
-                .unwrap_or(0)
-        };
-        let scratch = vec![[Vec3A::ZERO; 4]; largest(&distance_offsets).max(largest(&tet_offsets))];
         let mass: Vec<f32> = mass.iter().map(|&m| m as f32).collect();
         let w = mass
             .iter()
@@ -220,23 +372,28 @@ impl SoftBody {
             x,
             mass,
             w,
-            distance_lambda: vec![0.0; distance.len()],
-            distance_rows: Vec::new(),
+            order,
+            rank,
+            q: vec![Vec4::ZERO; n],
+            qw: vec![0.0; n],
+            blocks,
+            colours: (dl.colours, tl.colours),
+            distance_lambda: vec![F::ZERO; distance_batches.len()],
+            distance_batches,
+            distance_lanes: dl.lanes,
             distance,
-            distance_offsets,
             tets,
-            tet_offsets,
             volume_kind: material.volume,
             tet_volume,
-            tet_rows: Vec::new(),
+            tet_batches,
             centroid,
-            centroid_rows: Vec::new(),
+            centroid_batches,
+            tet_lanes: tl.lanes,
             volume_lambda,
             floor: None,
             attachments: Vec::new(),
             collision: Default::default(),
             settings: StepSettings::default(),
-            scratch,
             step_count: 0,
             rest_volume,
         };
@@ -253,31 +410,26 @@ impl SoftBody {
         settings.validate()?;
         self.settings = settings;
         let s = &self.settings;
-        self.distance_rows.clear();
-        self.distance_rows
-            .extend(self.distance.iter().map(|c| DistanceRow {
-                nodes: c.nodes,
-                rest: c.rest_length,
-                param: s.param(c.stiffness, c.compliance),
+        for (b, lanes) in self.distance_batches.iter_mut().zip(&self.distance_lanes) {
+            b.param = F::from_lanes(lanes.map(|r| {
+                let c = &self.distance[r as usize];
+                s.param(c.stiffness, c.compliance)
             }));
-        self.tet_rows.clear();
-        self.tet_rows.extend(self.tet_volume.iter().map(|c| TetRow {
-            nodes: c.nodes,
-            rest: c.rest_volume,
-            param: s.param(c.stiffness, c.compliance),
-        }));
-        self.centroid_rows.clear();
-        self.centroid_rows
-            .extend(
-                self.tets
-                    .iter()
-                    .zip(self.centroid.chunks_exact(4))
-                    .map(|(t, c)| CentroidRow {
-                        nodes: *t,
-                        rest: [0, 1, 2, 3].map(|j| c[j].rest_height),
-                        param: [0, 1, 2, 3].map(|j| s.param(c[j].stiffness, c[j].compliance)),
-                    }),
-            );
+        }
+        for (b, lanes) in self.tet_batches.iter_mut().zip(&self.tet_lanes) {
+            b.param = F::from_lanes(lanes.map(|r| {
+                let c = &self.tet_volume[r as usize];
+                s.param(c.stiffness, c.compliance)
+            }));
+        }
+        for (b, lanes) in self.centroid_batches.iter_mut().zip(&self.tet_lanes) {
+            b.param = [0, 1, 2, 3].map(|j| {
+                F::from_lanes(lanes.map(|r| {
+                    let c = &self.centroid[4 * r as usize + j];
+                    s.param(c.stiffness, c.compliance)
+                }))
+            });
+        }
         Ok(())
     }
 
@@ -311,11 +463,11 @@ impl SoftBody {
     pub fn inverse_masses(&self) -> &[f32] {
         &self.w
     }
-    /// Tets in the body's (colour) order.
+    /// Tets in the body's projection order (block by block, by colour within a block).
     pub fn tets(&self) -> &[[u32; 4]] {
         &self.tets
     }
-    /// Distance constraints, one per unique tet edge, in colour order.
+    /// Distance constraints, one per unique tet edge, in projection order.
     pub fn distance_constraints(&self) -> &[DistanceConstraint] {
         &self.distance
     }
@@ -331,9 +483,14 @@ impl SoftBody {
     pub fn volume_kind(&self) -> VolumeConstraintKind {
         self.volume_kind
     }
-    /// Number of colours of the distance constraints and of the tets (volume constraints).
+    /// Number of colours of the distance constraints and of the tets (volume constraints): the
+    /// most in any block of the domain decomposition (each block is coloured on its own).
     pub fn colour_counts(&self) -> (usize, usize) {
-        (self.distance_offsets.len() - 1, self.tet_offsets.len() - 1)
+        self.colours
+    }
+    /// Number of blocks of the domain decomposition (`2^d − 1`, fixed by the node count).
+    pub fn block_count(&self) -> usize {
+        self.blocks.len()
     }
     /// Steps taken since construction.
     pub fn step_count(&self) -> u64 {

@@ -1,5 +1,7 @@
-//! Constraint records (public, one `Vec` per kind) and their projection kernels (pure functions
-//! on local copies of the node positions).
+//! Constraint records (public, one `Vec` per kind) and their projection kernels: pure functions
+//! on local copies of the nodes of [`LANES`] constraints at once (structure of arrays, one
+//! constraint per `f32` lane; the nodes carry their inverse mass in `w`), gathered and scattered
+//! with 4×4 transposes.
 //!
 //! Projection of one constraint `C` (Müller et al.): `Δp_i = −s·w_i·∇_i C`,
 //! `s = k·C / Σ_j w_j |∇_j C|²`. XPBD (Macklin et al.) replaces the stiffness by a compliance:
@@ -7,7 +9,7 @@
 //! it is the PBD projection with `k = 1`. Both conserve linear and angular momentum (the
 //! gradients of a translation- and rotation-invariant `C` sum to zero and have zero torque).
 
-use glam::Vec3A;
+use glam::{BVec4A, Mat4, Vec3A, Vec4};
 
 /// Whether a constraint holds as `C = 0` or as `C ≥ 0` (projected only when `C < 0`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -118,103 +120,303 @@ impl Floor {
     pub const KIND: ConstraintKind = ConstraintKind::Inequality;
 }
 
-/// Hot record of a distance constraint: 16 bytes, `param` is `k'` (PBD) or `α̃` (XPBD).
-#[derive(Debug, Clone, Copy, Default)]
-#[repr(C)]
-pub(crate) struct DistanceRow {
-    pub nodes: [u32; 2],
-    pub rest: f32,
-    pub param: f32,
+/// `Vec4`s per lane group: a batch holds [`LANES`] `= 4·M` constraints, one per `f32` lane. Two
+/// `Vec4`s per value let the CPU overlap two independent chains of SSE operations.
+pub(crate) const M: usize = 2;
+/// Constraints per batch.
+pub(crate) const LANES: usize = 4 * M;
+
+/// One `f32` per lane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct F(pub [Vec4; M]);
+
+/// One boolean per lane.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Mask([BVec4A; M]);
+
+macro_rules! lanewise {
+    ($trait:ident, $fn:ident, $op:tt) => {
+        impl std::ops::$trait for F {
+            type Output = F;
+            #[inline(always)]
+            fn $fn(self, o: F) -> F {
+                let mut r = self.0;
+                for (r, o) in r.iter_mut().zip(o.0) {
+                    *r $op o;
+                }
+                F(r)
+            }
+        }
+    };
+}
+lanewise!(Add, add, +=);
+lanewise!(Sub, sub, -=);
+lanewise!(Mul, mul, *=);
+lanewise!(Div, div, /=);
+
+impl std::ops::Neg for F {
+    type Output = F;
+    #[inline(always)]
+    fn neg(self) -> F {
+        let mut r = self.0;
+        for r in &mut r {
+            *r = -*r;
+        }
+        F(r)
+    }
 }
 
-/// Hot record of a classic volume constraint: 24 bytes.
-#[derive(Debug, Clone, Copy, Default)]
-#[repr(C)]
-pub(crate) struct TetRow {
-    pub nodes: [u32; 4],
-    pub rest: f32,
-    pub param: f32,
+impl std::ops::BitAnd for Mask {
+    type Output = Mask;
+    #[inline(always)]
+    fn bitand(self, o: Mask) -> Mask {
+        let mut r = self.0;
+        for (r, o) in r.iter_mut().zip(o.0) {
+            *r &= o;
+        }
+        Mask(r)
+    }
 }
 
-/// Hot record of the four centroid constraints of one tet (apex `j` = node `j`): 48 bytes.
-#[derive(Debug, Clone, Copy, Default)]
-#[repr(C)]
-pub(crate) struct CentroidRow {
-    pub nodes: [u32; 4],
-    pub rest: [f32; 4],
-    pub param: [f32; 4],
+impl F {
+    pub(crate) const ZERO: F = F([Vec4::ZERO; M]);
+    #[cfg(test)]
+    pub(crate) const ONE: F = F([Vec4::ONE; M]);
+    #[inline(always)]
+    pub(crate) fn splat(v: f32) -> F {
+        F([Vec4::splat(v); M])
+    }
+    /// The lanes from an array.
+    pub(crate) fn from_lanes(a: [f32; LANES]) -> F {
+        F(std::array::from_fn(|m| {
+            Vec4::new(a[4 * m], a[4 * m + 1], a[4 * m + 2], a[4 * m + 3])
+        }))
+    }
+    /// Lane `i`.
+    #[cfg(test)]
+    pub(crate) fn lane(self, i: usize) -> f32 {
+        self.0[i / 4][i % 4]
+    }
+    #[inline(always)]
+    fn sqrt(self) -> F {
+        let mut r = self.0;
+        for r in &mut r {
+            *r = Vec4::new(r.x.sqrt(), r.y.sqrt(), r.z.sqrt(), r.w.sqrt());
+        }
+        F(r)
+    }
+    #[inline(always)]
+    fn cmpgt(self, o: F) -> Mask {
+        let mut r = [BVec4A::FALSE; M];
+        for (r, (a, b)) in r.iter_mut().zip(self.0.into_iter().zip(o.0)) {
+            *r = a.cmpgt(b);
+        }
+        Mask(r)
+    }
+    #[inline(always)]
+    fn cmpge(self, o: F) -> Mask {
+        let mut r = [BVec4A::FALSE; M];
+        for (r, (a, b)) in r.iter_mut().zip(self.0.into_iter().zip(o.0)) {
+            *r = a.cmpge(b);
+        }
+        Mask(r)
+    }
+    /// `if mask { a } else { b }` per lane.
+    #[inline(always)]
+    fn select(mask: Mask, a: F, b: F) -> F {
+        let mut r = b.0;
+        for ((r, m), a) in r.iter_mut().zip(mask.0).zip(a.0) {
+            *r = Vec4::select(m, a, *r);
+        }
+        F(r)
+    }
 }
 
-const _: () = assert!(std::mem::size_of::<DistanceRow>() == 16);
-const _: () = assert!(std::mem::size_of::<TetRow>() == 24);
-const _: () = assert!(std::mem::size_of::<CentroidRow>() == 48);
+/// [`LANES`] constraints of one kind projected at once, one per lane (structure of arrays). The
+/// lanes of a batch share no node (they come from one colour of one block); a colour whose size
+/// is not a multiple of [`LANES`] fills its last batch with copies of that batch's lane 0, which
+/// compute exactly what lane 0 computes and write the same values back.
+///
+/// `nodes[k][lane]`: node `k` of the lane's constraint, an index into the node range of the
+/// batch's block. `param` is `k`, `k'` or `α̃` per lane (see [`crate::StepSettings`]).
+#[derive(Debug, Clone, Copy)]
+#[repr(C)]
+pub(crate) struct DistanceBatch {
+    pub nodes: [[u32; LANES]; 2],
+    pub rest: F,
+    pub param: F,
+}
+
+/// Classic volume constraints: rest volumes `V₀`.
+#[derive(Debug, Clone, Copy)]
+#[repr(C)]
+pub(crate) struct TetBatch {
+    pub nodes: [[u32; LANES]; 4],
+    pub rest: F,
+    pub param: F,
+}
+
+/// The centroid constraints of [`LANES`] tets, `rest[j]`/`param[j]` for apex `j` = node `j`.
+#[derive(Debug, Clone, Copy)]
+#[repr(C)]
+pub(crate) struct CentroidBatch {
+    pub nodes: [[u32; LANES]; 4],
+    pub rest: [F; 4],
+    pub param: [F; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<DistanceBatch>() == 16 * LANES);
+const _: () = assert!(std::mem::size_of::<TetBatch>() == 24 * LANES);
+const _: () = assert!(std::mem::size_of::<CentroidBatch>() == 48 * LANES);
+
+/// [`LANES`] points, one per lane.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct P4 {
+    pub x: F,
+    pub y: F,
+    pub z: F,
+}
+
+impl P4 {
+    pub(crate) const ZERO: Self = Self {
+        x: F::ZERO,
+        y: F::ZERO,
+        z: F::ZERO,
+    };
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+    #[inline(always)]
+    fn scale(self, s: F) -> Self {
+        Self {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+    #[inline(always)]
+    fn dot(self, o: Self) -> F {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    #[inline(always)]
+    fn cross(self, o: Self) -> Self {
+        Self {
+            x: self.y * o.z - self.z * o.y,
+            y: self.z * o.x - self.x * o.z,
+            z: self.x * o.y - self.y * o.x,
+        }
+    }
+}
+
+/// Loads the nodes `ids` (xyz = position, w = inverse mass) into lanes.
+#[inline(always)]
+pub(crate) fn gather(p: &[Vec4], ids: &[u32; LANES]) -> (P4, F) {
+    let (mut q, mut w) = (P4::ZERO, F::ZERO);
+    for m in 0..M {
+        let t = Mat4::from_cols(
+            p[ids[4 * m] as usize],
+            p[ids[4 * m + 1] as usize],
+            p[ids[4 * m + 2] as usize],
+            p[ids[4 * m + 3] as usize],
+        )
+        .transpose();
+        q.x.0[m] = t.x_axis;
+        q.y.0[m] = t.y_axis;
+        q.z.0[m] = t.z_axis;
+        w.0[m] = t.w_axis;
+    }
+    (q, w)
+}
+
+/// Stores lanes back to the nodes `ids` (in lane order; duplicate lanes hold equal values).
+#[inline(always)]
+pub(crate) fn scatter(p: &mut [Vec4], ids: &[u32; LANES], q: P4, w: F) {
+    for m in 0..M {
+        let t = Mat4::from_cols(q.x.0[m], q.y.0[m], q.z.0[m], w.0[m]).transpose();
+        p[ids[4 * m] as usize] = t.x_axis;
+        p[ids[4 * m + 1] as usize] = t.y_axis;
+        p[ids[4 * m + 2] as usize] = t.z_axis;
+        p[ids[4 * m + 3] as usize] = t.w_axis;
+    }
+}
 
 /// Below this length (cm) a distance or centroid constraint has no usable direction and is
 /// skipped for the iteration.
 const MIN_LENGTH: f32 = 1e-12;
 
-/// The multiplier step `Δλ` shared by PBD (`α̃ = 0`, `k` = `param`) and XPBD (`α̃` = `param`).
+/// The step `s` along the direction `∇C · scale` that the kernel moves along, 0 in the lanes not
+/// `valid`: PBD `s = −k·C / (Σw|∇C|² · scale)`, XPBD `Δλ = (−C − α̃λ) / (Σw|∇C|² + α̃)`,
+/// `s = Δλ / scale` (`scale`: the length `|d|` for a distance direction `d`, 6 for the volume's
+/// six-fold gradients).
 #[inline(always)]
-fn delta_lambda<const XPBD: bool>(c: f32, denom: f32, param: f32, lambda: &mut f32) -> f32 {
-    if XPBD {
+fn step<const XPBD: bool>(c: F, denom: F, scale: F, param: F, valid: Mask, lambda: &mut F) -> F {
+    let s = if XPBD {
         let dl = (-c - param * *lambda) / (denom + param);
-        *lambda += dl;
-        dl
+        *lambda = F::select(valid, *lambda + dl, *lambda);
+        dl / scale
     } else {
-        -param * c / denom
-    }
+        -(param * c) / (denom * scale)
+    };
+    F::select(valid, s, F::ZERO)
 }
 
-/// Projects one distance constraint on local copies `q` of its nodes.
+/// Projects a batch of distance constraints (`C = |p₁ − p₂| − d`) on their gathered nodes.
 #[inline(always)]
 pub(crate) fn project_distance<const XPBD: bool>(
-    q: &mut [Vec3A; 2],
-    w: [f32; 2],
-    row: &DistanceRow,
-    lambda: &mut f32,
+    q: &mut [P4; 2],
+    w: &[F; 2],
+    b: &DistanceBatch,
+    lambda: &mut [F],
 ) {
-    let d = q[0] - q[1];
-    let len = d.length();
+    let d = q[0].sub(q[1]);
+    let len = d.dot(d).sqrt();
     let denom = w[0] + w[1];
-    if denom <= 0.0 || len < MIN_LENGTH {
-        return;
-    }
-    let n = d / len;
-    let dl = delta_lambda::<XPBD>(len - row.rest, denom, row.param, lambda);
-    q[0] += (w[0] * dl) * n;
-    q[1] -= (w[1] * dl) * n;
+    let valid = denom.cmpgt(F::ZERO) & len.cmpge(F::splat(MIN_LENGTH));
+    let s = step::<XPBD>(len - b.rest, denom, len, b.param, valid, &mut lambda[0]);
+    q[0] = q[0].add(d.scale(w[0] * s));
+    q[1] = q[1].sub(d.scale(w[1] * s));
 }
 
-/// Projects one classic tet-volume constraint on local copies `q` of its nodes.
+/// Projects a batch of classic tet-volume constraints on their gathered nodes.
 #[inline(always)]
 pub(crate) fn project_tet_volume<const XPBD: bool>(
-    q: &mut [Vec3A; 4],
-    w: [f32; 4],
-    row: &TetRow,
-    lambda: &mut f32,
+    q: &mut [P4; 4],
+    w: &[F; 4],
+    b: &TetBatch,
+    lambda: &mut [F],
 ) {
-    let (e1, e2, e3) = (q[1] - q[0], q[2] - q[0], q[3] - q[0]);
-    let g1 = e2.cross(e3) / 6.0;
-    let g2 = e3.cross(e1) / 6.0;
-    let g3 = e1.cross(e2) / 6.0;
-    let g0 = -(g1 + g2 + g3);
-    let c = e3.dot(g3) - row.rest;
-    let denom = w[0] * g0.length_squared()
-        + w[1] * g1.length_squared()
-        + w[2] * g2.length_squared()
-        + w[3] * g3.length_squared();
-    if denom <= f32::MIN_POSITIVE {
-        return;
-    }
-    let dl = delta_lambda::<XPBD>(c, denom, row.param, lambda);
-    q[0] += (w[0] * dl) * g0;
-    q[1] += (w[1] * dl) * g1;
-    q[2] += (w[2] * dl) * g2;
-    q[3] += (w[3] * dl) * g3;
+    let (e1, e2, e3) = (q[1].sub(q[0]), q[2].sub(q[0]), q[3].sub(q[0]));
+    // Six times the gradients: ∇ᵢC = gᵢ/6 (i = 1, 2, 3), ∇₀C = −g₀/6.
+    let g1 = e2.cross(e3);
+    let g2 = e3.cross(e1);
+    let g3 = e1.cross(e2);
+    let g0 = g1.add(g2).add(g3);
+    let c = e3.dot(g3) * F::splat(1.0 / 6.0) - b.rest;
+    let denom = (w[0] * g0.dot(g0) + w[1] * g1.dot(g1) + w[2] * g2.dot(g2) + w[3] * g3.dot(g3))
+        * F::splat(1.0 / 36.0);
+    let valid = denom.cmpgt(F::splat(f32::MIN_POSITIVE));
+    let s = step::<XPBD>(c, denom, F::splat(6.0), b.param, valid, &mut lambda[0]);
+    q[0] = q[0].sub(g0.scale(w[0] * s));
+    q[1] = q[1].add(g1.scale(w[1] * s));
+    q[2] = q[2].add(g2.scale(w[2] * s));
+    q[3] = q[3].add(g3.scale(w[3] * s));
 }
 
-/// Projects the four centroid constraints of one tet, apex 0, 1, 2, 3 in turn (Gauss–Seidel), on
-/// local copies `q` of its nodes.
+/// Projects the four centroid constraints of each tet of a batch, apex 0, 1, 2, 3 in turn
+/// (Gauss–Seidel), on their gathered nodes.
 ///
 /// `∇_s C = n`, `∇_{p_i} C = −n/3` (`n = (s−c)/|s−c|`), so `Σ w|∇C|² = w_s + (w₁+w₂+w₃)/9` and,
 /// with `g = (s−c)(1 − h₀/|s−c|)k'`, `Δp_i = 3w_i/W'·g`, `Δs = −9w_s/W'·g` where
@@ -222,16 +424,16 @@ pub(crate) fn project_tet_volume<const XPBD: bool>(
 /// `W'/W`, 3× for equal masses, and diverges for `k' > 2/3`.)
 #[inline(always)]
 pub(crate) fn project_centroid<const XPBD: bool>(
-    q: &mut [Vec3A; 4],
-    w: [f32; 4],
-    row: &CentroidRow,
-    lambda: &mut [f32],
+    q: &mut [P4; 4],
+    w: &[F; 4],
+    b: &CentroidBatch,
+    lambda: &mut [F],
 ) {
     // Unrolled with constant indices so that `q` stays in registers.
-    centroid_apex::<XPBD, 0, 1, 2, 3>(q, w, row, lambda);
-    centroid_apex::<XPBD, 1, 2, 3, 0>(q, w, row, lambda);
-    centroid_apex::<XPBD, 2, 3, 0, 1>(q, w, row, lambda);
-    centroid_apex::<XPBD, 3, 0, 1, 2>(q, w, row, lambda);
+    centroid_apex::<XPBD, 0, 1, 2, 3>(q, w, b, lambda);
+    centroid_apex::<XPBD, 1, 2, 3, 0>(q, w, b, lambda);
+    centroid_apex::<XPBD, 2, 3, 0, 1>(q, w, b, lambda);
+    centroid_apex::<XPBD, 3, 0, 1, 2>(q, w, b, lambda);
 }
 
 #[inline(always)]
@@ -242,91 +444,159 @@ fn centroid_apex<
     const B: usize,
     const C: usize,
 >(
-    q: &mut [Vec3A; 4],
-    w: [f32; 4],
-    row: &CentroidRow,
-    lambda: &mut [f32],
+    q: &mut [P4; 4],
+    w: &[F; 4],
+    b: &CentroidBatch,
+    lambda: &mut [F],
 ) {
-    let c = (q[A] + q[B] + q[C]) * (1.0 / 3.0);
-    let d = q[J] - c;
-    let len = d.length();
-    let denom = w[J] + (w[A] + w[B] + w[C]) * (1.0 / 9.0);
-    if denom <= 0.0 || len < MIN_LENGTH {
-        return;
-    }
-    let dl = delta_lambda::<XPBD>(len - row.rest[J], denom, row.param[J], &mut lambda[J]);
-    let step = d * (dl / len);
-    q[J] += w[J] * step;
-    let face = step * (1.0 / 3.0);
-    q[A] -= w[A] * face;
-    q[B] -= w[B] * face;
-    q[C] -= w[C] * face;
+    let third = F::splat(1.0 / 3.0);
+    let d = q[J].sub(q[A].add(q[B]).add(q[C]).scale(third));
+    let len = d.dot(d).sqrt();
+    let denom = w[J] + (w[A] + w[B] + w[C]) * F::splat(1.0 / 9.0);
+    let valid = denom.cmpgt(F::ZERO) & len.cmpge(F::splat(MIN_LENGTH));
+    let s = step::<XPBD>(
+        len - b.rest[J],
+        denom,
+        len,
+        b.param[J],
+        valid,
+        &mut lambda[J],
+    );
+    let step = d.scale(s);
+    q[J] = q[J].add(step.scale(w[J]));
+    let face = step.scale(third);
+    q[A] = q[A].sub(face.scale(w[A]));
+    q[B] = q[B].sub(face.scale(w[B]));
+    q[C] = q[C].sub(face.scale(w[C]));
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// Lane 0 holds the constraint; the other lanes copy it (as padding does).
+    fn lanes<const N: usize>(q: [Vec3A; N], w: [f32; N]) -> ([P4; N], [F; N]) {
+        (
+            q.map(|p| P4 {
+                x: F::splat(p.x),
+                y: F::splat(p.y),
+                z: F::splat(p.z),
+            }),
+            w.map(F::splat),
+        )
+    }
+
+    fn lane0<const N: usize>(q: &[P4; N]) -> [Vec3A; N] {
+        q.map(|p| Vec3A::new(p.x.lane(0), p.y.lane(0), p.z.lane(0)))
+    }
+
+    const W: [f32; 4] = [1.0, 0.5, 2.0, 0.25];
+    const Q: [Vec3A; 4] = [
+        Vec3A::new(0.0, 0.0, 0.0),
+        Vec3A::new(1.2, 0.1, 0.0),
+        Vec3A::new(0.1, 0.9, 0.2),
+        Vec3A::new(0.2, 0.1, 1.3),
+    ];
+
     #[test]
     fn one_projection_satisfies_each_constraint_with_unit_stiffness() {
-        let w = [1.0, 0.5, 2.0, 0.25];
-        let mut q = [
-            Vec3A::new(0.0, 0.0, 0.0),
-            Vec3A::new(1.2, 0.1, 0.0),
-            Vec3A::new(0.1, 0.9, 0.2),
-            Vec3A::new(0.2, 0.1, 1.3),
-        ];
-        let row = DistanceRow {
-            nodes: [0, 1],
-            rest: 0.7,
-            param: 1.0,
+        let b = DistanceBatch {
+            nodes: [[0; LANES]; 2],
+            rest: F::splat(0.7),
+            param: F::ONE,
         };
-        let mut pair = [q[0], q[1]];
-        project_distance::<false>(&mut pair, [w[0], w[1]], &row, &mut 0.0);
+        let (mut q, w) = lanes([Q[0], Q[1]], [W[0], W[1]]);
+        project_distance::<false>(&mut q, &w, &b, &mut [F::ZERO]);
+        let pair = lane0(&q);
         assert!(((pair[0] - pair[1]).length() - 0.7).abs() < 1e-5);
 
-        let row = TetRow {
-            nodes: [0, 1, 2, 3],
-            rest: 0.1,
-            param: 1.0,
+        let b = TetBatch {
+            nodes: [[0; LANES]; 4],
+            rest: F::splat(0.1),
+            param: F::ONE,
         };
-        let mut t = q;
-        project_tet_volume::<false>(&mut t, w, &row, &mut 0.0);
+        let (mut q, w) = lanes(Q, W);
+        project_tet_volume::<false>(&mut q, &w, &b, &mut [F::ZERO]);
+        let t = lane0(&q);
         let vol = (t[1] - t[0]).cross(t[2] - t[0]).dot(t[3] - t[0]) / 6.0;
         // Linearised: one step lands close, not exactly.
         assert!((vol - 0.1).abs() < 0.02, "{vol}");
 
         // One centroid constraint (apex 0) alone is exactly satisfied: it is linear along n.
-        let row = CentroidRow {
-            nodes: [0, 1, 2, 3],
-            rest: [0.5; 4],
-            param: [1.0, 0.0, 0.0, 0.0],
+        let b = CentroidBatch {
+            nodes: [[0; LANES]; 4],
+            rest: [F::splat(0.5); 4],
+            param: [F::ONE, F::ZERO, F::ZERO, F::ZERO],
         };
-        project_centroid::<false>(&mut q, w, &row, &mut [0.0; 4]);
+        let (mut q, w) = lanes(Q, W);
+        project_centroid::<false>(&mut q, &w, &b, &mut [F::ZERO; 4]);
+        let q = lane0(&q);
         let h = (q[0] - (q[1] + q[2] + q[3]) / 3.0).length();
         assert!((h - 0.5).abs() < 1e-5, "{h}");
     }
 
     #[test]
     fn centroid_projection_conserves_momentum() {
-        let w = [1.0, 0.5, 2.0, 0.25];
-        let q0 = [
-            Vec3A::new(0.0, 0.0, 0.0),
-            Vec3A::new(1.2, 0.1, 0.0),
-            Vec3A::new(0.1, 0.9, 0.2),
-            Vec3A::new(0.2, 0.1, 1.3),
-        ];
-        let mut q = q0;
-        let row = CentroidRow {
-            nodes: [0, 1, 2, 3],
-            rest: [0.3, 0.4, 0.5, 0.6],
-            param: [0.7; 4],
+        let b = CentroidBatch {
+            nodes: [[0; LANES]; 4],
+            rest: [0.3, 0.4, 0.5, 0.6].map(F::splat),
+            param: [F::splat(0.7); 4],
         };
-        project_centroid::<false>(&mut q, w, &row, &mut [0.0; 4]);
+        let (mut q, w) = lanes(Q, W);
+        project_centroid::<false>(&mut q, &w, &b, &mut [F::ZERO; 4]);
+        let q = lane0(&q);
         let mut p = Vec3A::ZERO;
         for i in 0..4 {
-            p += (q[i] - q0[i]) / w[i];
+            p += (q[i] - Q[i]) / W[i];
         }
         assert!(p.length() < 1e-5, "{p}");
+    }
+
+    #[test]
+    fn lanes_are_independent_and_gather_scatter_round_trip() {
+        // Different distance constraints in one batch give, lane by lane, what each gives alone
+        // (the padding invariant: a lane's result depends on its lane only).
+        let p: Vec<Vec4> = (0..2 * LANES)
+            .map(|i| {
+                Vec4::new(
+                    i as f32 * 0.3,
+                    (i * i) as f32 * 0.1,
+                    1.0 - i as f32,
+                    0.5 + i as f32,
+                )
+            })
+            .collect();
+        let nodes: [[u32; LANES]; 2] =
+            [0, 1].map(|k| std::array::from_fn(|lane| (2 * lane + k) as u32));
+        let b = DistanceBatch {
+            nodes,
+            rest: F::from_lanes(std::array::from_fn(|l| 0.1 * (l + 1) as f32)),
+            param: F::from_lanes(std::array::from_fn(|l| 1.0 - 0.1 * l as f32)),
+        };
+        let project = |p: &mut Vec<Vec4>, b: &DistanceBatch| {
+            let (a, wa) = gather(p, &b.nodes[0]);
+            let (c, wc) = gather(p, &b.nodes[1]);
+            let mut q = [a, c];
+            project_distance::<false>(&mut q, &[wa, wc], b, &mut [F::ZERO]);
+            scatter(p, &b.nodes[0], q[0], wa);
+            scatter(p, &b.nodes[1], q[1], wc);
+        };
+        let mut all = p.clone();
+        project(&mut all, &b);
+        for lane in 0..LANES {
+            let one = DistanceBatch {
+                nodes: [[nodes[0][lane]; LANES], [nodes[1][lane]; LANES]],
+                rest: F::splat(b.rest.lane(lane)),
+                param: F::splat(b.param.lane(lane)),
+            };
+            let mut alone = p.clone();
+            project(&mut alone, &one);
+            for ids in &nodes {
+                let n = ids[lane] as usize;
+                assert_eq!(alone[n].to_array(), all[n].to_array());
+                assert_eq!(all[n].w, p[n].w, "inverse mass kept");
+            }
+            assert_ne!(all[nodes[0][lane] as usize], p[nodes[0][lane] as usize]);
+        }
     }
 }

@@ -15,7 +15,7 @@
 
 use std::sync::Arc;
 
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 
 use crate::tool::{check_pose, sweep_node, Pose, Tool, ToolShape};
 use crate::{PbdError, SoftBody, VoxelCollider};
@@ -152,7 +152,10 @@ impl ContactState {
 
     /// Generates this step's contacts: `x` the positions at the start of the step, `p` the
     /// predictions, `w` the inverse masses (nodes with `w = 0` get none).
-    pub(crate) fn generate(&mut self, x: &[Vec3A], p: &[Vec3A], w: &[f32]) {
+    ///
+    /// The predictions are in solver order (`q[rank[i]]` is node `i`'s); contacts name the
+    /// caller's node indices.
+    pub(crate) fn generate(&mut self, x: &[Vec3A], q: &[Vec4], rank: &[u32], w: &[f32]) {
         self.contacts.clear();
         self.iteration = 0;
         if self.colliders.is_empty() && self.tools.is_empty() {
@@ -174,10 +177,11 @@ impl ContactState {
             let reach = params.margin + params.detection;
             let (lo, hi) = collider.bounds();
             let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
-            for (i, ((&xi, &pi), &wi)) in x.iter().zip(p).zip(w).enumerate() {
+            for (i, ((&xi, &r), &wi)) in x.iter().zip(rank).zip(w).enumerate() {
                 if wi <= 0.0 {
                     continue;
                 }
+                let pi = Vec3A::from(q[r as usize].truncate());
                 if pi.min(xi).cmpgt(hi).any() || pi.max(xi).cmplt(lo).any() {
                     continue;
                 }
@@ -211,10 +215,11 @@ impl ContactState {
             };
             let to = tool.pose;
             let (lo, hi) = tool.swept_bounds(&from, &to, reach);
-            for (i, ((&xi, &pi), &wi)) in x.iter().zip(p).zip(w).enumerate() {
+            for (i, ((&xi, &r), &wi)) in x.iter().zip(rank).zip(w).enumerate() {
                 if wi <= 0.0 {
                     continue;
                 }
+                let pi = Vec3A::from(q[r as usize].truncate());
                 let start = if params.continuous { xi } else { pi };
                 if pi.min(start).cmpgt(hi).any() || pi.max(start).cmplt(lo).any() {
                     continue;
@@ -244,10 +249,12 @@ impl ContactState {
 
     /// Projects every contact once (one Gauss–Seidel sweep in generation order), with friction
     /// relative to the start-of-step positions `x`.
-    pub(crate) fn project(&mut self, p: &mut [Vec3A], x: &[Vec3A]) {
+    /// `p` in solver order (`p[rank[i]]` is node `i`'s, its inverse mass in the w lane).
+    pub(crate) fn project(&mut self, p: &mut [Vec4], rank: &[u32], x: &[Vec3A]) {
         for c in &mut self.contacts {
             let i = c.node as usize;
-            let mut q = p[i];
+            let s = rank[i] as usize;
+            let mut q = Vec3A::from(p[s].truncate());
             let value = c.normal.dot(q - c.point) - c.margin;
             if value < 0.0 {
                 q -= value * c.normal;
@@ -269,7 +276,7 @@ impl ContactState {
                     }
                 }
             }
-            p[i] = q;
+            p[s] = q.extend(p[s].w);
         }
     }
 }
@@ -281,12 +288,17 @@ impl ContactState {
     /// tool radially from the core. Such
     /// a node had no contact because its prediction was beyond `margin + detection` and the
     /// body's constraints pushed it in during the iterations; it gets no friction this step.
-    fn resolve_remaining(&self, p: &mut [Vec3A], x: &[Vec3A], w: &[f32]) {
+    ///
+    /// `p` in solver order (`p[rank[i]]` is node `i`'s), walked in the caller's node order.
+    fn resolve_remaining(&self, p: &mut [Vec4], rank: &[u32], x: &[Vec3A], w: &[f32]) {
         for (collider, params) in &self.colliders {
-            for ((q, &xi), &wi) in p.iter_mut().zip(x).zip(w) {
+            for ((&r, &xi), &wi) in rank.iter().zip(x).zip(w) {
                 if wi <= 0.0 {
                     continue;
                 }
+                let slot = &mut p[r as usize];
+                let mut moved = Vec3A::from(slot.truncate());
+                let q = &mut moved;
                 let Some((phi, _)) = collider.probe(*q) else {
                     continue;
                 };
@@ -303,6 +315,7 @@ impl ContactState {
                     let c = n.dot(*q - point) - params.margin;
                     if c < 0.0 {
                         *q -= c * n;
+                        *slot = moved.extend(slot.w);
                     }
                 }
             }
@@ -310,16 +323,18 @@ impl ContactState {
         for (tool, params) in &self.tools {
             let keep = tool.shape.radius() + params.margin;
             let (lo, hi) = tool.swept_bounds(&tool.pose, &tool.pose, params.margin);
-            for (q, &wi) in p.iter_mut().zip(w) {
+            for (&r, &wi) in rank.iter().zip(w) {
+                let slot = &mut p[r as usize];
+                let q = Vec3A::from(slot.truncate());
                 if wi <= 0.0 || q.cmplt(lo).any() || q.cmpgt(hi).any() {
                     continue;
                 }
-                let local = tool.pose.inverse_transform_point((*q).into());
+                let local = tool.pose.inverse_transform_point(q.into());
                 let core = tool.shape.closest_core_point(local);
                 let d = local.distance(core);
                 if d < keep && d > 1e-6 {
                     let out = core + (local - core) * (keep / d);
-                    *q = tool.pose.transform_point(out).into();
+                    *slot = Vec3A::from(tool.pose.transform_point(out)).extend(slot.w);
                 }
             }
         }
@@ -502,17 +517,18 @@ impl SoftBody {
 
     /// Step phase: contacts for the predictions (after attachments).
     pub(crate) fn generate_contacts(&mut self) {
-        self.collision.generate(&self.x, &self.p, &self.w);
+        self.collision
+            .generate(&self.x, &self.q, &self.rank, &self.w);
     }
 
     /// Step phase: one projection of every contact (after the body's constraints, in each
     /// iteration).
     pub(crate) fn project_contacts(&mut self) {
-        self.collision.project(&mut self.p, &self.x);
+        self.collision.project(&mut self.q, &self.rank, &self.x);
         self.collision.iteration += 1;
         if self.collision.iteration == self.settings.iterations {
             self.collision
-                .resolve_remaining(&mut self.p, &self.x, &self.w);
+                .resolve_remaining(&mut self.q, &self.rank, &self.x, &self.w);
         }
     }
 }

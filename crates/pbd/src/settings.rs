@@ -87,8 +87,8 @@ pub struct StepSettings {
     /// Plain velocity damping `c ∈ [0, 1]` per step, `v ← (1 − c) v` for every node (also damps
     /// the rigid modes, so it does not conserve momentum; 0 by default).
     pub linear_damping: f32,
-    /// Project each colour of constraints on rayon's current pool. Bit-identical to the serial
-    /// projection (see the crate docs).
+    /// Project the blocks of the domain decomposition on rayon's current pool (sibling subtrees
+    /// at the same time). Bit-identical to the serial projection (see the crate docs).
     pub parallel: bool,
 }
 

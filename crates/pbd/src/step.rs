@@ -2,74 +2,135 @@
 //! contact generation → `K` × (distance, volume, floor projection, contacts) → velocity and
 //! position update → rigid-mode damping.
 
-use glam::{DMat3, DVec3, Vec3A};
-use rayon::prelude::*;
-
-use crate::constraint::{project_centroid, project_distance, project_tet_volume};
+use crate::body::Block;
+use crate::constraint::{
+    gather, project_centroid, project_distance, project_tet_volume, scatter, CentroidBatch,
+    DistanceBatch, TetBatch, F, LANES, P4,
+};
 use crate::{PbdError, SoftBody, Solver, VolumeConstraintKind};
+use std::sync::atomic::{AtomicBool, Ordering};
 
-/// Colours with fewer constraints than this are projected serially even in parallel mode (same
-/// result; saves a fork–join).
-const PARALLEL_MIN: usize = 1024;
-/// Constraints per rayon task. Results do not depend on it.
-const CHUNK: usize = 256;
+use glam::{DMat3, DVec3, Vec3A, Vec4};
 
-/// Projects all constraints of one kind once, colour by colour. `L` multipliers per row.
-///
-/// Serial and parallel give bit-identical results: a colour's constraints share no node, so
-/// projecting each on the positions from before the colour (parallel: computed into `scratch`,
-/// then written back) is what projecting them one after another does.
-#[allow(clippy::too_many_arguments)]
-fn project_kind<R: Sync, const N: usize, const L: usize>(
-    rows: &[R],
-    offsets: &[u32],
-    lambda: &mut [f32],
-    p: &mut [Vec3A],
-    w: &[f32],
-    scratch: &mut [[Vec3A; 4]],
-    parallel: bool,
-    nodes: impl Fn(&R) -> [u32; N] + Sync,
-    kernel: impl Fn(&mut [Vec3A; N], [f32; N], &R, &mut [f32]) + Sync,
+/// Projects `batches` once, in order (Gauss–Seidel; the 4 lanes of a batch share no node), on
+/// `p` (the node range of their block). `L` multipliers per batch.
+#[inline(always)]
+fn project_batches<B, const N: usize, const L: usize>(
+    batches: &[B],
+    lambda: &mut [F],
+    p: &mut [Vec4],
+    nodes: impl Fn(&B) -> &[[u32; LANES]; N],
+    kernel: impl Fn(&mut [P4; N], &[F; N], &B, &mut [F]),
 ) {
-    let serial = |rows: &[R], lambda: &mut [f32], p: &mut [Vec3A]| {
-        for (r, lam) in rows.iter().zip(lambda.chunks_exact_mut(L)) {
-            let ids = nodes(r);
-            let mut q = ids.map(|i| p[i as usize]);
-            kernel(&mut q, ids.map(|i| w[i as usize]), r, lam);
-            for k in 0..N {
-                p[ids[k] as usize] = q[k];
-            }
+    for (b, lam) in batches.iter().zip(lambda.chunks_exact_mut(L)) {
+        let ids = nodes(b);
+        let (mut q, mut w) = ([P4::ZERO; N], [F::ZERO; N]);
+        for k in 0..N {
+            (q[k], w[k]) = gather(p, &ids[k]);
         }
-    };
-    if !parallel {
-        serial(rows, lambda, p);
-        return;
+        kernel(&mut q, &w, b, lam);
+        for k in 0..N {
+            scatter(p, &ids[k], q[k], w[k]);
+        }
     }
-    for range in offsets.windows(2) {
-        let (s, e) = (range[0] as usize, range[1] as usize);
-        let (rows, lambda) = (&rows[s..e], &mut lambda[s * L..e * L]);
-        if e - s < PARALLEL_MIN {
-            serial(rows, lambda, p);
-            continue;
-        }
-        let out = &mut scratch[..e - s];
-        let read: &[Vec3A] = p;
-        rows.par_chunks(CHUNK)
-            .zip(lambda.par_chunks_mut(CHUNK * L))
-            .zip(out.par_chunks_mut(CHUNK))
-            .for_each(|((rows, lambda), out)| {
-                for ((r, lam), o) in rows.iter().zip(lambda.chunks_exact_mut(L)).zip(out) {
-                    let ids = nodes(r);
-                    let mut q = ids.map(|i| read[i as usize]);
-                    kernel(&mut q, ids.map(|i| w[i as usize]), r, lam);
-                    o[..N].copy_from_slice(&q);
-                }
-            });
-        for (r, o) in rows.iter().zip(out.iter()) {
-            let ids = nodes(r);
-            for k in 0..N {
-                p[ids[k] as usize] = o[k];
+}
+
+/// One Gauss–Seidel sweep over the block tree (see [`crate::partition`]).
+struct Sweep<'a> {
+    blocks: &'a [Block],
+    distance: &'a [DistanceBatch],
+    tet: &'a [TetBatch],
+    centroid: &'a [CentroidBatch],
+    kind: VolumeConstraintKind,
+    parallel: bool,
+}
+
+impl Sweep<'_> {
+    /// Projects the constraints of block `h`'s subtree: both children (at the same time in
+    /// parallel mode: they touch disjoint node ranges), then the block's own constraints. `p` is
+    /// the block's node range, `ld`, `lv` the multipliers of its subtree's batches.
+    fn block<const XPBD: bool>(&self, h: usize, p: &mut [Vec4], ld: &mut [F], lv: &mut [F]) {
+        let b = self.blocks[h];
+        let per_tet = match self.kind {
+            VolumeConstraintKind::None => 0,
+            VolumeConstraintKind::Classic => 1,
+            VolumeConstraintKind::Centroid => 4,
+        };
+        let (ld, lv) = if 2 * h + 1 < self.blocks.len() {
+            let (l, r) = (self.blocks[2 * h + 1], self.blocks[2 * h + 2]);
+            let (pl, pr) = p.split_at_mut((b.nodes[1] - b.nodes[0]) as usize);
+            let (ldl, rest) = ld.split_at_mut((l.distance[2] - b.distance[0]) as usize);
+            let (ldr, ld) = rest.split_at_mut((r.distance[2] - l.distance[2]) as usize);
+            let (lvl, rest) = lv.split_at_mut((l.tets[2] - b.tets[0]) as usize * per_tet);
+            let (lvr, lv) = rest.split_at_mut((r.tets[2] - l.tets[2]) as usize * per_tet);
+            if self.parallel {
+                rayon::join(
+                    || self.block::<XPBD>(2 * h + 1, pl, ldl, lvl),
+                    || self.block::<XPBD>(2 * h + 2, pr, ldr, lvr),
+                );
+            } else {
+                self.block::<XPBD>(2 * h + 1, pl, ldl, lvl);
+                self.block::<XPBD>(2 * h + 2, pr, ldr, lvr);
             }
+            (ld, lv)
+        } else {
+            (ld, lv)
+        };
+        if self.parallel && h == 0 && 2 * h + 1 < self.blocks.len() {
+            // The root's own constraints are the one serial phase of an iteration. Meanwhile
+            // another worker, if one took the second job, waits here awake instead of going to
+            // sleep, so that it takes its half of the next iteration without a wake-up (tens of
+            // µs). Run by this thread itself, the second job finds `done` set and returns.
+            let done = AtomicBool::new(false);
+            rayon::join(
+                || {
+                    self.own::<XPBD>(&b, p, ld, lv);
+                    done.store(true, Ordering::Release);
+                },
+                || {
+                    let mut spins = 0u32;
+                    while !done.load(Ordering::Acquire) {
+                        if spins < 4096 {
+                            spins += 1;
+                            std::hint::spin_loop();
+                        } else {
+                            std::thread::yield_now();
+                        }
+                    }
+                },
+            );
+        } else {
+            self.own::<XPBD>(&b, p, ld, lv);
+        }
+    }
+
+    /// Projects the block's own constraints: distances, then volumes.
+    fn own<const XPBD: bool>(&self, b: &Block, p: &mut [Vec4], ld: &mut [F], lv: &mut [F]) {
+        let [_, ds, de] = b.distance.map(|i| i as usize);
+        let [_, ts, te] = b.tets.map(|i| i as usize);
+        project_batches::<_, 2, 1>(
+            &self.distance[ds..de],
+            ld,
+            p,
+            |b| &b.nodes,
+            project_distance::<XPBD>,
+        );
+        match self.kind {
+            VolumeConstraintKind::None => {}
+            VolumeConstraintKind::Classic => project_batches::<_, 4, 1>(
+                &self.tet[ts..te],
+                lv,
+                p,
+                |b| &b.nodes,
+                project_tet_volume::<XPBD>,
+            ),
+            VolumeConstraintKind::Centroid => project_batches::<_, 4, 4>(
+                &self.centroid[ts..te],
+                lv,
+                p,
+                |b| &b.nodes,
+                project_centroid::<XPBD>,
+            ),
         }
     }
 }
@@ -79,8 +140,8 @@ impl SoftBody {
     /// 1. `v += Δt·g` for free nodes (`w·f_ext` with `f_ext = m g`);
     /// 2. `p = x + Δt·v`; attached nodes take their targets; contacts with colliders and tools are
     ///    generated for the predictions (see [`crate::Contact`]);
-    /// 3. `K` times: distance constraints, volume constraints, floor (Gauss–Seidel, colour order),
-    ///    then the contacts with friction;
+    /// 3. `K` times: distance and volume constraints block by block, then the floor (Gauss–Seidel
+    ///    in the order of the crate docs, in solver node order), then the contacts with friction;
     ///    XPBD multipliers start at 0 each step;
     /// 4. `v = (1 − c)(p − x)/Δt` (`c` the linear damping, default 0), `x = p` (the old `x` becomes [`SoftBody::previous_positions`]);
     /// 5. rigid-mode damping of the free nodes.
@@ -93,26 +154,25 @@ impl SoftBody {
         let _span = tracing::debug_span!("pbd_step", step = self.step_count).entered();
         let s = self.settings;
         let (dt, g) = (s.dt, Vec3A::from(s.gravity));
-        for ((p, v), (x, &w)) in self
-            .p
-            .iter_mut()
-            .zip(&mut self.v)
-            .zip(self.x.iter().zip(&self.w))
-        {
+        // 1–2, straight into solver order (crate::partition): the projection works on `q`.
+        for ((q, qw), &o) in self.q.iter_mut().zip(&mut self.qw).zip(&self.order) {
+            let (o, w) = (o as usize, self.w[o as usize]);
             if w > 0.0 {
-                *v += dt * g;
+                self.v[o] += dt * g;
             }
-            *p = *x + dt * *v;
+            *qw = w;
+            *q = (self.x[o] + dt * self.v[o]).extend(w);
         }
         for &(node, target) in &self.attachments {
-            self.p[node as usize] = target;
+            let s = self.rank[node as usize] as usize;
+            self.q[s] = target.extend(self.qw[s]);
         }
         // Contacts with colliders and tools for the predictions (contact.rs).
         self.generate_contacts();
         let xpbd = s.solver == Solver::Xpbd;
         if xpbd {
-            self.distance_lambda.fill(0.0);
-            self.volume_lambda.fill(0.0);
+            self.distance_lambda.fill(F::ZERO);
+            self.volume_lambda.fill(F::ZERO);
         }
         {
             let _span = tracing::trace_span!("project", iterations = s.iterations).entered();
@@ -126,13 +186,25 @@ impl SoftBody {
                 self.project_contacts();
             }
         }
+        // 4, back in the caller's order (walked in that order: `q` is the array still in
+        // cache), gathering the rigid-mode sums of step 5 on the way.
         let scale = (1.0 - s.linear_damping) / dt;
-        for ((v, p), x) in self.v.iter_mut().zip(&self.p).zip(&self.x) {
-            *v = (*p - *x) * scale;
+        let mut rigid = RigidSums::default();
+        for ((x, prev), (v, (&r, (&m, &w)))) in self.x.iter_mut().zip(&mut self.p).zip(
+            self.v
+                .iter_mut()
+                .zip(self.rank.iter().zip(self.mass.iter().zip(&self.w))),
+        ) {
+            let p = Vec3A::from(self.q[r as usize].truncate());
+            *v = (p - *x) * scale;
+            *prev = *x;
+            *x = p;
+            if s.damping > 0.0 && w > 0.0 {
+                rigid.add(m, p, *v);
+            }
         }
-        std::mem::swap(&mut self.x, &mut self.p);
         if s.damping > 0.0 {
-            self.damp_rigid_modes(s.damping);
+            self.damp_rigid_modes(s.damping, &rigid);
         }
         let step = self.step_count;
         self.step_count += 1;
@@ -150,45 +222,20 @@ impl SoftBody {
         Ok(())
     }
 
+    /// One sweep over all constraints, then the floor. `p` and `w` are in solver order.
     fn project_once<const XPBD: bool>(&mut self) {
-        let par = self.settings.parallel;
-        let (p, w, scratch) = (&mut self.p, &self.w, &mut self.scratch);
-        project_kind::<_, 2, 1>(
-            &self.distance_rows,
-            &self.distance_offsets,
-            &mut self.distance_lambda,
-            p,
-            w,
-            scratch,
-            par,
-            |r| r.nodes,
-            |q, w, r, l| project_distance::<XPBD>(q, w, r, &mut l[0]),
-        );
-        match self.volume_kind {
-            VolumeConstraintKind::None => {}
-            VolumeConstraintKind::Classic => project_kind::<_, 4, 1>(
-                &self.tet_rows,
-                &self.tet_offsets,
-                &mut self.volume_lambda,
-                p,
-                w,
-                scratch,
-                par,
-                |r| r.nodes,
-                |q, w, r, l| project_tet_volume::<XPBD>(q, w, r, &mut l[0]),
-            ),
-            VolumeConstraintKind::Centroid => project_kind::<_, 4, 4>(
-                &self.centroid_rows,
-                &self.tet_offsets,
-                &mut self.volume_lambda,
-                p,
-                w,
-                scratch,
-                par,
-                |r| r.nodes,
-                project_centroid::<XPBD>,
-            ),
+        let (p, w) = (&mut self.q, &self.qw);
+        Sweep {
+            blocks: &self.blocks,
+            distance: &self.distance_batches,
+            tet: &self.tet_batches,
+            centroid: &self.centroid_batches,
+            kind: self.volume_kind,
+            parallel: self.settings.parallel,
         }
+        .block::<XPBD>(0, p, &mut self.distance_lambda, &mut self.volume_lambda);
+        // Per-node projections from here on: `p` (xyz; w = inverse mass) and `w` are in solver
+        // order, the caller's node `i` is `p[self.rank[i]]`.
         if let Some(f) = self.floor {
             for (p, &w) in p.iter_mut().zip(w) {
                 if w > 0.0 && p[f.axis] < f.height {
@@ -200,44 +247,26 @@ impl SoftBody {
 
     /// Rigid-mode damping (Müller et al.): with `x_cm`, `v_cm`, `L = Σ rᵢ × mᵢvᵢ`,
     /// `I = Σ r̃ᵢ r̃ᵢᵀ mᵢ`, `ω = I⁻¹L`: `vᵢ += k (v_cm + ω × rᵢ − vᵢ)` over the free nodes. Keeps
-    /// their linear and angular momentum; damps everything else by `(1 − k)`.
-    fn damp_rigid_modes(&mut self, k: f32) {
+    /// their linear and angular momentum; damps everything else by `(1 − k)`. `sums` are the
+    /// free nodes' raw moments; about the centre of mass (`Σ mᵢrᵢ = 0`)
+    /// `L = Σ mᵢ xᵢ × vᵢ − x_cm × Σ mᵢvᵢ` and `Σ mᵢ rᵢrᵢᵀ = Σ mᵢ xᵢxᵢᵀ − M x_cm x_cmᵀ`.
+    fn damp_rigid_modes(&mut self, k: f32, sums: &RigidSums) {
         let _span = tracing::trace_span!("damp").entered();
-        let (mut m_sum, mut mx, mut mv) = (0.0f64, DVec3::ZERO, DVec3::ZERO);
-        for ((&m, &w), (x, v)) in self
-            .mass
-            .iter()
-            .zip(&self.w)
-            .zip(self.x.iter().zip(&self.v))
-        {
-            if w > 0.0 {
-                let m = m as f64;
-                m_sum += m;
-                mx += m * x.as_dvec3();
-                mv += m * v.as_dvec3();
-            }
-        }
-        if m_sum <= 0.0 {
+        if sums.m <= 0.0 {
             return;
         }
-        let (x_cm, v_cm) = (mx / m_sum, mv / m_sum);
-        let (mut l, mut inertia) = (DVec3::ZERO, DMat3::ZERO);
-        for ((&m, &w), (x, v)) in self
-            .mass
-            .iter()
-            .zip(&self.w)
-            .zip(self.x.iter().zip(&self.v))
-        {
-            if w > 0.0 {
-                let m = m as f64;
-                let r = x.as_dvec3() - x_cm;
-                l += r.cross(m * v.as_dvec3());
-                // r̃ r̃ᵀ = |r|² 1 − r rᵀ.
-                inertia += m
-                    * (DMat3::from_diagonal(DVec3::splat(r.length_squared()))
-                        - DMat3::from_cols(r * r.x, r * r.y, r * r.z));
-            }
-        }
+        let (x_cm, v_cm) = (sums.mx / sums.m, sums.mv / sums.m);
+        let l = sums.mxv - x_cm.cross(sums.mv);
+        // Σ m r rᵀ, then I = tr(·) 1 − (·).
+        let [xx, yy, zz, xy, xz, yz] = sums.mxx;
+        let c = sums.m * x_cm;
+        let rr = DMat3::from_cols(
+            DVec3::new(xx, xy, xz) - c * x_cm.x,
+            DVec3::new(xy, yy, yz) - c * x_cm.y,
+            DVec3::new(xz, yz, zz) - c * x_cm.z,
+        );
+        let trace = rr.x_axis.x + rr.y_axis.y + rr.z_axis.z;
+        let inertia = DMat3::from_diagonal(DVec3::splat(trace)) - rr;
         let det = inertia.determinant();
         let scale = inertia.x_axis.x + inertia.y_axis.y + inertia.z_axis.z;
         let omega = if det.abs() > 1e-12 * scale.powi(3) {
@@ -245,12 +274,41 @@ impl SoftBody {
         } else {
             DVec3::ZERO
         };
-        let (v_cm, omega, x_cm, k) = (v_cm.as_vec3a(), omega.as_vec3a(), x_cm.as_vec3a(), k);
+        let (v_cm, omega, x_cm) = (v_cm.as_vec3a(), omega.as_vec3a(), x_cm.as_vec3a());
         for ((v, x), &w) in self.v.iter_mut().zip(&self.x).zip(&self.w) {
             if w > 0.0 {
                 let rigid = v_cm + omega.cross(*x - x_cm);
                 *v += k * (rigid - *v);
             }
         }
+    }
+}
+
+/// Raw moments of the free nodes for the rigid-mode damping, in `f64`: `Σm`, `Σmx`, `Σmv`,
+/// `Σ m x xᵀ` (xx, yy, zz, xy, xz, yz) and `Σ m x × v`.
+#[derive(Debug, Default)]
+struct RigidSums {
+    m: f64,
+    mx: DVec3,
+    mv: DVec3,
+    mxx: [f64; 6],
+    mxv: DVec3,
+}
+
+impl RigidSums {
+    #[inline]
+    fn add(&mut self, m: f32, x: Vec3A, v: Vec3A) {
+        let (m, x, v) = (m as f64, x.as_dvec3(), v.as_dvec3());
+        let (mx, mv) = (m * x, m * v);
+        self.m += m;
+        self.mx += mx;
+        self.mv += mv;
+        self.mxx[0] += mx.x * x.x;
+        self.mxx[1] += mx.y * x.y;
+        self.mxx[2] += mx.z * x.z;
+        self.mxx[3] += mx.x * x.y;
+        self.mxx[4] += mx.x * x.z;
+        self.mxx[5] += mx.y * x.z;
+        self.mxv += x.cross(mv);
     }
 }

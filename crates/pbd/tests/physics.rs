@@ -290,3 +290,84 @@ fn compare_volume_constraints_cost_and_error_at_rest() {
         }
     }
 }
+
+/// The solver renumbers the nodes internally (domain decomposition); the public API must not
+/// show it: masses, pins, attachments, velocities and previous positions all use the caller's
+/// node indices, also for a mesh whose node order is scrambled.
+#[test]
+fn solver_node_order_is_invisible_in_the_public_api() {
+    let mesh = tet_box(12, 12, 12, Vec3::splat(6.0)).unwrap();
+    // Scramble the node order so that it cannot coincide with the solver's.
+    let n = mesh.vertex_count();
+    let mut rng = Rng(11);
+    let mut perm: Vec<u32> = (0..n as u32).collect();
+    for i in (1..n).rev() {
+        perm.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
+    }
+    let mut positions = vec![Vec3::ZERO; n];
+    for (old, &new) in perm.iter().enumerate() {
+        positions[new as usize] = mesh.positions()[old];
+    }
+    let tets: Vec<[u32; 4]> = mesh
+        .tets()
+        .iter()
+        .map(|t| t.map(|i| perm[i as usize]))
+        .collect();
+    let material = Material {
+        volume: VolumeConstraintKind::Classic,
+        ..Material::default()
+    };
+    let mut body = SoftBody::from_tets(&positions, &tets, &material).unwrap();
+    assert!(body.block_count() > 1, "the solver order must differ");
+    assert!(body
+        .positions()
+        .iter()
+        .zip(&positions)
+        .all(|(a, b)| Vec3::from(*a) == *b));
+    // Masses from eq. (1), by the caller's index.
+    let mut mass = vec![0.0f64; n];
+    for t in &tets {
+        let [a, b, c, d] = t.map(|i| positions[i as usize].as_dvec3());
+        for &i in t {
+            mass[i as usize] += (b - a).cross(c - a).dot(d - a) / 24.0;
+        }
+    }
+    assert!(body
+        .masses()
+        .iter()
+        .zip(&mass)
+        .all(|(&m, &e)| (m as f64 - e).abs() <= 1e-5 * e));
+    // A pinned node stays put, an attached one follows its target; the rest falls.
+    let (pinned, attached) = (perm[0], perm[n - 1]);
+    body.pin(pinned).unwrap();
+    let target = Vec3::new(3.5, 4.0, 3.5);
+    body.attach(attached, target).unwrap();
+    body.set_settings(StepSettings {
+        parallel: true,
+        damping: 0.0,
+        ..StepSettings::default()
+    })
+    .unwrap();
+    for _ in 0..10 {
+        body.step().unwrap();
+    }
+    assert_eq!(
+        Vec3::from(body.positions()[pinned as usize]),
+        positions[pinned as usize]
+    );
+    assert_eq!(Vec3::from(body.positions()[attached as usize]), target);
+    assert_eq!(body.inverse_masses()[pinned as usize], 0.0);
+    assert_eq!(body.inverse_masses()[attached as usize], 0.0);
+    // v = (x − x_prev)/Δt per node, in the caller's order (no damping here).
+    let dt = body.settings().dt;
+    for i in 0..n {
+        let v = (body.positions()[i] - body.previous_positions()[i]) / dt;
+        assert!(
+            (v - body.velocities()[i]).length() <= 1e-3 * (1.0 + v.length()),
+            "node {i}"
+        );
+    }
+    // The body fell (gravity), except where held.
+    let far = perm[n / 2] as usize;
+    assert!(body.positions()[far].y < positions[far].y - 0.01);
+}
