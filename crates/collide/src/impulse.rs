@@ -186,6 +186,8 @@ struct Prepared {
     weight: [f32; 5],
     push: [f32; 5],
     w_eff: f32,
+    /// `1/W`, or 0 for a contact no particle of which can move (skipped).
+    inv_w_eff: f32,
     normal: Vec3A,
 }
 
@@ -239,8 +241,8 @@ pub fn apply_impulses(
     let v = &mut ws.velocity;
     for _ in 0..params.sweeps {
         for (k, p) in ws.prepared.iter().enumerate() {
-            let w_eff = p.w_eff;
-            if w_eff.is_nan() || w_eff <= 0.0 {
+            let inv_w = p.inv_w_eff;
+            if inv_w == 0.0 {
                 continue;
             }
             let mut v_rel = Vec3A::ZERO;
@@ -249,14 +251,14 @@ pub fn apply_impulses(
             }
             let n = p.normal;
             let vn = v_rel.dot(n);
-            let lambda = (ws.normal[k] + (ws.target[k] - vn) / w_eff).max(0.0);
+            let lambda = (ws.normal[k] + (ws.target[k] - vn) * inv_w).max(0.0);
             let d_lambda = lambda - ws.normal[k];
             ws.normal[k] = lambda;
             let mut j = n * d_lambda;
             if params.friction > 0.0 {
                 // The normal impulse does not change the tangential relative velocity.
                 let vt = v_rel - n * vn;
-                let mut ft = ws.friction[k] - vt / w_eff;
+                let mut ft = ws.friction[k] - vt * inv_w;
                 let limit = params.friction * lambda;
                 let len = ft.length();
                 if len > limit {
@@ -318,6 +320,7 @@ fn prepare(
             0.0
         });
         let parts = contact_particles(c);
+        let w_eff: f32 = (0..5).map(|i| weights[i] * weights[i] * w[i]).sum();
         let mut slot = [0u32; 5];
         for (k, &(side, i, _)) in parts.iter().enumerate() {
             let key = velocities.key(side, i);
@@ -332,7 +335,12 @@ fn prepare(
             slot,
             weight: weights,
             push: std::array::from_fn(|i| weights[i] * w[i]),
-            w_eff: (0..5).map(|i| weights[i] * weights[i] * w[i]).sum(),
+            w_eff,
+            inv_w_eff: if w_eff > 0.0 && w_eff.is_finite() {
+                1.0 / w_eff
+            } else {
+                0.0
+            },
             normal,
         });
     }
