@@ -261,6 +261,10 @@ pub(crate) fn edge_against(
     })
 }
 
+/// A closest pair of a segment and a triangle: `(distance², s on the segment, barycentric on the
+/// triangle, point on the segment, point on the triangle)`.
+type ClosestPair = (f32, f32, [f32; 3], Vec3A, Vec3A);
+
 /// Clamps to `[0, 1]` and rescales to sum 1.
 fn normalized(b: [f32; 3]) -> [f32; 3] {
     let c = b.map(|x| x.clamp(0.0, 1.0));
@@ -292,7 +296,7 @@ fn closest_segment_planar(
     q: Vec3A,
     dp: f32,
     dq: f32,
-) -> (f32, f32, [f32; 3], Vec3A, Vec3A) {
+) -> ClosestPair {
     let corners = [plane.a, plane.b, plane.c];
     // How far beyond each side's line (scaled by the side's length) each endpoint projects.
     let out_p: [f32; 3] = std::array::from_fn(|k| (p - corners[k]).dot(plane.side[k]));
@@ -313,13 +317,22 @@ fn closest_segment_planar(
     if one_side && best.0 <= (dp * dp).min(dq * dq) {
         return best;
     }
-    let ends = [(plane.a, plane.b), (plane.b, plane.c), (plane.c, plane.a)];
-    for k in 0..3 {
-        if out_p[k] <= 0.0 && out_q[k] <= 0.0 {
-            continue;
-        }
-        let (x, y) = ends[k];
-        let (s, t, on_seg, on_side) = closest_segment_segment(p, q, x, y);
+    let beyond: [bool; 3] = std::array::from_fn(|k| out_p[k] > 0.0 || out_q[k] > 0.0);
+    closer_to_sides(p, q, corners, beyond, best)
+}
+
+/// `best` replaced by the closest pair of segment `pq` and side `k` (`corners[k]` to
+/// `corners[k + 1]`) wherever that is closer, for the sides `test` selects.
+fn closer_to_sides(
+    p: Vec3A,
+    q: Vec3A,
+    corners: [Vec3A; 3],
+    test: [bool; 3],
+    mut best: ClosestPair,
+) -> ClosestPair {
+    for k in (0..3).filter(|&k| test[k]) {
+        let (s, t, on_seg, on_side) =
+            closest_segment_segment(p, q, corners[k], corners[(k + 1) % 3]);
         let d = (on_seg - on_side).length_squared();
         if d < best.0 {
             let mut bary = [0.0; 3];
@@ -334,13 +347,7 @@ fn closest_segment_planar(
 /// Closest points of segment `pq` and triangle `abc` when the segment does not cross the
 /// triangle's interior: `(distance², s on the segment, barycentric on the triangle, point on the
 /// segment, point on the triangle)`.
-fn closest_segment_triangle(
-    p: Vec3A,
-    q: Vec3A,
-    a: Vec3A,
-    b: Vec3A,
-    c: Vec3A,
-) -> (f32, f32, [f32; 3], Vec3A, Vec3A) {
+fn closest_segment_triangle(p: Vec3A, q: Vec3A, a: Vec3A, b: Vec3A, c: Vec3A) -> ClosestPair {
     let (tp, bp) = closest_point_on_triangle(p, a, b, c);
     let mut best = ((tp - p).length_squared(), 0.0, bp, p, tp);
     let (tq, bq) = closest_point_on_triangle(q, a, b, c);
@@ -354,18 +361,7 @@ fn closest_segment_triangle(
     if bp.iter().chain(&bq).all(|&x| x > 0.0) {
         return best;
     }
-    let sides = [(a, b, 0usize), (b, c, 1), (c, a, 2)];
-    for (x, y, k) in sides {
-        let (s, t, on_seg, on_side) = closest_segment_segment(p, q, x, y);
-        let d = (on_seg - on_side).length_squared();
-        if d < best.0 {
-            let mut bary = [0.0; 3];
-            bary[k] = 1.0 - t;
-            bary[(k + 1) % 3] = t;
-            best = (d, s, bary, on_seg, on_side);
-        }
-    }
-    best
+    closer_to_sides(p, q, [a, b, c], [true; 3], best)
 }
 
 /// Closest points of segments `p1q1` and `p2q2` (Ericson, *Real-Time Collision Detection* 5.1.9):
