@@ -121,6 +121,7 @@ mod body;
 mod colour;
 mod constraint;
 mod contact;
+mod edit;
 mod error;
 mod geometry;
 mod partition;
@@ -134,6 +135,7 @@ pub use constraint::{
     CentroidVolumeConstraint, ConstraintKind, DistanceConstraint, Floor, TetVolumeConstraint,
 };
 pub use contact::{Contact, ContactParams, ContactSource};
+pub use edit::ConstraintSlot;
 pub use error::PbdError;
 pub use settings::{Material, Solver, StepSettings, VolumeConstraintKind};
 pub use tool::{Pose, Tool, ToolShape};

@@ -1,0 +1,521 @@
+//! The scalpel cut: tets separated along the faces the blade's swept surface crosses.
+//!
+//! 1. The blade's cut surface for one step is the blade triangle at both poses plus the
+//!    surfaces swept by its three edges (eight triangles, world space, current positions).
+//! 2. A face shared by tets `t` and `u` is cut when the segment between their centroids crosses
+//!    that surface. The cut walls are thus made of existing tet faces: no tet is split or
+//!    created, so no sliver can appear (the quality bound is the mesh's own, see
+//!    [`crate::Surgery::quality_bound`]); the walls lie within about one tet of the blade.
+//! 3. Each node on a newly cut face is split by the face-connected components of its tets: the
+//!    first component keeps the node, each other one gets a copy (appended to the body).
+//! 4. Before anything is committed, the boundary around the touched nodes is checked: an edge
+//!    used by more or fewer than two boundary faces, or a vertex whose boundary faces do not
+//!    make one fan (a pinch at the cut's front), has its newly cut faces glued back, and the
+//!    check repeats. So the surface stays manifold and consistently oriented.
+//! 5. Commit: nodes duplicated, tets moved onto them (rest values kept), every edge that now
+//!    exists twice gets a second distance constraint with the same rest length, masses of the
+//!    touched nodes rebuilt from their tets (eq. (1)), pieces recounted.
+
+use std::collections::HashMap;
+
+use glam::{DVec3, Vec3};
+use tissue_mesh::NO_TET;
+use tissue_pbd::{DistanceConstraint, Pose, SoftBody, Tool, ToolShape};
+
+use crate::geometry::segment_triangle;
+use crate::state::{face_nodes, single_cycle};
+use crate::{Surgery, SurgeryError, SurgeryEvent};
+
+/// A blade's sweep over one step, in world coordinates: its corners at the start and the end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BladeSweep {
+    /// Corners `a b c` at the start of the step.
+    pub from: [Vec3; 3],
+    /// Corners at the end.
+    pub to: [Vec3; 3],
+}
+
+impl BladeSweep {
+    /// The sweep of a [`ToolShape::Blade`] from one pose to another.
+    ///
+    /// # Errors
+    /// [`SurgeryError::InvalidTool`] for a capsule or a non-finite pose.
+    pub fn new(shape: &ToolShape, from: &Pose, to: &Pose) -> Result<Self, SurgeryError> {
+        let ToolShape::Blade { a, b, c, .. } = *shape else {
+            return Err(SurgeryError::InvalidTool {
+                reason: "a cut needs a ToolShape::Blade (the scalpel)",
+            });
+        };
+        let s = Self {
+            from: [a, b, c].map(|p| from.transform_point(p)),
+            to: [a, b, c].map(|p| to.transform_point(p)),
+        };
+        if s.from.iter().chain(&s.to).all(|p| p.is_finite()) {
+            Ok(s)
+        } else {
+            Err(SurgeryError::InvalidTool {
+                reason: "the blade's poses must be finite",
+            })
+        }
+    }
+
+    /// The sweep of the last step of a blade tool of a body ([`Tool::last_sweep`]).
+    ///
+    /// # Errors
+    /// As [`BladeSweep::new`].
+    pub fn from_tool(tool: &Tool) -> Result<Self, SurgeryError> {
+        let (from, to) = tool.last_sweep();
+        Self::new(tool.shape(), &from, &to)
+    }
+
+    /// The eight triangles of the cut surface (see the module docs).
+    pub(crate) fn triangles(&self) -> [[DVec3; 3]; 8] {
+        let f = self.from.map(|p| p.as_dvec3());
+        let t = self.to.map(|p| p.as_dvec3());
+        let mut out = [[DVec3::ZERO; 3]; 8];
+        out[0] = f;
+        out[1] = t;
+        for k in 0..3 {
+            let (i, j) = (k, (k + 1) % 3);
+            out[2 + 2 * k] = [f[i], f[j], t[j]];
+            out[3 + 2 * k] = [f[i], t[j], t[i]];
+        }
+        out
+    }
+}
+
+/// A face opened by this cut: tet `t` face `j` against tet `u` face `k`.
+#[derive(Debug, Clone, Copy)]
+struct NewFace {
+    t: u32,
+    j: u8,
+    u: u32,
+    k: u8,
+}
+
+impl Surgery {
+    /// Cuts `body` along a blade's sweep (see the module docs of `cut`), returning the events:
+    /// [`SurgeryEvent::CutAdvanced`] when faces were opened, then one
+    /// [`SurgeryEvent::PieceDetached`] per new piece. A sweep that crosses no face returns no
+    /// event. Call it after each step with the blade's sweep of that step (e.g.
+    /// [`BladeSweep::from_tool`]) to cut over many steps.
+    ///
+    /// # Errors
+    /// [`SurgeryError::BodyMismatch`] when `body` is not this state's body; [`SurgeryError::Body`]
+    /// should an edit be refused (the body is then left as it was before the failing edit).
+    pub fn cut(
+        &mut self,
+        body: &mut SoftBody,
+        sweep: &BladeSweep,
+    ) -> Result<Vec<SurgeryEvent>, SurgeryError> {
+        let _span = tracing::debug_span!("cut").entered();
+        self.check_body(body)?;
+        let surface = sweep.triangles();
+        let mut faces = self.crossed_faces(body, &surface);
+        if faces.is_empty() {
+            return Ok(Vec::new());
+        }
+        for f in &faces {
+            self.neighbours[f.t as usize][f.j as usize] = NO_TET;
+            self.neighbours[f.u as usize][f.k as usize] = NO_TET;
+        }
+        // Glue back what would leave the surface non-manifold, until nothing does.
+        let split = loop {
+            let plan = self.plan_split(body, &faces);
+            let bad = self.defects(body, &faces, &plan);
+            if bad.is_empty() {
+                break plan;
+            }
+            let mut keep = Vec::with_capacity(faces.len());
+            for (i, f) in faces.iter().enumerate() {
+                if bad.contains(&i) {
+                    self.neighbours[f.t as usize][f.j as usize] = f.u;
+                    self.neighbours[f.u as usize][f.k as usize] = f.t;
+                } else {
+                    keep.push(*f);
+                }
+            }
+            faces = keep;
+            if faces.is_empty() {
+                return Ok(Vec::new());
+            }
+        };
+        self.commit(body, &faces, split)
+    }
+
+    /// Faces between tets whose centroid segment crosses the cut surface.
+    fn crossed_faces(&mut self, body: &SoftBody, surface: &[[DVec3; 3]; 8]) -> Vec<NewFace> {
+        let x = body.positions();
+        let tets = body.tets();
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for tri in surface {
+            for p in tri {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+        }
+        let reach = 2.0 * self.longest_edge as f64;
+        let (lo, hi) = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.tet_mark.fill(0);
+            self.stamp = 1;
+        }
+        let stamp = self.stamp;
+        let centroid = |t: u32| -> DVec3 {
+            tets[t as usize]
+                .iter()
+                .map(|&i| x[i as usize].as_dvec3())
+                .sum::<DVec3>()
+                * 0.25
+        };
+        let mut candidates = Vec::new();
+        for (v, p) in x.iter().enumerate() {
+            let p = p.as_dvec3();
+            if p.cmpge(lo).all() && p.cmple(hi).all() {
+                for &t in &self.node_tets[v] {
+                    if self.tet_mark[t as usize] != stamp {
+                        self.tet_mark[t as usize] = stamp;
+                        candidates.push(t);
+                    }
+                }
+            }
+        }
+        candidates.sort_unstable();
+        let mut out = Vec::new();
+        for &t in &candidates {
+            let ct = centroid(t);
+            for j in 0..4 {
+                let u = self.neighbours[t as usize][j];
+                if u == NO_TET || (u < t && self.tet_mark[u as usize] == stamp) {
+                    continue;
+                }
+                let cu = centroid(u);
+                if surface
+                    .iter()
+                    .any(|tri| segment_triangle(ct, cu, *tri).is_some())
+                {
+                    if let Some(k) = self.neighbours[u as usize].iter().position(|&w| w == t) {
+                        out.push(NewFace {
+                            t,
+                            j: j as u8,
+                            u,
+                            k: k as u8,
+                        });
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// For each node on a new face: its tets grouped into face-connected components (through
+    /// faces containing the node). `(node, tets, component of each tet, component count)`.
+    fn plan_split(&self, body: &SoftBody, faces: &[NewFace]) -> Vec<(u32, Vec<u32>, Vec<u32>, u32)> {
+        let tets = body.tets();
+        let mut nodes: Vec<u32> = faces
+            .iter()
+            .flat_map(|f| face_nodes(&tets[f.t as usize], f.j as usize))
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        let mut out = Vec::with_capacity(nodes.len());
+        for v in nodes {
+            let star = self.node_tets[v as usize].clone();
+            let mut comp = vec![u32::MAX; star.len()];
+            let mut count = 0;
+            for s in 0..star.len() {
+                if comp[s] != u32::MAX {
+                    continue;
+                }
+                comp[s] = count;
+                let mut stack = vec![s];
+                while let Some(a) = stack.pop() {
+                    let t = star[a] as usize;
+                    for j in 0..4 {
+                        if tets[t][j] == v {
+                            continue;
+                        }
+                        let u = self.neighbours[t][j];
+                        if u == NO_TET {
+                            continue;
+                        }
+                        if let Some(b) = star.iter().position(|&w| w == u) {
+                            if comp[b] == u32::MAX {
+                                comp[b] = count;
+                                stack.push(b);
+                            }
+                        }
+                    }
+                }
+                count += 1;
+            }
+            out.push((v, star, comp, count));
+        }
+        out
+    }
+
+    /// Indices of the new faces to glue back: those on a boundary edge that would not be
+    /// manifold, and all new faces at a vertex whose boundary would be pinched.
+    fn defects(
+        &self,
+        body: &SoftBody,
+        faces: &[NewFace],
+        plan: &[(u32, Vec<u32>, Vec<u32>, u32)],
+    ) -> Vec<usize> {
+        let tets = body.tets();
+        // Tentative labels: (tet, node) → label; copies numbered from `first`.
+        let mut label: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut copy_of: HashMap<u32, u32> = HashMap::new();
+        let mut next = body.node_count() as u32;
+        let mut local: Vec<u32> = Vec::new();
+        for (v, star, comp, count) in plan {
+            local.extend(star);
+            if *count > 1 {
+                let base = next;
+                next += count - 1;
+                for c in base..next {
+                    copy_of.insert(c, *v);
+                }
+                for (t, &c) in star.iter().zip(comp) {
+                    if c > 0 {
+                        label.insert((*t, *v), base + c - 1);
+                    }
+                }
+            }
+        }
+        local.sort_unstable();
+        local.dedup();
+        let relabel = |t: u32, v: u32| label.get(&(t, v)).copied().unwrap_or(v);
+        let touched: Vec<u32> = plan.iter().map(|p| p.0).collect();
+        let is_touched = |v: u32| touched.binary_search(&v).is_ok();
+        // Boundary faces of the local tets, in tentative labels, with the original labels.
+        let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> = HashMap::new();
+        let mut around: HashMap<u32, Vec<[u32; 2]>> = HashMap::new();
+        for &t in &local {
+            for j in 0..4 {
+                if self.neighbours[t as usize][j] != NO_TET {
+                    continue;
+                }
+                let orig = face_nodes(&tets[t as usize], j);
+                let f = orig.map(|v| relabel(t, v));
+                for k in 0..3 {
+                    let (a, b) = (orig[k], orig[(k + 1) % 3]);
+                    if is_touched(a) || is_touched(b) {
+                        let e = directed.entry([f[k], f[(k + 1) % 3]]).or_insert((0, [a, b]));
+                        e.0 += 1;
+                    }
+                    if is_touched(orig[k]) {
+                        around
+                            .entry(f[k])
+                            .or_default()
+                            .push([f[(k + 1) % 3], f[(k + 2) % 3]]);
+                    }
+                }
+            }
+        }
+        let mut bad_edges: Vec<[u32; 2]> = Vec::new();
+        for (&[a, b], &(count, orig)) in &directed {
+            let back = directed.get(&[b, a]).map_or(0, |e| e.0);
+            if count != 1 || back != 1 {
+                bad_edges.push([orig[0].min(orig[1]), orig[0].max(orig[1])]);
+            }
+        }
+        let mut bad_vertices: Vec<u32> = Vec::new();
+        for (&v, link) in &around {
+            if !single_cycle(link) {
+                // Back to the original label: the node itself or the one it copies.
+                bad_vertices.push(copy_of.get(&v).copied().unwrap_or(v));
+            }
+        }
+        let mut out = Vec::new();
+        for (i, f) in faces.iter().enumerate() {
+            let n = face_nodes(&tets[f.t as usize], f.j as usize);
+            let on_edge = bad_edges
+                .iter()
+                .any(|e| n.contains(&e[0]) && n.contains(&e[1]));
+            let at_vertex = bad_vertices.iter().any(|v| n.contains(v));
+            if on_edge || at_vertex {
+                out.push(i);
+            }
+        }
+        out
+    }
+
+    fn commit(
+        &mut self,
+        body: &mut SoftBody,
+        faces: &[NewFace],
+        plan: Vec<(u32, Vec<u32>, Vec<u32>, u32)>,
+    ) -> Result<Vec<SurgeryEvent>, SurgeryError> {
+        let old_tets: Vec<[u32; 4]> = body.tets().to_vec();
+        // New nodes: one per extra component of each split node.
+        let sources: Vec<u32> = plan
+            .iter()
+            .flat_map(|(v, _, _, count)| std::iter::repeat_n(*v, count.saturating_sub(1) as usize))
+            .collect();
+        let first = if sources.is_empty() {
+            body.node_count() as u32
+        } else {
+            body.duplicate_nodes(&sources)?
+        };
+        let mut new_tets: HashMap<u32, [u32; 4]> = HashMap::new();
+        let mut next = first;
+        let mut split_nodes: Vec<u32> = Vec::new();
+        for (v, star, comp, count) in &plan {
+            if *count <= 1 {
+                continue;
+            }
+            split_nodes.push(*v);
+            let base = next;
+            next += count - 1;
+            let mut keep = Vec::new();
+            let mut moved: Vec<Vec<u32>> = vec![Vec::new(); *count as usize - 1];
+            for (&t, &c) in star.iter().zip(comp) {
+                if c == 0 {
+                    keep.push(t);
+                } else {
+                    let nodes = new_tets.entry(t).or_insert(old_tets[t as usize]);
+                    for n in nodes.iter_mut() {
+                        if *n == *v {
+                            *n = base + c - 1;
+                        }
+                    }
+                    moved[c as usize - 1].push(t);
+                }
+            }
+            self.node_tets[*v as usize] = keep;
+            for m in moved {
+                self.node_tets.push(m);
+                self.origin.push(self.origin[*v as usize]);
+            }
+        }
+        let mut changed: Vec<u32> = new_tets.keys().copied().collect();
+        changed.sort_unstable();
+        for &t in &changed {
+            body.set_tet_nodes(t as usize, new_tets[&t])?;
+        }
+        // Distance constraints: each old edge at a split node maps to the edges its tets now use.
+        split_nodes.sort_unstable();
+        let is_split = |v: u32| split_nodes.binary_search(&v).is_ok();
+        let mut images: Vec<([u32; 2], [u32; 2])> = Vec::new();
+        let mut region: Vec<u32> = plan
+            .iter()
+            .filter(|p| p.3 > 1)
+            .flat_map(|p| p.1.iter().copied())
+            .collect();
+        region.sort_unstable();
+        region.dedup();
+        let tets_now = body.tets();
+        for &t in &region {
+            let (o, n) = (old_tets[t as usize], tets_now[t as usize]);
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    if is_split(o[a]) || is_split(o[b]) {
+                        let oe = [o[a].min(o[b]), o[a].max(o[b])];
+                        let ne = [n[a].min(n[b]), n[a].max(n[b])];
+                        images.push((oe, ne));
+                    }
+                }
+            }
+        }
+        images.sort_unstable();
+        images.dedup();
+        let mut i = 0;
+        while i < images.len() {
+            let oe = images[i].0;
+            let mut j = i;
+            while j < images.len() && images[j].0 == oe {
+                j += 1;
+            }
+            let group: Vec<[u32; 2]> = images[i..j].iter().map(|p| p.1).collect();
+            i = j;
+            let Some(&c) = self.edge_constraint.get(&oe) else {
+                continue;
+            };
+            let record: DistanceConstraint = body.distance_constraints()[c as usize];
+            let mut rest = group.as_slice();
+            if !group.contains(&oe) {
+                body.set_distance_nodes(c as usize, group[0])?;
+                self.edge_constraint.remove(&oe);
+                self.edge_constraint.insert(group[0], c);
+                rest = &group[1..];
+            }
+            for &ne in rest {
+                if ne == oe || self.edge_constraint.contains_key(&ne) {
+                    continue;
+                }
+                let id = body.add_distance_constraint(DistanceConstraint {
+                    nodes: ne,
+                    ..record
+                })?;
+                self.edge_constraint.insert(ne, id as u32);
+            }
+        }
+        // Masses of the split nodes and their copies, from their tets' rest volumes (eq. (1)).
+        let rest = body.tet_rest_volumes();
+        let density = body.density();
+        let mut masses = Vec::new();
+        for v in split_nodes.iter().copied().chain(first..next) {
+            let m: f64 = self.node_tets[v as usize]
+                .iter()
+                .map(|&t| density as f64 * rest[t as usize] as f64 / 4.0)
+                .sum();
+            masses.push((v, m as f32));
+        }
+        for (v, m) in masses {
+            body.set_node_mass(v, m)?;
+        }
+        for f in faces {
+            self.cut_faces.push((f.t, f.j));
+            self.cut_faces.push((f.u, f.k));
+        }
+        let opened: Vec<[u32; 3]> = faces
+            .iter()
+            .flat_map(|f| {
+                [
+                    face_nodes(&body.tets()[f.t as usize], f.j as usize),
+                    face_nodes(&body.tets()[f.u as usize], f.k as usize),
+                ]
+            })
+            .collect();
+        let mut events = vec![SurgeryEvent::CutAdvanced {
+            new_nodes: first..next,
+            changed_tets: changed,
+            opened_faces: opened,
+        }];
+        if next > first {
+            for c in self.count_components(body) {
+                let tets: Vec<u32> = self
+                    .tet_component
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &k)| k == c)
+                    .map(|(t, _)| t as u32)
+                    .collect();
+                let volume = tets
+                    .iter()
+                    .map(|&t| body.tet_rest_volumes()[t as usize] as f64)
+                    .sum();
+                let mut nodes: Vec<u32> = tets
+                    .iter()
+                    .flat_map(|&t| body.tets()[t as usize])
+                    .collect();
+                nodes.sort_unstable();
+                nodes.dedup();
+                events.push(SurgeryEvent::PieceDetached {
+                    component: c,
+                    tets,
+                    nodes,
+                    rest_volume: volume,
+                });
+            }
+        }
+        tracing::debug!(
+            faces = faces.len(),
+            new_nodes = next - first,
+            "cut advanced"
+        );
+        Ok(events)
+    }
+}
