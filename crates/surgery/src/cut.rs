@@ -112,6 +112,20 @@ impl Surgery {
         self.check_body(body)?;
         let surface = sweep.triangles();
         let mut faces = self.crossed_faces(body, &surface);
+        // Faces the blade crossed before but that had to stay glued (at the cut's front then):
+        // retried now that the cut may have moved on.
+        for [t, j, u, k] in std::mem::take(&mut self.pending) {
+            if self.neighbours[t as usize][j as usize] == u
+                && !faces.iter().any(|f| (f.t == t && f.j as u32 == j) || (f.u == t && f.k as u32 == j))
+            {
+                faces.push(NewFace {
+                    t,
+                    j: j as u8,
+                    u,
+                    k: k as u8,
+                });
+            }
+        }
         if faces.is_empty() {
             return Ok(Vec::new());
         }
@@ -131,6 +145,7 @@ impl Surgery {
                 if bad.contains(&i) {
                     self.neighbours[f.t as usize][f.j as usize] = f.u;
                     self.neighbours[f.u as usize][f.k as usize] = f.t;
+                    self.pending.push([f.t, f.j as u32, f.u, f.k as u32]);
                 } else {
                     keep.push(*f);
                 }
@@ -328,17 +343,36 @@ impl Surgery {
                 bad_vertices.push(copy_of.get(&v).copied().unwrap_or(v));
             }
         }
-        let mut out = Vec::new();
-        for (i, f) in faces.iter().enumerate() {
-            let n = face_nodes(&tets[f.t as usize], f.j as usize);
-            let on_edge = bad_edges
-                .iter()
-                .any(|e| n.contains(&e[0]) && n.contains(&e[1]));
-            let at_vertex = bad_vertices.iter().any(|v| n.contains(v));
-            if on_edge || at_vertex {
-                out.push(i);
+        // One face per defect: the last new face on the bad edge or at the bad vertex (a chord
+        // of the crack between two front nodes, or a crack touching the surface at a point).
+        let mut out: Vec<usize> = Vec::new();
+        let nodes_of: Vec<[u32; 3]> = faces
+            .iter()
+            .map(|f| face_nodes(&tets[f.t as usize], f.j as usize))
+            .collect();
+        bad_edges.sort_unstable();
+        bad_edges.dedup();
+        for e in &bad_edges {
+            let covered = out.iter().any(|&i| nodes_of[i].contains(&e[0]) && nodes_of[i].contains(&e[1]));
+            if !covered {
+                if let Some(i) = (0..faces.len())
+                    .rev()
+                    .find(|&i| nodes_of[i].contains(&e[0]) && nodes_of[i].contains(&e[1]))
+                {
+                    out.push(i);
+                }
             }
         }
+        bad_vertices.sort_unstable();
+        bad_vertices.dedup();
+        for v in &bad_vertices {
+            if !out.iter().any(|&i| nodes_of[i].contains(v)) {
+                if let Some(i) = (0..faces.len()).rev().find(|&i| nodes_of[i].contains(v)) {
+                    out.push(i);
+                }
+            }
+        }
+        // A defect no new face touches was there before this cut: nothing to glue for it.
         out
     }
 

@@ -43,6 +43,9 @@ pub struct Surgery {
     pub(crate) edge_constraint: HashMap<[u32; 2], u32>,
     /// Faces opened by cuts: (tet, local face).
     pub(crate) cut_faces: Vec<(u32, u8)>,
+    /// Faces crossed by the blade but kept glued (they would have made the surface
+    /// non-manifold at the cut's front): (tet, face, neighbour, its face), retried next cut.
+    pub(crate) pending: Vec<[u32; 4]>,
     pub(crate) sutures: Vec<Option<Suture>>,
     /// Component (smallest tet index) of each tet, from the last time pieces were counted.
     pub(crate) tet_component: Vec<u32>,
@@ -125,6 +128,7 @@ impl Surgery {
             origin: (0..n as u32).collect(),
             edge_constraint,
             cut_faces: Vec::new(),
+            pending: Vec::new(),
             sutures: Vec::new(),
             tet_component: Vec::new(),
             component_count: 0,
