@@ -1,7 +1,9 @@
 //! The scalpel cut: tets separated along the faces the blade's swept surface crosses.
 //!
 //! 1. The blade's cut surface for one step is the blade triangle at both poses plus the
-//!    surfaces swept by its three edges (eight triangles, world space, current positions).
+//!    surfaces swept by its three edges, projected onto the blade's plane at the end pose
+//!    (eight coplanar triangles, world space, current positions): the area the blade swept in
+//!    its own plane.
 //! 2. A face shared by tets `t` and `u` is cut when the segment between their centroids crosses
 //!    that surface. The cut walls are thus made of existing tet faces: no tet is split or
 //!    created, so no sliver can appear (the quality bound is the mesh's own, see
@@ -22,7 +24,6 @@ use glam::{DVec3, Vec3};
 use tissue_mesh::NO_TET;
 use tissue_pbd::{DistanceConstraint, Pose, SoftBody, Tool, ToolShape};
 
-use crate::geometry::segment_triangle;
 use crate::state::{face_nodes, single_cycle};
 use crate::{Surgery, SurgeryError, SurgeryEvent};
 
@@ -68,10 +69,18 @@ impl BladeSweep {
         Self::new(tool.shape(), &from, &to)
     }
 
-    /// The eight triangles of the cut surface (see the module docs).
+    /// The eight triangles of the cut surface (see the module docs): the blade at the end pose,
+    /// and the blade at the start pose and the surfaces its edges swept, all projected onto the
+    /// end pose's plane. Only the blade's motion within its own plane cuts; motion along its
+    /// normal pushes tissue (a contact tool's job) and cuts nothing, so a blade moved flat-on
+    /// does not chop out a slab.
     pub(crate) fn triangles(&self) -> [[DVec3; 3]; 8] {
-        let f = self.from.map(|p| p.as_dvec3());
         let t = self.to.map(|p| p.as_dvec3());
+        let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
+        let f = self.from.map(|p| {
+            let p = p.as_dvec3();
+            p - n * n.dot(p - t[0])
+        });
         let mut out = [[DVec3::ZERO; 3]; 8];
         out[0] = f;
         out[1] = t;
@@ -83,6 +92,10 @@ impl BladeSweep {
         out
     }
 }
+
+/// Smallest piece (tets) a cut may detach: smaller face-connected groups that new faces would
+/// enclose stay glued.
+pub const MIN_PIECE: usize = 16;
 
 /// A face opened by this cut: tet `t` face `j` against tet `u` face `k`.
 #[derive(Debug, Clone, Copy)]
@@ -133,6 +146,31 @@ impl Surgery {
             self.neighbours[f.t as usize][f.j as usize] = NO_TET;
             self.neighbours[f.u as usize][f.k as usize] = NO_TET;
         }
+        // Crumbs: a group of fewer than MIN_PIECE tets that the new faces would enclose is a
+        // staircase artefact (or a sliver between two cuts); it stays attached.
+        let mut crumbs: Vec<u32> = Vec::new();
+        for f in &faces {
+            for t in [f.t, f.u] {
+                if !crumbs.contains(&t) {
+                    if let Some(group) = self.small_group(t) {
+                        crumbs.extend(group);
+                    }
+                }
+            }
+        }
+        if !crumbs.is_empty() {
+            faces.retain(|f| {
+                let glue = crumbs.contains(&f.t) || crumbs.contains(&f.u);
+                if glue {
+                    self.neighbours[f.t as usize][f.j as usize] = f.u;
+                    self.neighbours[f.u as usize][f.k as usize] = f.t;
+                }
+                !glue
+            });
+            if faces.is_empty() {
+                return Ok(Vec::new());
+            }
+        }
         // Glue back what would leave the surface non-manifold, until nothing does.
         let split = loop {
             let plan = self.plan_split(body, &faces);
@@ -156,6 +194,24 @@ impl Surgery {
             }
         };
         self.commit(body, &faces, split)
+    }
+
+    /// The tets face-connected to `t` when there are fewer than [`MIN_PIECE`] of them.
+    fn small_group(&self, t: u32) -> Option<Vec<u32>> {
+        let mut group = vec![t];
+        let mut i = 0;
+        while i < group.len() {
+            for &u in &self.neighbours[group[i] as usize] {
+                if u != NO_TET && !group.contains(&u) {
+                    if group.len() + 1 >= MIN_PIECE {
+                        return None;
+                    }
+                    group.push(u);
+                }
+            }
+            i += 1;
+        }
+        Some(group)
     }
 
     /// Faces between tets whose centroid segment crosses the cut surface.
@@ -197,19 +253,41 @@ impl Surgery {
             }
         }
         candidates.sort_unstable();
+        // All eight triangles lie in the end pose's plane: a centroid segment crosses the cut
+        // surface when its ends are on opposite sides and the crossing point lies in one of them.
+        let origin = surface[1][0];
+        let normal = (surface[1][1] - origin)
+            .cross(surface[1][2] - origin)
+            .normalize_or_zero();
+        let inside = |p: DVec3| {
+            surface.iter().any(|[a, b, c]| {
+                let (ab, bc, ca) = (
+                    (*b - *a).cross(p - *a).dot(normal),
+                    (*c - *b).cross(p - *b).dot(normal),
+                    (*a - *c).cross(p - *c).dot(normal),
+                );
+                (ab >= 0.0 && bc >= 0.0 && ca >= 0.0) || (ab <= 0.0 && bc <= 0.0 && ca <= 0.0)
+            })
+        };
         let mut out = Vec::new();
         for &t in &candidates {
             let ct = centroid(t);
+            let dt = normal.dot(ct - origin);
+            if dt.abs() > reach {
+                continue;
+            }
             for j in 0..4 {
                 let u = self.neighbours[t as usize][j];
                 if u == NO_TET || (u < t && self.tet_mark[u as usize] == stamp) {
                     continue;
                 }
                 let cu = centroid(u);
-                if surface
-                    .iter()
-                    .any(|tri| segment_triangle(ct, cu, *tri).is_some())
-                {
+                let du = normal.dot(cu - origin);
+                if (dt > 0.0) == (du > 0.0) || dt == du {
+                    continue;
+                }
+                let p = ct + (cu - ct) * (dt / (dt - du));
+                if inside(p) {
                     if let Some(k) = self.neighbours[u as usize].iter().position(|&w| w == t) {
                         out.push(NewFace {
                             t,
@@ -221,6 +299,15 @@ impl Surgery {
                 }
             }
         }
+        // A tet whose four faces would all be cut is an island of one side inside the other
+        // (the staircase, not the blade, cut it out): it stays with its neighbours.
+        let mut count: HashMap<u32, u32> = HashMap::new();
+        for f in &out {
+            *count.entry(f.t).or_default() += 1;
+            *count.entry(f.u).or_default() += 1;
+        }
+        let open = |t: u32| self.neighbours[t as usize].iter().filter(|&&w| w == NO_TET).count() as u32;
+        out.retain(|f| count[&f.t] + open(f.t) < 4 && count[&f.u] + open(f.u) < 4);
         out
     }
 

@@ -16,7 +16,7 @@
 //! along its path), snap vertices, and rebuild the physics model from the new elements. Here the
 //! cut **separates the mesh along existing tet faces** instead of subdividing: a face between
 //! two tets is cut when the segment between their centroids crosses the blade's swept surface
-//! (the blade triangle at both poses and the surfaces swept by its edges); each node on a newly
+//! (the area the blade triangle swept within its own plane; motion along its normal does not cut); each node on a newly
 //! cut face is duplicated once per extra face-connected group of its tets; tets on the far side
 //! are moved onto the copies. This is the limit case of vertex snapping (every crossing snaps to
 //! the nearest tet face, threshold one tet), and it buys robustness:
@@ -95,7 +95,7 @@ mod settings;
 mod state;
 mod suture;
 
-pub use cut::BladeSweep;
+pub use cut::{BladeSweep, MIN_PIECE};
 pub use error::SurgeryError;
 pub use event::SurgeryEvent;
 pub use settings::SurgerySettings;
