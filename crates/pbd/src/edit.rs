@@ -13,8 +13,9 @@
 //!   and the colouring are untouched.
 //! - **The dynamic set** holds every added or relabelled constraint, in the order the edits
 //!   made them, in solver indices: one batch per constraint (its eight lanes equal, as padding
-//!   lanes are). Each iteration projects it serially after the block tree and before the floor
-//!   and contacts. So serial and parallel stay bit-identical, and steps allocate nothing.
+//!   lanes are). Each iteration projects it serially after the block tree (its volumes, then
+//!   its distances, so that links added last, like sutures, are projected last) and before the
+//!   floor and contacts. So serial and parallel stay bit-identical, and steps allocate nothing.
 //! - Removed constraints keep their record (so indices stay stable) with
 //!   [`ConstraintSlot::Removed`]; [`SoftBody::distance_slot`] says where each record is.
 //! - Masses are set per node ([`SoftBody::set_node_mass`]); [`SoftBody::tet_rest_volumes`] and

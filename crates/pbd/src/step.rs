@@ -242,17 +242,9 @@ impl SoftBody {
             &mut self.distance_lambda,
             &mut self.volume_lambda,
         );
-        // The dynamic set (edited and added constraints), serially, in edit order, on all nodes.
+        // The dynamic set (edited and added constraints), serially, in edit order, on all nodes:
+        // volumes, then distances (so that links such as sutures come last).
         let e = &mut self.edits;
-        if !e.dyn_distance_batches.is_empty() {
-            project_batches::<_, 2, 1>(
-                &e.dyn_distance_batches,
-                &mut e.dyn_distance_lambda,
-                p,
-                |b| &b.nodes,
-                project_distance::<XPBD>,
-            );
-        }
         match self.volume_kind {
             VolumeConstraintKind::None => {}
             VolumeConstraintKind::Classic => project_batches::<_, 4, 1>(
@@ -269,6 +261,15 @@ impl SoftBody {
                 |b| &b.nodes,
                 project_centroid::<XPBD>,
             ),
+        }
+        if !e.dyn_distance_batches.is_empty() {
+            project_batches::<_, 2, 1>(
+                &e.dyn_distance_batches,
+                &mut e.dyn_distance_lambda,
+                p,
+                |b| &b.nodes,
+                project_distance::<XPBD>,
+            );
         }
         // Per-node projections from here on: `p` (xyz; w = inverse mass) and `w` are in solver
         // order, the caller's node `i` is `p[self.rank[i]]`.

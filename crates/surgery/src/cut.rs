@@ -149,24 +149,31 @@ impl Surgery {
         // Crumbs: a group of fewer than MIN_PIECE tets that the new faces would enclose is a
         // staircase artefact (or a sliver between two cuts); it stays attached.
         let mut crumbs: Vec<u32> = Vec::new();
+        self.stamp = self.stamp.wrapping_add(1).max(1);
         for f in &faces {
             for t in [f.t, f.u] {
-                if !crumbs.contains(&t) {
+                if self.tet_mark[t as usize] != self.stamp {
                     if let Some(group) = self.small_group(t) {
+                        for &g in &group {
+                            self.tet_mark[g as usize] = self.stamp;
+                        }
                         crumbs.extend(group);
                     }
                 }
             }
         }
         if !crumbs.is_empty() {
+            let stamp = self.stamp;
+            let marks = std::mem::take(&mut self.tet_mark);
             faces.retain(|f| {
-                let glue = crumbs.contains(&f.t) || crumbs.contains(&f.u);
+                let glue = marks[f.t as usize] == stamp || marks[f.u as usize] == stamp;
                 if glue {
                     self.neighbours[f.t as usize][f.j as usize] = f.u;
                     self.neighbours[f.u as usize][f.k as usize] = f.t;
                 }
                 !glue
             });
+            self.tet_mark = marks;
             if faces.is_empty() {
                 return Ok(Vec::new());
             }

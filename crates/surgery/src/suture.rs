@@ -85,23 +85,26 @@ impl Surgery {
         let Some(w) = hits.windows(2).find(|w| w[0].1 && !w[1].1) else {
             return Ok(None);
         };
-        let nearest = |f: [u32; 3], at: DVec3| {
-            f.into_iter()
-                .min_by(|&a, &b| {
-                    x[a as usize]
-                        .as_dvec3()
-                        .distance_squared(at)
-                        .total_cmp(&x[b as usize].as_dvec3().distance_squared(at))
-                })
-                .unwrap_or(f[0])
+        // The closest pair of distinct nodes, one from each face, to the two crossings (the
+        // faces may share a node at the wound's end).
+        let dist = |n: u32, at: DVec3| x[n as usize].as_dvec3().distance(at);
+        let mut best: Option<(f64, u32, u32)> = None;
+        for &a in &w[0].2 {
+            for &b in &w[1].2 {
+                let d = dist(a, w[0].3) + dist(b, w[1].3);
+                if a != b && best.is_none_or(|(e, _, _)| d < e) {
+                    best = Some((d, a, b));
+                }
+            }
+        }
+        let Some((_, na, nb)) = best else {
+            return Ok(None);
         };
-        let (na, nb) = (nearest(w[0].2, w[0].3), nearest(w[1].2, w[1].3));
-        if na == nb
-            || self
-                .sutures
-                .iter()
-                .flatten()
-                .any(|s| s.nodes == [na, nb] || s.nodes == [nb, na])
+        if self
+            .sutures
+            .iter()
+            .flatten()
+            .any(|s| s.nodes == [na, nb] || s.nodes == [nb, na])
         {
             return Ok(None);
         }
