@@ -466,6 +466,14 @@ impl Surgery {
                 }
             }
         }
+        // A new face none of whose nodes is split would be a zero-width double face: it waits.
+        for (i, f) in faces.iter().enumerate() {
+            if !out.contains(&i)
+                && nodes_of[i].iter().all(|&v| relabel(f.t, v) == relabel(f.u, v))
+            {
+                out.push(i);
+            }
+        }
         // A defect no new face touches was there before this cut: nothing to glue for it.
         out
     }

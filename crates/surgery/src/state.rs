@@ -331,6 +331,12 @@ impl Surgery {
                 return defect("edge", a as usize, "boundary edge without its opposite (open or non-manifold)");
             }
         }
+        let mut seen: HashMap<[u32; 3], ()> = HashMap::with_capacity(faces.len());
+        for f in &faces {
+            if seen.insert(sorted3(*f), ()).is_some() {
+                return defect("vertex", f[0] as usize, "two boundary triangles on the same three nodes (a double face)");
+            }
+        }
         // Vertex links: the boundary faces around a vertex make one cycle.
         let mut around: HashMap<u32, Vec<[u32; 2]>> = HashMap::new();
         for f in &faces {
