@@ -203,6 +203,66 @@ impl Surgery {
         self.commit(body, &faces, split)
     }
 
+    /// The pieces this cut detached: for each new face, two searches through shared nodes, one
+    /// from each side, taking a tet in turn; when one runs out before they meet, what it found
+    /// is a new piece. A face whose two tets one earlier search found together is skipped.
+    /// Costs about twice the smaller side, or the way around the cut's front when it holds.
+    fn detached_pieces(&self, body: &SoftBody, faces: &[NewFace]) -> Vec<Vec<u32>> {
+        let tets = body.tets();
+        // Tet → the connected search that found it.
+        let mut found: HashMap<u32, usize> = HashMap::new();
+        let mut pieces: Vec<Vec<u32>> = Vec::new();
+        for (search, f) in faces.iter().enumerate() {
+            let (a, b) = (f.t, f.u);
+            if found.get(&a).is_some_and(|s| found.get(&b) == Some(s)) {
+                continue;
+            }
+            if pieces.iter().any(|p| p.binary_search(&a).is_ok() || p.binary_search(&b).is_ok()) {
+                continue;
+            }
+            let mut side: [Vec<u32>; 2] = [vec![a], vec![b]];
+            let mut head = [0usize; 2];
+            let mut local: HashMap<u32, u8> = HashMap::new();
+            local.insert(a, 0);
+            local.insert(b, 1);
+            let mut exhausted = None;
+            'search: loop {
+                for s in 0..2 {
+                    let Some(&t) = side[s].get(head[s]) else {
+                        exhausted = Some(s);
+                        break 'search;
+                    };
+                    head[s] += 1;
+                    for &v in &tets[t as usize] {
+                        for &u in &self.node_tets[v as usize] {
+                            match local.get(&u) {
+                                None => {
+                                    local.insert(u, s as u8);
+                                    side[s].push(u);
+                                }
+                                Some(&m) if m as usize != s => break 'search,
+                                _ => {}
+                            }
+                        }
+                    }
+                }
+            }
+            match exhausted {
+                Some(s) => {
+                    let mut piece = std::mem::take(&mut side[s]);
+                    piece.sort_unstable();
+                    pieces.push(piece);
+                }
+                None => {
+                    for &t in side.iter().flatten() {
+                        found.insert(t, search);
+                    }
+                }
+            }
+        }
+        pieces
+    }
+
     /// The tets face-connected to `t` when there are fewer than [`MIN_PIECE`] of them.
     fn small_group(&self, t: u32) -> Option<Vec<u32>> {
         let mut group = vec![t];
@@ -232,13 +292,16 @@ impl Surgery {
                 hi = hi.max(*p);
             }
         }
-        let reach = 2.0 * self.longest_edge as f64;
-        let (lo, hi) = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
-        self.stamp = self.stamp.wrapping_add(1);
-        if self.stamp == 0 {
-            self.tet_mark.fill(0);
-            self.stamp = 1;
-        }
+        // A crossing point lies in `t` or in `u`, on the blade's plane: one of the two tets
+        // meets the surface's box and straddles the plane. Nodes near the box first, then
+        // their tets.
+        let reach = self.longest_edge as f64;
+        let (nlo, nhi) = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
+        let origin = surface[1][0];
+        let normal = (surface[1][1] - origin)
+            .cross(surface[1][2] - origin)
+            .normalize_or_zero();
+        self.stamp = self.stamp.wrapping_add(1).max(1);
         let stamp = self.stamp;
         let centroid = |t: u32| -> DVec3 {
             tets[t as usize]
@@ -250,22 +313,34 @@ impl Surgery {
         let mut candidates = Vec::new();
         for (v, p) in x.iter().enumerate() {
             let p = p.as_dvec3();
-            if p.cmpge(lo).all() && p.cmple(hi).all() {
+            if p.cmpge(nlo).all() && p.cmple(nhi).all() {
                 for &t in &self.node_tets[v] {
-                    if self.tet_mark[t as usize] != stamp {
-                        self.tet_mark[t as usize] = stamp;
+                    if self.tet_mark[t as usize] == stamp {
+                        continue;
+                    }
+                    self.tet_mark[t as usize] = stamp;
+                    let q = tets[t as usize].map(|i| x[i as usize].as_dvec3());
+                    let (tlo, thi) = (
+                        q[0].min(q[1]).min(q[2].min(q[3])),
+                        q[0].max(q[1]).max(q[2].max(q[3])),
+                    );
+                    let d = q.map(|p| normal.dot(p - origin));
+                    let straddles = d.iter().any(|&d| d >= 0.0) && d.iter().any(|&d| d <= 0.0);
+                    if straddles && tlo.cmple(hi).all() && thi.cmpge(lo).all() {
                         candidates.push(t);
                     }
                 }
             }
         }
+        // Candidates get a second mark so that each pair of candidates is tested once.
+        self.stamp = self.stamp.wrapping_add(1).max(1);
+        let stamp = self.stamp;
+        for &t in &candidates {
+            self.tet_mark[t as usize] = stamp;
+        }
         candidates.sort_unstable();
         // All eight triangles lie in the end pose's plane: a centroid segment crosses the cut
         // surface when its ends are on opposite sides and the crossing point lies in one of them.
-        let origin = surface[1][0];
-        let normal = (surface[1][1] - origin)
-            .cross(surface[1][2] - origin)
-            .normalize_or_zero();
         let inside = |p: DVec3| {
             surface.iter().any(|[a, b, c]| {
                 let (ab, bc, ca) = (
@@ -280,9 +355,6 @@ impl Surgery {
         for &t in &candidates {
             let ct = centroid(t);
             let dt = normal.dot(ct - origin);
-            if dt.abs() > reach {
-                continue;
-            }
             for j in 0..4 {
                 let u = self.neighbours[t as usize][j];
                 if u == NO_TET || (u < t && self.tet_mark[u as usize] == stamp) {
@@ -621,27 +693,25 @@ impl Surgery {
             opened_faces: opened,
         }];
         if next > first {
-            for c in self.count_components(body) {
-                let tets: Vec<u32> = self
-                    .tet_component
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, &k)| k == c)
-                    .map(|(t, _)| t as u32)
-                    .collect();
-                let volume = tets
+            for piece in self.detached_pieces(body, faces) {
+                let component = self.component_count as u32;
+                self.component_count += 1;
+                for &t in &piece {
+                    self.tet_component[t as usize] = component;
+                }
+                let volume = piece
                     .iter()
                     .map(|&t| body.tet_rest_volumes()[t as usize] as f64)
                     .sum();
-                let mut nodes: Vec<u32> = tets
+                let mut nodes: Vec<u32> = piece
                     .iter()
                     .flat_map(|&t| body.tets()[t as usize])
                     .collect();
                 nodes.sort_unstable();
                 nodes.dedup();
                 events.push(SurgeryEvent::PieceDetached {
-                    component: c,
-                    tets,
+                    component,
+                    tets: piece,
                     nodes,
                     rest_volume: volume,
                 });

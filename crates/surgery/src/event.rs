@@ -18,7 +18,7 @@ pub enum SurgeryEvent {
     },
     /// A cut made a new connected piece.
     PieceDetached {
-        /// The piece's id: its smallest tet index ([`crate::Surgery::tet_components`]).
+        /// The piece's label ([`crate::Surgery::tet_components`]).
         component: u32,
         /// Its tets.
         tets: Vec<u32>,

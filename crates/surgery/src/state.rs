@@ -47,7 +47,7 @@ pub struct Surgery {
     /// non-manifold at the cut's front): (tet, face, neighbour, its face), retried next cut.
     pub(crate) pending: Vec<[u32; 4]>,
     pub(crate) sutures: Vec<Option<Suture>>,
-    /// Component (smallest tet index) of each tet, from the last time pieces were counted.
+    /// Piece label of each tet (see [`Surgery::tet_components`]).
     pub(crate) tet_component: Vec<u32>,
     pub(crate) component_count: usize,
     /// Longest rest edge (cm): how far from the blade a tet's centroid can be and still be cut.
@@ -192,12 +192,13 @@ impl Surgery {
         &self.sutures
     }
 
-    /// Number of connected pieces (tets sharing nodes), as of the last cut.
+    /// Number of connected pieces (tets sharing nodes).
     pub fn component_count(&self) -> usize {
         self.component_count
     }
 
-    /// Component of each tet (the smallest tet index of its piece), as of the last cut.
+    /// Piece label of each tet: the pieces of the input `0, 1, …` (by smallest tet), then each
+    /// detached piece the next label, in order of detachment.
     pub fn tet_components(&self) -> &[u32] {
         &self.tet_component
     }
@@ -217,9 +218,9 @@ impl Surgery {
         out
     }
 
-    /// Counts the pieces (union–find over tets through shared nodes); returns the component ids
-    /// that did not exist before.
-    pub(crate) fn count_components(&mut self, body: &SoftBody) -> Vec<u32> {
+    /// Labels the pieces (union–find over tets through shared nodes) `0, 1, …` in the order of
+    /// their smallest tet.
+    pub(crate) fn count_components(&mut self, body: &SoftBody) {
         let tets = body.tets();
         let n = body.node_count();
         let mut parent: Vec<u32> = (0..n as u32).collect();
@@ -241,34 +242,19 @@ impl Surgery {
                 }
             }
         }
-        // Component id = smallest tet index of the piece.
         let mut root_comp = vec![u32::MAX; n];
-        let old = std::mem::take(&mut self.tet_component);
         let mut comp = Vec::with_capacity(tets.len());
         let mut count = 0;
-        for (i, t) in tets.iter().enumerate() {
+        for t in tets {
             let r = find(&mut parent, t[0]) as usize;
             if root_comp[r] == u32::MAX {
-                root_comp[r] = i as u32;
+                root_comp[r] = count;
                 count += 1;
             }
             comp.push(root_comp[r]);
         }
-        let mut fresh = Vec::new();
-        if !old.is_empty() {
-            let mut seen = vec![false; tets.len()];
-            for &c in &old {
-                seen[c as usize] = true;
-            }
-            for (i, &c) in comp.iter().enumerate() {
-                if c as usize == i && !seen[i] {
-                    fresh.push(c);
-                }
-            }
-        }
         self.tet_component = comp;
-        self.component_count = count;
-        fresh
+        self.component_count = count as usize;
     }
 
     /// Re-checks the invariants against `body`: adjacency symmetric and sharing nodes, the
