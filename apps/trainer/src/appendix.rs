@@ -84,7 +84,8 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
         grasp.push((i, p, body.attach(i, p).map_err(|e| Failure::from_pbd(&e))?));
     }
     // Phases (steps): settle 60, incise 20, cut off 30, suture at 140, run to 200.
-    let (settle, incise, cutoff, suture_at, total) = (60usize, 20usize, 30usize, 140usize, 200usize);
+    let (settle, incise, cutoff, suture_at, total) =
+        (60usize, 20usize, 30usize, 140usize, 200usize);
     let mut plain = Vec::new();
     let mut with_cut = Vec::new();
     let mut frames = 0usize;
@@ -103,30 +104,37 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
                 body.unpin(i).map_err(|e| Failure::from_pbd(&e))?;
             }
         }
-        let blade = if step > settle + incise { &wide } else { &scalpel };
+        let blade = if step > settle + incise {
+            &wide
+        } else {
+            &scalpel
+        };
         let pose = if step > settle && step <= settle + incise {
             // Incision near the base at x = −2.45, 0.8 cm deep, drawn across z over 20 steps.
             let k = (step - settle) as f32 / incise as f32;
             let top = top_near(&body, -2.45);
-            Some(Pose::new(Quat::IDENTITY, Vec3::new(-2.45, top - 0.8, -1.4 + 2.8 * k)))
+            Some(Pose::new(
+                Quat::IDENTITY,
+                Vec3::new(-2.45, top - 0.8, -1.4 + 2.8 * k),
+            ))
         } else if step > settle + incise && step <= settle + incise + cutoff {
             // Cut-off at x = 2.05: the blade is drawn down through the whole organ.
             let k = (step - settle - incise) as f32 / cutoff as f32;
-            Some(Pose::new(Quat::IDENTITY, Vec3::new(2.05, 1.5 - 3.5 * k, 0.0)))
+            Some(Pose::new(
+                Quat::IDENTITY,
+                Vec3::new(2.05, 1.5 - 3.5 * k, 0.0),
+            ))
         } else {
             None
         };
         let t = Instant::now();
         body.step().map_err(|e| Failure::from_pbd(&e))?;
         let mut events = Vec::new();
-        match (pose, last_pose) {
-            (Some(to), Some(from)) => {
-                let sweep = BladeSweep::new(blade, &from, &to).map_err(|e| surgery_failure(&e))?;
-                events = surgery
-                    .cut(&mut body, &sweep)
-                    .map_err(|e| surgery_failure(&e))?;
-            }
-            _ => {}
+        if let (Some(to), Some(from)) = (pose, last_pose) {
+            let sweep = BladeSweep::new(blade, &from, &to).map_err(|e| surgery_failure(&e))?;
+            events = surgery
+                .cut(&mut body, &sweep)
+                .map_err(|e| surgery_failure(&e))?;
         }
         if step == suture_at {
             // Three stitches across the incision, needles along x at mid-depth.
@@ -239,7 +247,10 @@ fn describe(e: &SurgeryEvent) -> String {
             nodes[0], nodes[1]
         ),
         SurgeryEvent::SutureRemoved { suture, nodes } => {
-            format!("suture {suture} removed: nodes {} and {}", nodes[0], nodes[1])
+            format!(
+                "suture {suture} removed: nodes {} and {}",
+                nodes[0], nodes[1]
+            )
         }
         other => format!("{other:?}"),
     }

@@ -121,7 +121,10 @@ impl SoftBody {
         // Switched-off tree lanes.
         for (b, lanes) in self.distance_batches.iter_mut().zip(&self.distance_lanes) {
             for (l, &r) in lanes.iter().enumerate() {
-                if !matches!(self.edits.distance_slot[r as usize], ConstraintSlot::Tree { .. }) {
+                if !matches!(
+                    self.edits.distance_slot[r as usize],
+                    ConstraintSlot::Tree { .. }
+                ) {
                     set_lane(&mut b.param, l, off);
                 }
             }
@@ -300,7 +303,10 @@ impl SoftBody {
         let b = &mut self.distance_batches[batch];
         let mut count = 0;
         for (l, &r) in self.distance_lanes[batch].iter().enumerate() {
-            if !matches!(self.edits.distance_slot[r as usize], ConstraintSlot::Tree { .. }) {
+            if !matches!(
+                self.edits.distance_slot[r as usize],
+                ConstraintSlot::Tree { .. }
+            ) {
                 b.nodes[1][l] = b.nodes[0][l];
                 set_lane(&mut b.rest, l, 0.0);
                 set_lane(&mut b.param, l, off);
@@ -412,9 +418,8 @@ impl SoftBody {
                 self.edits.dyn_distance_batches.remove(p);
                 self.edits.dyn_distance_lambda.remove(p);
                 for (k, &r) in self.edits.dyn_distance.iter().enumerate().skip(p) {
-                    self.edits.distance_slot[r as usize] = ConstraintSlot::Dynamic {
-                        position: k as u32,
-                    };
+                    self.edits.distance_slot[r as usize] =
+                        ConstraintSlot::Dynamic { position: k as u32 };
                 }
             }
             ConstraintSlot::Removed => {}
@@ -532,11 +537,7 @@ fn check_distance_values(c: &DistanceConstraint) -> Result<(), PbdError> {
             c.rest_length,
             c.rest_length.is_finite() && c.rest_length >= 0.0,
         ),
-        (
-            "stiffness",
-            c.stiffness,
-            (0.0..=1.0).contains(&c.stiffness),
-        ),
+        ("stiffness", c.stiffness, (0.0..=1.0).contains(&c.stiffness)),
         (
             "compliance",
             c.compliance,

@@ -88,24 +88,33 @@ fn run_cut(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: 
         .filter(|&i| x[i as usize].x.abs() < 1e-4 && x[i as usize].z > 0.1)
         .collect();
     let first = body.duplicate_nodes(&on_cut).unwrap();
-    let copy = |i: u32| on_cut.iter().position(|&c| c == i).map(|k| first + k as u32);
+    let copy = |i: u32| {
+        on_cut
+            .iter()
+            .position(|&c| c == i)
+            .map(|k| first + k as u32)
+    };
     let tets: Vec<[u32; 4]> = body.tets().to_vec();
     for (t, tet) in tets.iter().enumerate() {
         let c: f32 = tet.iter().map(|&i| x[i as usize].x).sum::<f32>() / 4.0;
         if c > 0.0 && tet.iter().any(|&i| copy(i).is_some()) {
-            body.set_tet_nodes(t, tet.map(|i| copy(i).unwrap_or(i))).unwrap();
+            body.set_tet_nodes(t, tet.map(|i| copy(i).unwrap_or(i)))
+                .unwrap();
         }
     }
     // Edges between two cut nodes now exist on both sides.
     let records: Vec<_> = body.distance_constraints().to_vec();
     for r in records {
         if let (Some(a), Some(b)) = (copy(r.nodes[0]), copy(r.nodes[1])) {
-            body.add_distance_constraint(tissue_pbd::DistanceConstraint { nodes: [a, b], ..r }).unwrap();
+            body.add_distance_constraint(tissue_pbd::DistanceConstraint { nodes: [a, b], ..r })
+                .unwrap();
         }
     }
     for (k, &i) in on_cut.iter().enumerate() {
-        body.set_node_mass(first + k as u32, body.masses()[i as usize] * 0.5).unwrap();
-        body.set_node_mass(i, body.masses()[i as usize] * 0.5).unwrap();
+        body.set_node_mass(first + k as u32, body.masses()[i as usize] * 0.5)
+            .unwrap();
+        body.set_node_mass(i, body.masses()[i as usize] * 0.5)
+            .unwrap();
     }
     let link = body
         .add_distance_constraint(tissue_pbd::DistanceConstraint {

@@ -41,8 +41,14 @@ fn main() {
     };
     let (p, t) = mesh.into_parts();
     let mesh = TetMesh::new(p.iter().map(|p| *p * 10.0).collect(), t).unwrap();
-    let lo = mesh.positions().iter().fold(Vec3::INFINITY, |a, p| a.min(*p));
-    let hi = mesh.positions().iter().fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
+    let lo = mesh
+        .positions()
+        .iter()
+        .fold(Vec3::INFINITY, |a, p| a.min(*p));
+    let hi = mesh
+        .positions()
+        .iter()
+        .fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
     let mut body = SoftBody::new(&mesh, &Material::default()).unwrap();
     body.set_floor(Some(Floor::y(lo.y))).unwrap();
     body.set_settings(StepSettings::default()).unwrap();
@@ -63,7 +69,11 @@ fn main() {
         c: Vec3::new(0.0, 6.0, 0.0),
         thickness: 0.01,
     };
-    let top = body.positions().iter().map(|p| p.y).fold(f32::MIN, f32::max);
+    let top = body
+        .positions()
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::MIN, f32::max);
     let (cz, y) = (0.5 * (lo.z + hi.z) + 0.013, 0.5 * (lo.y + top) + 1.0);
     let x0 = lo.x - 0.5;
     let at = |x: f32| Pose::new(Quat::IDENTITY, Vec3::new(x, y, cz));
@@ -76,7 +86,10 @@ fn main() {
         let s = t.elapsed().as_secs_f64();
         let c = Instant::now();
         let events = surgery
-            .cut(&mut body, &BladeSweep::new(&blade, &at(x), &at(x + step_cm)).unwrap())
+            .cut(
+                &mut body,
+                &BladeSweep::new(&blade, &at(x), &at(x + step_cm)).unwrap(),
+            )
             .unwrap();
         let c = c.elapsed().as_secs_f64();
         x += step_cm;

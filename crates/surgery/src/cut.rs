@@ -129,7 +129,9 @@ impl Surgery {
         // retried now that the cut may have moved on.
         for [t, j, u, k] in std::mem::take(&mut self.pending) {
             if self.neighbours[t as usize][j as usize] == u
-                && !faces.iter().any(|f| (f.t == t && f.j as u32 == j) || (f.u == t && f.k as u32 == j))
+                && !faces
+                    .iter()
+                    .any(|f| (f.t == t && f.j as u32 == j) || (f.u == t && f.k as u32 == j))
             {
                 faces.push(NewFace {
                     t,
@@ -217,7 +219,10 @@ impl Surgery {
             if found.get(&a).is_some_and(|s| found.get(&b) == Some(s)) {
                 continue;
             }
-            if pieces.iter().any(|p| p.binary_search(&a).is_ok() || p.binary_search(&b).is_ok()) {
+            if pieces
+                .iter()
+                .any(|p| p.binary_search(&a).is_ok() || p.binary_search(&b).is_ok())
+            {
                 continue;
             }
             let mut side: [Vec<u32>; 2] = [vec![a], vec![b]];
@@ -385,14 +390,23 @@ impl Surgery {
             *count.entry(f.t).or_default() += 1;
             *count.entry(f.u).or_default() += 1;
         }
-        let open = |t: u32| self.neighbours[t as usize].iter().filter(|&&w| w == NO_TET).count() as u32;
+        let open = |t: u32| {
+            self.neighbours[t as usize]
+                .iter()
+                .filter(|&&w| w == NO_TET)
+                .count() as u32
+        };
         out.retain(|f| count[&f.t] + open(f.t) < 4 && count[&f.u] + open(f.u) < 4);
         out
     }
 
     /// For each node on a new face: its tets grouped into face-connected components (through
     /// faces containing the node). `(node, tets, component of each tet, component count)`.
-    fn plan_split(&self, body: &SoftBody, faces: &[NewFace]) -> Vec<(u32, Vec<u32>, Vec<u32>, u32)> {
+    fn plan_split(
+        &self,
+        body: &SoftBody,
+        faces: &[NewFace],
+    ) -> Vec<(u32, Vec<u32>, Vec<u32>, u32)> {
         let tets = body.tets();
         let mut nodes: Vec<u32> = faces
             .iter()
@@ -413,12 +427,8 @@ impl Surgery {
                 let mut stack = vec![s];
                 while let Some(a) = stack.pop() {
                     let t = star[a] as usize;
-                    for j in 0..4 {
-                        if tets[t][j] == v {
-                            continue;
-                        }
-                        let u = self.neighbours[t][j];
-                        if u == NO_TET {
+                    for (&node, &u) in tets[t].iter().zip(&self.neighbours[t]) {
+                        if node == v || u == NO_TET {
                             continue;
                         }
                         if let Some(b) = star.iter().position(|&w| w == u) {
@@ -483,7 +493,9 @@ impl Surgery {
                 for k in 0..3 {
                     let (a, b) = (orig[k], orig[(k + 1) % 3]);
                     if is_touched(a) || is_touched(b) {
-                        let e = directed.entry([f[k], f[(k + 1) % 3]]).or_insert((0, [a, b]));
+                        let e = directed
+                            .entry([f[k], f[(k + 1) % 3]])
+                            .or_insert((0, [a, b]));
                         e.0 += 1;
                     }
                     if is_touched(orig[k]) {
@@ -519,7 +531,9 @@ impl Surgery {
         bad_edges.sort_unstable();
         bad_edges.dedup();
         for e in &bad_edges {
-            let covered = out.iter().any(|&i| nodes_of[i].contains(&e[0]) && nodes_of[i].contains(&e[1]));
+            let covered = out
+                .iter()
+                .any(|&i| nodes_of[i].contains(&e[0]) && nodes_of[i].contains(&e[1]));
             if !covered {
                 if let Some(i) = (0..faces.len())
                     .rev()
@@ -541,7 +555,9 @@ impl Surgery {
         // A new face none of whose nodes is split would be a zero-width double face: it waits.
         for (i, f) in faces.iter().enumerate() {
             if !out.contains(&i)
-                && nodes_of[i].iter().all(|&v| relabel(f.t, v) == relabel(f.u, v))
+                && nodes_of[i]
+                    .iter()
+                    .all(|&v| relabel(f.t, v) == relabel(f.u, v))
             {
                 out.push(i);
             }

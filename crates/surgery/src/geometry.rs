@@ -38,7 +38,7 @@ pub(crate) fn radius_ratio([a, b, c, d]: [DVec3; 4]) -> f64 {
     let area = |p: DVec3, q: DVec3, r: DVec3| 0.5 * (q - p).cross(r - p).length();
     let s = area(a, b, c) + area(a, b, d) + area(a, c, d) + area(b, c, d);
     let r_in = 0.5 * six_v / s; // 3V / S
-    // Circumcentre relative to a: (|u|² v×w + |v|² w×u + |w|² u×v) / (2 · 6V).
+                                // Circumcentre relative to a: (|u|² v×w + |v|² w×u + |w|² u×v) / (2 · 6V).
     let o = (u.length_squared() * v.cross(w)
         + v.length_squared() * w.cross(u)
         + w.length_squared() * u.cross(v))
@@ -60,8 +60,12 @@ mod tests {
         let tri = [DVec3::ZERO, DVec3::X, DVec3::Y];
         let t = segment_triangle(DVec3::new(0.2, 0.2, -1.0), DVec3::new(0.2, 0.2, 1.0), tri);
         assert!(t.is_some_and(|t| (t - 0.5).abs() < 1e-12));
-        assert!(segment_triangle(DVec3::new(0.8, 0.8, -1.0), DVec3::new(0.8, 0.8, 1.0), tri).is_none());
-        assert!(segment_triangle(DVec3::new(0.2, 0.2, 0.5), DVec3::new(0.2, 0.2, 1.0), tri).is_none());
+        assert!(
+            segment_triangle(DVec3::new(0.8, 0.8, -1.0), DVec3::new(0.8, 0.8, 1.0), tri).is_none()
+        );
+        assert!(
+            segment_triangle(DVec3::new(0.2, 0.2, 0.5), DVec3::new(0.2, 0.2, 1.0), tri).is_none()
+        );
     }
 
     #[test]

@@ -3,7 +3,6 @@
 
 use std::collections::HashMap;
 
-use glam::DVec3;
 use tissue_mesh::{NO_TET, TET_FACES};
 use tissue_pbd::{ConstraintSlot, SoftBody};
 
@@ -279,7 +278,9 @@ impl Surgery {
                 if u == NO_TET {
                     continue;
                 }
-                let back = self.neighbours[u as usize].iter().position(|&w| w as usize == t);
+                let back = self.neighbours[u as usize]
+                    .iter()
+                    .position(|&w| w as usize == t);
                 let Some(k) = back else {
                     return defect("tet", t, "adjacency is not symmetric");
                 };
@@ -289,16 +290,14 @@ impl Surgery {
             }
         }
         for (v, list) in self.node_tets.iter().enumerate() {
-            if list.iter().any(|&t| !tets[t as usize].contains(&(v as u32))) {
+            if list
+                .iter()
+                .any(|&t| !tets[t as usize].contains(&(v as u32)))
+            {
                 return defect("node", v, "node → tet list names a tet without the node");
             }
         }
-        let mut uses = 0usize;
-        for t in tets {
-            uses += 4;
-            let _ = t;
-        }
-        if self.node_tets.iter().map(Vec::len).sum::<usize>() != uses {
+        if self.node_tets.iter().map(Vec::len).sum::<usize>() != 4 * tets.len() {
             return defect("node", 0, "node → tet lists miss tets");
         }
         // Boundary: directed edges must pair up exactly.
@@ -311,16 +310,28 @@ impl Surgery {
         }
         for (&[a, b], &count) in &directed {
             if count != 1 {
-                return defect("edge", a as usize, "edge used twice in the same direction (non-manifold or mis-oriented)");
+                return defect(
+                    "edge",
+                    a as usize,
+                    "edge used twice in the same direction (non-manifold or mis-oriented)",
+                );
             }
             if directed.get(&[b, a]) != Some(&1) {
-                return defect("edge", a as usize, "boundary edge without its opposite (open or non-manifold)");
+                return defect(
+                    "edge",
+                    a as usize,
+                    "boundary edge without its opposite (open or non-manifold)",
+                );
             }
         }
         let mut seen: HashMap<[u32; 3], ()> = HashMap::with_capacity(faces.len());
         for f in &faces {
             if seen.insert(sorted3(*f), ()).is_some() {
-                return defect("vertex", f[0] as usize, "two boundary triangles on the same three nodes (a double face)");
+                return defect(
+                    "vertex",
+                    f[0] as usize,
+                    "two boundary triangles on the same three nodes (a double face)",
+                );
             }
         }
         // Vertex links: the boundary faces around a vertex make one cycle.
@@ -335,7 +346,11 @@ impl Surgery {
         }
         for (&v, link) in &around {
             if !single_cycle(link) {
-                return defect("vertex", v as usize, "boundary faces around the vertex do not form one fan (pinched)");
+                return defect(
+                    "vertex",
+                    v as usize,
+                    "boundary faces around the vertex do not form one fan (pinched)",
+                );
             }
         }
         let x = body.positions();
@@ -347,13 +362,40 @@ impl Surgery {
             if tet.iter().any(|&i| !x[i as usize].is_finite()) {
                 return defect("tet", t, "non-finite node position");
             }
-            let _ = DVec3::ZERO;
+        }
+        // Pieces: tets sharing a node carry one label, and there are as many labels as pieces.
+        for (v, list) in self.node_tets.iter().enumerate() {
+            if let Some(&first) = list.first() {
+                let l = self.tet_component[first as usize];
+                if list.iter().any(|&t| self.tet_component[t as usize] != l) {
+                    return defect(
+                        "node",
+                        v,
+                        "tets sharing the node carry different piece labels",
+                    );
+                }
+            }
+        }
+        let mut recount = self.clone();
+        recount.count_components(body);
+        if recount.component_count != self.component_count {
+            return defect(
+                "tet",
+                0,
+                "the piece count is wrong (a detached piece was missed)",
+            );
         }
         for (&[a, b], &c) in &self.edge_constraint {
             let d = body.distance_constraints()[c as usize];
             let [p, q] = d.nodes;
-            if [p.min(q), p.max(q)] != [a, b] || body.distance_slot(c as usize) == Some(ConstraintSlot::Removed) {
-                return defect("edge", a as usize, "edge's distance constraint is removed or on other nodes");
+            if [p.min(q), p.max(q)] != [a, b]
+                || body.distance_slot(c as usize) == Some(ConstraintSlot::Removed)
+            {
+                return defect(
+                    "edge",
+                    a as usize,
+                    "edge's distance constraint is removed or on other nodes",
+                );
             }
         }
         Ok(())
@@ -367,7 +409,12 @@ pub(crate) fn single_cycle(link: &[[u32; 2]]) -> bool {
         return true;
     }
     // Each link vertex must start exactly one edge and end exactly one.
-    let next = |a: u32| link.iter().filter(|e| e[0] == a).map(|e| e[1]).collect::<Vec<_>>();
+    let next = |a: u32| {
+        link.iter()
+            .filter(|e| e[0] == a)
+            .map(|e| e[1])
+            .collect::<Vec<_>>()
+    };
     for e in link {
         if next(e[0]).len() != 1 || link.iter().filter(|f| f[1] == e[1]).count() != 1 {
             return false;

@@ -98,7 +98,10 @@ fn a_full_cut_makes_two_pieces_and_the_free_one_falls_away() {
     // The left end is pinned; under gravity the right piece falls away, the left one stays.
     let right = pieces.iter().find(|p| p.0 != 0).unwrap().0;
     fall(&mut body);
-    let (hl, hr) = (piece_height(&body, &surgery, 0), piece_height(&body, &surgery, right));
+    let (hl, hr) = (
+        piece_height(&body, &surgery, 0),
+        piece_height(&body, &surgery, right),
+    );
     eprintln!("after 0.4 s: left piece mean y {hl:.3} cm, right piece mean y {hr:.3} cm");
     assert!(hr < -50.0, "the free piece should fall ~78 cm, is at {hr}");
     assert!(hl > -1.5, "the pinned piece should hang on, is at {hl}");
@@ -126,7 +129,10 @@ fn a_partial_incision_opens_the_surface_along_its_length_and_keeps_one_piece() {
     for k in 0..10 {
         let (x0, x1) = (-1.5 + 0.3 * k as f32, -1.5 + 0.3 * (k + 1) as f32);
         let events = surgery
-            .cut(&mut body, &BladeSweep::new(&blade, &at(x0), &at(x1)).unwrap())
+            .cut(
+                &mut body,
+                &BladeSweep::new(&blade, &at(x0), &at(x1)).unwrap(),
+            )
             .unwrap();
         surgery.validate(&body).unwrap();
         for e in &events {

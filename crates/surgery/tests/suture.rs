@@ -22,7 +22,10 @@ fn gaping_wound() -> (SoftBody, Surgery) {
     for k in 0..8 {
         let (z0, z1) = (-1.6 + 0.4 * k as f32, -1.2 + 0.4 * k as f32);
         surgery
-            .cut(&mut body, &BladeSweep::new(&blade, &at(z0), &at(z1)).unwrap())
+            .cut(
+                &mut body,
+                &BladeSweep::new(&blade, &at(z0), &at(z1)).unwrap(),
+            )
             .unwrap();
     }
     surgery.validate(&body).unwrap();
@@ -35,7 +38,8 @@ fn gaping_wound() -> (SoftBody, Surgery) {
     for i in 0..body.node_count() as u32 {
         let p = Vec3::from(body.positions()[i as usize]);
         if p.x.abs() > 1.99 && p.y > 0.4 {
-            body.attach(i, p + Vec3::new(0.4 * p.x.signum(), 0.0, 0.0)).unwrap();
+            body.attach(i, p + Vec3::new(0.4 * p.x.signum(), 0.0, 0.0))
+                .unwrap();
         }
     }
     for _ in 0..100 {
@@ -60,7 +64,11 @@ fn a_suture_across_an_open_incision_closes_it() {
         radius: 0.02,
     };
     let event = surgery
-        .suture(&mut body, &needle, &Pose::from_translation(Vec3::new(0.0, 0.55, 0.1)))
+        .suture(
+            &mut body,
+            &needle,
+            &Pose::from_translation(Vec3::new(0.0, 0.55, 0.1)),
+        )
         .unwrap()
         .unwrap();
     let SurgeryEvent::SuturePlaced { suture, nodes, .. } = event else {
@@ -71,7 +79,11 @@ fn a_suture_across_an_open_incision_closes_it() {
     assert_ne!(nodes[0], nodes[1]);
     // The same needle again finds the same, already linked, pair: nothing new.
     assert!(surgery
-        .suture(&mut body, &needle, &Pose::from_translation(Vec3::new(0.0, 0.55, 0.1)))
+        .suture(
+            &mut body,
+            &needle,
+            &Pose::from_translation(Vec3::new(0.0, 0.55, 0.1))
+        )
         .unwrap()
         .is_none());
     let mut closed_at = None;
@@ -83,7 +95,10 @@ fn a_suture_across_an_open_incision_closes_it() {
     }
     let last = gap(&body, nodes);
     eprintln!("suture: nodes {nodes:?}, gap {initial:.3} cm → < 5 % after {closed_at:?} steps, {last:.5} cm after 50");
-    assert!(closed_at.is_some_and(|s| s <= 10), "closed at {closed_at:?}");
+    assert!(
+        closed_at.is_some_and(|s| s <= 10),
+        "closed at {closed_at:?}"
+    );
     assert!(last < 0.05 * initial);
 
     // Removed, the wound opens again.
@@ -116,4 +131,3 @@ fn without_a_suture_the_wound_stays_open() {
     eprintln!("no suture: wall gap {before:.3} → {after:.3} cm");
     assert!(before > 0.3 && after > 0.9 * before);
 }
-
