@@ -205,24 +205,18 @@ impl Surgery {
         self.commit(body, &faces, split)
     }
 
-    /// The pieces this cut detached: for each new face, two searches through shared nodes, one
-    /// from each side, taking a tet in turn; when one runs out before they meet, what it found
-    /// is a new piece. A face whose two tets one earlier search found together is skipped.
-    /// Costs about twice the smaller side, or the way around the cut's front when it holds.
-    fn detached_pieces(&self, body: &SoftBody, faces: &[NewFace]) -> Vec<Vec<u32>> {
+    /// Whether every node this cut split still holds its groups of tets together: for each pair
+    /// of tets that shared a split node (one from the group that kept it, one from each group
+    /// that got a copy), two searches through shared nodes, one from each, taking a tet in turn,
+    /// until they meet (a pair one earlier search found together is skipped). `false` as soon as
+    /// one search runs out first: a piece may have come apart. Costs about the way around the
+    /// cut's front, so an incision stays cheap.
+    fn still_connected(&self, body: &SoftBody, pairs: &[(u32, u32)]) -> bool {
         let tets = body.tets();
-        // Tet → the connected search that found it.
+        // Tet → the search that found it.
         let mut found: HashMap<u32, usize> = HashMap::new();
-        let mut pieces: Vec<Vec<u32>> = Vec::new();
-        for (search, f) in faces.iter().enumerate() {
-            let (a, b) = (f.t, f.u);
+        for (search, &(a, b)) in pairs.iter().enumerate() {
             if found.get(&a).is_some_and(|s| found.get(&b) == Some(s)) {
-                continue;
-            }
-            if pieces
-                .iter()
-                .any(|p| p.binary_search(&a).is_ok() || p.binary_search(&b).is_ok())
-            {
                 continue;
             }
             let mut side: [Vec<u32>; 2] = [vec![a], vec![b]];
@@ -230,12 +224,10 @@ impl Surgery {
             let mut local: HashMap<u32, u8> = HashMap::new();
             local.insert(a, 0);
             local.insert(b, 1);
-            let mut exhausted = None;
             'search: loop {
                 for s in 0..2 {
                     let Some(&t) = side[s].get(head[s]) else {
-                        exhausted = Some(s);
-                        break 'search;
+                        return false;
                     };
                     head[s] += 1;
                     for &v in &tets[t as usize] {
@@ -252,20 +244,11 @@ impl Surgery {
                     }
                 }
             }
-            match exhausted {
-                Some(s) => {
-                    let mut piece = std::mem::take(&mut side[s]);
-                    piece.sort_unstable();
-                    pieces.push(piece);
-                }
-                None => {
-                    for &t in side.iter().flatten() {
-                        found.insert(t, search);
-                    }
-                }
+            for &t in side.iter().flatten() {
+                found.insert(t, search);
             }
         }
-        pieces
+        true
     }
 
     /// The tets face-connected to `t` when there are fewer than [`MIN_PIECE`] of them.
@@ -584,6 +567,17 @@ impl Surgery {
             body.duplicate_nodes(&sources)?
         };
         let mut new_tets: HashMap<u32, [u32; 4]> = HashMap::new();
+        // One tet of the group that keeps each split node and one of each group with a copy:
+        // node splits are the only way pieces come apart.
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        for (_, star, comp, count) in &plan {
+            for c in 1..*count {
+                let first_of = |k: u32| star.iter().zip(comp).find(|e| *e.1 == k).map(|e| *e.0);
+                if let (Some(a), Some(b)) = (first_of(0), first_of(c)) {
+                    pairs.push((a, b));
+                }
+            }
+        }
         let mut next = first;
         let mut split_nodes: Vec<u32> = Vec::new();
         for (v, star, comp, count) in &plan {
@@ -709,12 +703,13 @@ impl Surgery {
             opened_faces: opened,
         }];
         if next > first {
-            for piece in self.detached_pieces(body, faces) {
-                let component = self.component_count as u32;
-                self.component_count += 1;
-                for &t in &piece {
-                    self.tet_component[t as usize] = component;
-                }
+            let pieces = if self.still_connected(body, &pairs) {
+                Vec::new()
+            } else {
+                self.relabel_pieces(body)
+            };
+            for piece in pieces {
+                let component = self.tet_component[piece[0] as usize];
                 let volume = piece
                     .iter()
                     .map(|&t| body.tet_rest_volumes()[t as usize] as f64)

@@ -232,12 +232,13 @@ impl Surgery {
             i
         }
         for t in tets {
-            let r0 = find(&mut parent, t[0]);
+            let mut r0 = find(&mut parent, t[0]);
             for &v in &t[1..] {
                 let r = find(&mut parent, v);
                 if r != r0 {
                     let (lo, hi) = (r.min(r0), r.max(r0));
                     parent[hi as usize] = lo;
+                    r0 = lo;
                 }
             }
         }
@@ -254,6 +255,41 @@ impl Surgery {
         }
         self.tet_component = comp;
         self.component_count = count as usize;
+    }
+
+    /// After a cut that may have detached pieces: the pieces again (union–find), each keeping
+    /// the label its tets had when it is the first (by smallest tet) with that label, the others
+    /// getting new labels. Returns the new pieces' tets (sorted).
+    pub(crate) fn relabel_pieces(&mut self, body: &SoftBody) -> Vec<Vec<u32>> {
+        let old = std::mem::take(&mut self.tet_component);
+        self.count_components(body);
+        let fresh = std::mem::take(&mut self.tet_component);
+        // fresh label → final label.
+        let mut map: Vec<u32> = vec![u32::MAX; self.component_count];
+        let mut claimed: HashMap<u32, ()> = HashMap::new();
+        let mut next = old.iter().copied().max().map_or(0, |m| m + 1);
+        let mut pieces: Vec<Vec<u32>> = Vec::new();
+        let mut piece_of: HashMap<u32, usize> = HashMap::new();
+        let mut labels = Vec::with_capacity(fresh.len());
+        for (t, &f) in fresh.iter().enumerate() {
+            if map[f as usize] == u32::MAX {
+                if claimed.insert(old[t], ()).is_none() {
+                    map[f as usize] = old[t];
+                } else {
+                    map[f as usize] = next;
+                    piece_of.insert(next, pieces.len());
+                    pieces.push(Vec::new());
+                    next += 1;
+                }
+            }
+            let l = map[f as usize];
+            if let Some(&k) = piece_of.get(&l) {
+                pieces[k].push(t as u32);
+            }
+            labels.push(l);
+        }
+        self.tet_component = labels;
+        pieces
     }
 
     /// Re-checks the invariants against `body`: adjacency symmetric and sharing nodes, the
@@ -378,11 +414,15 @@ impl Surgery {
         }
         let mut recount = self.clone();
         recount.count_components(body);
-        if recount.component_count != self.component_count {
+        let mut distinct: Vec<u32> = self.tet_component.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        if recount.component_count != self.component_count || distinct.len() != self.component_count
+        {
             return defect(
                 "tet",
-                0,
-                "the piece count is wrong (a detached piece was missed)",
+                recount.component_count * 1000 + self.component_count,
+                "the piece count is wrong (index: actual × 1000 + counted)",
             );
         }
         for (&[a, b], &c) in &self.edge_constraint {
