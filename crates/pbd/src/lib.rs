@@ -18,6 +18,11 @@
 //!   meets, an inequality `n·(p − q) − margin ≥ 0` projected in every iteration after the body's
 //!   own constraints, with static and kinetic friction ([`ContactParams`]; Macklin et al. 2014).
 //!   Contacts are per node: a tool thinner than the node spacing can pass between nodes.
+//! - Topology edits for cutting and suturing (issue 8, used by `tissue-surgery`):
+//!   [`SoftBody::duplicate_nodes`], [`SoftBody::set_tet_nodes`],
+//!   [`SoftBody::add_distance_constraint`], [`SoftBody::set_distance_nodes`],
+//!   [`SoftBody::remove_distance_constraint`], [`SoftBody::set_node_mass`]; where each record is
+//!   projected: [`ConstraintSlot`].
 //! - [`PbdError`]: bad input, naming the element.
 //!
 //! ## Units
@@ -62,6 +67,13 @@
 //!   flag instead of going to sleep, so that the next iteration's fork does not wait for a
 //!   thread to wake up (it yields to the OS after a few thousand spins). It touches no data.
 //! - No I/O; meshes come in as [`tissue_mesh::TetMesh`] or raw arrays.
+//! - Edits (module `edit`) leave the block tree as built: new nodes are appended after the tree's
+//!   node range (caller's and solver index alike); a changed constraint's lane is switched off in
+//!   place (its nodes collapsed onto one, rest 0, parameter off: the kernels skip it exactly) and
+//!   the constraint joins the *dynamic set*, projected serially after the tree in every iteration
+//!   (volumes, then distances, in edit order, so that links added last come last). Serial and
+//!   parallel stay bit-identical (`tests/parallel.rs` also runs a cut body). No re-partition:
+//!   after very many edits the serial dynamic set grows.
 //! - Contacts are generated and projected serially, in a fixed order (colliders by id, then tools,
 //!   nodes in order within each), so they are deterministic and the same in parallel mode. Their
 //!   buffer is reserved when a collider or tool is added, so steps stay allocation-free.
