@@ -1,9 +1,9 @@
 //! Step time with and without a cut on the bunny (9217 nodes, 42117 tets, scaled to 16.7 cm):
-//! a scalpel 2.5 cm deep is drawn across the settled bunny, one cut per step; prints the median
+//! a scalpel (its edge `EDGE_CM` above the bunny's mid-height, default 1) is drawn across it, one cut per step; prints the median
 //! and p99 of the plain steps before the cut, of the steps during it (the step plus the cut),
 //! of the cut alone, and the wall triangles each cut opened.
 //!
-//! `cargo run --release -p tissue-surgery --example cut_timing [-- STEP_CM]`
+//! `cargo run --release -p tissue-surgery --example cut_timing [-- STEP_CM [EDGE_CM]]`
 #![allow(clippy::unwrap_used, clippy::print_stdout)]
 
 use std::time::Instant;
@@ -34,7 +34,12 @@ fn main() {
     let step_cm: f32 = std::env::args()
         .nth(1)
         .and_then(|s| s.parse().ok())
-        .unwrap_or(0.08);
+        .unwrap_or(0.25);
+    // Height of the blade's edge above the middle of the settled bunny (cm).
+    let edge: f32 = std::env::args()
+        .nth(2)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1.0);
     let Ok(mesh) = tissue_meshio::read_tets(BUNNY) else {
         println!("{BUNNY} not found");
         return;
@@ -74,7 +79,7 @@ fn main() {
         .iter()
         .map(|p| p.y)
         .fold(f32::MIN, f32::max);
-    let (cz, y) = (0.5 * (lo.z + hi.z) + 0.013, 0.5 * (lo.y + top) + 1.0);
+    let (cz, y) = (0.5 * (lo.z + hi.z) + 0.013, 0.5 * (lo.y + top) + edge);
     let x0 = lo.x - 0.5;
     let at = |x: f32| Pose::new(Quat::IDENTITY, Vec3::new(x, y, cz));
     let (mut with_cut, mut cut_only, mut step_only, mut opened) =

@@ -18,7 +18,7 @@
 //!    exists twice gets a second distance constraint with the same rest length, masses of the
 //!    touched nodes rebuilt from their tets (eq. (1)), pieces recounted.
 
-use std::collections::HashMap;
+use crate::geometry::FxMap as HashMap;
 
 use glam::{DVec3, Vec3};
 use tissue_mesh::NO_TET;
@@ -127,7 +127,16 @@ impl Surgery {
         let mut faces = self.crossed_faces(body, &surface);
         // Faces the blade crossed before but that had to stay glued (at the cut's front then):
         // retried now that the cut may have moved on.
+        let near = self.stamp;
+        let mut far = Vec::new();
         for [t, j, u, k] in std::mem::take(&mut self.pending) {
+            if self.tet_mark[t as usize] != near && self.tet_mark[u as usize] != near {
+                // Far from this sweep: it waits for a blade nearby.
+                if self.neighbours[t as usize][j as usize] == u {
+                    far.push([t, j, u, k]);
+                }
+                continue;
+            }
             if self.neighbours[t as usize][j as usize] == u
                 && !faces
                     .iter()
@@ -141,6 +150,7 @@ impl Surgery {
                 });
             }
         }
+        self.pending = far;
         if faces.is_empty() {
             return Ok(Vec::new());
         }
@@ -214,14 +224,14 @@ impl Surgery {
     fn still_connected(&self, body: &SoftBody, pairs: &[(u32, u32)]) -> bool {
         let tets = body.tets();
         // Tet → the search that found it.
-        let mut found: HashMap<u32, usize> = HashMap::new();
+        let mut found: HashMap<u32, usize> = HashMap::default();
         for (search, &(a, b)) in pairs.iter().enumerate() {
             if found.get(&a).is_some_and(|s| found.get(&b) == Some(s)) {
                 continue;
             }
             let mut side: [Vec<u32>; 2] = [vec![a], vec![b]];
             let mut head = [0usize; 2];
-            let mut local: HashMap<u32, u8> = HashMap::new();
+            let mut local: HashMap<u32, u8> = HashMap::default();
             local.insert(a, 0);
             local.insert(b, 1);
             'search: loop {
@@ -283,8 +293,6 @@ impl Surgery {
         // A crossing point lies in `t` or in `u`, on the blade's plane: one of the two tets
         // meets the surface's box and straddles the plane. Nodes near the box first, then
         // their tets.
-        let reach = self.longest_edge as f64;
-        let (nlo, nhi) = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
         let origin = surface[1][0];
         let normal = (surface[1][1] - origin)
             .cross(surface[1][2] - origin)
@@ -301,7 +309,11 @@ impl Surgery {
         let mut candidates = Vec::new();
         for (v, p) in x.iter().enumerate() {
             let p = p.as_dvec3();
-            if p.cmpge(nlo).all() && p.cmple(nhi).all() {
+            let reach = self.node_reach[v] as f64;
+            if normal.dot(p - origin).abs() <= reach
+                && p.cmpge(lo - DVec3::splat(reach)).all()
+                && p.cmple(hi + DVec3::splat(reach)).all()
+            {
                 for &t in &self.node_tets[v] {
                     if self.tet_mark[t as usize] == stamp {
                         continue;
@@ -368,7 +380,7 @@ impl Surgery {
         }
         // A tet whose four faces would all be cut is an island of one side inside the other
         // (the staircase, not the blade, cut it out): it stays with its neighbours.
-        let mut count: HashMap<u32, u32> = HashMap::new();
+        let mut count: HashMap<u32, u32> = HashMap::default();
         for f in &out {
             *count.entry(f.t).or_default() += 1;
             *count.entry(f.u).or_default() += 1;
@@ -439,8 +451,8 @@ impl Surgery {
     ) -> Vec<usize> {
         let tets = body.tets();
         // Tentative labels: (tet, node) → label; copies numbered from `first`.
-        let mut label: HashMap<(u32, u32), u32> = HashMap::new();
-        let mut copy_of: HashMap<u32, u32> = HashMap::new();
+        let mut label: HashMap<(u32, u32), u32> = HashMap::default();
+        let mut copy_of: HashMap<u32, u32> = HashMap::default();
         let mut next = body.node_count() as u32;
         let mut local: Vec<u32> = Vec::new();
         for (v, star, comp, count) in plan {
@@ -464,8 +476,8 @@ impl Surgery {
         let touched: Vec<u32> = plan.iter().map(|p| p.0).collect();
         let is_touched = |v: u32| touched.binary_search(&v).is_ok();
         // Boundary faces of the local tets, in tentative labels, with the original labels.
-        let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> = HashMap::new();
-        let mut around: HashMap<u32, Vec<[u32; 2]>> = HashMap::new();
+        let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> = HashMap::default();
+        let mut around: HashMap<u32, Vec<[u32; 2]>> = HashMap::default();
         for &t in &local {
             for j in 0..4 {
                 if self.neighbours[t as usize][j] != NO_TET {
@@ -566,7 +578,7 @@ impl Surgery {
         } else {
             body.duplicate_nodes(&sources)?
         };
-        let mut new_tets: HashMap<u32, [u32; 4]> = HashMap::new();
+        let mut new_tets: HashMap<u32, [u32; 4]> = HashMap::default();
         // One tet of the group that keeps each split node and one of each group with a copy:
         // node splits are the only way pieces come apart.
         let mut pairs: Vec<(u32, u32)> = Vec::new();
@@ -606,6 +618,7 @@ impl Surgery {
             for m in moved {
                 self.node_tets.push(m);
                 self.origin.push(self.origin[*v as usize]);
+                self.node_reach.push(self.node_reach[*v as usize]);
             }
         }
         let mut changed: Vec<u32> = new_tets.keys().copied().collect();

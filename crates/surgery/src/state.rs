@@ -1,7 +1,7 @@
 //! The surgery state kept next to a [`SoftBody`]: tet adjacency across faces (cut faces have
 //! none), node → tets, each node's original, the distance constraint of each edge, sutures.
 
-use std::collections::HashMap;
+use crate::geometry::FxMap as HashMap;
 
 use tissue_mesh::{NO_TET, TET_FACES};
 use tissue_pbd::{ConstraintSlot, SoftBody};
@@ -51,6 +51,9 @@ pub struct Surgery {
     pub(crate) component_count: usize,
     /// Longest rest edge (cm): how far from the blade a tet's centroid can be and still be cut.
     pub(crate) longest_edge: f32,
+    /// Per node: 1.5 × its longest rest edge (cm). A tet that straddles the blade's plane has a
+    /// node at most this far from it (unless stretched by more than 1.5).
+    pub(crate) node_reach: Vec<f32>,
     pub(crate) min_radius_ratio: f64,
     pub(crate) min_rest_volume: f32,
     /// Scratch marks per tet and node (stamped with `stamp`), reused by every cut.
@@ -77,7 +80,8 @@ impl Surgery {
         settings.validate()?;
         let tets = body.tets();
         let n = body.node_count();
-        let mut faces: HashMap<[u32; 3], (u32, u8)> = HashMap::with_capacity(tets.len() * 2);
+        let mut faces: HashMap<[u32; 3], (u32, u8)> =
+            HashMap::with_capacity_and_hasher(tets.len() * 2, Default::default());
         let mut neighbours = vec![[NO_TET; 4]; tets.len()];
         for (t, tet) in tets.iter().enumerate() {
             for j in 0..4 {
@@ -96,7 +100,10 @@ impl Surgery {
                 node_tets[v as usize].push(t as u32);
             }
         }
-        let mut edge_constraint = HashMap::with_capacity(body.distance_constraints().len());
+        let mut edge_constraint = HashMap::with_capacity_and_hasher(
+            body.distance_constraints().len(),
+            Default::default(),
+        );
         for (c, d) in body.distance_constraints().iter().enumerate() {
             if body.distance_slot(c) != Some(ConstraintSlot::Removed) {
                 let [a, b] = d.nodes;
@@ -105,12 +112,18 @@ impl Surgery {
         }
         let x = body.positions();
         let mut longest = 0.0f32;
+        let mut node_reach = vec![0.0f32; n];
         let mut min_ratio = f64::INFINITY;
         for tet in tets {
             let p = tet.map(|i| x[i as usize].as_dvec3());
             for a in 0..4 {
                 for b in a + 1..4 {
-                    longest = longest.max(p[a].distance(p[b]) as f32);
+                    let l = p[a].distance(p[b]) as f32;
+                    longest = longest.max(l);
+                    for k in [a, b] {
+                        let r = &mut node_reach[tet[k] as usize];
+                        *r = r.max(1.5 * l);
+                    }
                 }
             }
             min_ratio = min_ratio.min(radius_ratio(p));
@@ -132,6 +145,7 @@ impl Surgery {
             tet_component: Vec::new(),
             component_count: 0,
             longest_edge: longest,
+            node_reach,
             min_radius_ratio: min_ratio,
             min_rest_volume,
             tet_mark: vec![0; tets.len()],
@@ -266,10 +280,10 @@ impl Surgery {
         let fresh = std::mem::take(&mut self.tet_component);
         // fresh label → final label.
         let mut map: Vec<u32> = vec![u32::MAX; self.component_count];
-        let mut claimed: HashMap<u32, ()> = HashMap::new();
+        let mut claimed: HashMap<u32, ()> = HashMap::default();
         let mut next = old.iter().copied().max().map_or(0, |m| m + 1);
         let mut pieces: Vec<Vec<u32>> = Vec::new();
-        let mut piece_of: HashMap<u32, usize> = HashMap::new();
+        let mut piece_of: HashMap<u32, usize> = HashMap::default();
         let mut labels = Vec::with_capacity(fresh.len());
         for (t, &f) in fresh.iter().enumerate() {
             if map[f as usize] == u32::MAX {
@@ -333,12 +347,22 @@ impl Surgery {
                 return defect("node", v, "node → tet list names a tet without the node");
             }
         }
+        if self.node_reach.len() != self.node_tets.len()
+            || self.origin.len() != self.node_tets.len()
+        {
+            return defect(
+                "node",
+                self.node_tets.len(),
+                "per-node arrays of different lengths",
+            );
+        }
         if self.node_tets.iter().map(Vec::len).sum::<usize>() != 4 * tets.len() {
             return defect("node", 0, "node → tet lists miss tets");
         }
         // Boundary: directed edges must pair up exactly.
         let faces = self.boundary_faces(body);
-        let mut directed: HashMap<[u32; 2], u32> = HashMap::with_capacity(faces.len() * 3);
+        let mut directed: HashMap<[u32; 2], u32> =
+            HashMap::with_capacity_and_hasher(faces.len() * 3, Default::default());
         for f in &faces {
             for k in 0..3 {
                 *directed.entry([f[k], f[(k + 1) % 3]]).or_default() += 1;
@@ -360,7 +384,8 @@ impl Surgery {
                 );
             }
         }
-        let mut seen: HashMap<[u32; 3], ()> = HashMap::with_capacity(faces.len());
+        let mut seen: HashMap<[u32; 3], ()> =
+            HashMap::with_capacity_and_hasher(faces.len(), Default::default());
         for f in &faces {
             if seen.insert(sorted3(*f), ()).is_some() {
                 return defect(
@@ -371,7 +396,7 @@ impl Surgery {
             }
         }
         // Vertex links: the boundary faces around a vertex make one cycle.
-        let mut around: HashMap<u32, Vec<[u32; 2]>> = HashMap::new();
+        let mut around: HashMap<u32, Vec<[u32; 2]>> = HashMap::default();
         for f in &faces {
             for k in 0..3 {
                 around
