@@ -31,8 +31,18 @@
 //!   pinched vertex (typically at the cut's front) are glued back, so the boundary surface stays
 //!   closed, manifold and consistently oriented.
 //!
+//! - faces that must wait (at the cut's front, or with no node split yet, which would make a
+//!   zero-width double face) are kept and retried whenever a later sweep passes near them; a
+//!   group of fewer than [`MIN_PIECE`] tets that new faces would enclose (a staircase crumb)
+//!   stays glued;
+//! - pieces: two alternating searches through shared nodes per split node prove that an
+//!   incision detached nothing (cheap); only when one runs out are the pieces relabelled
+//!   globally ([`SurgeryEvent::PieceDetached`] for each new one).
+//!
 //! The price: the wall follows the blade only to within about one tet (a staircase on coarse
-//! meshes), and the surface triangles are not subdivided. A cut that crosses no face (a blade
+//! meshes), the surface triangles are not subdivided and nodes are not moved onto the blade
+//! (no geometric vertex snapping), and a tet stretched to more than 1.5 × its longest rest edge
+//! may be missed by a sweep. A cut that crosses no face (a blade
 //! sweep smaller than a tet) opens nothing until the blade has moved on; partial incisions and
 //! cuts continued over many steps are just more sweeps.
 //!
