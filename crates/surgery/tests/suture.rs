@@ -8,10 +8,10 @@ use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
 
 /// A 4 × 2 × 2 cm block with an incision 1.2 cm deep in the plane x = 0.1 across its whole
 /// width, its upper outer edges pulled 0.4 cm outward so that the wound gapes.
-fn gaping_wound() -> (SoftBody, Surgery) {
+fn gaping_wound(settings: SurgerySettings) -> (SoftBody, Surgery) {
     let mesh = tet_box(8, 4, 4, Vec3::new(4.0, 2.0, 2.0)).unwrap();
     let mut body = SoftBody::new(&mesh, &Material::default()).unwrap();
-    let mut surgery = Surgery::new(&body, SurgerySettings::default()).unwrap();
+    let mut surgery = Surgery::new(&body, settings).unwrap();
     let blade = ToolShape::Blade {
         a: Vec3::new(0.0, 0.0, -0.3),
         b: Vec3::new(0.0, 0.0, 0.3),
@@ -55,7 +55,7 @@ fn gap(body: &SoftBody, nodes: [u32; 2]) -> f32 {
 
 #[test]
 fn a_suture_across_an_open_incision_closes_it() {
-    let (mut body, mut surgery) = gaping_wound();
+    let (mut body, mut surgery) = gaping_wound(SurgerySettings::default());
     // The needle runs along x at mid-depth of the wound, from inside the left side to inside
     // the right side.
     let needle = ToolShape::Capsule {
@@ -115,7 +115,7 @@ fn a_suture_across_an_open_incision_closes_it() {
 
 #[test]
 fn without_a_suture_the_wound_stays_open() {
-    let (mut body, surgery) = gaping_wound();
+    let (mut body, surgery) = gaping_wound(SurgerySettings::default());
     // The wall nodes at the top: a split node and its copy.
     let x = body.positions();
     let pair = (0..body.node_count() as u32)
@@ -130,4 +130,41 @@ fn without_a_suture_the_wound_stays_open() {
     let after = gap(&body, pair);
     eprintln!("no suture: wall gap {before:.3} → {after:.3} cm");
     assert!(before > 0.3 && after > 0.9 * before);
+}
+
+#[test]
+fn a_softer_suture_pulls_less_against_the_held_tissue() {
+    // With k < 1 the link meets the tissue (k = 1, held open by the attachments) at an
+    // equilibrium: the stiffer the suture, the smaller the gap left.
+    let mut left = Vec::new();
+    for k in [0.2f32, 0.6, 0.95] {
+        let settings = SurgerySettings {
+            suture_stiffness: k,
+            ..SurgerySettings::default()
+        };
+        let (mut body, mut surgery) = gaping_wound(settings);
+        let needle = ToolShape::Capsule {
+            a: Vec3::new(-0.7, 0.0, 0.0),
+            b: Vec3::new(0.7, 0.0, 0.0),
+            radius: 0.02,
+        };
+        let Some(SurgeryEvent::SuturePlaced { nodes, .. }) = surgery
+            .suture(
+                &mut body,
+                &needle,
+                &Pose::from_translation(Vec3::new(0.0, 0.55, 0.1)),
+            )
+            .unwrap()
+        else {
+            panic!("no suture placed");
+        };
+        let initial = gap(&body, nodes);
+        for _ in 0..100 {
+            body.step().unwrap();
+        }
+        left.push(gap(&body, nodes) / initial);
+    }
+    eprintln!("suture stiffness 0.2, 0.6, 0.95: gap left {left:?} of the initial");
+    assert!(left[0] > left[1] && left[1] > left[2], "{left:?}");
+    assert!(left[2] < 0.8, "{left:?}");
 }
