@@ -12,8 +12,10 @@
 //!   touches only its own node and writes back exactly what it read, so the batch's other lanes
 //!   and the colouring are untouched.
 //! - **The dynamic set** holds every added or relabelled constraint, in the order the edits
-//!   made them, in solver indices: one batch per constraint (its eight lanes equal, as padding
-//!   lanes are). Each iteration projects it serially after the block tree (its volumes, then
+//!   made them, in solver indices, packed eight to a batch: a new constraint takes the next lane
+//!   of the last batch when no lane there touches its nodes, else opens a new batch whose unused
+//!   lanes copy its lane 0 (as padding does). A changed or removed dynamic constraint's lane is
+//!   switched off like a tree lane and the constraint, if changed, is appended again. Each iteration projects it serially after the block tree (its volumes, then
 //!   its distances, so that links added last, like sutures, are projected last) and before the
 //!   floor and contacts. So serial and parallel stay bit-identical, and steps allocate nothing.
 //! - Removed constraints keep their record (so indices stay stable) with
@@ -56,15 +58,22 @@ pub(crate) struct Edits {
     pub tet_rest: Vec<f32>,
     pub distance_slot: Vec<ConstraintSlot>,
     pub tet_slot: Vec<ConstraintSlot>,
-    /// Dynamic distance constraints: record index, batch (solver indices), multiplier.
-    pub dyn_distance: Vec<u32>,
+    /// Dynamic distance constraints, packed eight to a batch (lanes sharing no node, solver
+    /// indices): the record of each lane (unused lanes repeat lane 0, as padding does), lanes
+    /// in use, multipliers.
+    pub dyn_distance_lanes: Vec<[u32; LANES]>,
+    pub dyn_distance_fill: Vec<u8>,
     pub dyn_distance_batches: Vec<DistanceBatch>,
     pub dyn_distance_lambda: Vec<F>,
-    /// Dynamic tets: tet index, batch of the body's volume kind, multipliers (1 or 4 each).
-    pub dyn_tets: Vec<u32>,
+    /// Dynamic tets, the same way: batches of the body's volume kind, multipliers (1 or 4 per
+    /// batch).
+    pub dyn_tet_lanes: Vec<[u32; LANES]>,
+    pub dyn_tet_fill: Vec<u8>,
     pub dyn_tet_batches: Vec<TetBatch>,
     pub dyn_centroid_batches: Vec<CentroidBatch>,
     pub dyn_volume_lambda: Vec<F>,
+    /// Live dynamic constraints: distances, tets.
+    pub dyn_live: (usize, usize),
 }
 
 impl Edits {
@@ -143,26 +152,59 @@ impl SoftBody {
                 }
             }
         }
-        // Dynamic constraints.
-        for (b, &r) in self
+        // Dynamic constraints, lane by lane.
+        for (b, (batch, lanes)) in self
             .edits
             .dyn_distance_batches
             .iter_mut()
-            .zip(&self.edits.dyn_distance)
+            .zip(&self.edits.dyn_distance_lanes)
+            .enumerate()
         {
-            let c = &self.distance[r as usize];
-            b.param = F::splat(s.param(c.stiffness, c.compliance));
-        }
-        for (k, &t) in self.edits.dyn_tets.iter().enumerate() {
-            let t = t as usize;
-            if let Some(b) = self.edits.dyn_tet_batches.get_mut(k) {
-                let c = &self.tet_volume[t];
-                b.param = F::splat(s.param(c.stiffness, c.compliance));
+            let fill = self.edits.dyn_distance_fill[b] as usize;
+            for (l, &r) in lanes.iter().enumerate() {
+                let live = dyn_live(&self.edits.distance_slot, r, b, l, fill);
+                let c = &self.distance[r as usize];
+                set_lane(
+                    &mut batch.param,
+                    l,
+                    if live {
+                        s.param(c.stiffness, c.compliance)
+                    } else {
+                        off
+                    },
+                );
             }
-            if let Some(b) = self.edits.dyn_centroid_batches.get_mut(k) {
-                for j in 0..4 {
-                    let c = &self.centroid[4 * t + j];
-                    b.param[j] = F::splat(s.param(c.stiffness, c.compliance));
+        }
+        for (b, lanes) in self.edits.dyn_tet_lanes.iter().enumerate() {
+            let fill = self.edits.dyn_tet_fill[b] as usize;
+            for (l, &r) in lanes.iter().enumerate() {
+                let live = dyn_live(&self.edits.tet_slot, r, b, l, fill);
+                let t = r as usize;
+                if let Some(batch) = self.edits.dyn_tet_batches.get_mut(b) {
+                    let c = &self.tet_volume[t];
+                    set_lane(
+                        &mut batch.param,
+                        l,
+                        if live {
+                            s.param(c.stiffness, c.compliance)
+                        } else {
+                            off
+                        },
+                    );
+                }
+                if let Some(batch) = self.edits.dyn_centroid_batches.get_mut(b) {
+                    for j in 0..4 {
+                        let c = &self.centroid[4 * t + j];
+                        set_lane(
+                            &mut batch.param[j],
+                            l,
+                            if live {
+                                s.param(c.stiffness, c.compliance)
+                            } else {
+                                off
+                            },
+                        );
+                    }
                 }
             }
         }
@@ -189,9 +231,16 @@ impl SoftBody {
     pub fn tet_slot(&self, t: usize) -> Option<ConstraintSlot> {
         self.edits.tet_slot.get(t).copied()
     }
-    /// Sizes of the dynamic set: (distance constraints, tets).
+    /// Sizes of the dynamic set: (distance constraints, tets), live ones.
     pub fn dynamic_counts(&self) -> (usize, usize) {
-        (self.edits.dyn_distance.len(), self.edits.dyn_tets.len())
+        self.edits.dyn_live
+    }
+    /// Batches of the dynamic set: (distance, tet); up to eight constraints each.
+    pub fn dynamic_batch_counts(&self) -> (usize, usize) {
+        (
+            self.edits.dyn_distance_lanes.len(),
+            self.edits.dyn_tet_lanes.len(),
+        )
     }
 
     /// Appends one node per entry of `sources`, each a copy of its source (position, previous
@@ -298,10 +347,9 @@ impl SoftBody {
     }
 
     /// Switches off distance record `r`'s lanes in its tree batch.
-    fn switch_off_distance_lanes(&mut self, batch: usize) -> usize {
+    fn switch_off_distance_lanes(&mut self, batch: usize) {
         let off = off(self.settings.solver);
         let b = &mut self.distance_batches[batch];
-        let mut count = 0;
         for (l, &r) in self.distance_lanes[batch].iter().enumerate() {
             if !matches!(
                 self.edits.distance_slot[r as usize],
@@ -310,10 +358,8 @@ impl SoftBody {
                 b.nodes[1][l] = b.nodes[0][l];
                 set_lane(&mut b.rest, l, 0.0);
                 set_lane(&mut b.param, l, off);
-                count += 1;
             }
         }
-        count
     }
 
     fn switch_off_tet_lanes(&mut self, batch: usize) {
@@ -341,12 +387,174 @@ impl SoftBody {
         }
     }
 
-    fn distance_batch_of(&self, c: &DistanceConstraint) -> DistanceBatch {
-        let [a, b] = c.nodes.map(|i| [self.rank[i as usize]; LANES]);
-        DistanceBatch {
-            nodes: [a, b],
+    /// Puts distance record `r` into the dynamic set: into a free lane of the last batch when
+    /// none of that batch's lanes touches its nodes, else into a new batch (all lanes copies).
+    fn push_dyn_distance(&mut self, r: u32) {
+        let c = self.distance[r as usize];
+        let s = c.nodes.map(|i| self.rank[i as usize]);
+        let param = self.settings.param(c.stiffness, c.compliance);
+        let e = &mut self.edits;
+        if let (Some(b), Some(fill)) = (
+            e.dyn_distance_batches.last_mut(),
+            e.dyn_distance_fill.last_mut(),
+        ) {
+            let lane = *fill as usize;
+            let clash = b.nodes.iter().any(|ids| ids.iter().any(|n| s.contains(n)));
+            if lane < LANES && !clash {
+                for k in 0..2 {
+                    b.nodes[k][lane] = s[k];
+                }
+                set_lane(&mut b.rest, lane, c.rest_length);
+                set_lane(&mut b.param, lane, param);
+                *fill += 1;
+                let batch = e.dyn_distance_lanes.len() - 1;
+                e.dyn_distance_lanes[batch][lane] = r;
+                e.distance_slot[r as usize] = ConstraintSlot::Dynamic {
+                    position: (batch * LANES + lane) as u32,
+                };
+                e.dyn_live.0 += 1;
+                return;
+            }
+        }
+        let batch = e.dyn_distance_batches.len();
+        e.dyn_distance_batches.push(DistanceBatch {
+            nodes: [[s[0]; LANES], [s[1]; LANES]],
             rest: F::splat(c.rest_length),
-            param: F::splat(self.settings.param(c.stiffness, c.compliance)),
+            param: F::splat(param),
+        });
+        e.dyn_distance_lanes.push([r; LANES]);
+        e.dyn_distance_fill.push(1);
+        e.dyn_distance_lambda.push(F::ZERO);
+        e.distance_slot[r as usize] = ConstraintSlot::Dynamic {
+            position: (batch * LANES) as u32,
+        };
+        e.dyn_live.0 += 1;
+    }
+
+    /// Switches off the lanes of dynamic distance batch `b` that hold no live constraint.
+    fn switch_off_dyn_distance_lanes(&mut self, b: usize) {
+        let off = off(self.settings.solver);
+        let e = &mut self.edits;
+        let fill = e.dyn_distance_fill[b] as usize;
+        let batch = &mut e.dyn_distance_batches[b];
+        for (l, &r) in e.dyn_distance_lanes[b].iter().enumerate() {
+            if !dyn_live(&e.distance_slot, r, b, l, fill) {
+                batch.nodes[1][l] = batch.nodes[0][l];
+                set_lane(&mut batch.rest, l, 0.0);
+                set_lane(&mut batch.param, l, off);
+            }
+        }
+    }
+
+    /// Puts tet `t` into the dynamic set (as [`SoftBody::push_dyn_distance`]).
+    fn push_dyn_tet(&mut self, t: u32) {
+        let nodes = self.tets[t as usize];
+        let s = nodes.map(|i| self.rank[i as usize]);
+        let tet = self.tet_volume.get(t as usize).map(|c| {
+            (
+                c.rest_volume,
+                self.settings.param(c.stiffness, c.compliance),
+            )
+        });
+        let centroid = (self.volume_kind == VolumeConstraintKind::Centroid).then(|| {
+            let c = &self.centroid[4 * t as usize..4 * t as usize + 4];
+            (
+                [0, 1, 2, 3].map(|j| c[j].rest_height),
+                [0, 1, 2, 3].map(|j| self.settings.param(c[j].stiffness, c[j].compliance)),
+            )
+        });
+        let per_tet = match self.volume_kind {
+            VolumeConstraintKind::None => 0,
+            VolumeConstraintKind::Classic => 1,
+            VolumeConstraintKind::Centroid => 4,
+        };
+        let e = &mut self.edits;
+        if let Some(fill) = e.dyn_tet_fill.last().copied() {
+            let b = e.dyn_tet_fill.len() - 1;
+            let lane = fill as usize;
+            let ids = e
+                .dyn_tet_batches
+                .get(b)
+                .map(|x| x.nodes)
+                .or_else(|| e.dyn_centroid_batches.get(b).map(|x| x.nodes));
+            let clash = ids.is_some_and(|ids| ids.iter().any(|l| l.iter().any(|n| s.contains(n))));
+            if lane < LANES && !clash {
+                if let (Some(x), Some((rest, param))) = (e.dyn_tet_batches.get_mut(b), tet) {
+                    for k in 0..4 {
+                        x.nodes[k][lane] = s[k];
+                    }
+                    set_lane(&mut x.rest, lane, rest);
+                    set_lane(&mut x.param, lane, param);
+                }
+                if let (Some(x), Some((rest, param))) =
+                    (e.dyn_centroid_batches.get_mut(b), centroid)
+                {
+                    for k in 0..4 {
+                        x.nodes[k][lane] = s[k];
+                        set_lane(&mut x.rest[k], lane, rest[k]);
+                        set_lane(&mut x.param[k], lane, param[k]);
+                    }
+                }
+                e.dyn_tet_fill[b] += 1;
+                e.dyn_tet_lanes[b][lane] = t;
+                e.tet_slot[t as usize] = ConstraintSlot::Dynamic {
+                    position: (b * LANES + lane) as u32,
+                };
+                e.dyn_live.1 += 1;
+                return;
+            }
+        }
+        let b = e.dyn_tet_lanes.len();
+        let ids = s.map(|n| [n; LANES]);
+        if let Some((rest, param)) = tet {
+            e.dyn_tet_batches.push(TetBatch {
+                nodes: ids,
+                rest: F::splat(rest),
+                param: F::splat(param),
+            });
+        }
+        if let Some((rest, param)) = centroid {
+            e.dyn_centroid_batches.push(CentroidBatch {
+                nodes: ids,
+                rest: rest.map(F::splat),
+                param: param.map(F::splat),
+            });
+        }
+        e.dyn_tet_lanes.push([t; LANES]);
+        e.dyn_tet_fill.push(1);
+        e.dyn_volume_lambda
+            .extend(std::iter::repeat_n(F::ZERO, per_tet));
+        e.tet_slot[t as usize] = ConstraintSlot::Dynamic {
+            position: (b * LANES) as u32,
+        };
+        e.dyn_live.1 += 1;
+    }
+
+    /// Switches off the lanes of dynamic tet batch `b` that hold no live tet.
+    fn switch_off_dyn_tet_lanes(&mut self, b: usize) {
+        let off = off(self.settings.solver);
+        let e = &mut self.edits;
+        let fill = e.dyn_tet_fill[b] as usize;
+        for (l, &r) in e.dyn_tet_lanes[b].iter().enumerate() {
+            if dyn_live(&e.tet_slot, r, b, l, fill) {
+                continue;
+            }
+            if let Some(x) = e.dyn_tet_batches.get_mut(b) {
+                for k in 1..4 {
+                    x.nodes[k][l] = x.nodes[0][l];
+                }
+                set_lane(&mut x.rest, l, 0.0);
+                set_lane(&mut x.param, l, off);
+            }
+            if let Some(x) = e.dyn_centroid_batches.get_mut(b) {
+                for k in 1..4 {
+                    x.nodes[k][l] = x.nodes[0][l];
+                }
+                for j in 0..4 {
+                    set_lane(&mut x.rest[j], l, 0.0);
+                    set_lane(&mut x.param[j], l, off);
+                }
+            }
         }
     }
 
@@ -360,14 +568,9 @@ impl SoftBody {
         let index = self.distance.len();
         self.check_nodes("distance constraint", index, &c.nodes)?;
         check_distance_values(&c)?;
-        let batch = self.distance_batch_of(&c);
         self.distance.push(c);
-        self.edits.distance_slot.push(ConstraintSlot::Dynamic {
-            position: self.edits.dyn_distance.len() as u32,
-        });
-        self.edits.dyn_distance.push(index as u32);
-        self.edits.dyn_distance_batches.push(batch);
-        self.edits.dyn_distance_lambda.push(F::ZERO);
+        self.edits.distance_slot.push(ConstraintSlot::Removed);
+        self.push_dyn_distance(index as u32);
         Ok(index)
     }
 
@@ -381,22 +584,18 @@ impl SoftBody {
         let slot = self.live_distance(c)?;
         self.check_nodes("distance constraint", c, &nodes)?;
         self.distance[c].nodes = nodes;
-        let batch = self.distance_batch_of(&self.distance[c]);
+        self.edits.distance_slot[c] = ConstraintSlot::Removed;
         match slot {
             ConstraintSlot::Dynamic { position } => {
-                self.edits.dyn_distance_batches[position as usize] = batch;
+                self.edits.dyn_live.0 -= 1;
+                self.switch_off_dyn_distance_lanes(position as usize / LANES);
             }
-            ConstraintSlot::Tree { batch: b } => {
-                self.edits.distance_slot[c] = ConstraintSlot::Dynamic {
-                    position: self.edits.dyn_distance.len() as u32,
-                };
-                self.switch_off_distance_lanes(b as usize);
-                self.edits.dyn_distance.push(c as u32);
-                self.edits.dyn_distance_batches.push(batch);
-                self.edits.dyn_distance_lambda.push(F::ZERO);
+            ConstraintSlot::Tree { batch } => {
+                self.switch_off_distance_lanes(batch as usize);
             }
             ConstraintSlot::Removed => {}
         }
+        self.push_dyn_distance(c as u32);
         Ok(())
     }
 
@@ -412,15 +611,9 @@ impl SoftBody {
                 self.switch_off_distance_lanes(batch as usize);
             }
             ConstraintSlot::Dynamic { position } => {
-                let p = position as usize;
                 self.edits.distance_slot[c] = ConstraintSlot::Removed;
-                self.edits.dyn_distance.remove(p);
-                self.edits.dyn_distance_batches.remove(p);
-                self.edits.dyn_distance_lambda.remove(p);
-                for (k, &r) in self.edits.dyn_distance.iter().enumerate().skip(p) {
-                    self.edits.distance_slot[r as usize] =
-                        ConstraintSlot::Dynamic { position: k as u32 };
-                }
+                self.edits.dyn_live.0 -= 1;
+                self.switch_off_dyn_distance_lanes(position as usize / LANES);
             }
             ConstraintSlot::Removed => {}
         }
@@ -469,65 +662,28 @@ impl SoftBody {
                 c.apex = nodes[j];
             }
         }
-        let s = nodes.map(|i| [self.rank[i as usize]; LANES]);
-        let tet_batch = self.tet_volume.get(t).map(|c| TetBatch {
-            nodes: s,
-            rest: F::splat(c.rest_volume),
-            param: F::splat(self.settings.param(c.stiffness, c.compliance)),
-        });
-        let centroid_batch = (self.volume_kind == VolumeConstraintKind::Centroid).then(|| {
-            let c = &self.centroid[4 * t..4 * t + 4];
-            CentroidBatch {
-                nodes: s,
-                rest: [0, 1, 2, 3].map(|j| F::splat(c[j].rest_height)),
-                param: [0, 1, 2, 3]
-                    .map(|j| F::splat(self.settings.param(c[j].stiffness, c[j].compliance))),
+        self.edits.tet_slot[t] = ConstraintSlot::Removed;
+        match slot {
+            ConstraintSlot::Dynamic { position } => {
+                self.edits.dyn_live.1 -= 1;
+                self.switch_off_dyn_tet_lanes(position as usize / LANES);
             }
-        });
-        let position = match slot {
-            ConstraintSlot::Dynamic { position } => position as usize,
-            _ => {
-                let position = self.edits.dyn_tets.len();
-                self.edits.tet_slot[t] = ConstraintSlot::Dynamic {
-                    position: position as u32,
-                };
-                if let ConstraintSlot::Tree { batch } = slot {
-                    self.switch_off_tet_lanes(batch as usize);
-                }
-                self.edits.dyn_tets.push(t as u32);
-                if tet_batch.is_some() {
-                    self.edits.dyn_tet_batches.push(TetBatch {
-                        nodes: s,
-                        rest: F::ZERO,
-                        param: F::ZERO,
-                    });
-                }
-                if centroid_batch.is_some() {
-                    self.edits.dyn_centroid_batches.push(CentroidBatch {
-                        nodes: s,
-                        rest: [F::ZERO; 4],
-                        param: [F::ZERO; 4],
-                    });
-                }
-                let per_tet = match self.volume_kind {
-                    VolumeConstraintKind::None => 0,
-                    VolumeConstraintKind::Classic => 1,
-                    VolumeConstraintKind::Centroid => 4,
-                };
-                self.edits
-                    .dyn_volume_lambda
-                    .extend(std::iter::repeat_n(F::ZERO, per_tet));
-                position
-            }
-        };
-        if let Some(b) = tet_batch {
-            self.edits.dyn_tet_batches[position] = b;
+            ConstraintSlot::Tree { batch } => self.switch_off_tet_lanes(batch as usize),
+            ConstraintSlot::Removed => {}
         }
-        if let Some(b) = centroid_batch {
-            self.edits.dyn_centroid_batches[position] = b;
-        }
+        self.push_dyn_tet(t as u32);
         Ok(())
     }
+}
+
+/// Whether lane `l` of dynamic batch `b` (`fill` lanes in use) holds a live constraint: its
+/// record's slot is this lane, or it is a padding lane copying a live lane 0.
+fn dyn_live(slots: &[ConstraintSlot], r: u32, b: usize, l: usize, fill: usize) -> bool {
+    let at = |lane: usize| ConstraintSlot::Dynamic {
+        position: (b * LANES + lane) as u32,
+    };
+    let slot = slots[r as usize];
+    slot == at(l) || (l >= fill && slot == at(0))
 }
 
 fn check_distance_values(c: &DistanceConstraint) -> Result<(), PbdError> {

@@ -133,6 +133,9 @@ fn run_cut(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: 
     })
     .unwrap();
     assert!(body.dynamic_counts().0 > 0 && body.dynamic_counts().1 > 0);
+    // Packed: several dynamic constraints share a batch.
+    assert!(body.dynamic_batch_counts().0 * 2 < body.dynamic_counts().0);
+    assert!(body.dynamic_batch_counts().1 * 2 < body.dynamic_counts().1);
     body.set_settings(StepSettings {
         dt: 0.01,
         iterations: 5,

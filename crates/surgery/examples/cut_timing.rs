@@ -120,11 +120,12 @@ fn main() {
         after.push(t.elapsed().as_secs_f64());
     }
     println!(
-        "bunny: {} nodes ({} added by the cut), {} tets, blade step {step_cm} cm; dynamic set {:?}",
+        "bunny: {} nodes ({} added by the cut), {} tets, blade step {step_cm} cm; dynamic set {:?} in {:?} batches",
         body.node_count(),
         body.node_count() - mesh.vertex_count(),
         body.tets().len(),
-        body.dynamic_counts()
+        body.dynamic_counts(),
+        body.dynamic_batch_counts()
     );
     stats("step, before the cut", &mut plain);
     stats("step + cut (cutting steps)", &mut with_cut);
