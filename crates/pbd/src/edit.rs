@@ -13,11 +13,14 @@
 //!   and the colouring are untouched.
 //! - **The dynamic set** holds every added or relabelled constraint, in the order the edits
 //!   made them, in solver indices, packed eight to a batch: a new constraint takes the next lane
-//!   of the last batch when no lane there touches its nodes, else opens a new batch whose unused
+//!   of one of the last 16 batches where no lane touches its nodes, else opens a new batch whose unused
 //!   lanes copy its lane 0 (as padding does). A changed or removed dynamic constraint's lane is
 //!   switched off like a tree lane and the constraint, if changed, is appended again. Each iteration projects it serially after the block tree (its volumes, then
 //!   its distances, so that links added last, like sutures, are projected last) and before the
 //!   floor and contacts. So serial and parallel stay bit-identical, and steps allocate nothing.
+//! - **Links** ([`SoftBody::add_link_constraint`], for sutures) are kept apart from the packed
+//!   dynamic set and projected after it, one per batch, in the order added: a link of stiffness
+//!   1 is satisfied at the end of every iteration.
 //! - Removed constraints keep their record (so indices stay stable) with
 //!   [`ConstraintSlot::Removed`]; [`SoftBody::distance_slot`] says where each record is.
 //! - Masses are set per node ([`SoftBody::set_node_mass`]); [`SoftBody::tet_rest_volumes`] and
@@ -43,6 +46,12 @@ pub enum ConstraintSlot {
     /// In the dynamic set, at this position (projected after the tree).
     Dynamic {
         /// Position in the dynamic set.
+        position: u32,
+    },
+    /// A link (e.g. a suture), at this position of the link list: projected after everything
+    /// else of the body, one per batch, in the order added.
+    Link {
+        /// Position in the link list.
         position: u32,
     },
     /// Removed: the record is kept but has no effect.
@@ -74,6 +83,10 @@ pub(crate) struct Edits {
     pub dyn_volume_lambda: Vec<F>,
     /// Live dynamic constraints: distances, tets.
     pub dyn_live: (usize, usize),
+    /// Links: record per position, batches (all lanes equal), multipliers.
+    pub links: Vec<u32>,
+    pub link_batches: Vec<DistanceBatch>,
+    pub link_lambda: Vec<F>,
 }
 
 impl Edits {
@@ -109,6 +122,9 @@ impl Edits {
     }
 }
 
+/// How many of the last dynamic batches a new constraint may join (a lane free, no node shared).
+const SEARCH: usize = 16;
+
 /// The kernels' parameter of a switched-off lane.
 fn off(solver: Solver) -> f32 {
     if solver == Solver::Xpbd {
@@ -125,6 +141,7 @@ fn set_lane(f: &mut F, lane: usize, v: f32) {
 impl SoftBody {
     /// Re-applies the edit state to the per-step parameters (after [`SoftBody::set_settings`]).
     pub(crate) fn refresh_edit_params(&mut self) {
+        self.refresh_link_params();
         let off = off(self.settings.solver);
         let s = self.settings;
         // Switched-off tree lanes.
@@ -207,6 +224,14 @@ impl SoftBody {
                     }
                 }
             }
+        }
+    }
+
+    /// Refreshes the links' parameters.
+    fn refresh_link_params(&mut self) {
+        for (b, &r) in self.edits.link_batches.iter_mut().zip(&self.edits.links) {
+            let c = &self.distance[r as usize];
+            b.param = F::splat(self.settings.param(c.stiffness, c.compliance));
         }
     }
 
@@ -387,34 +412,36 @@ impl SoftBody {
         }
     }
 
-    /// Puts distance record `r` into the dynamic set: into a free lane of the last batch when
-    /// none of that batch's lanes touches its nodes, else into a new batch (all lanes copies).
+    /// Puts distance record `r` into the dynamic set: into a free lane of one of the last
+    /// [`SEARCH`] batches none of whose lanes touches its nodes, else into a new batch (all
+    /// lanes copies).
     fn push_dyn_distance(&mut self, r: u32) {
         let c = self.distance[r as usize];
         let s = c.nodes.map(|i| self.rank[i as usize]);
         let param = self.settings.param(c.stiffness, c.compliance);
         let e = &mut self.edits;
-        if let (Some(b), Some(fill)) = (
-            e.dyn_distance_batches.last_mut(),
-            e.dyn_distance_fill.last_mut(),
-        ) {
+        let count = e.dyn_distance_batches.len();
+        for batch in (count.saturating_sub(SEARCH)..count).rev() {
+            let (b, fill) = (
+                &mut e.dyn_distance_batches[batch],
+                &mut e.dyn_distance_fill[batch],
+            );
             let lane = *fill as usize;
-            let clash = b.nodes.iter().any(|ids| ids.iter().any(|n| s.contains(n)));
-            if lane < LANES && !clash {
-                for k in 0..2 {
-                    b.nodes[k][lane] = s[k];
-                }
-                set_lane(&mut b.rest, lane, c.rest_length);
-                set_lane(&mut b.param, lane, param);
-                *fill += 1;
-                let batch = e.dyn_distance_lanes.len() - 1;
-                e.dyn_distance_lanes[batch][lane] = r;
-                e.distance_slot[r as usize] = ConstraintSlot::Dynamic {
-                    position: (batch * LANES + lane) as u32,
-                };
-                e.dyn_live.0 += 1;
-                return;
+            if lane >= LANES || b.nodes.iter().any(|ids| ids.iter().any(|n| s.contains(n))) {
+                continue;
             }
+            for (ids, &n) in b.nodes.iter_mut().zip(&s) {
+                ids[lane] = n;
+            }
+            set_lane(&mut b.rest, lane, c.rest_length);
+            set_lane(&mut b.param, lane, param);
+            *fill += 1;
+            e.dyn_distance_lanes[batch][lane] = r;
+            e.distance_slot[r as usize] = ConstraintSlot::Dynamic {
+                position: (batch * LANES + lane) as u32,
+            };
+            e.dyn_live.0 += 1;
+            return;
         }
         let batch = e.dyn_distance_batches.len();
         e.dyn_distance_batches.push(DistanceBatch {
@@ -469,9 +496,9 @@ impl SoftBody {
             VolumeConstraintKind::Centroid => 4,
         };
         let e = &mut self.edits;
-        if let Some(fill) = e.dyn_tet_fill.last().copied() {
-            let b = e.dyn_tet_fill.len() - 1;
-            let lane = fill as usize;
+        let count = e.dyn_tet_lanes.len();
+        for b in (count.saturating_sub(SEARCH)..count).rev() {
+            let lane = e.dyn_tet_fill[b] as usize;
             let ids = e
                 .dyn_tet_batches
                 .get(b)
@@ -480,8 +507,8 @@ impl SoftBody {
             let clash = ids.is_some_and(|ids| ids.iter().any(|l| l.iter().any(|n| s.contains(n))));
             if lane < LANES && !clash {
                 if let (Some(x), Some((rest, param))) = (e.dyn_tet_batches.get_mut(b), tet) {
-                    for k in 0..4 {
-                        x.nodes[k][lane] = s[k];
+                    for (ids, &n) in x.nodes.iter_mut().zip(&s) {
+                        ids[lane] = n;
                     }
                     set_lane(&mut x.rest, lane, rest);
                     set_lane(&mut x.param, lane, param);
@@ -584,6 +611,11 @@ impl SoftBody {
         let slot = self.live_distance(c)?;
         self.check_nodes("distance constraint", c, &nodes)?;
         self.distance[c].nodes = nodes;
+        if let ConstraintSlot::Link { position } = slot {
+            let s = nodes.map(|i| [self.rank[i as usize]; LANES]);
+            self.edits.link_batches[position as usize].nodes = s;
+            return Ok(());
+        }
         self.edits.distance_slot[c] = ConstraintSlot::Removed;
         match slot {
             ConstraintSlot::Dynamic { position } => {
@@ -593,7 +625,7 @@ impl SoftBody {
             ConstraintSlot::Tree { batch } => {
                 self.switch_off_distance_lanes(batch as usize);
             }
-            ConstraintSlot::Removed => {}
+            ConstraintSlot::Link { .. } | ConstraintSlot::Removed => {}
         }
         self.push_dyn_distance(c as u32);
         Ok(())
@@ -615,9 +647,47 @@ impl SoftBody {
                 self.edits.dyn_live.0 -= 1;
                 self.switch_off_dyn_distance_lanes(position as usize / LANES);
             }
+            ConstraintSlot::Link { position } => {
+                let p = position as usize;
+                self.edits.distance_slot[c] = ConstraintSlot::Removed;
+                let e = &mut self.edits;
+                e.links.remove(p);
+                e.link_batches.remove(p);
+                e.link_lambda.remove(p);
+                for (k, &r) in e.links.iter().enumerate().skip(p) {
+                    e.distance_slot[r as usize] = ConstraintSlot::Link { position: k as u32 };
+                }
+            }
             ConstraintSlot::Removed => {}
         }
         Ok(())
+    }
+
+    /// Adds a link between two nodes (a suture): a distance constraint projected after
+    /// everything else of the body in every iteration (links in the order added), so that with
+    /// stiffness 1 the linked nodes end each iteration together. Returns its record index.
+    ///
+    /// # Errors
+    /// As [`SoftBody::add_distance_constraint`].
+    pub fn add_link_constraint(&mut self, c: DistanceConstraint) -> Result<usize, PbdError> {
+        let index = self.distance.len();
+        self.check_nodes("link", index, &c.nodes)?;
+        check_distance_values(&c)?;
+        let s = c.nodes.map(|i| [self.rank[i as usize]; LANES]);
+        let param = self.settings.param(c.stiffness, c.compliance);
+        self.distance.push(c);
+        let e = &mut self.edits;
+        e.distance_slot.push(ConstraintSlot::Link {
+            position: e.links.len() as u32,
+        });
+        e.links.push(index as u32);
+        e.link_batches.push(DistanceBatch {
+            nodes: s,
+            rest: F::splat(c.rest_length),
+            param: F::splat(param),
+        });
+        e.link_lambda.push(F::ZERO);
+        Ok(index)
     }
 
     fn live_distance(&self, c: usize) -> Result<ConstraintSlot, PbdError> {
@@ -669,7 +739,7 @@ impl SoftBody {
                 self.switch_off_dyn_tet_lanes(position as usize / LANES);
             }
             ConstraintSlot::Tree { batch } => self.switch_off_tet_lanes(batch as usize),
-            ConstraintSlot::Removed => {}
+            ConstraintSlot::Link { .. } | ConstraintSlot::Removed => {}
         }
         self.push_dyn_tet(t as u32);
         Ok(())

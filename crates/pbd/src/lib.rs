@@ -20,7 +20,8 @@
 //!   Contacts are per node: a tool thinner than the node spacing can pass between nodes.
 //! - Topology edits for cutting and suturing (issue 8, used by `tissue-surgery`):
 //!   [`SoftBody::duplicate_nodes`], [`SoftBody::set_tet_nodes`],
-//!   [`SoftBody::add_distance_constraint`], [`SoftBody::set_distance_nodes`],
+//!   [`SoftBody::add_distance_constraint`], [`SoftBody::add_link_constraint`] (sutures),
+//!   [`SoftBody::set_distance_nodes`],
 //!   [`SoftBody::remove_distance_constraint`], [`SoftBody::set_node_mass`]; where each record is
 //!   projected: [`ConstraintSlot`].
 //! - [`PbdError`]: bad input, naming the element.
@@ -71,7 +72,7 @@
 //!   node range (caller's and solver index alike); a changed constraint's lane is switched off in
 //!   place (its nodes collapsed onto one, rest 0, parameter off: the kernels skip it exactly) and
 //!   the constraint joins the *dynamic set*, projected serially after the tree in every iteration
-//!   (volumes, then distances, in edit order, so that links added last come last). Serial and
+//!   (volumes, then distances, packed eight to a batch, then links such as sutures, last). Serial and
 //!   parallel stay bit-identical (`tests/parallel.rs` also runs a cut body). No re-partition:
 //!   after very many edits the serial dynamic set grows.
 //! - Contacts are generated and projected serially, in a fixed order (colliders by id, then tools,

@@ -175,6 +175,7 @@ impl SoftBody {
             self.volume_lambda.fill(F::ZERO);
             self.edits.dyn_distance_lambda.fill(F::ZERO);
             self.edits.dyn_volume_lambda.fill(F::ZERO);
+            self.edits.link_lambda.fill(F::ZERO);
         }
         {
             let _span = tracing::trace_span!("project", iterations = s.iterations).entered();
@@ -243,7 +244,7 @@ impl SoftBody {
             &mut self.volume_lambda,
         );
         // The dynamic set (edited and added constraints), serially, in edit order, on all nodes:
-        // volumes, then distances (so that links such as sutures come last).
+        // volumes, then distances, then links (sutures).
         let e = &mut self.edits;
         match self.volume_kind {
             VolumeConstraintKind::None => {}
@@ -266,6 +267,16 @@ impl SoftBody {
             project_batches::<_, 2, 1>(
                 &e.dyn_distance_batches,
                 &mut e.dyn_distance_lambda,
+                p,
+                |b| &b.nodes,
+                project_distance::<XPBD>,
+            );
+        }
+        // Links (sutures) last.
+        if !e.link_batches.is_empty() {
+            project_batches::<_, 2, 1>(
+                &e.link_batches,
+                &mut e.link_lambda,
                 p,
                 |b| &b.nodes,
                 project_distance::<XPBD>,

@@ -125,6 +125,22 @@ fn run_cut(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: 
         })
         .unwrap();
     body.remove_distance_constraint(link).unwrap();
+    let link = body
+        .add_link_constraint(tissue_pbd::DistanceConstraint {
+            nodes: [on_cut[2], first + 7],
+            rest_length: 0.0,
+            stiffness: 1.0,
+            compliance: 0.0,
+        })
+        .unwrap();
+    body.add_link_constraint(tissue_pbd::DistanceConstraint {
+        nodes: [on_cut[4], first + 9],
+        rest_length: 0.1,
+        stiffness: 0.8,
+        compliance: 1e-4,
+    })
+    .unwrap();
+    body.remove_distance_constraint(link).unwrap();
     body.add_distance_constraint(tissue_pbd::DistanceConstraint {
         nodes: [on_cut[1], first + 5],
         rest_length: 0.0,

@@ -49,8 +49,6 @@ pub struct Surgery {
     /// Piece label of each tet (see [`Surgery::tet_components`]).
     pub(crate) tet_component: Vec<u32>,
     pub(crate) component_count: usize,
-    /// Longest rest edge (cm): how far from the blade a tet's centroid can be and still be cut.
-    pub(crate) longest_edge: f32,
     /// Per node: 1.5 × its longest rest edge (cm). A tet that straddles the blade's plane has a
     /// node at most this far from it (unless stretched by more than 1.5).
     pub(crate) node_reach: Vec<f32>,
@@ -111,7 +109,6 @@ impl Surgery {
             }
         }
         let x = body.positions();
-        let mut longest = 0.0f32;
         let mut node_reach = vec![0.0f32; n];
         let mut min_ratio = f64::INFINITY;
         for tet in tets {
@@ -119,7 +116,6 @@ impl Surgery {
             for a in 0..4 {
                 for b in a + 1..4 {
                     let l = p[a].distance(p[b]) as f32;
-                    longest = longest.max(l);
                     for k in [a, b] {
                         let r = &mut node_reach[tet[k] as usize];
                         *r = r.max(1.5 * l);
@@ -144,7 +140,6 @@ impl Surgery {
             sutures: Vec::new(),
             tet_component: Vec::new(),
             component_count: 0,
-            longest_edge: longest,
             node_reach,
             min_radius_ratio: min_ratio,
             min_rest_volume,

@@ -110,7 +110,7 @@ impl Surgery {
         }
         let gap = x[na as usize].distance(x[nb as usize]);
         let s = self.settings;
-        let constraint = body.add_distance_constraint(DistanceConstraint {
+        let constraint = body.add_link_constraint(DistanceConstraint {
             nodes: [na, nb],
             rest_length: s.suture_rest_length,
             stiffness: s.suture_stiffness,
@@ -142,7 +142,7 @@ impl Surgery {
         let _span = tracing::debug_span!("suture").entered();
         self.check_body(body)?;
         let s = self.settings;
-        let constraint = body.add_distance_constraint(DistanceConstraint {
+        let constraint = body.add_link_constraint(DistanceConstraint {
             nodes,
             rest_length: s.suture_rest_length,
             stiffness: s.suture_stiffness,
