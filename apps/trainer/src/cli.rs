@@ -63,6 +63,13 @@ pub enum FrameFormat {
     Obj,
 }
 
+/// A scripted scenario.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Scenario {
+    /// Deform, incise, cut a piece off, suture the wound.
+    Appendix,
+}
+
 /// `trainer` arguments.
 #[derive(Debug, Parser)]
 #[command(
@@ -74,6 +81,11 @@ pub enum FrameFormat {
     after_long_help = AFTER_LONG_HELP
 )]
 pub struct Cli {
+    /// A scripted scenario instead of the press-and-drag run: `appendix` (an appendix-like
+    /// 8 × 2 × 2 cm organ pinned at its base sags under gravity, is incised near the base, has
+    /// its tip cut off, and the incision is sutured; per-step timing and the surgery events).
+    #[arg(long, value_enum)]
+    pub scenario: Option<Scenario>,
     /// The organ: a TetGen mesh (its stem, .node or .ele) or a .vtk tet grid [default: the shipped
     /// bunny, else a generated box].
     #[arg(long, value_name = "PATH", conflicts_with_all = ["surface", "box_cells"])]

@@ -4,6 +4,7 @@
 //! with per-step timing, volume drift and frames ([`run`]) → a summary on stdout. Every failure is
 //! one line on stderr and a documented exit code ([`failure`]); see `trainer --help`.
 
+mod appendix;
 mod cli;
 mod failure;
 mod run;
@@ -21,6 +22,9 @@ fn ms(s: f64) -> String {
 }
 
 fn main_inner(cli: &Cli) -> Result<(), Failure> {
+    if cli.scenario == Some(cli::Scenario::Appendix) {
+        return appendix::run(cli);
+    }
     let mut scene = scene::build(cli)?;
     let (nodes, tets) = (scene.mesh.vertex_count(), scene.mesh.tet_count());
     println!("trainer: {}", scene.source);

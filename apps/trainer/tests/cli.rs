@@ -266,3 +266,23 @@ fn bad_input_gives_one_line_and_its_exit_code() {
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_appendix_scenario_incises_cuts_off_and_sutures() {
+    let dir = scratch("appendix");
+    let o = run(&[
+        "--scenario",
+        "appendix",
+        "--frames",
+        dir.to_str().unwrap_or_default(),
+        "--every",
+        "50",
+    ]);
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}\n{}", out, stderr(&o));
+    assert!(out.contains("cut advanced"), "{out}");
+    assert!(out.contains("piece detached"), "{out}");
+    assert!(out.contains("suture 0 placed"), "{out}");
+    assert!(number_after(&out, "with a cut", "median") > 0.0);
+    assert_eq!(files_in(&dir).len(), 4, "frames at steps 50, 100, 150, 200");
+}

@@ -70,6 +70,9 @@ pub struct SoftBody {
     pub(crate) settings: StepSettings,
     pub(crate) step_count: u64,
     rest_volume: f64,
+    /// Topology edits (`edit.rs`): where each record is projected, the dynamic set, rest
+    /// volumes and density for local mass rebuilds.
+    pub(crate) edits: crate::edit::Edits,
 }
 
 /// One block of the domain decomposition (see [`crate::partition`]). Its batches are stored in
@@ -396,7 +399,9 @@ impl SoftBody {
             settings: StepSettings::default(),
             step_count: 0,
             rest_volume,
+            edits: Default::default(),
         };
+        body.edits = crate::edit::Edits::new(&body, material.density);
         body.set_settings(StepSettings::default())?;
         Ok(body)
     }
@@ -430,6 +435,7 @@ impl SoftBody {
                 }))
             });
         }
+        self.refresh_edit_params();
         Ok(())
     }
 

@@ -144,7 +144,7 @@ const MARCH: f32 = 0.5;
 const MAX_SAMPLES: f32 = 64.0;
 
 impl ContactState {
-    fn reserve(&mut self, nodes: usize) {
+    pub(crate) fn reserve(&mut self, nodes: usize) {
         let need = nodes * (self.colliders.len() + self.tools.len());
         self.contacts
             .reserve_exact(need.saturating_sub(self.contacts.len()));

@@ -113,4 +113,14 @@ pub enum PbdError {
         /// How many there are.
         count: usize,
     },
+    /// A topology edit names a constraint or tet that does not exist or was removed.
+    #[error("{what} {index} does not exist or was removed (the body has {count})")]
+    NoSuchElement {
+        /// `"distance constraint"` or `"tet"`.
+        what: &'static str,
+        /// The index given.
+        index: usize,
+        /// How many there are.
+        count: usize,
+    },
 }

@@ -18,6 +18,12 @@
 //!   meets, an inequality `n·(p − q) − margin ≥ 0` projected in every iteration after the body's
 //!   own constraints, with static and kinetic friction ([`ContactParams`]; Macklin et al. 2014).
 //!   Contacts are per node: a tool thinner than the node spacing can pass between nodes.
+//! - Topology edits for cutting and suturing (issue 8, used by `tissue-surgery`):
+//!   [`SoftBody::duplicate_nodes`], [`SoftBody::set_tet_nodes`],
+//!   [`SoftBody::add_distance_constraint`], [`SoftBody::add_link_constraint`] (sutures),
+//!   [`SoftBody::set_distance_nodes`],
+//!   [`SoftBody::remove_distance_constraint`], [`SoftBody::set_node_mass`]; where each record is
+//!   projected: [`ConstraintSlot`].
 //! - [`PbdError`]: bad input, naming the element.
 //!
 //! ## Units
@@ -62,6 +68,13 @@
 //!   flag instead of going to sleep, so that the next iteration's fork does not wait for a
 //!   thread to wake up (it yields to the OS after a few thousand spins). It touches no data.
 //! - No I/O; meshes come in as [`tissue_mesh::TetMesh`] or raw arrays.
+//! - Edits (module `edit`) leave the block tree as built: new nodes are appended after the tree's
+//!   node range (caller's and solver index alike); a changed constraint's lane is switched off in
+//!   place (its nodes collapsed onto one, rest 0, parameter off: the kernels skip it exactly) and
+//!   the constraint joins the *dynamic set*, projected serially after the tree in every iteration
+//!   (volumes, then distances, packed eight to a batch, then links such as sutures, last). Serial and
+//!   parallel stay bit-identical (`tests/parallel.rs` also runs a cut body). No re-partition:
+//!   after very many edits the serial dynamic set grows.
 //! - Contacts are generated and projected serially, in a fixed order (colliders by id, then tools,
 //!   nodes in order within each), so they are deterministic and the same in parallel mode. Their
 //!   buffer is reserved when a collider or tool is added, so steps stay allocation-free.
@@ -121,6 +134,7 @@ mod body;
 mod colour;
 mod constraint;
 mod contact;
+mod edit;
 mod error;
 mod geometry;
 mod partition;
@@ -134,6 +148,7 @@ pub use constraint::{
     CentroidVolumeConstraint, ConstraintKind, DistanceConstraint, Floor, TetVolumeConstraint,
 };
 pub use contact::{Contact, ContactParams, ContactSource};
+pub use edit::ConstraintSlot;
 pub use error::PbdError;
 pub use settings::{Material, Solver, StepSettings, VolumeConstraintKind};
 pub use tool::{Pose, Tool, ToolShape};

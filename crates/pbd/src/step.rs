@@ -173,6 +173,9 @@ impl SoftBody {
         if xpbd {
             self.distance_lambda.fill(F::ZERO);
             self.volume_lambda.fill(F::ZERO);
+            self.edits.dyn_distance_lambda.fill(F::ZERO);
+            self.edits.dyn_volume_lambda.fill(F::ZERO);
+            self.edits.link_lambda.fill(F::ZERO);
         }
         {
             let _span = tracing::trace_span!("project", iterations = s.iterations).entered();
@@ -222,7 +225,8 @@ impl SoftBody {
         Ok(())
     }
 
-    /// One sweep over all constraints, then the floor. `p` and `w` are in solver order.
+    /// One sweep over all constraints (the block tree, then the dynamic set of `edit.rs`), then
+    /// the floor. `p` and `w` are in solver order.
     fn project_once<const XPBD: bool>(&mut self) {
         let (p, w) = (&mut self.q, &self.qw);
         Sweep {
@@ -233,7 +237,51 @@ impl SoftBody {
             kind: self.volume_kind,
             parallel: self.settings.parallel,
         }
-        .block::<XPBD>(0, p, &mut self.distance_lambda, &mut self.volume_lambda);
+        .block::<XPBD>(
+            0,
+            &mut p[..self.edits.tree_nodes],
+            &mut self.distance_lambda,
+            &mut self.volume_lambda,
+        );
+        // The dynamic set (edited and added constraints), serially, in edit order, on all nodes:
+        // volumes, then distances, then links (sutures).
+        let e = &mut self.edits;
+        match self.volume_kind {
+            VolumeConstraintKind::None => {}
+            VolumeConstraintKind::Classic => project_batches::<_, 4, 1>(
+                &e.dyn_tet_batches,
+                &mut e.dyn_volume_lambda,
+                p,
+                |b| &b.nodes,
+                project_tet_volume::<XPBD>,
+            ),
+            VolumeConstraintKind::Centroid => project_batches::<_, 4, 4>(
+                &e.dyn_centroid_batches,
+                &mut e.dyn_volume_lambda,
+                p,
+                |b| &b.nodes,
+                project_centroid::<XPBD>,
+            ),
+        }
+        if !e.dyn_distance_batches.is_empty() {
+            project_batches::<_, 2, 1>(
+                &e.dyn_distance_batches,
+                &mut e.dyn_distance_lambda,
+                p,
+                |b| &b.nodes,
+                project_distance::<XPBD>,
+            );
+        }
+        // Links (sutures) last.
+        if !e.link_batches.is_empty() {
+            project_batches::<_, 2, 1>(
+                &e.link_batches,
+                &mut e.link_lambda,
+                p,
+                |b| &b.nodes,
+                project_distance::<XPBD>,
+            );
+        }
         // Per-node projections from here on: `p` (xyz; w = inverse mass) and `w` are in solver
         // order, the caller's node `i` is `p[self.rank[i]]`.
         if let Some(f) = self.floor {

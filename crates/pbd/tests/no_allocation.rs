@@ -54,6 +54,19 @@ fn steps_allocate_nothing_after_the_first() {
                 let mut body = SoftBody::new(&mesh, &material).unwrap();
                 body.set_floor(Some(Floor::y(-3.5))).unwrap();
                 let id = body.attach(0, Vec3::new(-3.0, -3.0, -3.0)).unwrap();
+                // A topology edit (it may allocate; the steps after it must not): a node
+                // duplicated, one tet moved onto it, a link added, an edge removed.
+                let t = body.tets()[7];
+                let copy = body.duplicate_nodes(&[t[0]]).unwrap();
+                body.set_tet_nodes(7, [copy, t[1], t[2], t[3]]).unwrap();
+                body.add_distance_constraint(tissue_pbd::DistanceConstraint {
+                    nodes: [t[0], copy],
+                    rest_length: 0.0,
+                    stiffness: 1.0,
+                    compliance: 0.0,
+                })
+                .unwrap();
+                body.remove_distance_constraint(3).unwrap();
                 body.set_settings(StepSettings {
                     solver,
                     parallel,

@@ -1,0 +1,782 @@
+//! Local topology edits for cutting and suturing (issue 8): nodes appended, tets relabelled,
+//! distance constraints added, relabelled or removed, masses set — without rebuilding the
+//! domain decomposition.
+//!
+//! Design (kept apart from the block tree on purpose):
+//! - **Nodes are appended**: a new node gets the next caller index *and* the next solver index,
+//!   after the block tree's node range `[0, n₀)`. The tree never sees it.
+//! - **A constraint that changes leaves the tree**: its lanes in its block's batch are switched
+//!   off in place — all the lane's nodes set to the lane's first node (a zero-length distance, a
+//!   flat tet: the kernels' validity masks skip it), its rest value 0 and its parameter "off"
+//!   (`k = 0`; for XPBD `α̃ = f32::MAX`, so `Δλ = −C/α̃` underflows to 0). A switched-off lane
+//!   touches only its own node and writes back exactly what it read, so the batch's other lanes
+//!   and the colouring are untouched.
+//! - **The dynamic set** holds every added or relabelled constraint, in the order the edits
+//!   made them, in solver indices, packed eight to a batch: a new constraint takes the next lane
+//!   of one of the last 16 batches where no lane touches its nodes, else opens a new batch whose unused
+//!   lanes copy its lane 0 (as padding does). A changed or removed dynamic constraint's lane is
+//!   switched off like a tree lane and the constraint, if changed, is appended again. Each iteration projects it serially after the block tree (its volumes, then
+//!   its distances, so that links added last, like sutures, are projected last) and before the
+//!   floor and contacts. So serial and parallel stay bit-identical, and steps allocate nothing.
+//! - **Links** ([`SoftBody::add_link_constraint`], for sutures) are kept apart from the packed
+//!   dynamic set and projected after it, one per batch, in the order added: a link of stiffness
+//!   1 is satisfied at the end of every iteration.
+//! - Removed constraints keep their record (so indices stay stable) with
+//!   [`ConstraintSlot::Removed`]; [`SoftBody::distance_slot`] says where each record is.
+//! - Masses are set per node ([`SoftBody::set_node_mass`]); [`SoftBody::tet_rest_volumes`] and
+//!   [`SoftBody::density`] let the caller rebuild them locally (eq. (1)).
+//!
+//! Edits allocate (they are rare); a step after an edit allocates nothing. No re-partition is
+//! done: after very many edits the dynamic set grows and with it the serial part of a step.
+
+use glam::{Vec3A, Vec4};
+
+use crate::body::SoftBody;
+use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
+use crate::{DistanceConstraint, PbdError, Solver, VolumeConstraintKind};
+
+/// Where a distance constraint or tet is projected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ConstraintSlot {
+    /// In batch `batch` of the block tree (as built).
+    Tree {
+        /// Batch index.
+        batch: u32,
+    },
+    /// In the dynamic set, at this position (projected after the tree).
+    Dynamic {
+        /// Position in the dynamic set.
+        position: u32,
+    },
+    /// A link (e.g. a suture), at this position of the link list: projected after everything
+    /// else of the body, one per batch, in the order added.
+    Link {
+        /// Position in the link list.
+        position: u32,
+    },
+    /// Removed: the record is kept but has no effect.
+    Removed,
+}
+
+/// The edit state of a body.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Edits {
+    pub density: f32,
+    /// Nodes of the block tree, `n₀`.
+    pub tree_nodes: usize,
+    pub tet_rest: Vec<f32>,
+    pub distance_slot: Vec<ConstraintSlot>,
+    pub tet_slot: Vec<ConstraintSlot>,
+    /// Dynamic distance constraints, packed eight to a batch (lanes sharing no node, solver
+    /// indices): the record of each lane (unused lanes repeat lane 0, as padding does), lanes
+    /// in use, multipliers.
+    pub dyn_distance_lanes: Vec<[u32; LANES]>,
+    pub dyn_distance_fill: Vec<u8>,
+    pub dyn_distance_batches: Vec<DistanceBatch>,
+    pub dyn_distance_lambda: Vec<F>,
+    /// Dynamic tets, the same way: batches of the body's volume kind, multipliers (1 or 4 per
+    /// batch).
+    pub dyn_tet_lanes: Vec<[u32; LANES]>,
+    pub dyn_tet_fill: Vec<u8>,
+    pub dyn_tet_batches: Vec<TetBatch>,
+    pub dyn_centroid_batches: Vec<CentroidBatch>,
+    pub dyn_volume_lambda: Vec<F>,
+    /// Live dynamic constraints: distances, tets.
+    pub dyn_live: (usize, usize),
+    /// Links: record per position, batches (all lanes equal), multipliers.
+    pub links: Vec<u32>,
+    pub link_batches: Vec<DistanceBatch>,
+    pub link_lambda: Vec<F>,
+}
+
+impl Edits {
+    pub(crate) fn new(body: &SoftBody, density: f32) -> Self {
+        let mut distance_slot = vec![ConstraintSlot::Removed; body.distance.len()];
+        for (b, lanes) in body.distance_lanes.iter().enumerate() {
+            for &r in lanes {
+                distance_slot[r as usize] = ConstraintSlot::Tree { batch: b as u32 };
+            }
+        }
+        let mut tet_slot = vec![ConstraintSlot::Removed; body.tets.len()];
+        for (b, lanes) in body.tet_lanes.iter().enumerate() {
+            for &r in lanes {
+                tet_slot[r as usize] = ConstraintSlot::Tree { batch: b as u32 };
+            }
+        }
+        let tet_rest = body
+            .tets
+            .iter()
+            .map(|t| {
+                let [a, b, c, d] = t.map(|i| body.x[i as usize]);
+                (b - a).cross(c - a).dot(d - a) / 6.0
+            })
+            .collect();
+        Self {
+            density,
+            tree_nodes: body.x.len(),
+            tet_rest,
+            distance_slot,
+            tet_slot,
+            ..Default::default()
+        }
+    }
+}
+
+/// How many of the last dynamic batches a new constraint may join (a lane free, no node shared).
+const SEARCH: usize = 16;
+
+/// The kernels' parameter of a switched-off lane.
+fn off(solver: Solver) -> f32 {
+    if solver == Solver::Xpbd {
+        f32::MAX
+    } else {
+        0.0
+    }
+}
+
+fn set_lane(f: &mut F, lane: usize, v: f32) {
+    f.0[lane / 4][lane % 4] = v;
+}
+
+impl SoftBody {
+    /// Re-applies the edit state to the per-step parameters (after [`SoftBody::set_settings`]).
+    pub(crate) fn refresh_edit_params(&mut self) {
+        self.refresh_link_params();
+        let off = off(self.settings.solver);
+        let s = self.settings;
+        // Switched-off tree lanes.
+        for (b, lanes) in self.distance_batches.iter_mut().zip(&self.distance_lanes) {
+            for (l, &r) in lanes.iter().enumerate() {
+                if !matches!(
+                    self.edits.distance_slot[r as usize],
+                    ConstraintSlot::Tree { .. }
+                ) {
+                    set_lane(&mut b.param, l, off);
+                }
+            }
+        }
+        for (k, lanes) in self.tet_lanes.iter().enumerate() {
+            for (l, &r) in lanes.iter().enumerate() {
+                if !matches!(self.edits.tet_slot[r as usize], ConstraintSlot::Tree { .. }) {
+                    if let Some(b) = self.tet_batches.get_mut(k) {
+                        set_lane(&mut b.param, l, off);
+                    }
+                    if let Some(b) = self.centroid_batches.get_mut(k) {
+                        for p in &mut b.param {
+                            set_lane(p, l, off);
+                        }
+                    }
+                }
+            }
+        }
+        // Dynamic constraints, lane by lane.
+        for (b, (batch, lanes)) in self
+            .edits
+            .dyn_distance_batches
+            .iter_mut()
+            .zip(&self.edits.dyn_distance_lanes)
+            .enumerate()
+        {
+            let fill = self.edits.dyn_distance_fill[b] as usize;
+            for (l, &r) in lanes.iter().enumerate() {
+                let live = dyn_live(&self.edits.distance_slot, r, b, l, fill);
+                let c = &self.distance[r as usize];
+                set_lane(
+                    &mut batch.param,
+                    l,
+                    if live {
+                        s.param(c.stiffness, c.compliance)
+                    } else {
+                        off
+                    },
+                );
+            }
+        }
+        for (b, lanes) in self.edits.dyn_tet_lanes.iter().enumerate() {
+            let fill = self.edits.dyn_tet_fill[b] as usize;
+            for (l, &r) in lanes.iter().enumerate() {
+                let live = dyn_live(&self.edits.tet_slot, r, b, l, fill);
+                let t = r as usize;
+                if let Some(batch) = self.edits.dyn_tet_batches.get_mut(b) {
+                    let c = &self.tet_volume[t];
+                    set_lane(
+                        &mut batch.param,
+                        l,
+                        if live {
+                            s.param(c.stiffness, c.compliance)
+                        } else {
+                            off
+                        },
+                    );
+                }
+                if let Some(batch) = self.edits.dyn_centroid_batches.get_mut(b) {
+                    for j in 0..4 {
+                        let c = &self.centroid[4 * t + j];
+                        set_lane(
+                            &mut batch.param[j],
+                            l,
+                            if live {
+                                s.param(c.stiffness, c.compliance)
+                            } else {
+                                off
+                            },
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// Refreshes the links' parameters.
+    fn refresh_link_params(&mut self) {
+        for (b, &r) in self.edits.link_batches.iter_mut().zip(&self.edits.links) {
+            let c = &self.distance[r as usize];
+            b.param = F::splat(self.settings.param(c.stiffness, c.compliance));
+        }
+    }
+
+    /// Number of nodes of the block tree (the node count at construction); nodes past it were
+    /// appended by [`SoftBody::duplicate_nodes`].
+    pub fn tree_node_count(&self) -> usize {
+        self.edits.tree_nodes
+    }
+    /// Density (g/cm³) of the material the body was built with.
+    pub fn density(&self) -> f32 {
+        self.edits.density
+    }
+    /// Rest volume of each tet (cm³), in [`SoftBody::tets`] order.
+    pub fn tet_rest_volumes(&self) -> &[f32] {
+        &self.edits.tet_rest
+    }
+    /// Where distance constraint `c` is projected (`None` past the end).
+    pub fn distance_slot(&self, c: usize) -> Option<ConstraintSlot> {
+        self.edits.distance_slot.get(c).copied()
+    }
+    /// Where tet `t`'s volume constraints are projected (`None` past the end).
+    pub fn tet_slot(&self, t: usize) -> Option<ConstraintSlot> {
+        self.edits.tet_slot.get(t).copied()
+    }
+    /// Sizes of the dynamic set: (distance constraints, tets), live ones.
+    pub fn dynamic_counts(&self) -> (usize, usize) {
+        self.edits.dyn_live
+    }
+    /// Batches of the dynamic set: (distance, tet); up to eight constraints each.
+    pub fn dynamic_batch_counts(&self) -> (usize, usize) {
+        (
+            self.edits.dyn_distance_lanes.len(),
+            self.edits.dyn_tet_lanes.len(),
+        )
+    }
+
+    /// Appends one node per entry of `sources`, each a copy of its source (position, previous
+    /// position, velocity, mass, inverse mass: a pinned source gives a pinned copy). Returns the
+    /// index of the first new node; the others follow. The new nodes carry no constraint until
+    /// tets or constraints are moved onto them.
+    ///
+    /// # Errors
+    /// [`PbdError::NodeOutOfRange`] for a bad source (nothing is changed).
+    pub fn duplicate_nodes(&mut self, sources: &[u32]) -> Result<u32, PbdError> {
+        let n = self.x.len();
+        if let Some(&bad) = sources.iter().find(|&&s| s as usize >= n) {
+            return Err(PbdError::NodeOutOfRange {
+                element: "duplicated node",
+                index: bad as usize,
+                node: bad,
+                count: n,
+            });
+        }
+        if n + sources.len() >= u32::MAX as usize {
+            return Err(PbdError::InvalidParameter {
+                name: "node count",
+                value: (n + sources.len()) as f64,
+                expected: "fewer than 2³² nodes",
+            });
+        }
+        for &s in sources {
+            let s = s as usize;
+            let i = self.x.len() as u32;
+            self.x.push(self.x[s]);
+            self.p.push(self.p[s]);
+            self.v.push(self.v[s]);
+            self.mass.push(self.mass[s]);
+            self.w.push(self.w[s]);
+            self.order.push(i);
+            self.rank.push(i);
+            self.q.push(Vec4::ZERO);
+            self.qw.push(0.0);
+        }
+        self.collision.reserve(self.x.len());
+        Ok(n as u32)
+    }
+
+    /// Sets a node's mass (g). A pinned or attached node (inverse mass 0 with a mass) stays
+    /// pinned; otherwise the inverse mass becomes `1/mass` (0 for mass 0).
+    ///
+    /// # Errors
+    /// [`PbdError::NodeOutOfRange`], [`PbdError::InvalidParameter`] for a negative or
+    /// non-finite mass.
+    pub fn set_node_mass(&mut self, node: u32, mass: f32) -> Result<(), PbdError> {
+        let i = node as usize;
+        if i >= self.x.len() {
+            return Err(PbdError::NodeOutOfRange {
+                element: "mass",
+                index: i,
+                node,
+                count: self.x.len(),
+            });
+        }
+        if !(mass.is_finite() && mass >= 0.0) {
+            return Err(PbdError::InvalidParameter {
+                name: "mass",
+                value: mass as f64,
+                expected: "finite and ≥ 0 (g)",
+            });
+        }
+        let pinned = self.w[i] == 0.0 && self.mass[i] > 0.0;
+        self.mass[i] = mass;
+        self.w[i] = if pinned || mass <= 0.0 {
+            0.0
+        } else {
+            1.0 / mass
+        };
+        if self.w[i] == 0.0 {
+            self.v[i] = Vec3A::ZERO;
+        }
+        Ok(())
+    }
+
+    fn check_nodes<const N: usize>(
+        &self,
+        element: &'static str,
+        index: usize,
+        nodes: &[u32; N],
+    ) -> Result<(), PbdError> {
+        for (k, &a) in nodes.iter().enumerate() {
+            if a as usize >= self.x.len() {
+                return Err(PbdError::NodeOutOfRange {
+                    element,
+                    index,
+                    node: a,
+                    count: self.x.len(),
+                });
+            }
+            if nodes[..k].contains(&a) {
+                return Err(PbdError::InvalidParameter {
+                    name: "constraint nodes",
+                    value: a as f64,
+                    expected: "distinct nodes",
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Switches off distance record `r`'s lanes in its tree batch.
+    fn switch_off_distance_lanes(&mut self, batch: usize) {
+        let off = off(self.settings.solver);
+        let b = &mut self.distance_batches[batch];
+        for (l, &r) in self.distance_lanes[batch].iter().enumerate() {
+            if !matches!(
+                self.edits.distance_slot[r as usize],
+                ConstraintSlot::Tree { .. }
+            ) {
+                b.nodes[1][l] = b.nodes[0][l];
+                set_lane(&mut b.rest, l, 0.0);
+                set_lane(&mut b.param, l, off);
+            }
+        }
+    }
+
+    fn switch_off_tet_lanes(&mut self, batch: usize) {
+        let off = off(self.settings.solver);
+        for (l, &r) in self.tet_lanes[batch].iter().enumerate() {
+            if matches!(self.edits.tet_slot[r as usize], ConstraintSlot::Tree { .. }) {
+                continue;
+            }
+            if let Some(b) = self.tet_batches.get_mut(batch) {
+                for k in 1..4 {
+                    b.nodes[k][l] = b.nodes[0][l];
+                }
+                set_lane(&mut b.rest, l, 0.0);
+                set_lane(&mut b.param, l, off);
+            }
+            if let Some(b) = self.centroid_batches.get_mut(batch) {
+                for k in 1..4 {
+                    b.nodes[k][l] = b.nodes[0][l];
+                }
+                for j in 0..4 {
+                    set_lane(&mut b.rest[j], l, 0.0);
+                    set_lane(&mut b.param[j], l, off);
+                }
+            }
+        }
+    }
+
+    /// Puts distance record `r` into the dynamic set: into a free lane of one of the last
+    /// [`SEARCH`] batches none of whose lanes touches its nodes, else into a new batch (all
+    /// lanes copies).
+    fn push_dyn_distance(&mut self, r: u32) {
+        let c = self.distance[r as usize];
+        let s = c.nodes.map(|i| self.rank[i as usize]);
+        let param = self.settings.param(c.stiffness, c.compliance);
+        let e = &mut self.edits;
+        let count = e.dyn_distance_batches.len();
+        for batch in (count.saturating_sub(SEARCH)..count).rev() {
+            let (b, fill) = (
+                &mut e.dyn_distance_batches[batch],
+                &mut e.dyn_distance_fill[batch],
+            );
+            let lane = *fill as usize;
+            if lane >= LANES || b.nodes.iter().any(|ids| ids.iter().any(|n| s.contains(n))) {
+                continue;
+            }
+            for (ids, &n) in b.nodes.iter_mut().zip(&s) {
+                ids[lane] = n;
+            }
+            set_lane(&mut b.rest, lane, c.rest_length);
+            set_lane(&mut b.param, lane, param);
+            *fill += 1;
+            e.dyn_distance_lanes[batch][lane] = r;
+            e.distance_slot[r as usize] = ConstraintSlot::Dynamic {
+                position: (batch * LANES + lane) as u32,
+            };
+            e.dyn_live.0 += 1;
+            return;
+        }
+        let batch = e.dyn_distance_batches.len();
+        e.dyn_distance_batches.push(DistanceBatch {
+            nodes: [[s[0]; LANES], [s[1]; LANES]],
+            rest: F::splat(c.rest_length),
+            param: F::splat(param),
+        });
+        e.dyn_distance_lanes.push([r; LANES]);
+        e.dyn_distance_fill.push(1);
+        e.dyn_distance_lambda.push(F::ZERO);
+        e.distance_slot[r as usize] = ConstraintSlot::Dynamic {
+            position: (batch * LANES) as u32,
+        };
+        e.dyn_live.0 += 1;
+    }
+
+    /// Switches off the lanes of dynamic distance batch `b` that hold no live constraint.
+    fn switch_off_dyn_distance_lanes(&mut self, b: usize) {
+        let off = off(self.settings.solver);
+        let e = &mut self.edits;
+        let fill = e.dyn_distance_fill[b] as usize;
+        let batch = &mut e.dyn_distance_batches[b];
+        for (l, &r) in e.dyn_distance_lanes[b].iter().enumerate() {
+            if !dyn_live(&e.distance_slot, r, b, l, fill) {
+                batch.nodes[1][l] = batch.nodes[0][l];
+                set_lane(&mut batch.rest, l, 0.0);
+                set_lane(&mut batch.param, l, off);
+            }
+        }
+    }
+
+    /// Puts tet `t` into the dynamic set (as [`SoftBody::push_dyn_distance`]).
+    fn push_dyn_tet(&mut self, t: u32) {
+        let nodes = self.tets[t as usize];
+        let s = nodes.map(|i| self.rank[i as usize]);
+        let tet = self.tet_volume.get(t as usize).map(|c| {
+            (
+                c.rest_volume,
+                self.settings.param(c.stiffness, c.compliance),
+            )
+        });
+        let centroid = (self.volume_kind == VolumeConstraintKind::Centroid).then(|| {
+            let c = &self.centroid[4 * t as usize..4 * t as usize + 4];
+            (
+                [0, 1, 2, 3].map(|j| c[j].rest_height),
+                [0, 1, 2, 3].map(|j| self.settings.param(c[j].stiffness, c[j].compliance)),
+            )
+        });
+        let per_tet = match self.volume_kind {
+            VolumeConstraintKind::None => 0,
+            VolumeConstraintKind::Classic => 1,
+            VolumeConstraintKind::Centroid => 4,
+        };
+        let e = &mut self.edits;
+        let count = e.dyn_tet_lanes.len();
+        for b in (count.saturating_sub(SEARCH)..count).rev() {
+            let lane = e.dyn_tet_fill[b] as usize;
+            let ids = e
+                .dyn_tet_batches
+                .get(b)
+                .map(|x| x.nodes)
+                .or_else(|| e.dyn_centroid_batches.get(b).map(|x| x.nodes));
+            let clash = ids.is_some_and(|ids| ids.iter().any(|l| l.iter().any(|n| s.contains(n))));
+            if lane < LANES && !clash {
+                if let (Some(x), Some((rest, param))) = (e.dyn_tet_batches.get_mut(b), tet) {
+                    for (ids, &n) in x.nodes.iter_mut().zip(&s) {
+                        ids[lane] = n;
+                    }
+                    set_lane(&mut x.rest, lane, rest);
+                    set_lane(&mut x.param, lane, param);
+                }
+                if let (Some(x), Some((rest, param))) =
+                    (e.dyn_centroid_batches.get_mut(b), centroid)
+                {
+                    for k in 0..4 {
+                        x.nodes[k][lane] = s[k];
+                        set_lane(&mut x.rest[k], lane, rest[k]);
+                        set_lane(&mut x.param[k], lane, param[k]);
+                    }
+                }
+                e.dyn_tet_fill[b] += 1;
+                e.dyn_tet_lanes[b][lane] = t;
+                e.tet_slot[t as usize] = ConstraintSlot::Dynamic {
+                    position: (b * LANES + lane) as u32,
+                };
+                e.dyn_live.1 += 1;
+                return;
+            }
+        }
+        let b = e.dyn_tet_lanes.len();
+        let ids = s.map(|n| [n; LANES]);
+        if let Some((rest, param)) = tet {
+            e.dyn_tet_batches.push(TetBatch {
+                nodes: ids,
+                rest: F::splat(rest),
+                param: F::splat(param),
+            });
+        }
+        if let Some((rest, param)) = centroid {
+            e.dyn_centroid_batches.push(CentroidBatch {
+                nodes: ids,
+                rest: rest.map(F::splat),
+                param: param.map(F::splat),
+            });
+        }
+        e.dyn_tet_lanes.push([t; LANES]);
+        e.dyn_tet_fill.push(1);
+        e.dyn_volume_lambda
+            .extend(std::iter::repeat_n(F::ZERO, per_tet));
+        e.tet_slot[t as usize] = ConstraintSlot::Dynamic {
+            position: (b * LANES) as u32,
+        };
+        e.dyn_live.1 += 1;
+    }
+
+    /// Switches off the lanes of dynamic tet batch `b` that hold no live tet.
+    fn switch_off_dyn_tet_lanes(&mut self, b: usize) {
+        let off = off(self.settings.solver);
+        let e = &mut self.edits;
+        let fill = e.dyn_tet_fill[b] as usize;
+        for (l, &r) in e.dyn_tet_lanes[b].iter().enumerate() {
+            if dyn_live(&e.tet_slot, r, b, l, fill) {
+                continue;
+            }
+            if let Some(x) = e.dyn_tet_batches.get_mut(b) {
+                for k in 1..4 {
+                    x.nodes[k][l] = x.nodes[0][l];
+                }
+                set_lane(&mut x.rest, l, 0.0);
+                set_lane(&mut x.param, l, off);
+            }
+            if let Some(x) = e.dyn_centroid_batches.get_mut(b) {
+                for k in 1..4 {
+                    x.nodes[k][l] = x.nodes[0][l];
+                }
+                for j in 0..4 {
+                    set_lane(&mut x.rest[j], l, 0.0);
+                    set_lane(&mut x.param[j], l, off);
+                }
+            }
+        }
+    }
+
+    /// Adds a distance constraint to the dynamic set (a suture link, a new edge after a cut).
+    /// Returns its record index.
+    ///
+    /// # Errors
+    /// [`PbdError::NodeOutOfRange`], [`PbdError::InvalidParameter`] for repeated nodes or a
+    /// bad rest length, stiffness or compliance.
+    pub fn add_distance_constraint(&mut self, c: DistanceConstraint) -> Result<usize, PbdError> {
+        let index = self.distance.len();
+        self.check_nodes("distance constraint", index, &c.nodes)?;
+        check_distance_values(&c)?;
+        self.distance.push(c);
+        self.edits.distance_slot.push(ConstraintSlot::Removed);
+        self.push_dyn_distance(index as u32);
+        Ok(index)
+    }
+
+    /// Moves distance constraint `c` onto other nodes (rest length, stiffness, compliance kept);
+    /// it is projected in the dynamic set from now on.
+    ///
+    /// # Errors
+    /// [`PbdError::NoSuchElement`] for a bad or removed record, [`PbdError::NodeOutOfRange`],
+    /// [`PbdError::InvalidParameter`] for repeated nodes.
+    pub fn set_distance_nodes(&mut self, c: usize, nodes: [u32; 2]) -> Result<(), PbdError> {
+        let slot = self.live_distance(c)?;
+        self.check_nodes("distance constraint", c, &nodes)?;
+        self.distance[c].nodes = nodes;
+        if let ConstraintSlot::Link { position } = slot {
+            let s = nodes.map(|i| [self.rank[i as usize]; LANES]);
+            self.edits.link_batches[position as usize].nodes = s;
+            return Ok(());
+        }
+        self.edits.distance_slot[c] = ConstraintSlot::Removed;
+        match slot {
+            ConstraintSlot::Dynamic { position } => {
+                self.edits.dyn_live.0 -= 1;
+                self.switch_off_dyn_distance_lanes(position as usize / LANES);
+            }
+            ConstraintSlot::Tree { batch } => {
+                self.switch_off_distance_lanes(batch as usize);
+            }
+            ConstraintSlot::Link { .. } | ConstraintSlot::Removed => {}
+        }
+        self.push_dyn_distance(c as u32);
+        Ok(())
+    }
+
+    /// Removes distance constraint `c` (a suture cut, an edge that a cut separated). Its record
+    /// stays, with [`ConstraintSlot::Removed`].
+    ///
+    /// # Errors
+    /// [`PbdError::NoSuchElement`] for a bad or already removed record.
+    pub fn remove_distance_constraint(&mut self, c: usize) -> Result<(), PbdError> {
+        match self.live_distance(c)? {
+            ConstraintSlot::Tree { batch } => {
+                self.edits.distance_slot[c] = ConstraintSlot::Removed;
+                self.switch_off_distance_lanes(batch as usize);
+            }
+            ConstraintSlot::Dynamic { position } => {
+                self.edits.distance_slot[c] = ConstraintSlot::Removed;
+                self.edits.dyn_live.0 -= 1;
+                self.switch_off_dyn_distance_lanes(position as usize / LANES);
+            }
+            ConstraintSlot::Link { position } => {
+                let p = position as usize;
+                self.edits.distance_slot[c] = ConstraintSlot::Removed;
+                let e = &mut self.edits;
+                e.links.remove(p);
+                e.link_batches.remove(p);
+                e.link_lambda.remove(p);
+                for (k, &r) in e.links.iter().enumerate().skip(p) {
+                    e.distance_slot[r as usize] = ConstraintSlot::Link { position: k as u32 };
+                }
+            }
+            ConstraintSlot::Removed => {}
+        }
+        Ok(())
+    }
+
+    /// Adds a link between two nodes (a suture): a distance constraint projected after
+    /// everything else of the body in every iteration (links in the order added), so that with
+    /// stiffness 1 the linked nodes end each iteration together. Returns its record index.
+    ///
+    /// # Errors
+    /// As [`SoftBody::add_distance_constraint`].
+    pub fn add_link_constraint(&mut self, c: DistanceConstraint) -> Result<usize, PbdError> {
+        let index = self.distance.len();
+        self.check_nodes("link", index, &c.nodes)?;
+        check_distance_values(&c)?;
+        let s = c.nodes.map(|i| [self.rank[i as usize]; LANES]);
+        let param = self.settings.param(c.stiffness, c.compliance);
+        self.distance.push(c);
+        let e = &mut self.edits;
+        e.distance_slot.push(ConstraintSlot::Link {
+            position: e.links.len() as u32,
+        });
+        e.links.push(index as u32);
+        e.link_batches.push(DistanceBatch {
+            nodes: s,
+            rest: F::splat(c.rest_length),
+            param: F::splat(param),
+        });
+        e.link_lambda.push(F::ZERO);
+        Ok(index)
+    }
+
+    fn live_distance(&self, c: usize) -> Result<ConstraintSlot, PbdError> {
+        match self.edits.distance_slot.get(c) {
+            Some(&s) if s != ConstraintSlot::Removed => Ok(s),
+            _ => Err(PbdError::NoSuchElement {
+                what: "distance constraint",
+                index: c,
+                count: self.distance.len(),
+            }),
+        }
+    }
+
+    /// Moves tet `t` (and its volume constraints) onto other nodes, keeping its rest values: the
+    /// way a cut separates the two sides (a node duplicated, the tets of one side moved onto the
+    /// copy). The new nodes must keep the tet positively oriented (the caller's duty; the rest
+    /// values are not recomputed). From now on the tet is projected in the dynamic set.
+    ///
+    /// # Errors
+    /// [`PbdError::NoSuchElement`], [`PbdError::NodeOutOfRange`],
+    /// [`PbdError::InvalidParameter`] for repeated nodes.
+    pub fn set_tet_nodes(&mut self, t: usize, nodes: [u32; 4]) -> Result<(), PbdError> {
+        let slot = match self.edits.tet_slot.get(t) {
+            Some(&s) if s != ConstraintSlot::Removed => s,
+            _ => {
+                return Err(PbdError::NoSuchElement {
+                    what: "tet",
+                    index: t,
+                    count: self.tets.len(),
+                })
+            }
+        };
+        self.check_nodes("tet", t, &nodes)?;
+        self.tets[t] = nodes;
+        if let Some(c) = self.tet_volume.get_mut(t) {
+            c.nodes = nodes;
+        }
+        if self.volume_kind == VolumeConstraintKind::Centroid {
+            for j in 0..4 {
+                let c = &mut self.centroid[4 * t + j];
+                c.face = [nodes[(j + 1) & 3], nodes[(j + 2) & 3], nodes[(j + 3) & 3]];
+                c.apex = nodes[j];
+            }
+        }
+        self.edits.tet_slot[t] = ConstraintSlot::Removed;
+        match slot {
+            ConstraintSlot::Dynamic { position } => {
+                self.edits.dyn_live.1 -= 1;
+                self.switch_off_dyn_tet_lanes(position as usize / LANES);
+            }
+            ConstraintSlot::Tree { batch } => self.switch_off_tet_lanes(batch as usize),
+            ConstraintSlot::Link { .. } | ConstraintSlot::Removed => {}
+        }
+        self.push_dyn_tet(t as u32);
+        Ok(())
+    }
+}
+
+/// Whether lane `l` of dynamic batch `b` (`fill` lanes in use) holds a live constraint: its
+/// record's slot is this lane, or it is a padding lane copying a live lane 0.
+fn dyn_live(slots: &[ConstraintSlot], r: u32, b: usize, l: usize, fill: usize) -> bool {
+    let at = |lane: usize| ConstraintSlot::Dynamic {
+        position: (b * LANES + lane) as u32,
+    };
+    let slot = slots[r as usize];
+    slot == at(l) || (l >= fill && slot == at(0))
+}
+
+fn check_distance_values(c: &DistanceConstraint) -> Result<(), PbdError> {
+    for (name, v, ok) in [
+        (
+            "rest_length",
+            c.rest_length,
+            c.rest_length.is_finite() && c.rest_length >= 0.0,
+        ),
+        ("stiffness", c.stiffness, (0.0..=1.0).contains(&c.stiffness)),
+        (
+            "compliance",
+            c.compliance,
+            c.compliance.is_finite() && c.compliance >= 0.0,
+        ),
+    ] {
+        if !ok {
+            return Err(PbdError::InvalidParameter {
+                name,
+                value: v as f64,
+                expected: "rest length ≥ 0, stiffness in [0, 1], compliance ≥ 0 (all finite)",
+            });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,751 @@
+//! The scalpel cut: tets separated along the faces the blade's swept surface crosses.
+//!
+//! 1. The blade's cut surface for one step is the blade triangle at both poses plus the
+//!    surfaces swept by its three edges, projected onto the blade's plane at the end pose
+//!    (eight coplanar triangles, world space, current positions): the area the blade swept in
+//!    its own plane.
+//! 2. A face shared by tets `t` and `u` is cut when the segment between their centroids crosses
+//!    that surface. The cut walls are thus made of existing tet faces: no tet is split or
+//!    created, so no sliver can appear (the quality bound is the mesh's own, see
+//!    [`crate::Surgery::quality_bound`]); the walls lie within about one tet of the blade.
+//! 3. Each node on a newly cut face is split by the face-connected components of its tets: the
+//!    first component keeps the node, each other one gets a copy (appended to the body).
+//! 4. Before anything is committed, the boundary around the touched nodes is checked: an edge
+//!    used by more or fewer than two boundary faces, or a vertex whose boundary faces do not
+//!    make one fan (a pinch at the cut's front), has its newly cut faces glued back, and the
+//!    check repeats. So the surface stays manifold and consistently oriented.
+//! 5. Commit: nodes duplicated, tets moved onto them (rest values kept), every edge that now
+//!    exists twice gets a second distance constraint with the same rest length, masses of the
+//!    touched nodes rebuilt from their tets (eq. (1)), pieces recounted.
+
+use crate::geometry::FxMap as HashMap;
+
+use glam::{DVec3, Vec3};
+use tissue_mesh::NO_TET;
+use tissue_pbd::{DistanceConstraint, Pose, SoftBody, Tool, ToolShape};
+
+use crate::state::{face_nodes, single_cycle};
+use crate::{Surgery, SurgeryError, SurgeryEvent};
+
+/// A blade's sweep over one step, in world coordinates: its corners at the start and the end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BladeSweep {
+    /// Corners `a b c` at the start of the step.
+    pub from: [Vec3; 3],
+    /// Corners at the end.
+    pub to: [Vec3; 3],
+}
+
+impl BladeSweep {
+    /// The sweep of a [`ToolShape::Blade`] from one pose to another.
+    ///
+    /// # Errors
+    /// [`SurgeryError::InvalidTool`] for a capsule or a non-finite pose.
+    pub fn new(shape: &ToolShape, from: &Pose, to: &Pose) -> Result<Self, SurgeryError> {
+        let ToolShape::Blade { a, b, c, .. } = *shape else {
+            return Err(SurgeryError::InvalidTool {
+                reason: "a cut needs a ToolShape::Blade (the scalpel)",
+            });
+        };
+        let s = Self {
+            from: [a, b, c].map(|p| from.transform_point(p)),
+            to: [a, b, c].map(|p| to.transform_point(p)),
+        };
+        if s.from.iter().chain(&s.to).all(|p| p.is_finite()) {
+            Ok(s)
+        } else {
+            Err(SurgeryError::InvalidTool {
+                reason: "the blade's poses must be finite",
+            })
+        }
+    }
+
+    /// The sweep of the last step of a blade tool of a body ([`Tool::last_sweep`]).
+    ///
+    /// # Errors
+    /// As [`BladeSweep::new`].
+    pub fn from_tool(tool: &Tool) -> Result<Self, SurgeryError> {
+        let (from, to) = tool.last_sweep();
+        Self::new(tool.shape(), &from, &to)
+    }
+
+    /// The eight triangles of the cut surface (see the module docs): the blade at the end pose,
+    /// and the blade at the start pose and the surfaces its edges swept, all projected onto the
+    /// end pose's plane. Only the blade's motion within its own plane cuts; motion along its
+    /// normal pushes tissue (a contact tool's job) and cuts nothing, so a blade moved flat-on
+    /// does not chop out a slab.
+    pub(crate) fn triangles(&self) -> [[DVec3; 3]; 8] {
+        let t = self.to.map(|p| p.as_dvec3());
+        let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
+        let f = self.from.map(|p| {
+            let p = p.as_dvec3();
+            p - n * n.dot(p - t[0])
+        });
+        let mut out = [[DVec3::ZERO; 3]; 8];
+        out[0] = f;
+        out[1] = t;
+        for k in 0..3 {
+            let (i, j) = (k, (k + 1) % 3);
+            out[2 + 2 * k] = [f[i], f[j], t[j]];
+            out[3 + 2 * k] = [f[i], t[j], t[i]];
+        }
+        out
+    }
+}
+
+/// Smallest piece (tets) a cut may detach: smaller face-connected groups that new faces would
+/// enclose stay glued.
+pub const MIN_PIECE: usize = 16;
+
+/// A face opened by this cut: tet `t` face `j` against tet `u` face `k`.
+#[derive(Debug, Clone, Copy)]
+struct NewFace {
+    t: u32,
+    j: u8,
+    u: u32,
+    k: u8,
+}
+
+impl Surgery {
+    /// Cuts `body` along a blade's sweep (see the module docs of `cut`), returning the events:
+    /// [`SurgeryEvent::CutAdvanced`] when faces were opened, then one
+    /// [`SurgeryEvent::PieceDetached`] per new piece. A sweep that crosses no face returns no
+    /// event. Call it after each step with the blade's sweep of that step (e.g.
+    /// [`BladeSweep::from_tool`]) to cut over many steps.
+    ///
+    /// # Errors
+    /// [`SurgeryError::BodyMismatch`] when `body` is not this state's body; [`SurgeryError::Body`]
+    /// should an edit be refused (the body is then left as it was before the failing edit).
+    pub fn cut(
+        &mut self,
+        body: &mut SoftBody,
+        sweep: &BladeSweep,
+    ) -> Result<Vec<SurgeryEvent>, SurgeryError> {
+        let _span = tracing::debug_span!("cut").entered();
+        self.check_body(body)?;
+        let surface = sweep.triangles();
+        let mut faces = self.crossed_faces(body, &surface);
+        // Faces the blade crossed before but that had to stay glued (at the cut's front then):
+        // retried now that the cut may have moved on.
+        let near = self.stamp;
+        let mut far = Vec::new();
+        for [t, j, u, k] in std::mem::take(&mut self.pending) {
+            if self.tet_mark[t as usize] != near && self.tet_mark[u as usize] != near {
+                // Far from this sweep: it waits for a blade nearby.
+                if self.neighbours[t as usize][j as usize] == u {
+                    far.push([t, j, u, k]);
+                }
+                continue;
+            }
+            if self.neighbours[t as usize][j as usize] == u
+                && !faces
+                    .iter()
+                    .any(|f| (f.t == t && f.j as u32 == j) || (f.u == t && f.k as u32 == j))
+            {
+                faces.push(NewFace {
+                    t,
+                    j: j as u8,
+                    u,
+                    k: k as u8,
+                });
+            }
+        }
+        self.pending = far;
+        if faces.is_empty() {
+            return Ok(Vec::new());
+        }
+        for f in &faces {
+            self.neighbours[f.t as usize][f.j as usize] = NO_TET;
+            self.neighbours[f.u as usize][f.k as usize] = NO_TET;
+        }
+        // Crumbs: a group of fewer than MIN_PIECE tets that the new faces would enclose is a
+        // staircase artefact (or a sliver between two cuts); it stays attached.
+        let mut crumbs: Vec<u32> = Vec::new();
+        self.stamp = self.stamp.wrapping_add(1).max(1);
+        for f in &faces {
+            for t in [f.t, f.u] {
+                if self.tet_mark[t as usize] != self.stamp {
+                    if let Some(group) = self.small_group(t) {
+                        for &g in &group {
+                            self.tet_mark[g as usize] = self.stamp;
+                        }
+                        crumbs.extend(group);
+                    }
+                }
+            }
+        }
+        if !crumbs.is_empty() {
+            let stamp = self.stamp;
+            let marks = std::mem::take(&mut self.tet_mark);
+            faces.retain(|f| {
+                let glue = marks[f.t as usize] == stamp || marks[f.u as usize] == stamp;
+                if glue {
+                    self.neighbours[f.t as usize][f.j as usize] = f.u;
+                    self.neighbours[f.u as usize][f.k as usize] = f.t;
+                }
+                !glue
+            });
+            self.tet_mark = marks;
+            if faces.is_empty() {
+                return Ok(Vec::new());
+            }
+        }
+        // Glue back what would leave the surface non-manifold, until nothing does.
+        let split = loop {
+            let plan = self.plan_split(body, &faces);
+            let bad = self.defects(body, &faces, &plan);
+            if bad.is_empty() {
+                break plan;
+            }
+            let mut keep = Vec::with_capacity(faces.len());
+            for (i, f) in faces.iter().enumerate() {
+                if bad.contains(&i) {
+                    self.neighbours[f.t as usize][f.j as usize] = f.u;
+                    self.neighbours[f.u as usize][f.k as usize] = f.t;
+                    self.pending.push([f.t, f.j as u32, f.u, f.k as u32]);
+                } else {
+                    keep.push(*f);
+                }
+            }
+            faces = keep;
+            if faces.is_empty() {
+                return Ok(Vec::new());
+            }
+        };
+        self.commit(body, &faces, split)
+    }
+
+    /// Whether every node this cut split still holds its groups of tets together: for each pair
+    /// of tets that shared a split node (one from the group that kept it, one from each group
+    /// that got a copy), two searches through shared nodes, one from each, taking a tet in turn,
+    /// until they meet (a pair one earlier search found together is skipped). `false` as soon as
+    /// one search runs out first: a piece may have come apart. Costs about the way around the
+    /// cut's front, so an incision stays cheap.
+    fn still_connected(&self, body: &SoftBody, pairs: &[(u32, u32)]) -> bool {
+        let tets = body.tets();
+        // Tet → the search that found it.
+        let mut found: HashMap<u32, usize> = HashMap::default();
+        for (search, &(a, b)) in pairs.iter().enumerate() {
+            if found.get(&a).is_some_and(|s| found.get(&b) == Some(s)) {
+                continue;
+            }
+            let mut side: [Vec<u32>; 2] = [vec![a], vec![b]];
+            let mut head = [0usize; 2];
+            let mut local: HashMap<u32, u8> = HashMap::default();
+            local.insert(a, 0);
+            local.insert(b, 1);
+            'search: loop {
+                for s in 0..2 {
+                    let Some(&t) = side[s].get(head[s]) else {
+                        return false;
+                    };
+                    head[s] += 1;
+                    for &v in &tets[t as usize] {
+                        for &u in &self.node_tets[v as usize] {
+                            match local.get(&u) {
+                                None => {
+                                    local.insert(u, s as u8);
+                                    side[s].push(u);
+                                }
+                                Some(&m) if m as usize != s => break 'search,
+                                _ => {}
+                            }
+                        }
+                    }
+                }
+            }
+            for &t in side.iter().flatten() {
+                found.insert(t, search);
+            }
+        }
+        true
+    }
+
+    /// The tets face-connected to `t` when there are fewer than [`MIN_PIECE`] of them.
+    fn small_group(&self, t: u32) -> Option<Vec<u32>> {
+        let mut group = vec![t];
+        let mut i = 0;
+        while i < group.len() {
+            for &u in &self.neighbours[group[i] as usize] {
+                if u != NO_TET && !group.contains(&u) {
+                    if group.len() + 1 >= MIN_PIECE {
+                        return None;
+                    }
+                    group.push(u);
+                }
+            }
+            i += 1;
+        }
+        Some(group)
+    }
+
+    /// Faces between tets whose centroid segment crosses the cut surface.
+    fn crossed_faces(&mut self, body: &SoftBody, surface: &[[DVec3; 3]; 8]) -> Vec<NewFace> {
+        let x = body.positions();
+        let tets = body.tets();
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for tri in surface {
+            for p in tri {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+        }
+        // A crossing point lies in `t` or in `u`, on the blade's plane: one of the two tets
+        // meets the surface's box and straddles the plane. Nodes near the box first, then
+        // their tets.
+        let origin = surface[1][0];
+        let normal = (surface[1][1] - origin)
+            .cross(surface[1][2] - origin)
+            .normalize_or_zero();
+        self.stamp = self.stamp.wrapping_add(1).max(1);
+        let stamp = self.stamp;
+        let centroid = |t: u32| -> DVec3 {
+            tets[t as usize]
+                .iter()
+                .map(|&i| x[i as usize].as_dvec3())
+                .sum::<DVec3>()
+                * 0.25
+        };
+        let mut candidates = Vec::new();
+        for (v, p) in x.iter().enumerate() {
+            let p = p.as_dvec3();
+            let reach = self.node_reach[v] as f64;
+            if normal.dot(p - origin).abs() <= reach
+                && p.cmpge(lo - DVec3::splat(reach)).all()
+                && p.cmple(hi + DVec3::splat(reach)).all()
+            {
+                for &t in &self.node_tets[v] {
+                    if self.tet_mark[t as usize] == stamp {
+                        continue;
+                    }
+                    self.tet_mark[t as usize] = stamp;
+                    let q = tets[t as usize].map(|i| x[i as usize].as_dvec3());
+                    let (tlo, thi) = (
+                        q[0].min(q[1]).min(q[2].min(q[3])),
+                        q[0].max(q[1]).max(q[2].max(q[3])),
+                    );
+                    let d = q.map(|p| normal.dot(p - origin));
+                    let straddles = d.iter().any(|&d| d >= 0.0) && d.iter().any(|&d| d <= 0.0);
+                    if straddles && tlo.cmple(hi).all() && thi.cmpge(lo).all() {
+                        candidates.push(t);
+                    }
+                }
+            }
+        }
+        // Candidates get a second mark so that each pair of candidates is tested once.
+        self.stamp = self.stamp.wrapping_add(1).max(1);
+        let stamp = self.stamp;
+        for &t in &candidates {
+            self.tet_mark[t as usize] = stamp;
+        }
+        candidates.sort_unstable();
+        // All eight triangles lie in the end pose's plane: a centroid segment crosses the cut
+        // surface when its ends are on opposite sides and the crossing point lies in one of them.
+        let inside = |p: DVec3| {
+            surface.iter().any(|[a, b, c]| {
+                let (ab, bc, ca) = (
+                    (*b - *a).cross(p - *a).dot(normal),
+                    (*c - *b).cross(p - *b).dot(normal),
+                    (*a - *c).cross(p - *c).dot(normal),
+                );
+                (ab >= 0.0 && bc >= 0.0 && ca >= 0.0) || (ab <= 0.0 && bc <= 0.0 && ca <= 0.0)
+            })
+        };
+        let mut out = Vec::new();
+        for &t in &candidates {
+            let ct = centroid(t);
+            let dt = normal.dot(ct - origin);
+            for j in 0..4 {
+                let u = self.neighbours[t as usize][j];
+                if u == NO_TET || (u < t && self.tet_mark[u as usize] == stamp) {
+                    continue;
+                }
+                let cu = centroid(u);
+                let du = normal.dot(cu - origin);
+                if (dt > 0.0) == (du > 0.0) || dt == du {
+                    continue;
+                }
+                let p = ct + (cu - ct) * (dt / (dt - du));
+                if inside(p) {
+                    if let Some(k) = self.neighbours[u as usize].iter().position(|&w| w == t) {
+                        out.push(NewFace {
+                            t,
+                            j: j as u8,
+                            u,
+                            k: k as u8,
+                        });
+                    }
+                }
+            }
+        }
+        // A tet whose four faces would all be cut is an island of one side inside the other
+        // (the staircase, not the blade, cut it out): it stays with its neighbours.
+        let mut count: HashMap<u32, u32> = HashMap::default();
+        for f in &out {
+            *count.entry(f.t).or_default() += 1;
+            *count.entry(f.u).or_default() += 1;
+        }
+        let open = |t: u32| {
+            self.neighbours[t as usize]
+                .iter()
+                .filter(|&&w| w == NO_TET)
+                .count() as u32
+        };
+        out.retain(|f| count[&f.t] + open(f.t) < 4 && count[&f.u] + open(f.u) < 4);
+        out
+    }
+
+    /// For each node on a new face: its tets grouped into face-connected components (through
+    /// faces containing the node). `(node, tets, component of each tet, component count)`.
+    fn plan_split(
+        &self,
+        body: &SoftBody,
+        faces: &[NewFace],
+    ) -> Vec<(u32, Vec<u32>, Vec<u32>, u32)> {
+        let tets = body.tets();
+        let mut nodes: Vec<u32> = faces
+            .iter()
+            .flat_map(|f| face_nodes(&tets[f.t as usize], f.j as usize))
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        let mut out = Vec::with_capacity(nodes.len());
+        for v in nodes {
+            let star = self.node_tets[v as usize].clone();
+            let mut comp = vec![u32::MAX; star.len()];
+            let mut count = 0;
+            for s in 0..star.len() {
+                if comp[s] != u32::MAX {
+                    continue;
+                }
+                comp[s] = count;
+                let mut stack = vec![s];
+                while let Some(a) = stack.pop() {
+                    let t = star[a] as usize;
+                    for (&node, &u) in tets[t].iter().zip(&self.neighbours[t]) {
+                        if node == v || u == NO_TET {
+                            continue;
+                        }
+                        if let Some(b) = star.iter().position(|&w| w == u) {
+                            if comp[b] == u32::MAX {
+                                comp[b] = count;
+                                stack.push(b);
+                            }
+                        }
+                    }
+                }
+                count += 1;
+            }
+            out.push((v, star, comp, count));
+        }
+        out
+    }
+
+    /// Indices of the new faces to glue back: those on a boundary edge that would not be
+    /// manifold, and all new faces at a vertex whose boundary would be pinched.
+    fn defects(
+        &self,
+        body: &SoftBody,
+        faces: &[NewFace],
+        plan: &[(u32, Vec<u32>, Vec<u32>, u32)],
+    ) -> Vec<usize> {
+        let tets = body.tets();
+        // Tentative labels: (tet, node) → label; copies numbered from `first`.
+        let mut label: HashMap<(u32, u32), u32> = HashMap::default();
+        let mut copy_of: HashMap<u32, u32> = HashMap::default();
+        let mut next = body.node_count() as u32;
+        let mut local: Vec<u32> = Vec::new();
+        for (v, star, comp, count) in plan {
+            local.extend(star);
+            if *count > 1 {
+                let base = next;
+                next += count - 1;
+                for c in base..next {
+                    copy_of.insert(c, *v);
+                }
+                for (t, &c) in star.iter().zip(comp) {
+                    if c > 0 {
+                        label.insert((*t, *v), base + c - 1);
+                    }
+                }
+            }
+        }
+        local.sort_unstable();
+        local.dedup();
+        let relabel = |t: u32, v: u32| label.get(&(t, v)).copied().unwrap_or(v);
+        let touched: Vec<u32> = plan.iter().map(|p| p.0).collect();
+        let is_touched = |v: u32| touched.binary_search(&v).is_ok();
+        // Boundary faces of the local tets, in tentative labels, with the original labels.
+        let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> = HashMap::default();
+        let mut around: HashMap<u32, Vec<[u32; 2]>> = HashMap::default();
+        for &t in &local {
+            for j in 0..4 {
+                if self.neighbours[t as usize][j] != NO_TET {
+                    continue;
+                }
+                let orig = face_nodes(&tets[t as usize], j);
+                let f = orig.map(|v| relabel(t, v));
+                for k in 0..3 {
+                    let (a, b) = (orig[k], orig[(k + 1) % 3]);
+                    if is_touched(a) || is_touched(b) {
+                        let e = directed
+                            .entry([f[k], f[(k + 1) % 3]])
+                            .or_insert((0, [a, b]));
+                        e.0 += 1;
+                    }
+                    if is_touched(orig[k]) {
+                        around
+                            .entry(f[k])
+                            .or_default()
+                            .push([f[(k + 1) % 3], f[(k + 2) % 3]]);
+                    }
+                }
+            }
+        }
+        let mut bad_edges: Vec<[u32; 2]> = Vec::new();
+        for (&[a, b], &(count, orig)) in &directed {
+            let back = directed.get(&[b, a]).map_or(0, |e| e.0);
+            if count != 1 || back != 1 {
+                bad_edges.push([orig[0].min(orig[1]), orig[0].max(orig[1])]);
+            }
+        }
+        let mut bad_vertices: Vec<u32> = Vec::new();
+        for (&v, link) in &around {
+            if !single_cycle(link) {
+                // Back to the original label: the node itself or the one it copies.
+                bad_vertices.push(copy_of.get(&v).copied().unwrap_or(v));
+            }
+        }
+        // One face per defect: the last new face on the bad edge or at the bad vertex (a chord
+        // of the crack between two front nodes, or a crack touching the surface at a point).
+        let mut out: Vec<usize> = Vec::new();
+        let nodes_of: Vec<[u32; 3]> = faces
+            .iter()
+            .map(|f| face_nodes(&tets[f.t as usize], f.j as usize))
+            .collect();
+        bad_edges.sort_unstable();
+        bad_edges.dedup();
+        for e in &bad_edges {
+            let covered = out
+                .iter()
+                .any(|&i| nodes_of[i].contains(&e[0]) && nodes_of[i].contains(&e[1]));
+            if !covered {
+                if let Some(i) = (0..faces.len())
+                    .rev()
+                    .find(|&i| nodes_of[i].contains(&e[0]) && nodes_of[i].contains(&e[1]))
+                {
+                    out.push(i);
+                }
+            }
+        }
+        bad_vertices.sort_unstable();
+        bad_vertices.dedup();
+        for v in &bad_vertices {
+            if !out.iter().any(|&i| nodes_of[i].contains(v)) {
+                if let Some(i) = (0..faces.len()).rev().find(|&i| nodes_of[i].contains(v)) {
+                    out.push(i);
+                }
+            }
+        }
+        // A new face none of whose nodes is split would be a zero-width double face: it waits.
+        for (i, f) in faces.iter().enumerate() {
+            if !out.contains(&i)
+                && nodes_of[i]
+                    .iter()
+                    .all(|&v| relabel(f.t, v) == relabel(f.u, v))
+            {
+                out.push(i);
+            }
+        }
+        // A defect no new face touches was there before this cut: nothing to glue for it.
+        out
+    }
+
+    fn commit(
+        &mut self,
+        body: &mut SoftBody,
+        faces: &[NewFace],
+        plan: Vec<(u32, Vec<u32>, Vec<u32>, u32)>,
+    ) -> Result<Vec<SurgeryEvent>, SurgeryError> {
+        let old_tets: Vec<[u32; 4]> = body.tets().to_vec();
+        // New nodes: one per extra component of each split node.
+        let sources: Vec<u32> = plan
+            .iter()
+            .flat_map(|(v, _, _, count)| std::iter::repeat_n(*v, count.saturating_sub(1) as usize))
+            .collect();
+        let first = if sources.is_empty() {
+            body.node_count() as u32
+        } else {
+            body.duplicate_nodes(&sources)?
+        };
+        let mut new_tets: HashMap<u32, [u32; 4]> = HashMap::default();
+        // One tet of the group that keeps each split node and one of each group with a copy:
+        // node splits are the only way pieces come apart.
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        for (_, star, comp, count) in &plan {
+            for c in 1..*count {
+                let first_of = |k: u32| star.iter().zip(comp).find(|e| *e.1 == k).map(|e| *e.0);
+                if let (Some(a), Some(b)) = (first_of(0), first_of(c)) {
+                    pairs.push((a, b));
+                }
+            }
+        }
+        let mut next = first;
+        let mut split_nodes: Vec<u32> = Vec::new();
+        for (v, star, comp, count) in &plan {
+            if *count <= 1 {
+                continue;
+            }
+            split_nodes.push(*v);
+            let base = next;
+            next += count - 1;
+            let mut keep = Vec::new();
+            let mut moved: Vec<Vec<u32>> = vec![Vec::new(); *count as usize - 1];
+            for (&t, &c) in star.iter().zip(comp) {
+                if c == 0 {
+                    keep.push(t);
+                } else {
+                    let nodes = new_tets.entry(t).or_insert(old_tets[t as usize]);
+                    for n in nodes.iter_mut() {
+                        if *n == *v {
+                            *n = base + c - 1;
+                        }
+                    }
+                    moved[c as usize - 1].push(t);
+                }
+            }
+            self.node_tets[*v as usize] = keep;
+            for m in moved {
+                self.node_tets.push(m);
+                self.origin.push(self.origin[*v as usize]);
+                self.node_reach.push(self.node_reach[*v as usize]);
+            }
+        }
+        let mut changed: Vec<u32> = new_tets.keys().copied().collect();
+        changed.sort_unstable();
+        for &t in &changed {
+            body.set_tet_nodes(t as usize, new_tets[&t])?;
+        }
+        // Distance constraints: each old edge at a split node maps to the edges its tets now use.
+        split_nodes.sort_unstable();
+        let is_split = |v: u32| split_nodes.binary_search(&v).is_ok();
+        let mut images: Vec<([u32; 2], [u32; 2])> = Vec::new();
+        let mut region: Vec<u32> = plan
+            .iter()
+            .filter(|p| p.3 > 1)
+            .flat_map(|p| p.1.iter().copied())
+            .collect();
+        region.sort_unstable();
+        region.dedup();
+        let tets_now = body.tets();
+        for &t in &region {
+            let (o, n) = (old_tets[t as usize], tets_now[t as usize]);
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    if is_split(o[a]) || is_split(o[b]) {
+                        let oe = [o[a].min(o[b]), o[a].max(o[b])];
+                        let ne = [n[a].min(n[b]), n[a].max(n[b])];
+                        images.push((oe, ne));
+                    }
+                }
+            }
+        }
+        images.sort_unstable();
+        images.dedup();
+        let mut i = 0;
+        while i < images.len() {
+            let oe = images[i].0;
+            let mut j = i;
+            while j < images.len() && images[j].0 == oe {
+                j += 1;
+            }
+            let group: Vec<[u32; 2]> = images[i..j].iter().map(|p| p.1).collect();
+            i = j;
+            let Some(&c) = self.edge_constraint.get(&oe) else {
+                continue;
+            };
+            let record: DistanceConstraint = body.distance_constraints()[c as usize];
+            let mut rest = group.as_slice();
+            if !group.contains(&oe) {
+                body.set_distance_nodes(c as usize, group[0])?;
+                self.edge_constraint.remove(&oe);
+                self.edge_constraint.insert(group[0], c);
+                rest = &group[1..];
+            }
+            for &ne in rest {
+                if ne == oe || self.edge_constraint.contains_key(&ne) {
+                    continue;
+                }
+                let id = body.add_distance_constraint(DistanceConstraint {
+                    nodes: ne,
+                    ..record
+                })?;
+                self.edge_constraint.insert(ne, id as u32);
+            }
+        }
+        // Masses of the split nodes and their copies, from their tets' rest volumes (eq. (1)).
+        let rest = body.tet_rest_volumes();
+        let density = body.density();
+        let mut masses = Vec::new();
+        for v in split_nodes.iter().copied().chain(first..next) {
+            let m: f64 = self.node_tets[v as usize]
+                .iter()
+                .map(|&t| density as f64 * rest[t as usize] as f64 / 4.0)
+                .sum();
+            masses.push((v, m as f32));
+        }
+        for (v, m) in masses {
+            body.set_node_mass(v, m)?;
+        }
+        for f in faces {
+            self.cut_faces.push((f.t, f.j));
+            self.cut_faces.push((f.u, f.k));
+        }
+        let opened: Vec<[u32; 3]> = faces
+            .iter()
+            .flat_map(|f| {
+                [
+                    face_nodes(&body.tets()[f.t as usize], f.j as usize),
+                    face_nodes(&body.tets()[f.u as usize], f.k as usize),
+                ]
+            })
+            .collect();
+        let mut events = vec![SurgeryEvent::CutAdvanced {
+            new_nodes: first..next,
+            changed_tets: changed,
+            opened_faces: opened,
+        }];
+        if next > first {
+            let pieces = if self.still_connected(body, &pairs) {
+                Vec::new()
+            } else {
+                self.relabel_pieces(body)
+            };
+            for piece in pieces {
+                let component = self.tet_component[piece[0] as usize];
+                let volume = piece
+                    .iter()
+                    .map(|&t| body.tet_rest_volumes()[t as usize] as f64)
+                    .sum();
+                let mut nodes: Vec<u32> = piece
+                    .iter()
+                    .flat_map(|&t| body.tets()[t as usize])
+                    .collect();
+                nodes.sort_unstable();
+                nodes.dedup();
+                events.push(SurgeryEvent::PieceDetached {
+                    component,
+                    tets: piece,
+                    nodes,
+                    rest_volume: volume,
+                });
+            }
+        }
+        tracing::debug!(
+            faces = faces.len(),
+            new_nodes = next - first,
+            "cut advanced"
+        );
+        Ok(events)
+    }
+}

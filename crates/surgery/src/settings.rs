@@ -1,0 +1,62 @@
+//! Settings of cuts and sutures.
+
+use crate::SurgeryError;
+
+/// How sutures behave. (Cuts have no setting: the design has no threshold to tune, see the
+/// crate docs.)
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurgerySettings {
+    /// PBD stiffness `k ∈ [0, 1]` of a suture link (1 = the linked nodes are pulled together
+    /// fully each iteration).
+    pub suture_stiffness: f32,
+    /// XPBD compliance of a suture link (cm/dyn), used when the body's solver is XPBD.
+    pub suture_compliance: f32,
+    /// Rest length of a suture link (cm), `≥ 0`; near zero closes the wound.
+    pub suture_rest_length: f32,
+}
+
+impl Default for SurgerySettings {
+    /// `k = 1`, compliance 0, rest length 0.
+    fn default() -> Self {
+        Self {
+            suture_stiffness: 1.0,
+            suture_compliance: 0.0,
+            suture_rest_length: 0.0,
+        }
+    }
+}
+
+impl SurgerySettings {
+    pub(crate) fn validate(&self) -> Result<(), SurgeryError> {
+        let checks = [
+            (
+                "suture_stiffness",
+                self.suture_stiffness,
+                (0.0..=1.0).contains(&self.suture_stiffness),
+                "in [0, 1]",
+            ),
+            (
+                "suture_compliance",
+                self.suture_compliance,
+                self.suture_compliance.is_finite() && self.suture_compliance >= 0.0,
+                "finite and ≥ 0",
+            ),
+            (
+                "suture_rest_length",
+                self.suture_rest_length,
+                self.suture_rest_length.is_finite() && self.suture_rest_length >= 0.0,
+                "finite and ≥ 0 (cm)",
+            ),
+        ];
+        for (name, value, ok, expected) in checks {
+            if !ok {
+                return Err(SurgeryError::InvalidSetting {
+                    name,
+                    value: value as f64,
+                    expected,
+                });
+            }
+        }
+        Ok(())
+    }
+}

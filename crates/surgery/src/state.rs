@@ -1,0 +1,502 @@
+//! The surgery state kept next to a [`SoftBody`]: tet adjacency across faces (cut faces have
+//! none), node → tets, each node's original, the distance constraint of each edge, sutures.
+
+use crate::geometry::FxMap as HashMap;
+
+use tissue_mesh::{NO_TET, TET_FACES};
+use tissue_pbd::{ConstraintSlot, SoftBody};
+
+use crate::geometry::radius_ratio;
+use crate::{SurgeryError, SurgerySettings};
+
+/// A suture: a link constraint between two nodes on the two sides of a wound.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Suture {
+    /// The linked nodes.
+    pub nodes: [u32; 2],
+    /// The body's distance constraint that links them.
+    pub constraint: usize,
+    /// Their distance when the suture was placed (cm).
+    pub initial_gap: f32,
+}
+
+/// Cutting and suturing state for one [`SoftBody`]; every operation takes that body.
+///
+/// Invariants (kept by every method; [`Surgery::validate`] re-checks them):
+/// - `neighbours[t][j]` is the tet across face `j` of tet `t` (the face opposite local node `j`,
+///   [`TET_FACES`] order) or [`NO_TET`] when that face is on the boundary (the original surface
+///   or a cut wall); the relation is symmetric and neighbours share the face's three nodes;
+/// - the boundary faces (those with no neighbour), wound outward, form a closed, manifold,
+///   consistently oriented surface when the body's did at construction;
+/// - `node_tets[v]` lists the tets using node `v`; `origin[v]` is the node of the original mesh
+///   that `v` was split from (itself for original nodes);
+/// - `edge_constraint` maps each sorted node pair of a tet edge to the body's live distance
+///   constraint on it; tets are never created or removed by a cut, only moved onto new nodes, so
+///   every tet keeps its rest shape and quality.
+#[derive(Debug, Clone)]
+pub struct Surgery {
+    pub(crate) settings: SurgerySettings,
+    pub(crate) neighbours: Vec<[u32; 4]>,
+    pub(crate) node_tets: Vec<Vec<u32>>,
+    pub(crate) origin: Vec<u32>,
+    pub(crate) edge_constraint: HashMap<[u32; 2], u32>,
+    /// Faces opened by cuts: (tet, local face).
+    pub(crate) cut_faces: Vec<(u32, u8)>,
+    /// Faces crossed by the blade but kept glued (they would have made the surface
+    /// non-manifold at the cut's front): (tet, face, neighbour, its face), retried next cut.
+    pub(crate) pending: Vec<[u32; 4]>,
+    pub(crate) sutures: Vec<Option<Suture>>,
+    /// Piece label of each tet (see [`Surgery::tet_components`]).
+    pub(crate) tet_component: Vec<u32>,
+    pub(crate) component_count: usize,
+    /// Per node: 1.5 × its longest rest edge (cm). A tet that straddles the blade's plane has a
+    /// node at most this far from it (unless stretched by more than 1.5).
+    pub(crate) node_reach: Vec<f32>,
+    pub(crate) min_radius_ratio: f64,
+    pub(crate) min_rest_volume: f32,
+    /// Scratch marks per tet and node (stamped with `stamp`), reused by every cut.
+    pub(crate) tet_mark: Vec<u32>,
+    pub(crate) stamp: u32,
+}
+
+/// The face of tet `t` opposite local node `j`, wound outward.
+pub(crate) fn face_nodes(t: &[u32; 4], j: usize) -> [u32; 3] {
+    TET_FACES[j].map(|i| t[i])
+}
+
+fn sorted3(mut f: [u32; 3]) -> [u32; 3] {
+    f.sort_unstable();
+    f
+}
+
+impl Surgery {
+    /// The state for `body` as it is (uncut, or as built): face adjacency, edges, quality.
+    ///
+    /// # Errors
+    /// [`SurgeryError::InvalidSetting`] for bad settings.
+    pub fn new(body: &SoftBody, settings: SurgerySettings) -> Result<Self, SurgeryError> {
+        settings.validate()?;
+        let tets = body.tets();
+        let n = body.node_count();
+        let mut faces: HashMap<[u32; 3], (u32, u8)> =
+            HashMap::with_capacity_and_hasher(tets.len() * 2, Default::default());
+        let mut neighbours = vec![[NO_TET; 4]; tets.len()];
+        for (t, tet) in tets.iter().enumerate() {
+            for j in 0..4 {
+                let key = sorted3(face_nodes(tet, j));
+                if let Some((u, k)) = faces.remove(&key) {
+                    neighbours[t][j] = u;
+                    neighbours[u as usize][k as usize] = t as u32;
+                } else {
+                    faces.insert(key, (t as u32, j as u8));
+                }
+            }
+        }
+        let mut node_tets = vec![Vec::new(); n];
+        for (t, tet) in tets.iter().enumerate() {
+            for &v in tet {
+                node_tets[v as usize].push(t as u32);
+            }
+        }
+        let mut edge_constraint = HashMap::with_capacity_and_hasher(
+            body.distance_constraints().len(),
+            Default::default(),
+        );
+        for (c, d) in body.distance_constraints().iter().enumerate() {
+            if body.distance_slot(c) != Some(ConstraintSlot::Removed) {
+                let [a, b] = d.nodes;
+                edge_constraint.insert([a.min(b), a.max(b)], c as u32);
+            }
+        }
+        let x = body.positions();
+        let mut node_reach = vec![0.0f32; n];
+        let mut min_ratio = f64::INFINITY;
+        for tet in tets {
+            let p = tet.map(|i| x[i as usize].as_dvec3());
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    let l = p[a].distance(p[b]) as f32;
+                    for k in [a, b] {
+                        let r = &mut node_reach[tet[k] as usize];
+                        *r = r.max(1.5 * l);
+                    }
+                }
+            }
+            min_ratio = min_ratio.min(radius_ratio(p));
+        }
+        let min_rest_volume = body
+            .tet_rest_volumes()
+            .iter()
+            .copied()
+            .fold(f32::INFINITY, f32::min);
+        let mut s = Self {
+            settings,
+            neighbours,
+            node_tets,
+            origin: (0..n as u32).collect(),
+            edge_constraint,
+            cut_faces: Vec::new(),
+            pending: Vec::new(),
+            sutures: Vec::new(),
+            tet_component: Vec::new(),
+            component_count: 0,
+            node_reach,
+            min_radius_ratio: min_ratio,
+            min_rest_volume,
+            tet_mark: vec![0; tets.len()],
+            stamp: 0,
+        };
+        s.count_components(body);
+        Ok(s)
+    }
+
+    pub(crate) fn check_body(&self, body: &SoftBody) -> Result<(), SurgeryError> {
+        if body.node_count() != self.node_tets.len() {
+            return Err(SurgeryError::BodyMismatch {
+                what: "nodes",
+                got: body.node_count(),
+                expected: self.node_tets.len(),
+            });
+        }
+        if body.tets().len() != self.neighbours.len() {
+            return Err(SurgeryError::BodyMismatch {
+                what: "tets",
+                got: body.tets().len(),
+                expected: self.neighbours.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &SurgerySettings {
+        &self.settings
+    }
+
+    /// The quality bound every tet keeps through any cut: `(smallest rest volume (cm³), smallest
+    /// radius ratio 3r_in/r_circ)` of the mesh at construction. Cuts create no tet and move no
+    /// node in rest space, so no tet ever falls below it.
+    pub fn quality_bound(&self) -> (f32, f64) {
+        (self.min_rest_volume, self.min_radius_ratio)
+    }
+
+    /// Tet adjacency across faces (`NO_TET` on the boundary and across cut walls).
+    pub fn neighbours(&self) -> &[[u32; 4]] {
+        &self.neighbours
+    }
+
+    /// The node of the original mesh each node was split from.
+    pub fn origins(&self) -> &[u32] {
+        &self.origin
+    }
+
+    /// Faces opened by cuts so far, as (tet, local face); both walls of each cut appear.
+    pub fn cut_faces(&self) -> &[(u32, u8)] {
+        &self.cut_faces
+    }
+
+    /// The sutures placed so far (`None` where removed), by id.
+    pub fn sutures(&self) -> &[Option<Suture>] {
+        &self.sutures
+    }
+
+    /// Number of connected pieces (tets sharing nodes).
+    pub fn component_count(&self) -> usize {
+        self.component_count
+    }
+
+    /// Piece label of each tet: the pieces of the input `0, 1, …` (by smallest tet), then each
+    /// detached piece the next label, in order of detachment.
+    pub fn tet_components(&self) -> &[u32] {
+        &self.tet_component
+    }
+
+    /// The boundary surface: every tet face without a neighbour (original surface and cut
+    /// walls), wound outward, in the body's node numbering.
+    pub fn boundary_faces(&self, body: &SoftBody) -> Vec<[u32; 3]> {
+        let tets = body.tets();
+        let mut out = Vec::new();
+        for (t, nb) in self.neighbours.iter().enumerate() {
+            for (j, &u) in nb.iter().enumerate() {
+                if u == NO_TET {
+                    out.push(face_nodes(&tets[t], j));
+                }
+            }
+        }
+        out
+    }
+
+    /// Labels the pieces (union–find over tets through shared nodes) `0, 1, …` in the order of
+    /// their smallest tet.
+    pub(crate) fn count_components(&mut self, body: &SoftBody) {
+        let tets = body.tets();
+        let n = body.node_count();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(p: &mut [u32], mut i: u32) -> u32 {
+            while p[i as usize] != i {
+                let g = p[p[i as usize] as usize];
+                p[i as usize] = g;
+                i = g;
+            }
+            i
+        }
+        for t in tets {
+            let mut r0 = find(&mut parent, t[0]);
+            for &v in &t[1..] {
+                let r = find(&mut parent, v);
+                if r != r0 {
+                    let (lo, hi) = (r.min(r0), r.max(r0));
+                    parent[hi as usize] = lo;
+                    r0 = lo;
+                }
+            }
+        }
+        let mut root_comp = vec![u32::MAX; n];
+        let mut comp = Vec::with_capacity(tets.len());
+        let mut count = 0;
+        for t in tets {
+            let r = find(&mut parent, t[0]) as usize;
+            if root_comp[r] == u32::MAX {
+                root_comp[r] = count;
+                count += 1;
+            }
+            comp.push(root_comp[r]);
+        }
+        self.tet_component = comp;
+        self.component_count = count as usize;
+    }
+
+    /// After a cut that may have detached pieces: the pieces again (union–find), each keeping
+    /// the label its tets had when it is the first (by smallest tet) with that label, the others
+    /// getting new labels. Returns the new pieces' tets (sorted).
+    pub(crate) fn relabel_pieces(&mut self, body: &SoftBody) -> Vec<Vec<u32>> {
+        let old = std::mem::take(&mut self.tet_component);
+        self.count_components(body);
+        let fresh = std::mem::take(&mut self.tet_component);
+        // fresh label → final label.
+        let mut map: Vec<u32> = vec![u32::MAX; self.component_count];
+        let mut claimed: HashMap<u32, ()> = HashMap::default();
+        let mut next = old.iter().copied().max().map_or(0, |m| m + 1);
+        let mut pieces: Vec<Vec<u32>> = Vec::new();
+        let mut piece_of: HashMap<u32, usize> = HashMap::default();
+        let mut labels = Vec::with_capacity(fresh.len());
+        for (t, &f) in fresh.iter().enumerate() {
+            if map[f as usize] == u32::MAX {
+                if claimed.insert(old[t], ()).is_none() {
+                    map[f as usize] = old[t];
+                } else {
+                    map[f as usize] = next;
+                    piece_of.insert(next, pieces.len());
+                    pieces.push(Vec::new());
+                    next += 1;
+                }
+            }
+            let l = map[f as usize];
+            if let Some(&k) = piece_of.get(&l) {
+                pieces[k].push(t as u32);
+            }
+            labels.push(l);
+        }
+        self.tet_component = labels;
+        pieces
+    }
+
+    /// Re-checks the invariants against `body`: adjacency symmetric and sharing nodes, the
+    /// boundary surface edge-manifold, consistently oriented and vertex-manifold, node → tet
+    /// lists right, edge constraints live and on their edge, every tet positive in rest volume
+    /// at or above the quality bound and finite. For tests; O(tets).
+    ///
+    /// # Errors
+    /// [`SurgeryError::Defect`] naming the first defect found, or a body mismatch.
+    pub fn validate(&self, body: &SoftBody) -> Result<(), SurgeryError> {
+        self.check_body(body)?;
+        let tets = body.tets();
+        let defect = |element, index: usize, what| {
+            Err(SurgeryError::Defect {
+                element,
+                index,
+                what,
+            })
+        };
+        for (t, nb) in self.neighbours.iter().enumerate() {
+            for (j, &u) in nb.iter().enumerate() {
+                if u == NO_TET {
+                    continue;
+                }
+                let back = self.neighbours[u as usize]
+                    .iter()
+                    .position(|&w| w as usize == t);
+                let Some(k) = back else {
+                    return defect("tet", t, "adjacency is not symmetric");
+                };
+                if sorted3(face_nodes(&tets[t], j)) != sorted3(face_nodes(&tets[u as usize], k)) {
+                    return defect("tet", t, "neighbours do not share the face's nodes");
+                }
+            }
+        }
+        for (v, list) in self.node_tets.iter().enumerate() {
+            if list
+                .iter()
+                .any(|&t| !tets[t as usize].contains(&(v as u32)))
+            {
+                return defect("node", v, "node → tet list names a tet without the node");
+            }
+        }
+        if self.node_reach.len() != self.node_tets.len()
+            || self.origin.len() != self.node_tets.len()
+        {
+            return defect(
+                "node",
+                self.node_tets.len(),
+                "per-node arrays of different lengths",
+            );
+        }
+        if self.node_tets.iter().map(Vec::len).sum::<usize>() != 4 * tets.len() {
+            return defect("node", 0, "node → tet lists miss tets");
+        }
+        // Boundary: directed edges must pair up exactly.
+        let faces = self.boundary_faces(body);
+        let mut directed: HashMap<[u32; 2], u32> =
+            HashMap::with_capacity_and_hasher(faces.len() * 3, Default::default());
+        for f in &faces {
+            for k in 0..3 {
+                *directed.entry([f[k], f[(k + 1) % 3]]).or_default() += 1;
+            }
+        }
+        for (&[a, b], &count) in &directed {
+            if count != 1 {
+                return defect(
+                    "edge",
+                    a as usize,
+                    "edge used twice in the same direction (non-manifold or mis-oriented)",
+                );
+            }
+            if directed.get(&[b, a]) != Some(&1) {
+                return defect(
+                    "edge",
+                    a as usize,
+                    "boundary edge without its opposite (open or non-manifold)",
+                );
+            }
+        }
+        let mut seen: HashMap<[u32; 3], ()> =
+            HashMap::with_capacity_and_hasher(faces.len(), Default::default());
+        for f in &faces {
+            if seen.insert(sorted3(*f), ()).is_some() {
+                return defect(
+                    "vertex",
+                    f[0] as usize,
+                    "two boundary triangles on the same three nodes (a double face)",
+                );
+            }
+        }
+        // Vertex links: the boundary faces around a vertex make one cycle.
+        let mut around: HashMap<u32, Vec<[u32; 2]>> = HashMap::default();
+        for f in &faces {
+            for k in 0..3 {
+                around
+                    .entry(f[k])
+                    .or_default()
+                    .push([f[(k + 1) % 3], f[(k + 2) % 3]]);
+            }
+        }
+        for (&v, link) in &around {
+            if !single_cycle(link) {
+                return defect(
+                    "vertex",
+                    v as usize,
+                    "boundary faces around the vertex do not form one fan (pinched)",
+                );
+            }
+        }
+        let x = body.positions();
+        let rest = body.tet_rest_volumes();
+        for (t, tet) in tets.iter().enumerate() {
+            if rest[t] < self.min_rest_volume {
+                return defect("tet", t, "rest volume below the quality bound");
+            }
+            if tet.iter().any(|&i| !x[i as usize].is_finite()) {
+                return defect("tet", t, "non-finite node position");
+            }
+        }
+        // Pieces: tets sharing a node carry one label, and there are as many labels as pieces.
+        for (v, list) in self.node_tets.iter().enumerate() {
+            if let Some(&first) = list.first() {
+                let l = self.tet_component[first as usize];
+                if list.iter().any(|&t| self.tet_component[t as usize] != l) {
+                    return defect(
+                        "node",
+                        v,
+                        "tets sharing the node carry different piece labels",
+                    );
+                }
+            }
+        }
+        let mut recount = self.clone();
+        recount.count_components(body);
+        let mut distinct: Vec<u32> = self.tet_component.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        if recount.component_count != self.component_count || distinct.len() != self.component_count
+        {
+            return defect(
+                "tet",
+                recount.component_count * 1000 + self.component_count,
+                "the piece count is wrong (index: actual × 1000 + counted)",
+            );
+        }
+        for (&[a, b], &c) in &self.edge_constraint {
+            let d = body.distance_constraints()[c as usize];
+            let [p, q] = d.nodes;
+            if [p.min(q), p.max(q)] != [a, b]
+                || body.distance_slot(c as usize) == Some(ConstraintSlot::Removed)
+            {
+                return defect(
+                    "edge",
+                    a as usize,
+                    "edge's distance constraint is removed or on other nodes",
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Whether the directed link edges `(b, c)` (one per boundary face around a vertex) form a
+/// single cycle.
+pub(crate) fn single_cycle(link: &[[u32; 2]]) -> bool {
+    if link.is_empty() {
+        return true;
+    }
+    // Each link vertex must start exactly one edge and end exactly one.
+    let next = |a: u32| {
+        link.iter()
+            .filter(|e| e[0] == a)
+            .map(|e| e[1])
+            .collect::<Vec<_>>()
+    };
+    for e in link {
+        if next(e[0]).len() != 1 || link.iter().filter(|f| f[1] == e[1]).count() != 1 {
+            return false;
+        }
+    }
+    let start = link[0][0];
+    let mut a = start;
+    for _ in 0..link.len() {
+        a = next(a)[0];
+        if a == start {
+            break;
+        }
+    }
+    // Walked back to the start after visiting every edge exactly once.
+    let mut steps = 0;
+    let mut b = start;
+    loop {
+        b = next(b)[0];
+        steps += 1;
+        if b == start || steps > link.len() {
+            break;
+        }
+    }
+    steps == link.len()
+}
