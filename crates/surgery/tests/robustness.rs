@@ -83,9 +83,11 @@ fn hammer(mesh: &TetMesh, seed: u64, sessions: usize, per_session: usize, steps:
         worst_volume_ratio: f64::INFINITY,
     };
     let (mut body, mut surgery) = (fresh.clone(), fresh_surgery.clone());
+    // Parallel stepping (bit-identical to serial, tests/parallel.rs in tissue-pbd), for time.
     let settings = StepSettings {
         dt: 0.01,
         iterations: 5,
+        parallel: true,
         ..StepSettings::default()
     };
     body.set_settings(settings).unwrap();
@@ -185,11 +187,10 @@ fn random_sweeps_over_the_bunny_keep_the_body_valid() {
     let (p, t) = mesh.into_parts();
     let mesh = TetMesh::new(p.iter().map(|p| *p * 10.0).collect(), t).unwrap();
     let start = Instant::now();
-    let s = hammer(&mesh, 0x05EE_DB0B, 250, 4, 2);
+    let s = hammer(&mesh, 0x05EE_DB0B, 250, 4, 10);
     report("bunny", &s, start.elapsed().as_secs_f64());
-    // 2 steps after each cut here (10 steps after each of 1000 cuts on 42k tets takes about
-    // two minutes on two cores); the liver below takes 10 steps after each of its 1000 cuts.
     assert_eq!(s.cuts, 1000);
+    assert_eq!(s.steps, 10_000);
     assert!(
         s.cuts_opening > 600,
         "too few sweeps opened anything: {}",
