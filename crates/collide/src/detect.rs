@@ -54,9 +54,46 @@ fn check_bvh(view: &SurfaceView<'_>, bvh: &Bvh) -> Result<(), CollideError> {
 #[cfg(feature = "parallel")]
 const PARALLEL_MIN: usize = 512;
 
+/// The chunks' contacts (each sorted by [`Contact::key`]) merged into `contacts`, sorted. Keys
+/// are unique, so the result is the one order of the set, whatever the chunking.
+fn merge_sorted(chunks: &[ChunkState], contacts: &mut Vec<Contact>) {
+    contacts.clear();
+    if let [only] = chunks {
+        contacts.extend_from_slice(&only.out);
+        return;
+    }
+    if chunks.len() > MERGE_MAX {
+        for state in chunks {
+            contacts.extend_from_slice(&state.out);
+        }
+        contacts.sort_unstable_by_key(Contact::key);
+        return;
+    }
+    let mut heads = [0usize; MERGE_MAX];
+    loop {
+        let mut best: Option<usize> = None;
+        for (i, state) in chunks.iter().enumerate() {
+            if let Some(c) = state.out.get(heads[i]) {
+                if best.is_none_or(|b| c.key() < chunks[b].out[heads[b]].key()) {
+                    best = Some(i);
+                }
+            }
+        }
+        let Some(i) = best else {
+            break;
+        };
+        contacts.push(chunks[i].out[heads[i]]);
+        heads[i] += 1;
+    }
+}
+
+/// Chunks merged directly by [`merge_sorted`] (more are concatenated and sorted).
+const MERGE_MAX: usize = 16;
+
 /// Runs `body` on every candidate, in consecutive chunks (one per rayon thread when there are at
-/// least [`PARALLEL_MIN`] candidates per thread, feature `parallel`), then gathers the chunks'
-/// contacts into `contacts` sorted by [`Contact::key`]. Each contact is computed by the same kernel
+/// least [`PARALLEL_MIN`] candidates per thread, feature `parallel`), each chunk sorting its
+/// own contacts on its thread, then merges the chunks' contacts into `contacts` sorted by
+/// [`Contact::key`]. Each contact is computed by the same kernel
 /// from the same data whichever chunk meets it, and the keys are unique, so the result does not
 /// depend on the number of threads.
 fn run_narrow<B>(
@@ -86,6 +123,8 @@ where
         for &c in candidates.iter().skip(i * per).take(per) {
             body(&mut nw, c);
         }
+        // Each chunk sorts its own contacts (on its thread); the chunks are merged below.
+        state.out.sort_unstable_by_key(Contact::key);
     };
     #[cfg(feature = "parallel")]
     if k > 1 {
@@ -102,11 +141,10 @@ where
         ..DetectStats::default()
     };
     for state in &chunks[..k] {
-        contacts.extend_from_slice(&state.out);
         stats.triangle_pairs += state.stats.triangle_pairs;
         stats.edge_tests += state.stats.edge_tests;
     }
-    contacts.sort_unstable_by_key(Contact::key);
+    merge_sorted(&chunks[..k], contacts);
     stats.contacts = contacts.len() as u32;
     stats
 }
