@@ -393,22 +393,12 @@ impl SoftBody {
             if matches!(self.edits.tet_slot[r as usize], ConstraintSlot::Tree { .. }) {
                 continue;
             }
-            if let Some(b) = self.tet_batches.get_mut(batch) {
-                for k in 1..4 {
-                    b.nodes[k][l] = b.nodes[0][l];
-                }
-                set_lane(&mut b.rest, l, 0.0);
-                set_lane(&mut b.param, l, off);
-            }
-            if let Some(b) = self.centroid_batches.get_mut(batch) {
-                for k in 1..4 {
-                    b.nodes[k][l] = b.nodes[0][l];
-                }
-                for j in 0..4 {
-                    set_lane(&mut b.rest[j], l, 0.0);
-                    set_lane(&mut b.param[j], l, off);
-                }
-            }
+            switch_off_tet_lane(
+                self.tet_batches.get_mut(batch),
+                self.centroid_batches.get_mut(batch),
+                l,
+                off,
+            );
         }
     }
 
@@ -566,22 +556,12 @@ impl SoftBody {
             if dyn_live(&e.tet_slot, r, b, l, fill) {
                 continue;
             }
-            if let Some(x) = e.dyn_tet_batches.get_mut(b) {
-                for k in 1..4 {
-                    x.nodes[k][l] = x.nodes[0][l];
-                }
-                set_lane(&mut x.rest, l, 0.0);
-                set_lane(&mut x.param, l, off);
-            }
-            if let Some(x) = e.dyn_centroid_batches.get_mut(b) {
-                for k in 1..4 {
-                    x.nodes[k][l] = x.nodes[0][l];
-                }
-                for j in 0..4 {
-                    set_lane(&mut x.rest[j], l, 0.0);
-                    set_lane(&mut x.param[j], l, off);
-                }
-            }
+            switch_off_tet_lane(
+                e.dyn_tet_batches.get_mut(b),
+                e.dyn_centroid_batches.get_mut(b),
+                l,
+                off,
+            );
         }
     }
 
@@ -779,4 +759,30 @@ fn check_distance_values(c: &DistanceConstraint) -> Result<(), PbdError> {
         }
     }
     Ok(())
+}
+
+/// Switches lane `l` of a classic and/or centroid volume batch off in place: its nodes collapsed
+/// onto its first, rest 0, parameter `off`, so the kernels compute no correction for it.
+fn switch_off_tet_lane(
+    tet: Option<&mut TetBatch>,
+    centroid: Option<&mut CentroidBatch>,
+    l: usize,
+    off: f32,
+) {
+    if let Some(b) = tet {
+        for k in 1..4 {
+            b.nodes[k][l] = b.nodes[0][l];
+        }
+        set_lane(&mut b.rest, l, 0.0);
+        set_lane(&mut b.param, l, off);
+    }
+    if let Some(b) = centroid {
+        for k in 1..4 {
+            b.nodes[k][l] = b.nodes[0][l];
+        }
+        for j in 0..4 {
+            set_lane(&mut b.rest[j], l, 0.0);
+            set_lane(&mut b.param[j], l, off);
+        }
+    }
 }
