@@ -6,8 +6,9 @@ use glam::Vec3;
 use tissue_mesh::tet_box;
 use tissue_pbd::{Floor, Material, SoftBody, Solver, StepSettings, VolumeConstraintKind};
 
-fn run(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: usize) -> Vec<u32> {
-    // 20³ cells: colours of a few thousand constraints, so the parallel path really forks.
+/// The 20³-cell test box (colours of a few thousand constraints, so the parallel path really
+/// forks), on a floor `floor` below, node 0 pinned.
+fn box_body(kind: VolumeConstraintKind, floor: f32) -> SoftBody {
     let mesh = tet_box(20, 20, 20, Vec3::splat(10.0)).unwrap();
     let material = Material {
         distance_stiffness: 0.7,
@@ -18,12 +19,13 @@ fn run(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: usiz
         ..Material::default()
     };
     let mut body = SoftBody::new(&mesh, &material).unwrap();
-    body.set_floor(Some(Floor::y(-4.0))).unwrap();
+    body.set_floor(Some(Floor::y(floor))).unwrap();
     body.pin(0).unwrap();
-    assert!(
-        body.block_count() >= 15,
-        "too few blocks to exercise the parallel path"
-    );
+    body
+}
+
+/// Five steps of `body` on a pool of `threads`; the bits of its positions and velocities.
+fn five_steps(mut body: SoftBody, solver: Solver, parallel: bool, threads: usize) -> Vec<u32> {
     body.set_settings(StepSettings {
         dt: 0.01,
         iterations: 5,
@@ -49,6 +51,15 @@ fn run(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: usiz
         .collect()
 }
 
+fn run(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: usize) -> Vec<u32> {
+    let body = box_body(kind, -4.0);
+    assert!(
+        body.block_count() >= 15,
+        "too few blocks to exercise the parallel path"
+    );
+    five_steps(body, solver, parallel, threads)
+}
+
 #[test]
 fn parallel_is_bit_identical_for_any_thread_count_and_to_serial() {
     for (kind, solver) in [
@@ -69,18 +80,7 @@ fn parallel_is_bit_identical_for_any_thread_count_and_to_serial() {
 /// the right moved onto the copies, new edges and a link constraint added, one edge removed):
 /// the dynamic set is projected serially, so parallel stays bit-identical.
 fn run_cut(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: usize) -> Vec<u32> {
-    let mesh = tet_box(20, 20, 20, Vec3::splat(10.0)).unwrap();
-    let material = Material {
-        distance_stiffness: 0.7,
-        volume_stiffness: 0.9,
-        distance_compliance: 1e-4,
-        volume_compliance: 1e-4,
-        volume: kind,
-        ..Material::default()
-    };
-    let mut body = SoftBody::new(&mesh, &material).unwrap();
-    body.set_floor(Some(Floor::y(-6.0))).unwrap();
-    body.pin(0).unwrap();
+    let mut body = box_body(kind, -6.0);
     // Separate along x = 0 for z > 0 (a partial cut): nodes on that half-plane get a copy used
     // by the tets whose centroid is at x > 0.
     let x: Vec<Vec3> = body.positions().iter().map(|p| Vec3::from(*p)).collect();
@@ -152,29 +152,7 @@ fn run_cut(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: 
     // Packed: several dynamic constraints share a batch.
     assert!(body.dynamic_batch_counts().0 * 2 < body.dynamic_counts().0);
     assert!(body.dynamic_batch_counts().1 * 2 < body.dynamic_counts().1);
-    body.set_settings(StepSettings {
-        dt: 0.01,
-        iterations: 5,
-        solver,
-        parallel,
-        ..StepSettings::default()
-    })
-    .unwrap();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
-    pool.install(|| {
-        for _ in 0..5 {
-            body.step().unwrap();
-        }
-    });
-    body.positions()
-        .iter()
-        .chain(body.velocities())
-        .flat_map(|p| p.to_array())
-        .map(f32::to_bits)
-        .collect()
+    five_steps(body, solver, parallel, threads)
 }
 
 #[test]
