@@ -47,7 +47,10 @@ pub struct ColliderOptions {
     /// pairs (no refit, no broad phase). A pair that was farther than `tolerance + margin` can
     /// only have closed by the two moves, so the contact set is exactly a full detection's.
     /// The same bound, per pair (its distance then minus its edge's and its triangle's largest
-    /// particle move since), skips re-testing pairs still out of reach.
+    /// particle move since), skips re-testing pairs still out of reach. While the particles
+    /// move more than the margin per detection (an expander being filled), the kept pairs
+    /// could never be re-tested: the full detection then runs at the bare tolerance, and a call
+    /// at unchanged positions returns its contacts as they are.
     pub coherence_margin: f32,
 }
 
@@ -135,29 +138,36 @@ struct Coherence {
     /// How far each particle has moved from its anchor (as of the last [`Coherence::holds`]).
     moved_a: Vec<f32>,
     moved_b: Vec<f32>,
+    /// Whether the anchor positions are set.
+    anchored: bool,
+    /// Whether `near` holds the margin's pairs at the anchor positions.
     valid: bool,
+    /// Detections since the anchor (re-tests included).
+    calls: u32,
     /// Per-thread contacts of a parallel re-test, concatenated in order.
     chunks: Vec<Vec<Contact>>,
     planes: RetestPlanes,
 }
 
 impl Coherence {
-    /// Whether every pair closer than the tolerance now is among `near`: no particle of A plus
-    /// no particle of B has moved more than `margin` since the full detection.
-    /// Also records each particle's move, which [`Coherence::retest`] uses to skip pairs that
-    /// cannot have come within reach.
-    fn holds(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A], margin: f32) -> bool {
-        margin > 0.0
-            && self.valid
-            && pos_a.len() == self.anchor_a.len()
-            && pos_b.len() == self.anchor_b.len()
-            && moves(pos_a, &self.anchor_a, &mut self.moved_a)
-                + moves(pos_b, &self.anchor_b, &mut self.moved_b)
-                <= margin
+    /// How far the particles have moved since the last full detection: the largest move of a
+    /// particle of A plus that of B (`f32::INFINITY` before the first, or when a surface's
+    /// particle count changed). Records each particle's move, which [`Coherence::retest`] uses
+    /// to skip pairs that cannot have come within reach.
+    fn moved(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A]) -> f32 {
+        if !self.anchored
+            || pos_a.len() != self.anchor_a.len()
+            || pos_b.len() != self.anchor_b.len()
+        {
+            return f32::INFINITY;
+        }
+        moves(pos_a, &self.anchor_a, &mut self.moved_a)
+            + moves(pos_b, &self.anchor_b, &mut self.moved_b)
     }
 
-    /// Anchors the positions of a full detection (every particle's move is then 0).
-    fn anchor(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A]) {
+    /// Anchors the positions of a full detection (every particle's move is then 0); `near` is
+    /// valid for re-tests when the detection kept the margin's pairs.
+    fn anchor(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A], near_valid: bool) {
         for (anchor, moved, pos) in [
             (&mut self.anchor_a, &mut self.moved_a, pos_a),
             (&mut self.anchor_b, &mut self.moved_b, pos_b),
@@ -167,7 +177,9 @@ impl Coherence {
             moved.clear();
             moved.resize(pos.len(), 0.0);
         }
-        self.valid = true;
+        self.anchored = true;
+        self.valid = near_valid;
+        self.calls = 0;
     }
 
     /// The contacts among `near` at the views' positions, into `out`.
@@ -407,7 +419,17 @@ impl Collider {
     pub fn detect(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A]) -> Result<&[Contact], CollideError> {
         let margin = self.options.coherence_margin;
         let tolerance = self.options.contact.tolerance;
-        if self.coherence.holds(pos_a, pos_b, margin) {
+        let moved = if margin > 0.0 {
+            self.coherence.moved(pos_a, pos_b)
+        } else {
+            f32::INFINITY
+        };
+        self.coherence.calls += 1;
+        if !self.coherence.valid && moved == 0.0 {
+            // Nothing moved since a detection at the bare tolerance: its contacts stand.
+            return Ok(&self.contacts);
+        }
+        if self.coherence.valid && moved <= margin {
             let _span = tracing::trace_span!("retest", pairs = self.coherence.near.len()).entered();
             let va = self.a.view(Side::A, pos_a)?;
             let vb = self.b.view(Side::B, pos_b)?;
@@ -425,11 +447,20 @@ impl Collider {
         self.update(pos_a, pos_b)?;
         let va = self.a.view(Side::A, pos_a)?;
         let vb = self.b.view(Side::B, pos_b)?;
+        // Keep the margin's pairs only if they can be re-tested next time: when the particles
+        // moved more than the margin per detection since the last full one, the next call would
+        // fail the coherence test anyway, and a detection at the bare tolerance is cheaper. The
+        // contacts are the same either way.
+        let keep_margin = margin > 0.0 && moved <= margin * self.coherence.calls as f32;
         let params = ContactParams {
-            tolerance: tolerance + margin,
+            tolerance: if keep_margin {
+                tolerance + margin
+            } else {
+                tolerance
+            },
             ..self.options.contact
         };
-        let out = if margin > 0.0 {
+        let out = if keep_margin {
             &mut self.coherence.near
         } else {
             &mut self.contacts
@@ -444,9 +475,11 @@ impl Collider {
         };
         if margin > 0.0 {
             let c = &mut self.coherence;
-            c.anchor(pos_a, pos_b);
-            c.retest(&va, &vb, tolerance, &mut self.contacts);
-            self.stats.contacts = self.contacts.len() as u32;
+            c.anchor(pos_a, pos_b, keep_margin);
+            if keep_margin {
+                c.retest(&va, &vb, tolerance, &mut self.contacts);
+                self.stats.contacts = self.contacts.len() as u32;
+            }
         }
         Ok(&self.contacts)
     }

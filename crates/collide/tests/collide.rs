@@ -333,6 +333,54 @@ fn temporal_coherence_finds_exactly_the_full_detections_contacts() {
     assert!(retests > 40, "{retests} of 60 steps re-tested");
 }
 
+#[test]
+fn coherence_drops_the_margin_while_the_motion_outruns_it() {
+    // The sphere jumps 0.01 cm per step (2.5 margins) for 10 steps, each detection called
+    // twice at the same positions (a step's detection and the next one's, after an unchanged
+    // separation), then creeps 0.0005 cm per step. Every call gives a full detection's contacts
+    // bit for bit; while jumping, each detection is a plain one at the tolerance (its counts
+    // are the full collider's: no margin pairs kept); creeping, most steps are re-tests.
+    let scene = scenes::plane_press(65, 0.05, 0.0).unwrap();
+    let contact = ContactParams {
+        tolerance: 0.002,
+        shared_particles: false,
+    };
+    let options = |coherence_margin| ColliderOptions {
+        contact,
+        coherence_margin,
+        ..ColliderOptions::default()
+    };
+    let mut full = Collider::new(&scene.region, &scene.sphere, &options(0.0)).unwrap();
+    let mut coherent = Collider::new(&scene.region, &scene.sphere, &options(0.004)).unwrap();
+    let (pa, mut pb) = (
+        to_vec3a(scene.region.positions()),
+        to_vec3a(scene.sphere.positions()),
+    );
+    let (mut plain, mut retests, mut total) = (0, 0, 0);
+    for step in 0..50 {
+        let rise = if step < 10 { 0.01 } else { 0.0005 };
+        for p in &mut pb {
+            p.z += rise;
+        }
+        for call in 0..2 {
+            let expected = full.detect(&pa, &pb).unwrap().to_vec();
+            let got = coherent.detect(&pa, &pb).unwrap().to_vec();
+            assert_eq!(got, expected, "step {step}, call {call}");
+            total += expected.len();
+        }
+        let (c, f) = (coherent.stats(), full.stats());
+        if step > 0 && step < 10 && c.triangle_pairs > 0 && c == f {
+            plain += 1;
+        }
+        if step >= 10 && c.triangle_pairs == 0 {
+            retests += 1;
+        }
+    }
+    assert!(total > 1000, "{total} contacts in all");
+    assert_eq!(plain, 9, "jumping steps detected at the bare tolerance");
+    assert!(retests > 30, "{retests} of 40 creeping steps re-tested");
+}
+
 // --- Edge–triangle cases ---------------------------------------------------------------------
 
 fn unit_triangle() -> [Vec3A; 3] {
