@@ -144,6 +144,11 @@ struct Coherence {
     valid: bool,
     /// Detections since the anchor (re-tests included).
     calls: u32,
+    /// The positions of the last successful detection, whose contacts [`Collider::contacts`]
+    /// holds (`last_valid`).
+    last_a: Vec<Vec3A>,
+    last_b: Vec<Vec3A>,
+    last_valid: bool,
     /// Per-thread contacts of a parallel re-test, concatenated in order.
     chunks: Vec<Vec<Contact>>,
     planes: RetestPlanes,
@@ -417,6 +422,25 @@ impl Collider {
     /// # Errors
     /// As [`Collider::update`].
     pub fn detect(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A]) -> Result<&[Contact], CollideError> {
+        let c = &mut self.coherence;
+        if c.last_valid && same_bits(pos_a, &c.last_a) && same_bits(pos_b, &c.last_b) {
+            // Nothing moved since the last detection (a step's detection after a separation
+            // that corrected nothing): its contacts stand.
+            return Ok(&self.contacts);
+        }
+        c.last_valid = false;
+        self.detect_moved(pos_a, pos_b)?;
+        let c = &mut self.coherence;
+        for (last, pos) in [(&mut c.last_a, pos_a), (&mut c.last_b, pos_b)] {
+            last.clear();
+            last.extend_from_slice(pos);
+        }
+        c.last_valid = true;
+        Ok(&self.contacts)
+    }
+
+    /// [`Collider::detect`] at positions that differ from the last detection's.
+    fn detect_moved(&mut self, pos_a: &[Vec3A], pos_b: &[Vec3A]) -> Result<(), CollideError> {
         let margin = self.options.coherence_margin;
         let tolerance = self.options.contact.tolerance;
         let moved = if margin > 0.0 {
@@ -425,10 +449,6 @@ impl Collider {
             f32::INFINITY
         };
         self.coherence.calls += 1;
-        if !self.coherence.valid && moved == 0.0 {
-            // Nothing moved since a detection at the bare tolerance: its contacts stand.
-            return Ok(&self.contacts);
-        }
         if self.coherence.valid && moved <= margin {
             let _span = tracing::trace_span!("retest", pairs = self.coherence.near.len()).entered();
             let va = self.a.view(Side::A, pos_a)?;
@@ -442,7 +462,7 @@ impl Collider {
                 edge_tests: pairs,
                 contacts: self.contacts.len() as u32,
             };
-            return Ok(&self.contacts);
+            return Ok(());
         }
         self.update(pos_a, pos_b)?;
         let va = self.a.view(Side::A, pos_a)?;
@@ -481,7 +501,7 @@ impl Collider {
                 self.stats.contacts = self.contacts.len() as u32;
             }
         }
-        Ok(&self.contacts)
+        Ok(())
     }
 
     /// Impulses for the contacts of the last detection ([`apply_impulses`]); `velocities` holds
@@ -533,6 +553,16 @@ impl Collider {
             }
         }
     }
+}
+
+/// Whether `a` and `b` hold the same positions, bit for bit.
+fn same_bits(a: &[Vec3A], b: &[Vec3A]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| {
+            x.x.to_bits() == y.x.to_bits()
+                && x.y.to_bits() == y.y.to_bits()
+                && x.z.to_bits() == y.z.to_bits()
+        })
 }
 
 /// The distances between `now[i]` and `then[i]`, into `moved` (resized to match); returns the
