@@ -179,12 +179,17 @@ pub struct ImpulseWorkspace {
 
 /// A contact as the sweeps read it: its particles' slots in the compact velocities, their weights
 /// in the relative velocity, the velocity change per unit impulse of each (`weight/m`),
-/// `W = Σ weight²/m` and the normal.
+/// `W = Σ weight²/m` and the normal. Only the first `count` entries are used: the particles
+/// that can move and have a weight; the fixed ones' part of the relative velocity, constant
+/// during the sweeps, is `fixed_part` (a kinematic body's contacts touch two or three
+/// particles, not five).
 #[derive(Debug, Clone, Copy)]
 struct Prepared {
     slot: [u32; 5],
     weight: [f32; 5],
     push: [f32; 5],
+    count: u32,
+    fixed_part: Vec3A,
     w_eff: f32,
     /// `1/W`, or 0 for a contact no particle of which can move (skipped).
     inv_w_eff: f32,
@@ -245,8 +250,9 @@ pub fn apply_impulses(
             if inv_w == 0.0 {
                 continue;
             }
-            let mut v_rel = Vec3A::ZERO;
-            for i in 0..5 {
+            let m = p.count as usize;
+            let mut v_rel = p.fixed_part;
+            for i in 0..m {
                 v_rel += v[p.slot[i] as usize] * p.weight[i];
             }
             let n = p.normal;
@@ -268,7 +274,7 @@ pub fn apply_impulses(
                 ws.friction[k] = ft;
             }
             if j != Vec3A::ZERO {
-                for i in 0..5 {
+                for i in 0..m {
                     v[p.slot[i] as usize] += j * p.push[i];
                 }
             }
@@ -321,20 +327,12 @@ fn prepare(
         });
         let parts = contact_particles(c);
         let w_eff: f32 = (0..5).map(|i| weights[i] * weights[i] * w[i]).sum();
-        let mut slot = [0u32; 5];
-        for (k, &(side, i, _)) in parts.iter().enumerate() {
-            let key = velocities.key(side, i);
-            if ws.slot[key] == u32::MAX {
-                ws.slot[key] = ws.velocity.len() as u32;
-                ws.velocity.push(v[k]);
-                ws.owner.push((side, i));
-            }
-            slot[k] = ws.slot[key];
-        }
-        ws.prepared.push(Prepared {
-            slot,
-            weight: weights,
-            push: std::array::from_fn(|i| weights[i] * w[i]),
+        let mut prepared = Prepared {
+            slot: [0; 5],
+            weight: [0.0; 5],
+            push: [0.0; 5],
+            count: 0,
+            fixed_part: Vec3A::ZERO,
             w_eff,
             inv_w_eff: if w_eff > 0.0 && w_eff.is_finite() {
                 1.0 / w_eff
@@ -342,7 +340,28 @@ fn prepare(
                 0.0
             },
             normal,
-        });
+        };
+        for (k, &(side, i, weight)) in parts.iter().enumerate() {
+            if weight == 0.0 {
+                continue;
+            }
+            if w[k] == 0.0 {
+                prepared.fixed_part += v[k] * weight;
+                continue;
+            }
+            let key = velocities.key(side, i);
+            if ws.slot[key] == u32::MAX {
+                ws.slot[key] = ws.velocity.len() as u32;
+                ws.velocity.push(v[k]);
+                ws.owner.push((side, i));
+            }
+            let m = prepared.count as usize;
+            prepared.slot[m] = ws.slot[key];
+            prepared.weight[m] = weight;
+            prepared.push[m] = weight * w[k];
+            prepared.count += 1;
+        }
+        ws.prepared.push(prepared);
     }
     Ok(())
 }
@@ -379,7 +398,7 @@ fn warm_start(contacts: &[Contact], params: &ResponseParams, ws: &mut ImpulseWor
         ws.friction[k] = ft;
         let j = p.normal * lambda + ft;
         if j != Vec3A::ZERO {
-            for i in 0..5 {
+            for i in 0..p.count as usize {
                 ws.velocity[p.slot[i] as usize] += j * p.push[i];
             }
         }
