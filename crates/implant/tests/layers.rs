@@ -258,3 +258,44 @@ fn offset_folding_on_a_tight_curve_is_an_error() {
         ));
     }
 }
+
+#[test]
+fn the_thickness_guard_stops_the_approach_and_keeps_momentum() {
+    // Layer 1's centre pushed to a tenth of the depth above layer 2, moving down at 5 cm/s while
+    // layer 2 rises at 1 cm/s: the guard puts it back at the minimum thickness and stops the
+    // pair's approach along the normal with an impulse between the two, so their momentum is
+    // what it was.
+    let region = disc(4, 16, 2.0).unwrap();
+    let mut layers = TissueLayers::new(&region, &params()).unwrap();
+    let min = layers.min_thickness();
+    assert!(min > 0.0);
+    let (outer, inner) = (
+        TissueLayers::particle(Layer::Outer, 0) as usize,
+        TissueLayers::particle(Layer::Inner, 0) as usize,
+    );
+    let depth = params().depth as f32;
+    let particles = layers.system_mut().particles_mut();
+    let (position, velocity, inverse_mass) = particles.state_mut();
+    position[outer].z -= 0.9 * depth;
+    velocity[outer] = Vec3A::new(0.3, 0.0, -5.0);
+    velocity[inner] = Vec3A::new(0.0, 0.0, 1.0);
+    let (mo, mi) = (1.0 / inverse_mass[outer], 1.0 / inverse_mass[inner]);
+    let momentum = velocity[outer] * mo + velocity[inner] * mi;
+    assert_eq!(layers.hold_thickness(), 1);
+    let particles = layers.system().particles();
+    let (x, v) = (particles.positions(), particles.velocities());
+    let gap = x[outer].z - x[inner].z;
+    assert!((gap - min).abs() < 1e-5, "gap {gap} against {min}");
+    let approach = v[outer].z - v[inner].z;
+    assert!(
+        approach.abs() < 1e-5,
+        "still approaching at {approach} cm/s"
+    );
+    let after = v[outer] * mo + v[inner] * mi;
+    assert!(
+        (after - momentum).length() <= 1e-5 * momentum.length(),
+        "momentum {momentum} → {after}"
+    );
+    // The tangential velocity is left alone.
+    assert_eq!(v[outer].x, 0.3);
+}
