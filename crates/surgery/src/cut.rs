@@ -24,6 +24,7 @@ use glam::{DVec3, Vec3};
 use tissue_mesh::NO_TET;
 use tissue_pbd::{DistanceConstraint, Pose, SoftBody, Tool, ToolShape};
 
+use crate::split::{CutPlane, SplitOutcome};
 use crate::state::{face_nodes, single_cycle};
 use crate::{Surgery, SurgeryError, SurgeryEvent};
 
@@ -124,7 +125,69 @@ impl Surgery {
         let _span = tracing::debug_span!("cut").entered();
         self.check_body(body)?;
         let surface = sweep.triangles();
-        let mut faces = self.crossed_faces(body, &surface);
+        let origin = surface[1][0];
+        let normal = (surface[1][1] - origin)
+            .cross(surface[1][2] - origin)
+            .normalize_or_zero();
+        let plane = CutPlane {
+            origin,
+            normal,
+            surface: &surface,
+        };
+        let split = if normal == DVec3::ZERO {
+            SplitOutcome {
+                first_node: body.node_count() as u32,
+                end_node: body.node_count() as u32,
+                first_tet: body.tets().len() as u32,
+                end_tet: body.tets().len() as u32,
+                ..Default::default()
+            }
+        } else {
+            let candidates = self.straddling_tets(body, &plane);
+            self.split_along(body, &plane, &candidates)?
+        };
+        let mut events = self.open_faces(body, &plane, &split.front)?;
+        let geometric = !split.split.is_empty() || !split.snapped.is_empty();
+        match events.first_mut() {
+            Some(SurgeryEvent::CutAdvanced {
+                new_nodes,
+                new_tets,
+                split_tets,
+                snapped_nodes,
+                split_triangles,
+                ..
+            }) => {
+                new_nodes.start = split.first_node;
+                *new_tets = split.first_tet..split.end_tet;
+                *split_tets = split.split;
+                *snapped_nodes = split.snapped;
+                *split_triangles = split.surface;
+            }
+            _ if geometric => events.insert(
+                0,
+                SurgeryEvent::CutAdvanced {
+                    new_nodes: split.first_node..split.end_node,
+                    new_tets: split.first_tet..split.end_tet,
+                    split_tets: split.split,
+                    snapped_nodes: split.snapped,
+                    split_triangles: split.surface,
+                    changed_tets: Vec::new(),
+                    opened_faces: Vec::new(),
+                },
+            ),
+            _ => {}
+        }
+        Ok(events)
+    }
+
+    /// The face separation of a cut (steps 2–5 of the module docs), after the split.
+    fn open_faces(
+        &mut self,
+        body: &mut SoftBody,
+        plane: &CutPlane<'_>,
+        front: &[u32],
+    ) -> Result<Vec<SurgeryEvent>, SurgeryError> {
+        let mut faces = self.crossed_faces(body, plane, front);
         // Faces the blade crossed before but that had to stay glued (at the cut's front then):
         // retried now that the cut may have moved on.
         let near = self.stamp;
@@ -279,33 +342,21 @@ impl Surgery {
         Some(group)
     }
 
-    /// Faces between tets whose centroid segment crosses the cut surface.
-    fn crossed_faces(&mut self, body: &SoftBody, surface: &[[DVec3; 3]; 8]) -> Vec<NewFace> {
+    /// The tets that straddle the plane of `plane` and meet the box of its polygon (sorted):
+    /// nodes near the box first, then their tets. A crossing point lies in such a tet.
+    pub(crate) fn straddling_tets(&mut self, body: &SoftBody, plane: &CutPlane<'_>) -> Vec<u32> {
         let x = body.positions();
         let tets = body.tets();
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for tri in surface {
+        for tri in plane.surface {
             for p in tri {
                 lo = lo.min(*p);
                 hi = hi.max(*p);
             }
         }
-        // A crossing point lies in `t` or in `u`, on the blade's plane: one of the two tets
-        // meets the surface's box and straddles the plane. Nodes near the box first, then
-        // their tets.
-        let origin = surface[1][0];
-        let normal = (surface[1][1] - origin)
-            .cross(surface[1][2] - origin)
-            .normalize_or_zero();
+        let (origin, normal) = (plane.origin, plane.normal);
         self.stamp = self.stamp.wrapping_add(1).max(1);
         let stamp = self.stamp;
-        let centroid = |t: u32| -> DVec3 {
-            tets[t as usize]
-                .iter()
-                .map(|&i| x[i as usize].as_dvec3())
-                .sum::<DVec3>()
-                * 0.25
-        };
         let mut candidates = Vec::new();
         for (v, p) in x.iter().enumerate() {
             let p = p.as_dvec3();
@@ -332,32 +383,49 @@ impl Surgery {
                 }
             }
         }
+        candidates.sort_unstable();
+        candidates
+    }
+
+    /// Faces between tets whose centroid segment crosses the cut surface, except faces of the
+    /// tets in `front` (sorted: crossed only partly by this sweep, see `split`).
+    fn crossed_faces(
+        &mut self,
+        body: &SoftBody,
+        plane: &CutPlane<'_>,
+        front: &[u32],
+    ) -> Vec<NewFace> {
+        let candidates = self.straddling_tets(body, plane);
+        let x = body.positions();
+        let tets = body.tets();
+        let (origin, normal) = (plane.origin, plane.normal);
+        let centroid = |t: u32| -> DVec3 {
+            tets[t as usize]
+                .iter()
+                .map(|&i| x[i as usize].as_dvec3())
+                .sum::<DVec3>()
+                * 0.25
+        };
         // Candidates get a second mark so that each pair of candidates is tested once.
         self.stamp = self.stamp.wrapping_add(1).max(1);
         let stamp = self.stamp;
         for &t in &candidates {
             self.tet_mark[t as usize] = stamp;
         }
-        candidates.sort_unstable();
+        let in_front = |t: u32| front.binary_search(&t).is_ok();
         // All eight triangles lie in the end pose's plane: a centroid segment crosses the cut
         // surface when its ends are on opposite sides and the crossing point lies in one of them.
-        let inside = |p: DVec3| {
-            surface.iter().any(|[a, b, c]| {
-                let (ab, bc, ca) = (
-                    (*b - *a).cross(p - *a).dot(normal),
-                    (*c - *b).cross(p - *b).dot(normal),
-                    (*a - *c).cross(p - *c).dot(normal),
-                );
-                (ab >= 0.0 && bc >= 0.0 && ca >= 0.0) || (ab <= 0.0 && bc <= 0.0 && ca <= 0.0)
-            })
-        };
+        let inside = |p: DVec3| plane.contains(p);
         let mut out = Vec::new();
         for &t in &candidates {
+            if in_front(t) {
+                continue;
+            }
             let ct = centroid(t);
             let dt = normal.dot(ct - origin);
             for j in 0..4 {
                 let u = self.neighbours[t as usize][j];
-                if u == NO_TET || (u < t && self.tet_mark[u as usize] == stamp) {
+                if u == NO_TET || (u < t && self.tet_mark[u as usize] == stamp) || in_front(u) {
                     continue;
                 }
                 let cu = centroid(u);
@@ -619,6 +687,7 @@ impl Surgery {
                 self.node_tets.push(m);
                 self.origin.push(self.origin[*v as usize]);
                 self.node_reach.push(self.node_reach[*v as usize]);
+                self.rest.push(self.rest[*v as usize]);
             }
         }
         let mut changed: Vec<u32> = new_tets.keys().copied().collect();
@@ -712,6 +781,10 @@ impl Surgery {
             .collect();
         let mut events = vec![SurgeryEvent::CutAdvanced {
             new_nodes: first..next,
+            new_tets: 0..0,
+            split_tets: Vec::new(),
+            snapped_nodes: Vec::new(),
+            split_triangles: Vec::new(),
             changed_tets: changed,
             opened_faces: opened,
         }];

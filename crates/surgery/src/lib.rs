@@ -102,11 +102,13 @@ mod error;
 mod event;
 mod geometry;
 mod settings;
+mod split;
 mod state;
 mod suture;
 
 pub use cut::{BladeSweep, MIN_PIECE};
 pub use error::SurgeryError;
-pub use event::SurgeryEvent;
+pub use event::{SplitTriangle, SurgeryEvent};
 pub use settings::SurgerySettings;
+pub use split::{FRONT_SNAP, MIN_RATIO, SNAP_FRACTION};
 pub use state::{Surgery, Suture};

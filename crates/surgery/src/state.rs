@@ -3,6 +3,7 @@
 
 use crate::geometry::FxMap as HashMap;
 
+use glam::DVec3;
 use tissue_mesh::{NO_TET, TET_FACES};
 use tissue_pbd::{ConstraintSlot, SoftBody};
 
@@ -54,6 +55,15 @@ pub struct Surgery {
     pub(crate) node_reach: Vec<f32>,
     pub(crate) min_radius_ratio: f64,
     pub(crate) min_rest_volume: f32,
+    /// Rest position of each node (cm, `f64`): the body's at construction, then moved by
+    /// snapping and interpolated for nodes on split edges (the body's `rest_positions` are
+    /// these rounded to `f32`).
+    pub(crate) rest: Vec<DVec3>,
+    /// Per tet: made by a split (a piece), so held to [`crate::MIN_RATIO`].
+    pub(crate) created: Vec<bool>,
+    /// Crossing points (parameter from the smaller node) of edges that a sweep covered but
+    /// could not split yet, by sorted edge: a later sweep counts them as inside its polygon.
+    pub(crate) covered: HashMap<[u32; 2], f64>,
     /// Scratch marks per tet and node (stamped with `stamp`), reused by every cut.
     pub(crate) tet_mark: Vec<u32>,
     pub(crate) stamp: u32,
@@ -143,6 +153,9 @@ impl Surgery {
             node_reach,
             min_radius_ratio: min_ratio,
             min_rest_volume,
+            rest: body.rest_positions().iter().map(|p| p.as_dvec3()).collect(),
+            created: vec![false; tets.len()],
+            covered: HashMap::default(),
             tet_mark: vec![0; tets.len()],
             stamp: 0,
         };
@@ -344,6 +357,7 @@ impl Surgery {
         }
         if self.node_reach.len() != self.node_tets.len()
             || self.origin.len() != self.node_tets.len()
+            || self.rest.len() != self.node_tets.len()
         {
             return defect(
                 "node",
@@ -414,6 +428,11 @@ impl Surgery {
         for (t, tet) in tets.iter().enumerate() {
             if rest[t] < self.min_rest_volume {
                 return defect("tet", t, "rest volume below the quality bound");
+            }
+            if self.created.get(t).copied().unwrap_or(false)
+                && radius_ratio(tet.map(|i| self.rest[i as usize])) < crate::MIN_RATIO
+            {
+                return defect("tet", t, "a piece of a split below the radius-ratio bound");
             }
             if tet.iter().any(|&i| !x[i as usize].is_finite()) {
                 return defect("tet", t, "non-finite node position");
