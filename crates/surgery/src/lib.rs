@@ -110,5 +110,5 @@ pub use cut::{BladeSweep, MIN_PIECE};
 pub use error::SurgeryError;
 pub use event::{SplitTriangle, SurgeryEvent};
 pub use settings::SurgerySettings;
-pub use split::{FRONT_SNAP, MIN_RATIO, SNAP_FRACTION};
+pub use split::{FRONT_SNAP, MIN_RATIO, MIN_VOLUME_FRACTION, SNAP_FRACTION};
 pub use state::{Surgery, Suture};

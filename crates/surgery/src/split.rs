@@ -63,6 +63,10 @@ const COVERED_SLACK: f64 = 0.1;
 /// Covered crossing points remembered at most (then forgotten all at once).
 const COVERED_CAP: usize = 1 << 16;
 
+/// Smallest rest volume of a tet created or reshaped by a cut, as a fraction of the input
+/// mesh's smallest rest volume.
+pub const MIN_VOLUME_FRACTION: f64 = 1e-3;
+
 /// What one sweep's split did.
 #[derive(Debug, Default)]
 pub(crate) struct SplitOutcome {
@@ -135,100 +139,28 @@ fn sorted2(a: u32, b: u32) -> [u32; 2] {
     [a.min(b), a.max(b)]
 }
 
-/// The pieces of a tet with node signs `s` (see the module docs), `mid(a, b)` the node on
-/// edge `a b`. Unoriented. `false` when the tet is not crossed.
-fn subdivide(
-    t: [u32; 4],
-    s: [i8; 4],
-    mid: &dyn Fn(u32, u32) -> u32,
-    out: &mut Vec<[u32; 4]>,
-) -> bool {
-    let pick = |sign: i8| -> ([u32; 4], usize) {
-        let mut v = [0; 4];
-        let mut n = 0;
-        for k in 0..4 {
-            if s[k] == sign {
-                v[n] = t[k];
-                n += 1;
-            }
+/// The pieces of tet `t` when its edges in `split` (sorted edge → node on it, in the global
+/// order of the sorted edges) are bisected in that order: the first split edge of `t` is
+/// bisected (the tet into the two tets through its node and the opposite edge), then each half
+/// the same way with the later edges. Since a face's triangulation then depends only on the
+/// order of its own edges, which is global, two tets sharing a face split it alike (no
+/// hanging node); replacing an end of an edge by a point strictly inside it keeps the
+/// orientation. Once every crossing edge of `t` is split, no piece holds nodes of both sides.
+fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
+    for (k, (e, m)) in split.iter().enumerate() {
+        if let (Some(i), Some(j)) = (
+            t.iter().position(|&v| v == e[0]),
+            t.iter().position(|&v| v == e[1]),
+        ) {
+            let (mut lo, mut hi) = (t, t);
+            lo[j] = *m;
+            hi[i] = *m;
+            bisect(lo, &split[k + 1..], out);
+            bisect(hi, &split[k + 1..], out);
+            return;
         }
-        (v, n)
-    };
-    let (pos, np) = pick(1);
-    let (neg, nn) = pick(-1);
-    let (zer, _) = pick(0);
-    // The lone node of the smaller side and the others.
-    let (one, many, nm) = if np <= nn {
-        (pos, neg, nn)
-    } else {
-        (neg, pos, np)
-    };
-    match (np.min(nn), nm) {
-        (1, 1) => {
-            let (a, b) = (one[0], many[0]);
-            let m = mid(a, b);
-            out.push(t.map(|v| if v == b { m } else { v }));
-            out.push(t.map(|v| if v == a { m } else { v }));
-        }
-        (1, 2) => {
-            let (x, [y, z], w) = (one[0], [many[0], many[1]], zer[0]);
-            let (my, mz) = (mid(x, y), mid(x, z));
-            out.push([x, my, mz, w]);
-            pyramid([y, z, mz, my], w, out);
-        }
-        (1, 3) => {
-            let x = one[0];
-            let [y, z, w] = [many[0], many[1], many[2]];
-            let (my, mz, mw) = (mid(x, y), mid(x, z), mid(x, w));
-            out.push([x, my, mz, mw]);
-            prism([my, mz, mw, y, z, w], out);
-        }
-        (2, 2) => {
-            let ([a, b], [c, d]) = ([pos[0], pos[1]], [neg[0], neg[1]]);
-            let (ac, ad, bc, bd) = (mid(a, c), mid(a, d), mid(b, c), mid(b, d));
-            prism([a, ac, ad, b, bc, bd], out);
-            prism([c, ac, bc, d, ad, bd], out);
-        }
-        _ => return false,
     }
-    true
-}
-
-/// A pyramid on the quad `q` (cyclic) with apex `w`: split along the diagonal from the quad's
-/// smallest node.
-fn pyramid(q: [u32; 4], w: u32, out: &mut Vec<[u32; 4]>) {
-    let k = (0..4).min_by_key(|&i| q[i]).unwrap_or(0);
-    let at = |i: usize| q[(k + i) % 4];
-    out.push([w, at(0), at(1), at(2)]);
-    out.push([w, at(0), at(2), at(3)]);
-}
-
-/// A prism with triangles `v[0..3]`, `v[3..6]` and edges `v[i] v[i+3]`: three tets, each quad
-/// split along the diagonal from its smallest node (Dompierre, Labbé, Vallet, Camarero 1999).
-fn prism(v: [u32; 6], out: &mut Vec<[u32; 4]>) {
-    const ROT: [[usize; 6]; 6] = [
-        [0, 1, 2, 3, 4, 5],
-        [1, 2, 0, 4, 5, 3],
-        [2, 0, 1, 5, 3, 4],
-        [3, 5, 4, 0, 2, 1],
-        [4, 3, 5, 1, 0, 2],
-        [5, 4, 3, 2, 1, 0],
-    ];
-    let k = (0..6).min_by_key(|&i| v[i]).unwrap_or(0);
-    let p = ROT[k].map(|i| v[i]);
-    if p[1].min(p[5]) < p[2].min(p[4]) {
-        out.extend([
-            [p[0], p[1], p[2], p[5]],
-            [p[0], p[1], p[5], p[4]],
-            [p[0], p[4], p[5], p[3]],
-        ]);
-    } else {
-        out.extend([
-            [p[0], p[1], p[2], p[4]],
-            [p[0], p[4], p[2], p[5]],
-            [p[0], p[4], p[5], p[3]],
-        ]);
-    }
+    out.push(t);
 }
 
 /// A planned split edge: its ends, the crossing parameter from the first, its new node.
@@ -315,7 +247,7 @@ impl Surgery {
                     let now = tet.map(|u| if u == v { target } else { pos(body, u) });
                     let vol = six_volume(after) / 6.0;
                     six_volume(now) > 0.0
-                        && vol >= self.min_rest_volume as f64
+                        && vol >= self.volume_floor()
                         && radius_ratio(after) >= MIN_RATIO.min(radius_ratio(before))
                 });
             if !ok {
@@ -411,57 +343,16 @@ impl Surgery {
                 crossed.push(t);
             }
         }
-        // A tet at the front: one of its crossing points is outside the polygon.
-        out.front.clear();
-        for &t in &crossed {
-            let tet = body.tets()[t as usize];
-            let outside = (0..4).any(|a| {
-                (a + 1..4).any(|b| {
-                    let e = sorted2(tet[a], tet[b]);
-                    edges
-                        .get(&e)
-                        .is_some_and(|c| !c.valid && !is_near(e[0]) && !is_near(e[1]))
-                })
-            });
-            if outside {
-                out.front.push(t);
-            }
-        }
-        // 3. Fixed point: split tets have all their crossing edges split, split edges have all
-        // their tets split; then the quality check, and again until nothing fails.
-        let mut split: Vec<u32> = crossed.clone();
+        // 3. Split edges (valid ones), the tets around them bisected (see `bisect`); a tet
+        // whose pieces would fall below the quality bound or not tile it in rest space gives
+        // up its split edges, and the rest is planned again until nothing fails.
+        let first = body.node_count() as u32;
         let mut pieces: Vec<[u32; 4]> = Vec::new();
         let mut plan: Vec<(u32, std::ops::Range<usize>)> = Vec::new();
         let mut new_rest: Vec<DVec3> = Vec::new();
         let mut order: Vec<[u32; 2]> = Vec::new();
-        let first = body.node_count() as u32;
+        let mut local: Vec<([u32; 2], u32)> = Vec::new();
         loop {
-            loop {
-                let mut changed = false;
-                split.retain(|&t| {
-                    let tet = body.tets()[t as usize];
-                    let keep = (0..4).all(|a| {
-                        (a + 1..4)
-                            .all(|b| edges.get(&sorted2(tet[a], tet[b])).is_none_or(|c| c.valid))
-                    });
-                    changed |= !keep;
-                    keep
-                });
-                for (e, c) in edges.iter_mut() {
-                    if c.valid
-                        && self
-                            .tets_around(e)
-                            .any(|t| split.binary_search(&t).is_err())
-                    {
-                        c.valid = false;
-                        changed = true;
-                    }
-                }
-                if !changed {
-                    break;
-                }
-            }
-            // Node ids for the split edges, in edge order.
             order.clear();
             order.extend(edges.iter().filter(|(_, c)| c.valid).map(|(e, _)| *e));
             order.sort_unstable();
@@ -476,6 +367,9 @@ impl Surgery {
                 let (r0, r1) = (self.rest[e[0] as usize], self.rest[e[1] as usize]);
                 new_rest.push(r0 + (r1 - r0) * c.s);
             }
+            let mut affected: Vec<u32> = order.iter().flat_map(|e| self.tets_around(e)).collect();
+            affected.sort_unstable();
+            affected.dedup();
             let rest_of = |v: u32| -> DVec3 {
                 if v >= first {
                     new_rest[(v - first) as usize]
@@ -483,43 +377,47 @@ impl Surgery {
                     self.rest[v as usize]
                 }
             };
-            let mid = |a: u32, b: u32| edges.get(&sorted2(a, b)).map_or(u32::MAX, |c| c.node);
             pieces.clear();
             plan.clear();
-            let mut failed: Vec<u32> = Vec::new();
-            for &t in &split {
+            let mut failed: Vec<[u32; 2]> = Vec::new();
+            for &t in &affected {
                 let tet = body.tets()[t as usize];
+                local.clear();
+                for a in 0..4 {
+                    for b in a + 1..4 {
+                        let e = sorted2(tet[a], tet[b]);
+                        if let Some(c) = edges.get(&e).filter(|c| c.valid) {
+                            local.push((e, c.node));
+                        }
+                    }
+                }
+                local.sort_unstable();
                 let start = pieces.len();
-                let ok = subdivide(tet, tet.map(sign), &mid, &mut pieces);
+                bisect(tet, &local, &mut pieces);
                 let parent = six_volume(tet.map(rest_of));
                 let mut sum = 0.0;
-                let good =
-                    ok && pieces[start..].iter_mut().all(|p| {
-                        if p.contains(&u32::MAX) {
-                            return false;
-                        }
-                        if six_volume(p.map(rest_of)) < 0.0 {
-                            p.swap(0, 1);
-                        }
-                        let r = p.map(rest_of);
-                        let v = six_volume(r);
-                        sum += v;
-                        v / 6.0 >= self.min_rest_volume as f64 && radius_ratio(r) >= MIN_RATIO
-                    }) && (sum - parent).abs() <= 1e-9 * parent.abs();
+                let good = pieces[start..].iter().all(|p| {
+                    let r = p.map(rest_of);
+                    let v = six_volume(r);
+                    sum += v;
+                    v / 6.0 >= self.volume_floor() && radius_ratio(r) >= MIN_RATIO
+                }) && (sum - parent).abs() <= 1e-9 * parent.abs();
                 if good {
                     plan.push((t, start..pieces.len()));
                 } else {
                     pieces.truncate(start);
-                    failed.push(t);
+                    failed.extend(local.iter().map(|l| l.0));
                 }
             }
             if failed.is_empty() {
                 break;
             }
-            split.retain(|t| failed.binary_search(t).is_err());
+            for e in failed {
+                if let Some(c) = edges.get_mut(&e) {
+                    c.valid = false;
+                }
+            }
         }
-        out.front.sort_unstable();
-        out.front.dedup();
         // Crossing points this sweep covered on edges it did not split: a later sweep in about
         // the same place finds them covered (a cut continued over many steps).
         if self.covered.len() > COVERED_CAP {
@@ -532,11 +430,25 @@ impl Surgery {
                 self.covered.remove(e);
             }
         }
-        if plan.is_empty() {
-            return Ok(out);
+        let outside: Vec<[u32; 2]> = edges
+            .iter()
+            .filter(|(_, c)| !c.inside)
+            .map(|(e, _)| *e)
+            .collect();
+        if !plan.is_empty() {
+            self.apply_split(body, &edges, &order, &new_rest, &plan, &pieces, &mut out)?;
         }
-        self.apply_split(body, &edges, &order, &new_rest, &plan, &pieces, &mut out)?;
+        // The front: tets (after the split) on a crossing edge outside the polygon.
+        for e in &outside {
+            out.front.extend(self.tets_around(e));
+        }
+        out.front.sort_unstable();
+        out.front.dedup();
         Ok(out)
+    }
+    /// Smallest rest volume a cut may create (cm³): [`MIN_VOLUME_FRACTION`] of the input's.
+    pub(crate) fn volume_floor(&self) -> f64 {
+        MIN_VOLUME_FRACTION * self.min_rest_volume as f64
     }
 
     /// The tets around an edge.
@@ -820,72 +732,73 @@ fn old_neighbours_contains(
 mod tests {
     use super::*;
 
-    fn volume(p: &[[u32; 4]], x: &[DVec3]) -> f64 {
-        p.iter()
-            .map(|t| six_volume(t.map(|i| x[i as usize])).abs())
-            .sum()
-    }
-
-    /// Every sign pattern of the unit tet, cut at crossing points: the pieces tile the tet
-    /// (their volumes sum to its volume) and none is flat.
+    /// Every sign pattern of the unit tet, with every crossing edge split: the pieces tile the
+    /// tet (their volumes sum to its volume), none is flat or inverted, and none holds nodes of
+    /// both sides.
     #[test]
-    fn every_sign_pattern_tiles_the_tet() {
+    fn every_sign_pattern_tiles_the_tet_and_separates_the_sides() {
         let base = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
         for code in 0..81u32 {
             let s: [i8; 4] = [0, 1, 2, 3].map(|k| ((code / 3u32.pow(k)) % 3) as i8 - 1);
             let mut x = base.to_vec();
-            let mut mids: Vec<([u32; 2], u32)> = Vec::new();
+            let mut split: Vec<([u32; 2], u32)> = Vec::new();
             for a in 0..4u32 {
                 for b in a + 1..4 {
                     if s[a as usize] * s[b as usize] < 0 {
-                        mids.push(([a, b], x.len() as u32));
-                        x.push((base[a as usize] * 0.4 + base[b as usize] * 0.6) * 1.0);
+                        split.push(([a, b], x.len() as u32));
+                        x.push(base[a as usize] * 0.4 + base[b as usize] * 0.6);
                     }
                 }
             }
-            // Reverse ids so the diagonal rule sees several orders.
-            let mid = |a: u32, b: u32| {
-                mids.iter()
-                    .find(|m| m.0 == sorted2(a, b))
-                    .map_or(u32::MAX, |m| m.1)
-            };
             let mut out = Vec::new();
-            let crossed = subdivide([0, 1, 2, 3], s, &mid, &mut out);
-            let any = !mids.is_empty();
-            assert_eq!(crossed, any, "{s:?}");
-            if crossed {
-                assert!(out.iter().all(|t| !t.contains(&u32::MAX)));
-                let v = volume(&out, &x);
-                assert!((v - 1.0).abs() < 1e-12, "{s:?}: {v}");
-                assert!(out
+            bisect([0, 1, 2, 3], &split, &mut out);
+            let v: f64 = out
+                .iter()
+                .map(|t| six_volume(t.map(|i| x[i as usize])))
+                .sum();
+            assert!((v - 1.0).abs() < 1e-12, "{s:?}: {v}");
+            for t in &out {
+                assert!(six_volume(t.map(|i| x[i as usize])) > 1e-6, "{s:?}: {t:?}");
+                let sides: Vec<i8> = t
                     .iter()
-                    .all(|t| six_volume(t.map(|i| x[i as usize])).abs() > 1e-6));
+                    .filter(|&&i| i < 4)
+                    .map(|&i| s[i as usize])
+                    .collect();
+                assert!(!(sides.contains(&1) && sides.contains(&-1)), "{s:?}: {t:?}");
             }
         }
     }
 
+    /// Two tets sharing the face 0 1 2, any subset of its edges split: both sides triangulate
+    /// the face the same way.
     #[test]
-    fn prisms_split_their_quads_from_the_smallest_node() {
-        for perm in [
-            [0, 1, 2, 3, 4, 5],
-            [5, 4, 3, 2, 1, 0],
-            [2, 5, 0, 4, 1, 3],
-            [3, 0, 4, 1, 5, 2],
-        ] {
-            let v = perm.map(|i: u32| i + 10);
-            let mut out = Vec::new();
-            prism(v, &mut out);
-            let quads = [[0, 1, 4, 3], [1, 2, 5, 4], [2, 0, 3, 5]];
-            for q in quads {
-                let q = q.map(|i| v[i]);
-                let k = (0..4).min_by_key(|&i| q[i]).unwrap();
-                let diag = [q[k], q[(k + 2) % 4]];
-                assert!(
-                    out.iter()
-                        .any(|t| t.contains(&diag[0]) && t.contains(&diag[1])),
-                    "{perm:?}: quad {q:?} not split along {diag:?}"
-                );
-            }
+    fn neighbours_split_a_shared_face_alike() {
+        let edges = [([0, 1], 5), ([1, 2], 6), ([0, 2], 7)];
+        for mask in 1..8u32 {
+            let split: Vec<([u32; 2], u32)> = (0..3)
+                .filter(|k| mask & (1 << k) != 0)
+                .map(|k| edges[k])
+                .collect();
+            let mut sorted = split.clone();
+            sorted.sort_unstable();
+            let on_face = |t: &[u32; 4]| -> Vec<[u32; 3]> {
+                (0..4)
+                    .map(|j| {
+                        let mut f = face_nodes(t, j);
+                        f.sort_unstable();
+                        f
+                    })
+                    .filter(|f| f.iter().all(|&v| v != 3 && v != 4))
+                    .collect()
+            };
+            let faces = |t: [u32; 4]| {
+                let mut out = Vec::new();
+                bisect(t, &sorted, &mut out);
+                let mut f: Vec<[u32; 3]> = out.iter().flat_map(on_face).collect();
+                f.sort_unstable();
+                f
+            };
+            assert_eq!(faces([0, 1, 2, 3]), faces([0, 2, 1, 4]), "mask {mask}");
         }
     }
 }

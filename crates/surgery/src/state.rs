@@ -186,11 +186,18 @@ impl Surgery {
         &self.settings
     }
 
-    /// The quality bound every tet keeps through any cut: `(smallest rest volume (cm³), smallest
-    /// radius ratio 3r_in/r_circ)` of the mesh at construction. Cuts create no tet and move no
-    /// node in rest space, so no tet ever falls below it.
+    /// The quality bound every tet keeps through any cut: `(smallest rest volume (cm³),
+    /// smallest rest radius ratio 3r_in/r_circ)`. The volume is [`crate::MIN_VOLUME_FRACTION`]
+    /// of the input mesh's smallest; the ratio is the smaller of the input's smallest and
+    /// [`crate::MIN_RATIO`]. Every tet a split creates has a radius ratio of at least
+    /// [`crate::MIN_RATIO`] (pieces that would not are not created: that tet stays whole), and
+    /// a snap never makes a tet's ratio worse than `min(MIN_RATIO, its ratio before)`.
+    /// [`Surgery::validate`] checks both.
     pub fn quality_bound(&self) -> (f32, f64) {
-        (self.min_rest_volume, self.min_radius_ratio)
+        (
+            self.volume_floor() as f32,
+            self.min_radius_ratio.min(crate::MIN_RATIO),
+        )
     }
 
     /// Tet adjacency across faces (`NO_TET` on the boundary and across cut walls).
@@ -426,7 +433,7 @@ impl Surgery {
         let x = body.positions();
         let rest = body.tet_rest_volumes();
         for (t, tet) in tets.iter().enumerate() {
-            if rest[t] < self.min_rest_volume {
+            if (rest[t] as f64) < self.volume_floor() {
                 return defect("tet", t, "rest volume below the quality bound");
             }
             if self.created.get(t).copied().unwrap_or(false)
