@@ -479,7 +479,8 @@ impl Surgery {
         nodes.dedup();
         let mut out = Vec::with_capacity(nodes.len());
         for v in nodes {
-            let star = self.node_tets[v as usize].clone();
+            let mut star = self.node_tets[v as usize].clone();
+            star.sort_unstable();
             let mut comp = vec![u32::MAX; star.len()];
             let mut count = 0;
             for s in 0..star.len() {
@@ -494,7 +495,7 @@ impl Surgery {
                         if node == v || u == NO_TET {
                             continue;
                         }
-                        if let Some(b) = star.iter().position(|&w| w == u) {
+                        if let Ok(b) = star.binary_search(&u) {
                             if comp[b] == u32::MAX {
                                 comp[b] = count;
                                 stack.push(b);

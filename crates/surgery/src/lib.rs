@@ -110,5 +110,7 @@ pub use cut::{BladeSweep, MIN_PIECE};
 pub use error::SurgeryError;
 pub use event::{SplitTriangle, SurgeryEvent};
 pub use settings::SurgerySettings;
-pub use split::{FRONT_SNAP, MIN_RATIO, MIN_VOLUME_FRACTION, SNAP_FRACTION};
+pub use split::{
+    FRONT_SNAP, MAX_SPLIT_DEPTH, MIN_PIECE_FRACTION, MIN_RATIO, MIN_VOLUME_FRACTION, SNAP_FRACTION,
+};
 pub use state::{Surgery, Suture};

@@ -67,6 +67,14 @@ const COVERED_CAP: usize = 1 << 16;
 /// mesh's smallest rest volume.
 pub const MIN_VOLUME_FRACTION: f64 = 1e-3;
 
+/// Smallest rest volume of a piece a split creates, as a fraction of the input's median tet:
+/// with [`MAX_SPLIT_DEPTH`] it bounds how fine repeated cuts through one place refine the mesh.
+pub const MIN_PIECE_FRACTION: f64 = 0.01;
+
+/// A tet made by this many splits in a row is not split again (a later cut through it
+/// separates along its faces, as where a split is refused for quality).
+pub const MAX_SPLIT_DEPTH: u8 = 3;
+
 /// What one sweep's split did.
 #[derive(Debug, Default)]
 pub(crate) struct SplitOutcome {
@@ -400,8 +408,9 @@ impl Surgery {
                     let r = p.map(rest_of);
                     let v = six_volume(r);
                     sum += v;
-                    v / 6.0 >= self.volume_floor() && radius_ratio(r) >= MIN_RATIO
-                }) && (sum - parent).abs() <= 1e-9 * parent.abs();
+                    v / 6.0 >= self.piece_floor() && radius_ratio(r) >= MIN_RATIO
+                }) && (sum - parent).abs() <= 1e-9 * parent.abs()
+                    && (local.is_empty() || self.depth[t as usize] < MAX_SPLIT_DEPTH);
                 if good {
                     plan.push((t, start..pieces.len()));
                 } else {
@@ -449,6 +458,12 @@ impl Surgery {
     /// Smallest rest volume a cut may create (cm³): [`MIN_VOLUME_FRACTION`] of the input's.
     pub(crate) fn volume_floor(&self) -> f64 {
         MIN_VOLUME_FRACTION * self.min_rest_volume as f64
+    }
+
+    /// Smallest rest volume of a piece a split creates (cm³): [`MIN_PIECE_FRACTION`] of the
+    /// input's median tet, and at least [`Surgery::volume_floor`].
+    pub(crate) fn piece_floor(&self) -> f64 {
+        (MIN_PIECE_FRACTION * self.median_rest_volume).max(self.volume_floor())
     }
 
     /// The tets around an edge.
@@ -637,7 +652,13 @@ impl Surgery {
             .copied()
             .filter(|(t, _)| !split_set(*t))
             .collect();
-        let was_wall = |t: u32, j: usize| wall.contains(&(t, j as u8));
+        let mut split_walls: Vec<(u32, u8)> = wall
+            .iter()
+            .copied()
+            .filter(|(t, _)| split_set(*t))
+            .collect();
+        split_walls.sort_unstable();
+        let was_wall = |t: u32, j: usize| split_walls.binary_search(&(t, j as u8)).is_ok();
         let mut surface: HashMap<(usize, usize), Vec<[u32; 3]>> = HashMap::default();
         for &(idx, k) in &made {
             let tet = body.tets()[idx as usize];
@@ -702,9 +723,10 @@ impl Surgery {
         }
         let touched: Vec<u32> = made.iter().map(|m| m.0).collect();
         self.rebuild_masses(body, &touched)?;
-        self.created.resize(body.tets().len(), false);
-        for &t in &touched {
-            self.created[t as usize] = true;
+        let parent_depth: Vec<u8> = plan.iter().map(|(t, _)| self.depth[*t as usize]).collect();
+        self.depth.resize(body.tets().len(), 0);
+        for &(idx, k) in &made {
+            self.depth[idx as usize] = parent_depth[k].saturating_add(1);
         }
         tracing::debug!(
             split = plan.len(),

@@ -59,8 +59,11 @@ pub struct Surgery {
     /// snapping and interpolated for nodes on split edges (the body's `rest_positions` are
     /// these rounded to `f32`).
     pub(crate) rest: Vec<DVec3>,
-    /// Per tet: made by a split (a piece), so held to [`crate::MIN_RATIO`].
-    pub(crate) created: Vec<bool>,
+    /// Per tet: how many splits made it (0 for the input's tets); pieces (depth > 0) are held
+    /// to [`crate::MIN_RATIO`], and a tet at [`crate::MAX_SPLIT_DEPTH`] is not split again.
+    pub(crate) depth: Vec<u8>,
+    /// Median rest volume of the input's tets (cm³).
+    pub(crate) median_rest_volume: f64,
     /// Crossing points (parameter from the smaller node) of edges that a sweep covered but
     /// could not split yet, by sorted edge: a later sweep counts them as inside its polygon.
     pub(crate) covered: HashMap<[u32; 2], f64>,
@@ -154,7 +157,12 @@ impl Surgery {
             min_radius_ratio: min_ratio,
             min_rest_volume,
             rest: body.rest_positions().iter().map(|p| p.as_dvec3()).collect(),
-            created: vec![false; tets.len()],
+            depth: vec![0; tets.len()],
+            median_rest_volume: {
+                let mut v: Vec<f32> = body.tet_rest_volumes().to_vec();
+                v.sort_unstable_by(f32::total_cmp);
+                v.get(v.len() / 2).copied().unwrap_or(0.0) as f64
+            },
             covered: HashMap::default(),
             tet_mark: vec![0; tets.len()],
             stamp: 0,
@@ -436,7 +444,7 @@ impl Surgery {
             if (rest[t] as f64) < self.volume_floor() {
                 return defect("tet", t, "rest volume below the quality bound");
             }
-            if self.created.get(t).copied().unwrap_or(false)
+            if self.depth.get(t).is_some_and(|&d| d > 0)
                 && radius_ratio(tet.map(|i| self.rest[i as usize])) < crate::MIN_RATIO
             {
                 return defect("tet", t, "a piece of a split below the radius-ratio bound");
