@@ -1,20 +1,22 @@
-//! The scalpel cut: tets separated along the faces the blade's swept surface crosses.
+//! The scalpel cut: after the split (module `split`), tets separated along the faces the
+//! blade's swept surface crosses.
 //!
 //! 1. The blade's cut surface for one step is the blade triangle at both poses plus the
 //!    surfaces swept by its three edges, projected onto the blade's plane at the end pose
 //!    (eight coplanar triangles, world space, current positions): the area the blade swept in
 //!    its own plane.
-//! 2. A face shared by tets `t` and `u` is cut when the segment between their centroids crosses
-//!    that surface. The cut walls are thus made of existing tet faces: no tet is split or
-//!    created, so no sliver can appear (the quality bound is the mesh's own, see
-//!    [`crate::Surgery::quality_bound`]); the walls lie within about one tet of the blade.
-//! 3. Each node on a newly cut face is split by the face-connected components of its tets: the
+//! 2. The split snaps nodes onto that plane and splits the crossed tets (module `split`).
+//! 3. A face shared by tets `t` and `u` is cut when the segment between their centroids crosses
+//!    that surface, unless `t` or `u` is at the cut's front (crossed only partly). After the
+//!    split these are faces on the blade's plane; where a split was refused, faces of the
+//!    whole tets (within one tet of the blade).
+//! 4. Each node on a newly cut face is split by the face-connected components of its tets: the
 //!    first component keeps the node, each other one gets a copy (appended to the body).
-//! 4. Before anything is committed, the boundary around the touched nodes is checked: an edge
+//! 5. Before anything is committed, the boundary around the touched nodes is checked: an edge
 //!    used by more or fewer than two boundary faces, or a vertex whose boundary faces do not
 //!    make one fan (a pinch at the cut's front), has its newly cut faces glued back, and the
 //!    check repeats. So the surface stays manifold and consistently oriented.
-//! 5. Commit: nodes duplicated, tets moved onto them (rest values kept), every edge that now
+//! 6. Commit: nodes duplicated, tets moved onto them (rest values kept), every edge that now
 //!    exists twice gets a second distance constraint with the same rest length, masses of the
 //!    touched nodes rebuilt from their tets (eq. (1)), pieces recounted.
 
@@ -108,8 +110,8 @@ struct NewFace {
 }
 
 impl Surgery {
-    /// Cuts `body` along a blade's sweep (see the module docs of `cut`), returning the events:
-    /// [`SurgeryEvent::CutAdvanced`] when faces were opened, then one
+    /// Cuts `body` along a blade's sweep (see the crate docs), returning the events:
+    /// [`SurgeryEvent::CutAdvanced`] when tets were split, nodes snapped or faces opened, then one
     /// [`SurgeryEvent::PieceDetached`] per new piece. A sweep that crosses no face returns no
     /// event. Call it after each step with the blade's sweep of that step (e.g.
     /// [`BladeSweep::from_tool`]) to cut over many steps.

@@ -32,8 +32,9 @@ pub struct Suture {
 /// - `node_tets[v]` lists the tets using node `v`; `origin[v]` is the node of the original mesh
 ///   that `v` was split from (itself for original nodes);
 /// - `edge_constraint` maps each sorted node pair of a tet edge to the body's live distance
-///   constraint on it; tets are never created or removed by a cut, only moved onto new nodes, so
-///   every tet keeps its rest shape and quality.
+///   constraint on it; tets are never removed: a split tet's record holds its first piece and
+///   the others are appended; every tet's rest shape is at or above [`Surgery::quality_bound`];
+/// - `rest[v]` is node `v`'s rest position, `depth[t]` how many splits made tet `t`.
 #[derive(Debug, Clone)]
 pub struct Surgery {
     pub(crate) settings: SurgerySettings,
