@@ -130,7 +130,7 @@ impl Edits {
 }
 
 /// How many of the last dynamic batches a new constraint may join (a lane free, no node shared).
-const SEARCH: usize = 16;
+const SEARCH: usize = 64;
 
 /// The kernels' parameter of a switched-off lane.
 fn off(solver: Solver) -> f32 {
@@ -605,6 +605,11 @@ impl SoftBody {
             self.edits.link_batches[position as usize].nodes = s;
             return Ok(());
         }
+        if let ConstraintSlot::Dynamic { position } = slot {
+            if self.update_dyn_distance_in_place(c, position as usize) {
+                return Ok(());
+            }
+        }
         self.edits.distance_slot[c] = ConstraintSlot::Removed;
         match slot {
             ConstraintSlot::Dynamic { position } => {
@@ -712,6 +717,11 @@ impl SoftBody {
                 c.apex = nodes[j];
             }
         }
+        if let ConstraintSlot::Dynamic { position } = slot {
+            if self.update_dyn_tet_in_place(t, position as usize) {
+                return Ok(());
+            }
+        }
         self.retire_tet_slot(t, slot);
         self.push_dyn_tet(t as u32);
         Ok(())
@@ -748,6 +758,11 @@ impl SoftBody {
                 c.face = [nodes[(j + 1) & 3], nodes[(j + 2) & 3], nodes[(j + 3) & 3]];
                 c.apex = nodes[j];
                 c.rest_height = heights[j];
+            }
+        }
+        if let ConstraintSlot::Dynamic { position } = slot {
+            if self.update_dyn_tet_in_place(t, position as usize) {
+                return Ok(());
             }
         }
         self.retire_tet_slot(t, slot);
@@ -907,6 +922,87 @@ impl SoftBody {
                 count: self.tets.len(),
             }),
         }
+    }
+
+    /// Rewrites dynamic distance constraint `c`'s lane at `position` (its nodes, rest length and
+    /// parameter, and the padding lanes that copy it) when no other lane of its batch touches
+    /// its new nodes: a changed constraint then keeps its lane instead of leaving a dead one.
+    /// `false` (nothing changed) when a node clashes.
+    fn update_dyn_distance_in_place(&mut self, c: usize, position: usize) -> bool {
+        let (b, l) = (position / LANES, position % LANES);
+        let d = self.distance[c];
+        let s = d.nodes.map(|i| self.rank[i as usize]);
+        let param = self.settings.param(d.stiffness, d.compliance);
+        let e = &mut self.edits;
+        let fill = e.dyn_distance_fill[b] as usize;
+        let batch = &mut e.dyn_distance_batches[b];
+        let clash = (0..fill)
+            .filter(|&lane| lane != l)
+            .any(|lane| s.contains(&batch.nodes[0][lane]) || s.contains(&batch.nodes[1][lane]));
+        if clash {
+            return false;
+        }
+        let padding = if l == 0 { fill..LANES } else { 0..0 };
+        for lane in std::iter::once(l).chain(padding) {
+            batch.nodes[0][lane] = s[0];
+            batch.nodes[1][lane] = s[1];
+            set_lane(&mut batch.rest, lane, d.rest_length);
+            set_lane(&mut batch.param, lane, param);
+        }
+        true
+    }
+
+    /// As [`SoftBody::update_dyn_distance_in_place`] for tet `t` (nodes and rest values of its
+    /// volume constraints).
+    fn update_dyn_tet_in_place(&mut self, t: usize, position: usize) -> bool {
+        let (b, l) = (position / LANES, position % LANES);
+        let s = self.tets[t].map(|i| self.rank[i as usize]);
+        let tet = self.tet_volume.get(t).map(|c| {
+            (
+                c.rest_volume,
+                self.settings.param(c.stiffness, c.compliance),
+            )
+        });
+        let centroid = (self.volume_kind == VolumeConstraintKind::Centroid).then(|| {
+            let c = &self.centroid[4 * t..4 * t + 4];
+            (
+                [0, 1, 2, 3].map(|j| c[j].rest_height),
+                [0, 1, 2, 3].map(|j| self.settings.param(c[j].stiffness, c[j].compliance)),
+            )
+        });
+        let e = &mut self.edits;
+        let fill = e.dyn_tet_fill[b] as usize;
+        let ids = e
+            .dyn_tet_batches
+            .get(b)
+            .map(|x| x.nodes)
+            .or_else(|| e.dyn_centroid_batches.get(b).map(|x| x.nodes));
+        if let Some(ids) = ids {
+            let clash = (0..fill)
+                .filter(|&lane| lane != l)
+                .any(|lane| ids.iter().any(|k| s.contains(&k[lane])));
+            if clash {
+                return false;
+            }
+        }
+        let padding = if l == 0 { fill..LANES } else { 0..0 };
+        for lane in std::iter::once(l).chain(padding) {
+            if let (Some(x), Some((rest, param))) = (e.dyn_tet_batches.get_mut(b), tet) {
+                for (ids, &n) in x.nodes.iter_mut().zip(&s) {
+                    ids[lane] = n;
+                }
+                set_lane(&mut x.rest, lane, rest);
+                set_lane(&mut x.param, lane, param);
+            }
+            if let (Some(x), Some((rest, param))) = (e.dyn_centroid_batches.get_mut(b), centroid) {
+                for k in 0..4 {
+                    x.nodes[k][lane] = s[k];
+                    set_lane(&mut x.rest[k], lane, rest[k]);
+                    set_lane(&mut x.param[k], lane, param[k]);
+                }
+            }
+        }
+        true
     }
 
     /// Takes tet `t` out of its current slot (its lane switched off).

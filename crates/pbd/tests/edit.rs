@@ -113,6 +113,17 @@ fn a_body_split_in_rest_space_stays_at_rest_and_keeps_its_volume() {
             body.rest_volume()
         );
         assert!((body.total_mass() / mass - 1.0).abs() < 1e-5);
+        // Rewriting a dynamic constraint keeps its lane (no dead lane, no new batch).
+        let batches = body.dynamic_batch_counts();
+        let last = body.tets().len() - 1;
+        let (tet, shape) = (body.tets()[last], rest(&body, body.tets()[last]));
+        body.reshape_tet(last, tet, shape).unwrap();
+        body.set_tet_nodes(last, tet).unwrap();
+        let c = body.distance_constraints().len() - 1;
+        let d = body.distance_constraints()[c];
+        body.reset_distance_constraint(c, d.nodes, d.rest_length)
+            .unwrap();
+        assert_eq!(body.dynamic_batch_counts(), batches, "{kind:?}");
         let start: Vec<_> = body.positions().to_vec();
         for _ in 0..20 {
             body.step().unwrap();

@@ -26,7 +26,7 @@ use glam::{DVec3, Vec3};
 use tissue_mesh::NO_TET;
 use tissue_pbd::{DistanceConstraint, Pose, SoftBody, Tool, ToolShape};
 
-use crate::split::{CutPlane, SplitOutcome};
+use crate::split::CutPlane;
 use crate::state::{face_nodes, single_cycle};
 use crate::{Surgery, SurgeryError, SurgeryEvent};
 
@@ -136,19 +136,15 @@ impl Surgery {
             normal,
             surface: &surface,
         };
-        let split = if normal == DVec3::ZERO {
-            SplitOutcome {
-                first_node: body.node_count() as u32,
-                end_node: body.node_count() as u32,
-                first_tet: body.tets().len() as u32,
-                end_tet: body.tets().len() as u32,
-                ..Default::default()
-            }
+        let mut candidates = if normal == DVec3::ZERO {
+            Vec::new()
         } else {
-            let candidates = self.straddling_tets(body, &plane);
-            self.split_along(body, &plane, &candidates)?
+            self.straddling_tets(body, &plane)
         };
-        let mut events = self.open_faces(body, &plane, &split.front)?;
+        let split = self.split_along(body, &plane, &candidates)?;
+        // The faces to open are faces of the straddling tets or of the pieces.
+        candidates.extend(split.first_tet..split.end_tet);
+        let mut events = self.open_faces(body, &plane, &split.front, &candidates)?;
         let geometric = !split.split.is_empty() || !split.snapped.is_empty();
         match events.first_mut() {
             Some(SurgeryEvent::CutAdvanced {
@@ -188,8 +184,9 @@ impl Surgery {
         body: &mut SoftBody,
         plane: &CutPlane<'_>,
         front: &[u32],
+        candidates: &[u32],
     ) -> Result<Vec<SurgeryEvent>, SurgeryError> {
-        let mut faces = self.crossed_faces(body, plane, front);
+        let mut faces = self.crossed_faces(body, plane, front, candidates);
         // Faces the blade crossed before but that had to stay glued (at the cut's front then):
         // retried now that the cut may have moved on.
         let near = self.stamp;
@@ -396,8 +393,8 @@ impl Surgery {
         body: &SoftBody,
         plane: &CutPlane<'_>,
         front: &[u32],
+        candidates: &[u32],
     ) -> Vec<NewFace> {
-        let candidates = self.straddling_tets(body, plane);
         let x = body.positions();
         let tets = body.tets();
         let (origin, normal) = (plane.origin, plane.normal);
@@ -411,7 +408,7 @@ impl Surgery {
         // Candidates get a second mark so that each pair of candidates is tested once.
         self.stamp = self.stamp.wrapping_add(1).max(1);
         let stamp = self.stamp;
-        for &t in &candidates {
+        for &t in candidates {
             self.tet_mark[t as usize] = stamp;
         }
         let in_front = |t: u32| front.binary_search(&t).is_ok();
@@ -419,7 +416,7 @@ impl Surgery {
         // surface when its ends are on opposite sides and the crossing point lies in one of them.
         let inside = |p: DVec3| plane.contains(p);
         let mut out = Vec::new();
-        for &t in &candidates {
+        for &t in candidates {
             if in_front(t) {
                 continue;
             }
