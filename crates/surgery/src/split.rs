@@ -219,7 +219,8 @@ impl Surgery {
         let mut reshaped: Vec<u32> = Vec::new();
         for &v in &nodes {
             let d = dist[&v];
-            if d == 0.0 {
+            // `node_reach` is 1.5 × the longest rest edge: far nodes are skipped cheaply.
+            if d == 0.0 || d.abs() >= SNAP_FRACTION * self.node_reach[v as usize] as f64 / 1.5 {
                 continue;
             }
             let star = &self.node_tets[v as usize];
