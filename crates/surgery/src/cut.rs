@@ -545,7 +545,8 @@ impl Surgery {
         let is_touched = |v: u32| touched.binary_search(&v).is_ok();
         // Boundary faces of the local tets, in tentative labels, with the original labels.
         let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> = HashMap::default();
-        let mut around: HashMap<u32, Vec<[u32; 2]>> = HashMap::default();
+        // (vertex, link edge) of each boundary face at a touched vertex, grouped by sorting.
+        let mut around: Vec<(u32, [u32; 2])> = Vec::new();
         for &t in &local {
             for j in 0..4 {
                 if self.neighbours[t as usize][j] != NO_TET {
@@ -562,10 +563,7 @@ impl Surgery {
                         e.0 += 1;
                     }
                     if is_touched(orig[k]) {
-                        around
-                            .entry(f[k])
-                            .or_default()
-                            .push([f[(k + 1) % 3], f[(k + 2) % 3]]);
+                        around.push((f[k], [f[(k + 1) % 3], f[(k + 2) % 3]]));
                     }
                 }
             }
@@ -578,9 +576,14 @@ impl Surgery {
             }
         }
         let mut bad_vertices: Vec<u32> = Vec::new();
-        for (&v, link) in &around {
-            if !single_cycle(link) {
+        around.sort_unstable();
+        let mut link: Vec<[u32; 2]> = Vec::new();
+        for group in around.chunk_by(|a, b| a.0 == b.0) {
+            link.clear();
+            link.extend(group.iter().map(|g| g.1));
+            if !single_cycle(&link) {
                 // Back to the original label: the node itself or the one it copies.
+                let v = group[0].0;
                 bad_vertices.push(copy_of.get(&v).copied().unwrap_or(v));
             }
         }

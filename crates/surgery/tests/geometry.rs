@@ -199,6 +199,14 @@ fn a_partial_incision_splits_the_crossed_top_triangles_into_three() {
     }
     assert_eq!(surgery.component_count(), 1);
     assert!(reported > 0);
+    // A cut continued over ten sweeps still has flat walls: on the plane z = 0.15.
+    let walls = wall_nodes(&body, &surgery);
+    let off = walls
+        .iter()
+        .map(|&v| (body.positions()[v as usize].z - 0.15).abs())
+        .fold(0.0f32, f32::max);
+    assert!(walls.len() > 20);
+    assert!(off < 1e-5, "a wall node is {off} cm off the blade's plane");
     assert!((body.rest_volume() / total - 1.0).abs() < 1e-6);
     // The top triangles the path crossed (well inside its ends): each is now 3 boundary
     // triangles (rest centroids inside it), 1 and 2 on the two sides of the cut.
