@@ -3,7 +3,8 @@
 //! and p99 of the plain steps before the cut, of the steps during it (the step plus the cut),
 //! of the cut alone, and the wall triangles each cut opened.
 //!
-//! `cargo run --release -p tissue-surgery --example cut_timing [-- STEP_CM [EDGE_CM]]`
+//! `cargo run --release -p tissue-surgery --example cut_timing [-- STEP_CM [EDGE_CM [faces]]]`
+//! (`faces`: face separation only, `SurgerySettings::split_tets` off; default on).
 #![allow(clippy::unwrap_used, clippy::print_stdout)]
 
 use std::time::Instant;
@@ -57,7 +58,13 @@ fn main() {
     let mut body = SoftBody::new(&mesh, &Material::default()).unwrap();
     body.set_floor(Some(Floor::y(lo.y))).unwrap();
     body.set_settings(StepSettings::default()).unwrap();
-    let mut surgery = Surgery::new(&body, SurgerySettings::default()).unwrap();
+    // Geometric cuts (tets split on the blade's plane) unless the third argument is `faces`.
+    let split_tets = std::env::args().nth(3).as_deref() != Some("faces");
+    let settings = SurgerySettings {
+        split_tets,
+        ..SurgerySettings::default()
+    };
+    let mut surgery = Surgery::new(&body, settings).unwrap();
     for _ in 0..30 {
         body.step().unwrap();
     }

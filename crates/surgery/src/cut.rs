@@ -97,7 +97,8 @@ impl BladeSweep {
 }
 
 /// Smallest piece (tets) a cut may detach: smaller face-connected groups that new faces would
-/// enclose stay glued.
+/// enclose stay glued, and so do groups of less rest volume than this many median tets of the
+/// input (a slab between two nearly parallel walls, made of pieces of splits).
 pub const MIN_PIECE: usize = 16;
 
 /// A face opened by this cut: tet `t` face `j` against tet `u` face `k`.
@@ -136,7 +137,7 @@ impl Surgery {
             normal,
             surface: &surface,
         };
-        let mut candidates = if normal == DVec3::ZERO {
+        let mut candidates = if normal == DVec3::ZERO || !self.settings.split_tets {
             Vec::new()
         } else {
             self.straddling_tets(body, &plane)
@@ -144,6 +145,9 @@ impl Surgery {
         let split = self.split_along(body, &plane, &candidates)?;
         // The faces to open are faces of the straddling tets or of the pieces.
         candidates.extend(split.first_tet..split.end_tet);
+        if !self.settings.split_tets && normal != DVec3::ZERO {
+            candidates = self.straddling_tets(body, &plane);
+        }
         let mut events = self.open_faces(body, &plane, &split.front, &candidates)?;
         let geometric = !split.split.is_empty() || !split.snapped.is_empty();
         match events.first_mut() {
@@ -227,7 +231,7 @@ impl Surgery {
         for f in &faces {
             for t in [f.t, f.u] {
                 if self.tet_mark[t as usize] != self.stamp {
-                    if let Some(group) = self.small_group(t) {
+                    if let Some(group) = self.small_group(body, t) {
                         for &g in &group {
                             self.tet_mark[g as usize] = self.stamp;
                         }
@@ -323,14 +327,25 @@ impl Surgery {
         true
     }
 
-    /// The tets face-connected to `t` when there are fewer than [`MIN_PIECE`] of them.
-    fn small_group(&self, t: u32) -> Option<Vec<u32>> {
+    /// The tets face-connected to `t` when they are a crumb: fewer than [`MIN_PIECE`] tets, or
+    /// less rest volume than [`MIN_PIECE`] median tets of the input (pieces of splits are
+    /// small tets). `None` for a bigger group (the search stops early).
+    fn small_group(&self, body: &SoftBody, t: u32) -> Option<Vec<u32>> {
+        let rest = body.tet_rest_volumes();
+        let limit = MIN_PIECE as f64 * self.median_rest_volume;
         let mut group = vec![t];
+        let mut seen: HashMap<u32, ()> = HashMap::default();
+        seen.insert(t, ());
+        let mut volume = rest[t as usize] as f64;
         let mut i = 0;
         while i < group.len() {
             for &u in &self.neighbours[group[i] as usize] {
-                if u != NO_TET && !group.contains(&u) {
-                    if group.len() + 1 >= MIN_PIECE {
+                if u != NO_TET && seen.insert(u, ()).is_none() {
+                    volume += rest[u as usize] as f64;
+                    if (group.len() + 1 >= MIN_PIECE
+                        && (volume >= limit || !self.settings.split_tets))
+                        || group.len() >= 64 * MIN_PIECE
+                    {
                         return None;
                     }
                     group.push(u);

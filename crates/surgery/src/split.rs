@@ -75,6 +75,9 @@ pub const MIN_PIECE_FRACTION: f64 = 0.01;
 /// separates along its faces, as where a split is refused for quality).
 pub const MAX_SPLIT_DEPTH: u8 = 3;
 
+/// A cut wall whose normal is this close to the blade's (|cos|) counts as parallel to it.
+const WALL_PARALLEL: f64 = 0.9;
+
 /// What one sweep's split did.
 #[derive(Debug, Default)]
 pub(crate) struct SplitOutcome {
@@ -315,6 +318,23 @@ impl Surgery {
                 0
             }
         };
+        // Tets with a cut wall nearly parallel to the blade: the blade runs in a gap already
+        // opened (the tissue moved a little since the sweep that cut it); splitting them again
+        // would shave a thin slab off the wall. They are not split (their faces may still open,
+        // as where a split is refused).
+        let mut blocked: Vec<u32> = Vec::new();
+        for &(t, j) in &self.cut_faces {
+            if candidates.binary_search(&t).is_err() {
+                continue;
+            }
+            let f = face_nodes(&body.tets()[t as usize], j as usize).map(|v| pos(body, v));
+            let normal = (f[1] - f[0]).cross(f[2] - f[0]).normalize_or_zero();
+            if normal.dot(n).abs() > WALL_PARALLEL {
+                blocked.push(t);
+            }
+        }
+        blocked.sort_unstable();
+        blocked.dedup();
         // 2. Crossing edges.
         let mut edges: HashMap<[u32; 2], EdgeCut> = HashMap::default();
         let mut crossed: Vec<u32> = Vec::new();
@@ -350,6 +370,25 @@ impl Surgery {
             }
             if any {
                 crossed.push(t);
+            }
+        }
+        // A tet whose centroid lies over the polygon is cut whole: its crossing points outside
+        // the polygon count as inside (the cut's end snaps to the tet's far side), so a body
+        // that moved between sweeps does not leave partly covered tets behind for good.
+        for &t in &crossed {
+            let tet = body.tets()[t as usize];
+            let c = tet.iter().map(|&v| pos(body, v)).sum::<DVec3>() * 0.25;
+            if !plane.contains(c - n * n.dot(c - o)) {
+                continue;
+            }
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    let e = sorted2(tet[a], tet[b]);
+                    if let Some(c) = edges.get_mut(&e) {
+                        c.inside = true;
+                        c.valid = !is_near(e[0]) && !is_near(e[1]);
+                    }
+                }
             }
         }
         // 3. Split edges (valid ones), the tets around them bisected (see `bisect`); a tet
@@ -411,7 +450,9 @@ impl Surgery {
                     sum += v;
                     v / 6.0 >= self.piece_floor() && radius_ratio(r) >= MIN_RATIO
                 }) && (sum - parent).abs() <= 1e-9 * parent.abs()
-                    && (local.is_empty() || self.depth[t as usize] < MAX_SPLIT_DEPTH);
+                    && (local.is_empty()
+                        || (self.depth[t as usize] < MAX_SPLIT_DEPTH
+                            && blocked.binary_search(&t).is_err()));
                 if good {
                     plan.push((t, start..pieces.len()));
                 } else {

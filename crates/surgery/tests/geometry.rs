@@ -12,7 +12,11 @@ use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings, MIN_RAT
 fn block() -> (SoftBody, Surgery) {
     let mesh = tet_box(12, 6, 6, Vec3::new(6.0, 3.0, 3.0)).unwrap();
     let body = SoftBody::new(&mesh, &Material::default()).unwrap();
-    let surgery = Surgery::new(&body, SurgerySettings::default()).unwrap();
+    let settings = SurgerySettings {
+        split_tets: true,
+        ..SurgerySettings::default()
+    };
+    let surgery = Surgery::new(&body, settings).unwrap();
     (body, surgery)
 }
 

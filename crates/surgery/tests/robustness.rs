@@ -59,7 +59,11 @@ struct Stats {
 fn hammer(mesh: &TetMesh, seed: u64, sessions: usize, per_session: usize, steps: usize) -> Stats {
     let material = Material::default();
     let fresh = SoftBody::new(mesh, &material).unwrap();
-    let fresh_surgery = Surgery::new(&fresh, SurgerySettings::default()).unwrap();
+    let settings = SurgerySettings {
+        split_tets: true,
+        ..SurgerySettings::default()
+    };
+    let fresh_surgery = Surgery::new(&fresh, settings).unwrap();
     fresh_surgery.validate(&fresh).unwrap();
     let (lo, hi) = mesh
         .positions()
