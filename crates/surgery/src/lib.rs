@@ -12,7 +12,8 @@
 //! - [`SurgerySettings`], [`SurgeryError`].
 //!
 //! ## Cutting (SPEC Part B)
-//! Each sweep of the blade cuts in two phases.
+//! Each sweep of the blade cuts in two phases; the first only with
+//! [`SurgerySettings::split_tets`] on (off by default: see "Not built" below).
 //!
 //! **Geometry** (module `split`): the cut surface is the polygon the blade swept in its own
 //! plane. Nodes closer to the plane than [`SNAP_FRACTION`] of their shortest rest edge (and
@@ -48,8 +49,11 @@
 //!
 //! Not built: a surface triangle where a cut ends *inside* it is not split into 4 (the blade's
 //! end point is not inserted): the cut's end snaps to a tet boundary instead, and a partly
-//! crossed tet stays glued. A tet stretched to more than 1.5 × its longest rest edge may be
-//! missed by a sweep.
+//! crossed tet stays glued. With splits on, a body that moves against the blade while it is
+//! cut (a world-fixed blade path through a falling organ) gets slightly offset walls in every
+//! sweep and may not be cut through (the trainer's appendix cut-off), hence the setting is off
+//! by default; face separation alone handles that case. A tet stretched to more than 1.5 × its
+//! longest rest edge may be missed by a sweep.
 //!
 //! ## Suturing
 //! No change of geometry: the needle's axis is intersected with the boundary faces; the first

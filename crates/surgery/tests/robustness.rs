@@ -54,13 +54,20 @@ struct Stats {
 }
 
 /// `sessions` cuts of `per_session` continued sweeps each; `steps` steps after every cut; a
-/// fresh body every 2 sessions (8 cuts: splits add tets, projected serially in the dynamic
-/// set, and cut pieces pile up otherwise).
-fn hammer(mesh: &TetMesh, seed: u64, sessions: usize, per_session: usize, steps: usize) -> Stats {
+/// fresh body every 2 sessions (8 cuts) with splits, every 5 (20 cuts) without (splits add
+/// tets, projected serially in the dynamic set; cut pieces pile up otherwise).
+fn hammer(
+    mesh: &TetMesh,
+    seed: u64,
+    sessions: usize,
+    per_session: usize,
+    steps: usize,
+    split: bool,
+) -> Stats {
     let material = Material::default();
     let fresh = SoftBody::new(mesh, &material).unwrap();
     let settings = SurgerySettings {
-        split_tets: true,
+        split_tets: split,
         ..SurgerySettings::default()
     };
     let fresh_surgery = Surgery::new(&fresh, settings).unwrap();
@@ -101,7 +108,7 @@ fn hammer(mesh: &TetMesh, seed: u64, sessions: usize, per_session: usize, steps:
     body.set_settings(settings).unwrap();
     body.set_floor(Some(Floor::y(lo.y - 0.5))).unwrap();
     for session in 0..sessions {
-        if session % 2 == 0 {
+        if session % if split { 2 } else { 5 } == 0 {
             (body, surgery) = (fresh.clone(), fresh_surgery.clone());
             body.set_settings(settings).unwrap();
             body.set_floor(Some(Floor::y(lo.y - 0.5))).unwrap();
@@ -192,6 +199,15 @@ fn report(name: &str, s: &Stats, seconds: f64) {
 
 #[test]
 fn random_sweeps_over_the_bunny_keep_the_body_valid() {
+    bunny(true);
+}
+
+#[test]
+fn random_sweeps_over_the_bunny_keep_the_body_valid_without_splits() {
+    bunny(false);
+}
+
+fn bunny(split: bool) {
     let Ok(mesh) = tissue_meshio::read_tets(BUNNY) else {
         eprintln!("skipped: {BUNNY} not found (shared meshes missing)");
         return;
@@ -199,8 +215,16 @@ fn random_sweeps_over_the_bunny_keep_the_body_valid() {
     let (p, t) = mesh.into_parts();
     let mesh = TetMesh::new(p.iter().map(|p| *p * 10.0).collect(), t).unwrap();
     let start = Instant::now();
-    let s = hammer(&mesh, 0x05EE_DB0B, 250, 4, 10);
-    report("bunny", &s, start.elapsed().as_secs_f64());
+    let s = hammer(&mesh, 0x05EE_DB0B, 250, 4, 10, split);
+    report(
+        if split {
+            "bunny, split"
+        } else {
+            "bunny, faces"
+        },
+        &s,
+        start.elapsed().as_secs_f64(),
+    );
     assert_eq!(s.cuts, 1000);
     assert_eq!(s.steps, 10_000);
     assert!(
@@ -212,6 +236,15 @@ fn random_sweeps_over_the_bunny_keep_the_body_valid() {
 
 #[test]
 fn random_sweeps_over_the_liver_keep_the_body_valid() {
+    liver(true);
+}
+
+#[test]
+fn random_sweeps_over_the_liver_keep_the_body_valid_without_splits() {
+    liver(false);
+}
+
+fn liver(split: bool) {
     let Ok(surface) = tissue_meshio::read_surface(LIVER) else {
         eprintln!("skipped: {LIVER} not found (shared meshes missing)");
         return;
@@ -220,8 +253,16 @@ fn random_sweeps_over_the_liver_keep_the_body_valid() {
         .unwrap()
         .mesh;
     let start = Instant::now();
-    let s = hammer(&mesh, 0x0001_1FE2, 250, 4, 10);
-    report("liver", &s, start.elapsed().as_secs_f64());
+    let s = hammer(&mesh, 0x0001_1FE2, 250, 4, 10, split);
+    report(
+        if split {
+            "liver, split"
+        } else {
+            "liver, faces"
+        },
+        &s,
+        start.elapsed().as_secs_f64(),
+    );
     assert_eq!(s.cuts, 1000);
     assert!(
         s.cuts_opening > 500,
