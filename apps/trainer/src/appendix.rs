@@ -220,6 +220,7 @@ fn describe(e: &SurgeryEvent) -> String {
             new_nodes,
             changed_tets,
             opened_faces,
+            ..
         } => format!(
             "cut advanced: {} wall triangles, {} new nodes ({}..{}), {} tets moved",
             opened_faces.len(),

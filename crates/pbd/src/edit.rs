@@ -29,11 +29,14 @@
 //! Edits allocate (they are rare); a step after an edit allocates nothing. No re-partition is
 //! done: after very many edits the dynamic set grows and with it the serial part of a step.
 
-use glam::{Vec3A, Vec4};
+use glam::{DVec3, Vec3, Vec3A, Vec4};
 
 use crate::body::SoftBody;
 use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
-use crate::{DistanceConstraint, PbdError, Solver, VolumeConstraintKind};
+use crate::{
+    CentroidVolumeConstraint, DistanceConstraint, PbdError, Solver, TetVolumeConstraint,
+    VolumeConstraintKind,
+};
 
 /// Where a distance constraint or tet is projected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,6 +65,9 @@ pub enum ConstraintSlot {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Edits {
     pub density: f32,
+    /// Rest position of each node (cm): the positions at construction, then whatever
+    /// [`SoftBody::set_rest_position`] set (appended nodes copy their source's).
+    pub rest_x: Vec<Vec3A>,
     /// Nodes of the block tree, `n₀`.
     pub tree_nodes: usize,
     pub tet_rest: Vec<f32>,
@@ -113,6 +119,7 @@ impl Edits {
             .collect();
         Self {
             density,
+            rest_x: body.x.clone(),
             tree_nodes: body.x.len(),
             tet_rest,
             distance_slot,
@@ -123,7 +130,7 @@ impl Edits {
 }
 
 /// How many of the last dynamic batches a new constraint may join (a lane free, no node shared).
-const SEARCH: usize = 16;
+const SEARCH: usize = 64;
 
 /// The kernels' parameter of a switched-off lane.
 fn off(solver: Solver) -> f32 {
@@ -304,6 +311,8 @@ impl SoftBody {
             self.rank.push(i);
             self.q.push(Vec4::ZERO);
             self.qw.push(0.0);
+            let r = self.edits.rest_x[s];
+            self.edits.rest_x.push(r);
         }
         self.collision.reserve(self.x.len());
         Ok(n as u32)
@@ -596,6 +605,11 @@ impl SoftBody {
             self.edits.link_batches[position as usize].nodes = s;
             return Ok(());
         }
+        if let ConstraintSlot::Dynamic { position } = slot {
+            if self.update_dyn_distance_in_place(c, position as usize) {
+                return Ok(());
+            }
+        }
         self.edits.distance_slot[c] = ConstraintSlot::Removed;
         match slot {
             ConstraintSlot::Dynamic { position } => {
@@ -690,16 +704,7 @@ impl SoftBody {
     /// [`PbdError::NoSuchElement`], [`PbdError::NodeOutOfRange`],
     /// [`PbdError::InvalidParameter`] for repeated nodes.
     pub fn set_tet_nodes(&mut self, t: usize, nodes: [u32; 4]) -> Result<(), PbdError> {
-        let slot = match self.edits.tet_slot.get(t) {
-            Some(&s) if s != ConstraintSlot::Removed => s,
-            _ => {
-                return Err(PbdError::NoSuchElement {
-                    what: "tet",
-                    index: t,
-                    count: self.tets.len(),
-                })
-            }
-        };
+        let slot = self.live_tet(t)?;
         self.check_nodes("tet", t, &nodes)?;
         self.tets[t] = nodes;
         if let Some(c) = self.tet_volume.get_mut(t) {
@@ -712,6 +717,296 @@ impl SoftBody {
                 c.apex = nodes[j];
             }
         }
+        if let ConstraintSlot::Dynamic { position } = slot {
+            if self.update_dyn_tet_in_place(t, position as usize) {
+                return Ok(());
+            }
+        }
+        self.retire_tet_slot(t, slot);
+        self.push_dyn_tet(t as u32);
+        Ok(())
+    }
+
+    /// Gives tet `t` new nodes **and** a new rest shape: its rest volume (classic) or rest
+    /// heights (centroid) are computed from `rest`, the rest positions of `nodes` (cm, `f64`),
+    /// which must be positively oriented. The way a cut reuses a tet it splits for one of the
+    /// pieces, or rebuilds a tet whose node was snapped onto the cut. From now on the tet is
+    /// projected in the dynamic set.
+    ///
+    /// # Errors
+    /// [`PbdError::NoSuchElement`], [`PbdError::NodeOutOfRange`],
+    /// [`PbdError::InvalidParameter`] for repeated nodes or a rest shape that is not finite
+    /// with a positive volume (nothing is changed then).
+    pub fn reshape_tet(
+        &mut self,
+        t: usize,
+        nodes: [u32; 4],
+        rest: [DVec3; 4],
+    ) -> Result<(), PbdError> {
+        let slot = self.live_tet(t)?;
+        self.check_nodes("tet", t, &nodes)?;
+        let (volume, heights) = rest_shape(&rest)?;
+        self.tets[t] = nodes;
+        self.edits.tet_rest[t] = volume;
+        if let Some(c) = self.tet_volume.get_mut(t) {
+            c.nodes = nodes;
+            c.rest_volume = volume;
+        }
+        if self.volume_kind == VolumeConstraintKind::Centroid {
+            for j in 0..4 {
+                let c = &mut self.centroid[4 * t + j];
+                c.face = [nodes[(j + 1) & 3], nodes[(j + 2) & 3], nodes[(j + 3) & 3]];
+                c.apex = nodes[j];
+                c.rest_height = heights[j];
+            }
+        }
+        if let ConstraintSlot::Dynamic { position } = slot {
+            if self.update_dyn_tet_in_place(t, position as usize) {
+                return Ok(());
+            }
+        }
+        self.retire_tet_slot(t, slot);
+        self.push_dyn_tet(t as u32);
+        Ok(())
+    }
+
+    /// Appends a tet on `nodes` with the rest shape `rest` (as [`SoftBody::reshape_tet`]) and
+    /// the volume stiffness and compliance of tet `like`; it is projected in the dynamic set.
+    /// Returns its index (the next one of [`SoftBody::tets`]). Masses are not changed: set them
+    /// with [`SoftBody::set_node_mass`].
+    ///
+    /// # Errors
+    /// [`PbdError::NoSuchElement`] for a bad `like`, [`PbdError::NodeOutOfRange`],
+    /// [`PbdError::InvalidParameter`] for repeated nodes or a bad rest shape (nothing is
+    /// changed then).
+    pub fn add_tet(
+        &mut self,
+        like: usize,
+        nodes: [u32; 4],
+        rest: [DVec3; 4],
+    ) -> Result<usize, PbdError> {
+        let t = self.tets.len();
+        if like >= t {
+            return Err(PbdError::NoSuchElement {
+                what: "tet",
+                index: like,
+                count: t,
+            });
+        }
+        if t + 1 >= u32::MAX as usize {
+            return Err(PbdError::InvalidParameter {
+                name: "tet count",
+                value: t as f64,
+                expected: "fewer than 2³² tets",
+            });
+        }
+        self.check_nodes("tet", t, &nodes)?;
+        let (volume, heights) = rest_shape(&rest)?;
+        self.tets.push(nodes);
+        self.edits.tet_rest.push(volume);
+        self.edits.tet_slot.push(ConstraintSlot::Removed);
+        match self.volume_kind {
+            VolumeConstraintKind::None => {}
+            VolumeConstraintKind::Classic => {
+                let c = self.tet_volume[like];
+                self.tet_volume.push(TetVolumeConstraint {
+                    nodes,
+                    rest_volume: volume,
+                    ..c
+                });
+            }
+            VolumeConstraintKind::Centroid => {
+                for j in 0..4 {
+                    let c = self.centroid[4 * like + j];
+                    self.centroid.push(CentroidVolumeConstraint {
+                        face: [nodes[(j + 1) & 3], nodes[(j + 2) & 3], nodes[(j + 3) & 3]],
+                        apex: nodes[j],
+                        rest_height: heights[j],
+                        ..c
+                    });
+                }
+            }
+        }
+        self.push_dyn_tet(t as u32);
+        Ok(t)
+    }
+
+    /// Moves distance constraint `c` onto `nodes` with a new rest length (stiffness and
+    /// compliance kept): an edge split by a cut, an edge whose node was snapped. Projected in
+    /// the dynamic set from now on (a link stays a link).
+    ///
+    /// # Errors
+    /// [`PbdError::NoSuchElement`] for a bad or removed record, [`PbdError::NodeOutOfRange`],
+    /// [`PbdError::InvalidParameter`] for repeated nodes or a bad rest length.
+    pub fn reset_distance_constraint(
+        &mut self,
+        c: usize,
+        nodes: [u32; 2],
+        rest_length: f32,
+    ) -> Result<(), PbdError> {
+        self.live_distance(c)?;
+        self.check_nodes("distance constraint", c, &nodes)?;
+        check_distance_values(&DistanceConstraint {
+            rest_length,
+            ..self.distance[c]
+        })?;
+        self.distance[c].rest_length = rest_length;
+        if let Some(ConstraintSlot::Link { position }) = self.distance_slot(c) {
+            self.edits.link_batches[position as usize].rest = F::splat(rest_length);
+        }
+        self.set_distance_nodes(c, nodes)
+    }
+
+    /// Rest positions of the nodes (cm): the positions the body was built on, appended nodes
+    /// their source's, then as [`SoftBody::set_rest_position`] set them. Bookkeeping for the
+    /// caller of local edits: the constraints' rest values are set by the edits themselves.
+    pub fn rest_positions(&self) -> &[Vec3A] {
+        &self.edits.rest_x
+    }
+
+    /// Records node `node`'s rest position (see [`SoftBody::rest_positions`]).
+    ///
+    /// # Errors
+    /// [`PbdError::NodeOutOfRange`], [`PbdError::NonFinite`].
+    pub fn set_rest_position(&mut self, node: u32, rest: Vec3) -> Result<(), PbdError> {
+        self.check_nodes("rest position", node as usize, &[node])?;
+        if !rest.is_finite() {
+            return Err(PbdError::NonFinite {
+                node,
+                what: "rest position",
+            });
+        }
+        self.edits.rest_x[node as usize] = rest.into();
+        Ok(())
+    }
+
+    /// Sets one node's position, previous position and velocity (a node created on a cut edge,
+    /// interpolated from its ends; a node snapped onto a cut). A pinned node keeps velocity 0.
+    ///
+    /// # Errors
+    /// [`PbdError::NodeOutOfRange`], [`PbdError::NonFinite`].
+    pub fn set_node_state(
+        &mut self,
+        node: u32,
+        position: Vec3,
+        previous: Vec3,
+        velocity: Vec3,
+    ) -> Result<(), PbdError> {
+        self.check_nodes("node state", node as usize, &[node])?;
+        for (v, what) in [
+            (position, "position"),
+            (previous, "previous position"),
+            (velocity, "velocity"),
+        ] {
+            if !v.is_finite() {
+                return Err(PbdError::NonFinite { node, what });
+            }
+        }
+        let i = node as usize;
+        self.x[i] = position.into();
+        self.p[i] = previous.into();
+        self.v[i] = if self.w[i] == 0.0 {
+            Vec3A::ZERO
+        } else {
+            velocity.into()
+        };
+        Ok(())
+    }
+
+    fn live_tet(&self, t: usize) -> Result<ConstraintSlot, PbdError> {
+        match self.edits.tet_slot.get(t) {
+            Some(&s) if s != ConstraintSlot::Removed => Ok(s),
+            _ => Err(PbdError::NoSuchElement {
+                what: "tet",
+                index: t,
+                count: self.tets.len(),
+            }),
+        }
+    }
+
+    /// Rewrites dynamic distance constraint `c`'s lane at `position` (its nodes, rest length and
+    /// parameter, and the padding lanes that copy it) when no other lane of its batch touches
+    /// its new nodes: a changed constraint then keeps its lane instead of leaving a dead one.
+    /// `false` (nothing changed) when a node clashes.
+    fn update_dyn_distance_in_place(&mut self, c: usize, position: usize) -> bool {
+        let (b, l) = (position / LANES, position % LANES);
+        let d = self.distance[c];
+        let s = d.nodes.map(|i| self.rank[i as usize]);
+        let param = self.settings.param(d.stiffness, d.compliance);
+        let e = &mut self.edits;
+        let fill = e.dyn_distance_fill[b] as usize;
+        let batch = &mut e.dyn_distance_batches[b];
+        let clash = (0..fill)
+            .filter(|&lane| lane != l)
+            .any(|lane| s.contains(&batch.nodes[0][lane]) || s.contains(&batch.nodes[1][lane]));
+        if clash {
+            return false;
+        }
+        let padding = if l == 0 { fill..LANES } else { 0..0 };
+        for lane in std::iter::once(l).chain(padding) {
+            batch.nodes[0][lane] = s[0];
+            batch.nodes[1][lane] = s[1];
+            set_lane(&mut batch.rest, lane, d.rest_length);
+            set_lane(&mut batch.param, lane, param);
+        }
+        true
+    }
+
+    /// As [`SoftBody::update_dyn_distance_in_place`] for tet `t` (nodes and rest values of its
+    /// volume constraints).
+    fn update_dyn_tet_in_place(&mut self, t: usize, position: usize) -> bool {
+        let (b, l) = (position / LANES, position % LANES);
+        let s = self.tets[t].map(|i| self.rank[i as usize]);
+        let tet = self.tet_volume.get(t).map(|c| {
+            (
+                c.rest_volume,
+                self.settings.param(c.stiffness, c.compliance),
+            )
+        });
+        let centroid = (self.volume_kind == VolumeConstraintKind::Centroid).then(|| {
+            let c = &self.centroid[4 * t..4 * t + 4];
+            (
+                [0, 1, 2, 3].map(|j| c[j].rest_height),
+                [0, 1, 2, 3].map(|j| self.settings.param(c[j].stiffness, c[j].compliance)),
+            )
+        });
+        let e = &mut self.edits;
+        let fill = e.dyn_tet_fill[b] as usize;
+        let ids = e
+            .dyn_tet_batches
+            .get(b)
+            .map(|x| x.nodes)
+            .or_else(|| e.dyn_centroid_batches.get(b).map(|x| x.nodes));
+        if let Some(ids) = ids {
+            let clash = (0..fill)
+                .filter(|&lane| lane != l)
+                .any(|lane| ids.iter().any(|k| s.contains(&k[lane])));
+            if clash {
+                return false;
+            }
+        }
+        let padding = if l == 0 { fill..LANES } else { 0..0 };
+        for lane in std::iter::once(l).chain(padding) {
+            if let (Some(x), Some((rest, param))) = (e.dyn_tet_batches.get_mut(b), tet) {
+                for (ids, &n) in x.nodes.iter_mut().zip(&s) {
+                    ids[lane] = n;
+                }
+                set_lane(&mut x.rest, lane, rest);
+                set_lane(&mut x.param, lane, param);
+            }
+            if let (Some(x), Some((rest, param))) = (e.dyn_centroid_batches.get_mut(b), centroid) {
+                for k in 0..4 {
+                    x.nodes[k][lane] = s[k];
+                    set_lane(&mut x.rest[k], lane, rest[k]);
+                    set_lane(&mut x.param[k], lane, param[k]);
+                }
+            }
+        }
+        true
+    }
+
+    /// Takes tet `t` out of its current slot (its lane switched off).
+    fn retire_tet_slot(&mut self, t: usize, slot: ConstraintSlot) {
         self.edits.tet_slot[t] = ConstraintSlot::Removed;
         match slot {
             ConstraintSlot::Dynamic { position } => {
@@ -721,9 +1016,26 @@ impl SoftBody {
             ConstraintSlot::Tree { batch } => self.switch_off_tet_lanes(batch as usize),
             ConstraintSlot::Link { .. } | ConstraintSlot::Removed => {}
         }
-        self.push_dyn_tet(t as u32);
-        Ok(())
     }
+}
+
+/// Rest volume and the four rest heights (apex `j` to the centroid of the face opposite it) of
+/// a tet with rest positions `r`.
+fn rest_shape(r: &[DVec3; 4]) -> Result<(f32, [f32; 4]), PbdError> {
+    let [a, b, c, d] = *r;
+    let volume = (b - a).cross(c - a).dot(d - a) / 6.0;
+    if !(volume.is_finite() && volume > 0.0 && (volume as f32) > 0.0) {
+        return Err(PbdError::InvalidParameter {
+            name: "rest volume",
+            value: volume,
+            expected: "finite and > 0: rest positions positively oriented, not flat",
+        });
+    }
+    let heights = [0, 1, 2, 3].map(|j| {
+        let face = (r[(j + 1) & 3] + r[(j + 2) & 3] + r[(j + 3) & 3]) / 3.0;
+        r[j].distance(face) as f32
+    });
+    Ok((volume as f32, heights))
 }
 
 /// Whether lane `l` of dynamic batch `b` (`fill` lanes in use) holds a live constraint: its

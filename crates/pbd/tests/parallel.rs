@@ -148,6 +148,29 @@ fn run_cut(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: 
         compliance: 1e-3,
     })
     .unwrap();
+    // One tet split at the middle of an edge (one record reshaped, one appended, a node on the
+    // edge), one rest length reset: the edits a cut through a tet makes.
+    let tet = body.tets()[5];
+    let m = body.duplicate_nodes(&[tet[0]]).unwrap();
+    let r = |i: u32| Vec3::from(body.rest_positions()[i as usize]);
+    let (rm, xm) = (
+        (r(tet[0]) + r(tet[1])) * 0.5,
+        Vec3::from(body.positions()[tet[0] as usize] + body.positions()[tet[1] as usize]) * 0.5,
+    );
+    body.set_rest_position(m, rm).unwrap();
+    body.set_node_state(m, xm, xm, Vec3::ZERO).unwrap();
+    let lo = [tet[0], m, tet[2], tet[3]];
+    let hi = [m, tet[1], tet[2], tet[3]];
+    let shape = |b: &SoftBody, t: [u32; 4]| {
+        t.map(|i| Vec3::from(b.rest_positions()[i as usize]).as_dvec3())
+    };
+    let rest_lo = shape(&body, lo);
+    body.reshape_tet(5, lo, rest_lo).unwrap();
+    let rest_hi = shape(&body, hi);
+    body.add_tet(5, hi, rest_hi).unwrap();
+    let d = body.distance_constraints()[3];
+    body.reset_distance_constraint(3, d.nodes, 0.9 * d.rest_length)
+        .unwrap();
     assert!(body.dynamic_counts().0 > 0 && body.dynamic_counts().1 > 0);
     // Packed: several dynamic constraints share a batch.
     assert!(body.dynamic_batch_counts().0 * 2 < body.dynamic_counts().0);

@@ -3,7 +3,8 @@
 //! and p99 of the plain steps before the cut, of the steps during it (the step plus the cut),
 //! of the cut alone, and the wall triangles each cut opened.
 //!
-//! `cargo run --release -p tissue-surgery --example cut_timing [-- STEP_CM [EDGE_CM]]`
+//! `cargo run --release -p tissue-surgery --example cut_timing [-- STEP_CM [EDGE_CM [faces]]]`
+//! (`faces`: face separation only, `SurgerySettings::split_tets` off; default on).
 #![allow(clippy::unwrap_used, clippy::print_stdout)]
 
 use std::time::Instant;
@@ -57,7 +58,13 @@ fn main() {
     let mut body = SoftBody::new(&mesh, &Material::default()).unwrap();
     body.set_floor(Some(Floor::y(lo.y))).unwrap();
     body.set_settings(StepSettings::default()).unwrap();
-    let mut surgery = Surgery::new(&body, SurgerySettings::default()).unwrap();
+    // Geometric cuts (tets split on the blade's plane) unless the third argument is `faces`.
+    let split_tets = std::env::args().nth(3).as_deref() != Some("faces");
+    let settings = SurgerySettings {
+        split_tets,
+        ..SurgerySettings::default()
+    };
+    let mut surgery = Surgery::new(&body, settings).unwrap();
     for _ in 0..30 {
         body.step().unwrap();
     }
@@ -82,8 +89,8 @@ fn main() {
     let (cz, y) = (0.5 * (lo.z + hi.z) + 0.013, 0.5 * (lo.y + top) + edge);
     let x0 = lo.x - 0.5;
     let at = |x: f32| Pose::new(Quat::IDENTITY, Vec3::new(x, y, cz));
-    let (mut with_cut, mut cut_only, mut step_only, mut opened) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut with_cut, mut cut_only, mut step_only, mut opened, mut split) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut x = x0;
     while x < hi.x + 0.5 {
         let t = Instant::now();
@@ -98,15 +105,20 @@ fn main() {
             .unwrap();
         let c = c.elapsed().as_secs_f64();
         x += step_cm;
-        let faces: usize = events
+        let (faces, triangles): (usize, usize) = events
             .iter()
             .map(|e| match e {
-                SurgeryEvent::CutAdvanced { opened_faces, .. } => opened_faces.len(),
-                _ => 0,
+                SurgeryEvent::CutAdvanced {
+                    opened_faces,
+                    split_triangles,
+                    ..
+                } => (opened_faces.len(), split_triangles.len()),
+                _ => (0, 0),
             })
-            .sum();
-        if faces > 0 {
+            .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        if faces > 0 || triangles > 0 {
             opened.push(faces as f64);
+            split.push(triangles as f64);
             with_cut.push(s + c);
             cut_only.push(c);
             step_only.push(s);
@@ -133,9 +145,12 @@ fn main() {
     stats("  of which the cut", &mut cut_only);
     stats("step, after the cut", &mut after);
     opened.sort_by(f64::total_cmp);
+    split.sort_by(f64::total_cmp);
     println!(
-        "wall triangles per cutting step: median {}, max {}",
+        "wall triangles per cutting step: median {}, max {}; boundary triangles split per cutting step: median {}, max {}",
         opened[opened.len() / 2],
-        opened[opened.len() - 1]
+        opened[opened.len() - 1],
+        split[split.len() / 2],
+        split[split.len() - 1]
     );
 }

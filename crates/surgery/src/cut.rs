@@ -1,20 +1,22 @@
-//! The scalpel cut: tets separated along the faces the blade's swept surface crosses.
+//! The scalpel cut: after the split (module `split`), tets separated along the faces the
+//! blade's swept surface crosses.
 //!
 //! 1. The blade's cut surface for one step is the blade triangle at both poses plus the
 //!    surfaces swept by its three edges, projected onto the blade's plane at the end pose
 //!    (eight coplanar triangles, world space, current positions): the area the blade swept in
 //!    its own plane.
-//! 2. A face shared by tets `t` and `u` is cut when the segment between their centroids crosses
-//!    that surface. The cut walls are thus made of existing tet faces: no tet is split or
-//!    created, so no sliver can appear (the quality bound is the mesh's own, see
-//!    [`crate::Surgery::quality_bound`]); the walls lie within about one tet of the blade.
-//! 3. Each node on a newly cut face is split by the face-connected components of its tets: the
+//! 2. The split snaps nodes onto that plane and splits the crossed tets (module `split`).
+//! 3. A face shared by tets `t` and `u` is cut when the segment between their centroids crosses
+//!    that surface, unless `t` or `u` is at the cut's front (crossed only partly). After the
+//!    split these are faces on the blade's plane; where a split was refused, faces of the
+//!    whole tets (within one tet of the blade).
+//! 4. Each node on a newly cut face is split by the face-connected components of its tets: the
 //!    first component keeps the node, each other one gets a copy (appended to the body).
-//! 4. Before anything is committed, the boundary around the touched nodes is checked: an edge
+//! 5. Before anything is committed, the boundary around the touched nodes is checked: an edge
 //!    used by more or fewer than two boundary faces, or a vertex whose boundary faces do not
 //!    make one fan (a pinch at the cut's front), has its newly cut faces glued back, and the
 //!    check repeats. So the surface stays manifold and consistently oriented.
-//! 5. Commit: nodes duplicated, tets moved onto them (rest values kept), every edge that now
+//! 6. Commit: nodes duplicated, tets moved onto them (rest values kept), every edge that now
 //!    exists twice gets a second distance constraint with the same rest length, masses of the
 //!    touched nodes rebuilt from their tets (eq. (1)), pieces recounted.
 
@@ -24,6 +26,7 @@ use glam::{DVec3, Vec3};
 use tissue_mesh::NO_TET;
 use tissue_pbd::{DistanceConstraint, Pose, SoftBody, Tool, ToolShape};
 
+use crate::split::CutPlane;
 use crate::state::{face_nodes, single_cycle};
 use crate::{Surgery, SurgeryError, SurgeryEvent};
 
@@ -94,7 +97,8 @@ impl BladeSweep {
 }
 
 /// Smallest piece (tets) a cut may detach: smaller face-connected groups that new faces would
-/// enclose stay glued.
+/// enclose stay glued, and so do groups of less rest volume than this many median tets of the
+/// input (a slab between two nearly parallel walls, made of pieces of splits).
 pub const MIN_PIECE: usize = 16;
 
 /// A face opened by this cut: tet `t` face `j` against tet `u` face `k`.
@@ -107,8 +111,8 @@ struct NewFace {
 }
 
 impl Surgery {
-    /// Cuts `body` along a blade's sweep (see the module docs of `cut`), returning the events:
-    /// [`SurgeryEvent::CutAdvanced`] when faces were opened, then one
+    /// Cuts `body` along a blade's sweep (see the crate docs), returning the events:
+    /// [`SurgeryEvent::CutAdvanced`] when tets were split, nodes snapped or faces opened, then one
     /// [`SurgeryEvent::PieceDetached`] per new piece. A sweep that crosses no face returns no
     /// event. Call it after each step with the blade's sweep of that step (e.g.
     /// [`BladeSweep::from_tool`]) to cut over many steps.
@@ -124,7 +128,69 @@ impl Surgery {
         let _span = tracing::debug_span!("cut").entered();
         self.check_body(body)?;
         let surface = sweep.triangles();
-        let mut faces = self.crossed_faces(body, &surface);
+        let origin = surface[1][0];
+        let normal = (surface[1][1] - origin)
+            .cross(surface[1][2] - origin)
+            .normalize_or_zero();
+        let plane = CutPlane {
+            origin,
+            normal,
+            surface: &surface,
+        };
+        let mut candidates = if normal == DVec3::ZERO || !self.settings.split_tets {
+            Vec::new()
+        } else {
+            self.straddling_tets(body, &plane)
+        };
+        let split = self.split_along(body, &plane, &candidates)?;
+        // The faces to open are faces of the straddling tets or of the pieces.
+        candidates.extend(split.first_tet..split.end_tet);
+        if !self.settings.split_tets && normal != DVec3::ZERO {
+            candidates = self.straddling_tets(body, &plane);
+        }
+        let mut events = self.open_faces(body, &plane, &split.front, &candidates)?;
+        let geometric = !split.split.is_empty() || !split.snapped.is_empty();
+        match events.first_mut() {
+            Some(SurgeryEvent::CutAdvanced {
+                new_nodes,
+                new_tets,
+                split_tets,
+                snapped_nodes,
+                split_triangles,
+                ..
+            }) => {
+                new_nodes.start = split.first_node;
+                *new_tets = split.first_tet..split.end_tet;
+                *split_tets = split.split;
+                *snapped_nodes = split.snapped;
+                *split_triangles = split.surface;
+            }
+            _ if geometric => events.insert(
+                0,
+                SurgeryEvent::CutAdvanced {
+                    new_nodes: split.first_node..split.end_node,
+                    new_tets: split.first_tet..split.end_tet,
+                    split_tets: split.split,
+                    snapped_nodes: split.snapped,
+                    split_triangles: split.surface,
+                    changed_tets: Vec::new(),
+                    opened_faces: Vec::new(),
+                },
+            ),
+            _ => {}
+        }
+        Ok(events)
+    }
+
+    /// The face separation of a cut (steps 2–5 of the module docs), after the split.
+    fn open_faces(
+        &mut self,
+        body: &mut SoftBody,
+        plane: &CutPlane<'_>,
+        front: &[u32],
+        candidates: &[u32],
+    ) -> Result<Vec<SurgeryEvent>, SurgeryError> {
+        let mut faces = self.crossed_faces(body, plane, front, candidates);
         // Faces the blade crossed before but that had to stay glued (at the cut's front then):
         // retried now that the cut may have moved on.
         let near = self.stamp;
@@ -165,7 +231,7 @@ impl Surgery {
         for f in &faces {
             for t in [f.t, f.u] {
                 if self.tet_mark[t as usize] != self.stamp {
-                    if let Some(group) = self.small_group(t) {
+                    if let Some(group) = self.small_group(body, t) {
                         for &g in &group {
                             self.tet_mark[g as usize] = self.stamp;
                         }
@@ -261,14 +327,25 @@ impl Surgery {
         true
     }
 
-    /// The tets face-connected to `t` when there are fewer than [`MIN_PIECE`] of them.
-    fn small_group(&self, t: u32) -> Option<Vec<u32>> {
+    /// The tets face-connected to `t` when they are a crumb: fewer than [`MIN_PIECE`] tets, or
+    /// less rest volume than [`MIN_PIECE`] median tets of the input (pieces of splits are
+    /// small tets). `None` for a bigger group (the search stops early).
+    fn small_group(&self, body: &SoftBody, t: u32) -> Option<Vec<u32>> {
+        let rest = body.tet_rest_volumes();
+        let limit = MIN_PIECE as f64 * self.median_rest_volume;
         let mut group = vec![t];
+        let mut seen: HashMap<u32, ()> = HashMap::default();
+        seen.insert(t, ());
+        let mut volume = rest[t as usize] as f64;
         let mut i = 0;
         while i < group.len() {
             for &u in &self.neighbours[group[i] as usize] {
-                if u != NO_TET && !group.contains(&u) {
-                    if group.len() + 1 >= MIN_PIECE {
+                if u != NO_TET && seen.insert(u, ()).is_none() {
+                    volume += rest[u as usize] as f64;
+                    if (group.len() + 1 >= MIN_PIECE
+                        && (volume >= limit || !self.settings.split_tets))
+                        || group.len() >= 64 * MIN_PIECE
+                    {
                         return None;
                     }
                     group.push(u);
@@ -279,33 +356,21 @@ impl Surgery {
         Some(group)
     }
 
-    /// Faces between tets whose centroid segment crosses the cut surface.
-    fn crossed_faces(&mut self, body: &SoftBody, surface: &[[DVec3; 3]; 8]) -> Vec<NewFace> {
+    /// The tets that straddle the plane of `plane` and meet the box of its polygon (sorted):
+    /// nodes near the box first, then their tets. A crossing point lies in such a tet.
+    pub(crate) fn straddling_tets(&mut self, body: &SoftBody, plane: &CutPlane<'_>) -> Vec<u32> {
         let x = body.positions();
         let tets = body.tets();
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for tri in surface {
+        for tri in plane.surface {
             for p in tri {
                 lo = lo.min(*p);
                 hi = hi.max(*p);
             }
         }
-        // A crossing point lies in `t` or in `u`, on the blade's plane: one of the two tets
-        // meets the surface's box and straddles the plane. Nodes near the box first, then
-        // their tets.
-        let origin = surface[1][0];
-        let normal = (surface[1][1] - origin)
-            .cross(surface[1][2] - origin)
-            .normalize_or_zero();
+        let (origin, normal) = (plane.origin, plane.normal);
         self.stamp = self.stamp.wrapping_add(1).max(1);
         let stamp = self.stamp;
-        let centroid = |t: u32| -> DVec3 {
-            tets[t as usize]
-                .iter()
-                .map(|&i| x[i as usize].as_dvec3())
-                .sum::<DVec3>()
-                * 0.25
-        };
         let mut candidates = Vec::new();
         for (v, p) in x.iter().enumerate() {
             let p = p.as_dvec3();
@@ -332,32 +397,49 @@ impl Surgery {
                 }
             }
         }
+        candidates.sort_unstable();
+        candidates
+    }
+
+    /// Faces between tets whose centroid segment crosses the cut surface, except faces of the
+    /// tets in `front` (sorted: crossed only partly by this sweep, see `split`).
+    fn crossed_faces(
+        &mut self,
+        body: &SoftBody,
+        plane: &CutPlane<'_>,
+        front: &[u32],
+        candidates: &[u32],
+    ) -> Vec<NewFace> {
+        let x = body.positions();
+        let tets = body.tets();
+        let (origin, normal) = (plane.origin, plane.normal);
+        let centroid = |t: u32| -> DVec3 {
+            tets[t as usize]
+                .iter()
+                .map(|&i| x[i as usize].as_dvec3())
+                .sum::<DVec3>()
+                * 0.25
+        };
         // Candidates get a second mark so that each pair of candidates is tested once.
         self.stamp = self.stamp.wrapping_add(1).max(1);
         let stamp = self.stamp;
-        for &t in &candidates {
+        for &t in candidates {
             self.tet_mark[t as usize] = stamp;
         }
-        candidates.sort_unstable();
+        let in_front = |t: u32| front.binary_search(&t).is_ok();
         // All eight triangles lie in the end pose's plane: a centroid segment crosses the cut
         // surface when its ends are on opposite sides and the crossing point lies in one of them.
-        let inside = |p: DVec3| {
-            surface.iter().any(|[a, b, c]| {
-                let (ab, bc, ca) = (
-                    (*b - *a).cross(p - *a).dot(normal),
-                    (*c - *b).cross(p - *b).dot(normal),
-                    (*a - *c).cross(p - *c).dot(normal),
-                );
-                (ab >= 0.0 && bc >= 0.0 && ca >= 0.0) || (ab <= 0.0 && bc <= 0.0 && ca <= 0.0)
-            })
-        };
+        let inside = |p: DVec3| plane.contains(p);
         let mut out = Vec::new();
-        for &t in &candidates {
+        for &t in candidates {
+            if in_front(t) {
+                continue;
+            }
             let ct = centroid(t);
             let dt = normal.dot(ct - origin);
             for j in 0..4 {
                 let u = self.neighbours[t as usize][j];
-                if u == NO_TET || (u < t && self.tet_mark[u as usize] == stamp) {
+                if u == NO_TET || (u < t && self.tet_mark[u as usize] == stamp) || in_front(u) {
                     continue;
                 }
                 let cu = centroid(u);
@@ -411,7 +493,8 @@ impl Surgery {
         nodes.dedup();
         let mut out = Vec::with_capacity(nodes.len());
         for v in nodes {
-            let star = self.node_tets[v as usize].clone();
+            let mut star = self.node_tets[v as usize].clone();
+            star.sort_unstable();
             let mut comp = vec![u32::MAX; star.len()];
             let mut count = 0;
             for s in 0..star.len() {
@@ -426,7 +509,7 @@ impl Surgery {
                         if node == v || u == NO_TET {
                             continue;
                         }
-                        if let Some(b) = star.iter().position(|&w| w == u) {
+                        if let Ok(b) = star.binary_search(&u) {
                             if comp[b] == u32::MAX {
                                 comp[b] = count;
                                 stack.push(b);
@@ -477,7 +560,8 @@ impl Surgery {
         let is_touched = |v: u32| touched.binary_search(&v).is_ok();
         // Boundary faces of the local tets, in tentative labels, with the original labels.
         let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> = HashMap::default();
-        let mut around: HashMap<u32, Vec<[u32; 2]>> = HashMap::default();
+        // (vertex, link edge) of each boundary face at a touched vertex, grouped by sorting.
+        let mut around: Vec<(u32, [u32; 2])> = Vec::new();
         for &t in &local {
             for j in 0..4 {
                 if self.neighbours[t as usize][j] != NO_TET {
@@ -494,10 +578,7 @@ impl Surgery {
                         e.0 += 1;
                     }
                     if is_touched(orig[k]) {
-                        around
-                            .entry(f[k])
-                            .or_default()
-                            .push([f[(k + 1) % 3], f[(k + 2) % 3]]);
+                        around.push((f[k], [f[(k + 1) % 3], f[(k + 2) % 3]]));
                     }
                 }
             }
@@ -510,9 +591,14 @@ impl Surgery {
             }
         }
         let mut bad_vertices: Vec<u32> = Vec::new();
-        for (&v, link) in &around {
-            if !single_cycle(link) {
+        around.sort_unstable();
+        let mut link: Vec<[u32; 2]> = Vec::new();
+        for group in around.chunk_by(|a, b| a.0 == b.0) {
+            link.clear();
+            link.extend(group.iter().map(|g| g.1));
+            if !single_cycle(&link) {
                 // Back to the original label: the node itself or the one it copies.
+                let v = group[0].0;
                 bad_vertices.push(copy_of.get(&v).copied().unwrap_or(v));
             }
         }
@@ -619,6 +705,7 @@ impl Surgery {
                 self.node_tets.push(m);
                 self.origin.push(self.origin[*v as usize]);
                 self.node_reach.push(self.node_reach[*v as usize]);
+                self.rest.push(self.rest[*v as usize]);
             }
         }
         let mut changed: Vec<u32> = new_tets.keys().copied().collect();
@@ -712,6 +799,10 @@ impl Surgery {
             .collect();
         let mut events = vec![SurgeryEvent::CutAdvanced {
             new_nodes: first..next,
+            new_tets: 0..0,
+            split_tets: Vec::new(),
+            snapped_nodes: Vec::new(),
+            split_triangles: Vec::new(),
             changed_tets: changed,
             opened_faces: opened,
         }];

@@ -11,40 +11,49 @@
 //!   detached" (a new connected component), "suture placed" / "suture removed".
 //! - [`SurgerySettings`], [`SurgeryError`].
 //!
-//! ## Cutting (SPEC Part B), and where it departs from the slides
-//! The slides split the crossed surface triangles (into 4 where the cut starts or ends, into 3
-//! along its path), snap vertices, and rebuild the physics model from the new elements. Here the
-//! cut **separates the mesh along existing tet faces** instead of subdividing: a face between
-//! two tets is cut when the segment between their centroids crosses the blade's swept surface
-//! (the area the blade triangle swept within its own plane; motion along its normal does not cut); each node on a newly
-//! cut face is duplicated once per extra face-connected group of its tets; tets on the far side
-//! are moved onto the copies. This is the limit case of vertex snapping (every crossing snaps to
-//! the nearest tet face, threshold one tet), and it buys robustness:
-//! - **no tet is created or split**, so no sliver can appear: the quality bound is the input
-//!   mesh's own smallest rest volume and radius ratio ([`Surgery::quality_bound`]), and it
-//!   holds after any number of cuts;
-//! - constraints keep their rest values; an edge that now exists on both sides gets a second
-//!   distance constraint with the same rest length; masses of the split nodes are rebuilt from
-//!   their tets (eq. (1)) — all locally, through `tissue-pbd`'s edit API (nodes appended,
-//!   changed constraints moved to a dynamic set projected after the block tree, no rebuild);
-//! - before a cut is committed, newly cut faces that would leave a non-manifold edge or a
-//!   pinched vertex (typically at the cut's front) are glued back, so the boundary surface stays
-//!   closed, manifold and consistently oriented.
+//! ## Cutting (SPEC Part B)
+//! Each sweep of the blade cuts in two phases; the first only with
+//! [`SurgerySettings::split_tets`] on (off by default: see "Not built" below).
 //!
-//! - faces that must wait (at the cut's front, or with no node split yet, which would make a
-//!   zero-width double face) are kept and retried whenever a later sweep passes near them; a
-//!   group of fewer than [`MIN_PIECE`] tets that new faces would enclose (a staircase crumb)
-//!   stays glued;
-//! - pieces: two alternating searches through shared nodes per split node prove that an
-//!   incision detached nothing (cheap); only when one runs out are the pieces relabelled
-//!   globally ([`SurgeryEvent::PieceDetached`] for each new one).
+//! **Geometry** (module `split`): the cut surface is the polygon the blade swept in its own
+//! plane. Nodes closer to the plane than [`SNAP_FRACTION`] of their shortest rest edge (and
+//! whose projection is in the polygon) are **snapped** onto it, current and rest position,
+//! when no tet around them would fall below the quality bound; their tets' rest volumes and
+//! edges' rest lengths are rebuilt. Every other tet edge the plane crosses inside the polygon
+//! (or within [`FRONT_SNAP`] of its length outside it: the cut's ends snap to tet boundaries)
+//! gets a node at the crossing, interpolated in current and rest space; the tets around those
+//! edges are **split** by bisecting their split edges in one global order, which is conforming
+//! (no hanging node: two tets split a shared face alike) and leaves no piece with nodes on
+//! both sides once all of a tet's crossing edges are split. A crossed surface triangle is so
+//! split into 3 along the path (2 where the blade passes through one of its nodes). Pieces
+//! below the quality bound ([`MIN_RATIO`], [`MIN_PIECE_FRACTION`]) or past
+//! [`MAX_SPLIT_DEPTH`] are not made: that tet's edges stay whole. New tets get volume
+//! constraints with their rest volumes, new edges distance constraints with their rest
+//! lengths, masses are rebuilt from the tets around the touched nodes (eq. (1)) — all locally
+//! through `tissue-pbd`'s edit API ([`tissue_pbd::SoftBody::reshape_tet`],
+//! [`tissue_pbd::SoftBody::add_tet`], ...), no rebuild.
 //!
-//! The price: the wall follows the blade only to within about one tet (a staircase on coarse
-//! meshes), the surface triangles are not subdivided and nodes are not moved onto the blade
-//! (no geometric vertex snapping), and a tet stretched to more than 1.5 × its longest rest edge
-//! may be missed by a sweep. A cut that crosses no face (a blade
-//! sweep smaller than a tet) opens nothing until the blade has moved on; partial incisions and
-//! cuts continued over many steps are just more sweeps.
+//! **Separation** (module `cut`): a face shared by tets `t` and `u` opens when the segment
+//! between their centroids crosses the polygon; after the split these are the faces lying on
+//! the blade's plane, so the walls are flat. Tets the sweep crossed only partly (the cut's
+//! front: a crossing point outside the polygon) stay glued until a later sweep covers them;
+//! where a split was refused (quality, a node that could not be snapped) the faces of the
+//! whole tets open instead (a staircase within one tet). Each node on a newly opened face is
+//! duplicated once per extra face-connected group of its tets; tets on the far side move onto
+//! the copies. Before committing, new faces that would leave a non-manifold edge or a pinched
+//! vertex, faces with no node split yet (a zero-width double face) and faces that would
+//! enclose a crumb of fewer than [`MIN_PIECE`] tets are glued back and retried later. Pieces:
+//! two alternating searches through shared nodes per split node prove that an incision
+//! detached nothing (cheap); only when one runs out are the pieces relabelled
+//! ([`SurgeryEvent::PieceDetached`]).
+//!
+//! Not built: a surface triangle where a cut ends *inside* it is not split into 4 (the blade's
+//! end point is not inserted): the cut's end snaps to a tet boundary instead, and a partly
+//! crossed tet stays glued. With splits on, a body that moves against the blade while it is
+//! cut (a world-fixed blade path through a falling organ) gets slightly offset walls in every
+//! sweep and may not be cut through (the trainer's appendix cut-off), hence the setting is off
+//! by default; face separation alone handles that case. A tet stretched to more than 1.5 × its
+//! longest rest edge may be missed by a sweep.
 //!
 //! ## Suturing
 //! No change of geometry: the needle's axis is intersected with the boundary faces; the first
@@ -55,8 +64,9 @@
 //! ## Invariants
 //! - Architecture Invariant: the surgery state and its body change together; every operation
 //!   takes the body and refuses one whose node or tet count differs from the state's.
-//! - Tets are never created or destroyed, only moved onto duplicated nodes; tet indices are
-//!   stable for the host. New nodes are appended (indices past the old count).
+//! - Tets are never destroyed: a split tet's record holds its first piece, the other pieces
+//!   are appended; tets are otherwise only moved onto duplicated nodes. New nodes are appended
+//!   (indices past the old count).
 //! - After every cut the boundary (faces without a neighbour) is closed, edge- and
 //!   vertex-manifold and wound outward, if the input's was; [`Surgery::validate`] checks it.
 //! - No I/O, no printing; spans `cut` and `suture`.
@@ -102,11 +112,15 @@ mod error;
 mod event;
 mod geometry;
 mod settings;
+mod split;
 mod state;
 mod suture;
 
 pub use cut::{BladeSweep, MIN_PIECE};
 pub use error::SurgeryError;
-pub use event::SurgeryEvent;
+pub use event::{SplitTriangle, SurgeryEvent};
 pub use settings::SurgerySettings;
+pub use split::{
+    FRONT_SNAP, MAX_SPLIT_DEPTH, MIN_PIECE_FRACTION, MIN_RATIO, MIN_VOLUME_FRACTION, SNAP_FRACTION,
+};
 pub use state::{Surgery, Suture};

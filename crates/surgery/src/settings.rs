@@ -2,10 +2,14 @@
 
 use crate::SurgeryError;
 
-/// How sutures behave. (Cuts have no setting: the design has no threshold to tune, see the
-/// crate docs.)
+/// How cuts and sutures behave.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SurgerySettings {
+    /// Geometric cuts: snap nodes onto the blade's plane and split the crossed tets, so the
+    /// walls lie on the plane (crate docs, "Cutting"). Off: the cut only separates existing tet
+    /// faces (walls within one tet of the blade), which is what a body that moves relative to
+    /// the blade during a cut needs today (see `docs/surgery.md`).
+    pub split_tets: bool,
     /// PBD stiffness `k ∈ [0, 1]` of a suture link (1 = the linked nodes are pulled together
     /// fully each iteration).
     pub suture_stiffness: f32,
@@ -16,9 +20,11 @@ pub struct SurgerySettings {
 }
 
 impl Default for SurgerySettings {
-    /// `k = 1`, compliance 0, rest length 0.
+    /// Face separation only (`split_tets` off), sutures with `k = 1`, compliance 0, rest
+    /// length 0.
     fn default() -> Self {
         Self {
+            split_tets: false,
             suture_stiffness: 1.0,
             suture_compliance: 0.0,
             suture_rest_length: 0.0,

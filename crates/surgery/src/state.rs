@@ -3,6 +3,7 @@
 
 use crate::geometry::FxMap as HashMap;
 
+use glam::DVec3;
 use tissue_mesh::{NO_TET, TET_FACES};
 use tissue_pbd::{ConstraintSlot, SoftBody};
 
@@ -31,8 +32,9 @@ pub struct Suture {
 /// - `node_tets[v]` lists the tets using node `v`; `origin[v]` is the node of the original mesh
 ///   that `v` was split from (itself for original nodes);
 /// - `edge_constraint` maps each sorted node pair of a tet edge to the body's live distance
-///   constraint on it; tets are never created or removed by a cut, only moved onto new nodes, so
-///   every tet keeps its rest shape and quality.
+///   constraint on it; tets are never removed: a split tet's record holds its first piece and
+///   the others are appended; every tet's rest shape is at or above [`Surgery::quality_bound`];
+/// - `rest[v]` is node `v`'s rest position, `depth[t]` how many splits made tet `t`.
 #[derive(Debug, Clone)]
 pub struct Surgery {
     pub(crate) settings: SurgerySettings,
@@ -54,6 +56,18 @@ pub struct Surgery {
     pub(crate) node_reach: Vec<f32>,
     pub(crate) min_radius_ratio: f64,
     pub(crate) min_rest_volume: f32,
+    /// Rest position of each node (cm, `f64`): the body's at construction, then moved by
+    /// snapping and interpolated for nodes on split edges (the body's `rest_positions` are
+    /// these rounded to `f32`).
+    pub(crate) rest: Vec<DVec3>,
+    /// Per tet: how many splits made it (0 for the input's tets); pieces (depth > 0) are held
+    /// to [`crate::MIN_RATIO`], and a tet at [`crate::MAX_SPLIT_DEPTH`] is not split again.
+    pub(crate) depth: Vec<u8>,
+    /// Median rest volume of the input's tets (cm³).
+    pub(crate) median_rest_volume: f64,
+    /// Crossing points (parameter from the smaller node) of edges that a sweep covered but
+    /// could not split yet, by sorted edge: a later sweep counts them as inside its polygon.
+    pub(crate) covered: HashMap<[u32; 2], f64>,
     /// Scratch marks per tet and node (stamped with `stamp`), reused by every cut.
     pub(crate) tet_mark: Vec<u32>,
     pub(crate) stamp: u32,
@@ -143,6 +157,14 @@ impl Surgery {
             node_reach,
             min_radius_ratio: min_ratio,
             min_rest_volume,
+            rest: body.rest_positions().iter().map(|p| p.as_dvec3()).collect(),
+            depth: vec![0; tets.len()],
+            median_rest_volume: {
+                let mut v: Vec<f32> = body.tet_rest_volumes().to_vec();
+                v.sort_unstable_by(f32::total_cmp);
+                v.get(v.len() / 2).copied().unwrap_or(0.0) as f64
+            },
+            covered: HashMap::default(),
             tet_mark: vec![0; tets.len()],
             stamp: 0,
         };
@@ -173,11 +195,18 @@ impl Surgery {
         &self.settings
     }
 
-    /// The quality bound every tet keeps through any cut: `(smallest rest volume (cm³), smallest
-    /// radius ratio 3r_in/r_circ)` of the mesh at construction. Cuts create no tet and move no
-    /// node in rest space, so no tet ever falls below it.
+    /// The quality bound every tet keeps through any cut: `(smallest rest volume (cm³),
+    /// smallest rest radius ratio 3r_in/r_circ)`. The volume is [`crate::MIN_VOLUME_FRACTION`]
+    /// of the input mesh's smallest; the ratio is the smaller of the input's smallest and
+    /// [`crate::MIN_RATIO`]. Every tet a split creates has a radius ratio of at least
+    /// [`crate::MIN_RATIO`] (pieces that would not are not created: that tet stays whole), and
+    /// a snap never makes a tet's ratio worse than `min(MIN_RATIO, its ratio before)`.
+    /// [`Surgery::validate`] checks both.
     pub fn quality_bound(&self) -> (f32, f64) {
-        (self.min_rest_volume, self.min_radius_ratio)
+        (
+            self.volume_floor() as f32,
+            self.min_radius_ratio.min(crate::MIN_RATIO),
+        )
     }
 
     /// Tet adjacency across faces (`NO_TET` on the boundary and across cut walls).
@@ -344,6 +373,7 @@ impl Surgery {
         }
         if self.node_reach.len() != self.node_tets.len()
             || self.origin.len() != self.node_tets.len()
+            || self.rest.len() != self.node_tets.len()
         {
             return defect(
                 "node",
@@ -412,8 +442,13 @@ impl Surgery {
         let x = body.positions();
         let rest = body.tet_rest_volumes();
         for (t, tet) in tets.iter().enumerate() {
-            if rest[t] < self.min_rest_volume {
+            if (rest[t] as f64) < self.volume_floor() {
                 return defect("tet", t, "rest volume below the quality bound");
+            }
+            if self.depth.get(t).is_some_and(|&d| d > 0)
+                && radius_ratio(tet.map(|i| self.rest[i as usize])) < crate::MIN_RATIO
+            {
+                return defect("tet", t, "a piece of a split below the radius-ratio bound");
             }
             if tet.iter().any(|&i| !x[i as usize].is_finite()) {
                 return defect("tet", t, "non-finite node position");

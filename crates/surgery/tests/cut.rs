@@ -8,10 +8,15 @@ use tissue_pbd::{Material, Pose, SoftBody, StepSettings, ToolShape};
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
 
 /// A 6 × 3 × 3 cm block centred at the origin, cells of 0.5 cm.
-fn block() -> (SoftBody, Surgery) {
+/// `split`: geometric cuts ([`SurgerySettings::split_tets`]) or face separation only.
+fn block(split: bool) -> (SoftBody, Surgery) {
     let mesh = tet_box(12, 6, 6, Vec3::new(6.0, 3.0, 3.0)).unwrap();
     let body = SoftBody::new(&mesh, &Material::default()).unwrap();
-    let surgery = Surgery::new(&body, SurgerySettings::default()).unwrap();
+    let settings = SurgerySettings {
+        split_tets: split,
+        ..SurgerySettings::default()
+    };
+    let surgery = Surgery::new(&body, settings).unwrap();
     (body, surgery)
 }
 
@@ -61,7 +66,12 @@ fn fall(body: &mut SoftBody) {
 
 #[test]
 fn a_full_cut_makes_two_pieces_and_the_free_one_falls_away() {
-    let (mut body, mut surgery) = block();
+    full_cut(true);
+    full_cut(false);
+}
+
+fn full_cut(split: bool) {
+    let (mut body, mut surgery) = block(split);
     let total = body.rest_volume();
     let blade = ToolShape::Blade {
         a: Vec3::new(0.0, 0.0, -5.0),
@@ -87,7 +97,7 @@ fn a_full_cut_makes_two_pieces_and_the_free_one_falls_away() {
     assert_eq!(detached, 1);
     let pieces = piece_volumes(&body, &surgery);
     let sum: f64 = pieces.iter().map(|p| p.1).sum();
-    eprintln!("full cut: piece volumes {pieces:?}, sum {sum:.4} of {total:.4} cm³");
+    eprintln!("full cut (split {split}): piece volumes {pieces:?}, sum {sum:.4} of {total:.4} cm³");
     assert!((sum / total - 1.0).abs() < 0.01);
     // The plane at x = 0.3 splits 54 : 54 cm³ into 33 : 21 up to one layer of cells (±4.5 cm³).
     let left = pieces.iter().find(|p| p.0 == 0).unwrap().1;
@@ -107,7 +117,7 @@ fn a_full_cut_makes_two_pieces_and_the_free_one_falls_away() {
     assert!(hl > -1.5, "the pinned piece should hang on, is at {hl}");
 
     // Control: the uncut block under the same pins does not come apart.
-    let (mut whole, surgery) = block();
+    let (mut whole, surgery) = block(split);
     fall(&mut whole);
     let h = piece_height(&whole, &surgery, 0);
     assert!(h > -5.0, "uncut block sags to {h}");
@@ -115,7 +125,12 @@ fn a_full_cut_makes_two_pieces_and_the_free_one_falls_away() {
 
 #[test]
 fn a_partial_incision_opens_the_surface_along_its_length_and_keeps_one_piece() {
-    let (mut body, mut surgery) = block();
+    partial_incision(true);
+    partial_incision(false);
+}
+
+fn partial_incision(geometric: bool) {
+    let (mut body, mut surgery) = block(geometric);
     // A blade standing up in the plane z = 0.15, its lower edge 1 cm below the top (y = 1.5),
     // drawn along x from −1.5 to 1.5 in ten steps.
     let blade = ToolShape::Blade {
@@ -156,7 +171,7 @@ fn a_partial_incision_opens_the_surface_along_its_length_and_keeps_one_piece() {
     let hi = split.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     // The blade's width at the top surface is ±0.2 cm, so the cut spans x ∈ [−1.7, 1.7]: 3.4 cm.
     let length = hi - lo;
-    eprintln!("partial incision: opening on top from x = {lo} to {hi}: {length} cm (blade 3.4 cm)");
+    eprintln!("partial incision (split {geometric}): opening on top from x = {lo} to {hi}: {length} cm (blade 3.4 cm)");
     assert!((length - 3.4).abs() <= 0.5 + 1e-4, "opening {length} cm");
     // It does not go through: no node at the bottom was split.
     assert!((0..body.node_count())

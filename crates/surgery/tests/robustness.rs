@@ -1,9 +1,8 @@
 //! Seeded random blade sweeps over the bunny (TetGen, 42k tets) and the liver (meshed by
 //! `tissue-tetra`): after every cut no panic, no non-finite value, the boundary closed, manifold
-//! and consistently oriented ([`Surgery::validate`]), no tet below the quality bound, and the
-//! body keeps stepping without divergence. The rest volume of every tet stays at or above the
-//! quality bound (cuts create no tet); the worst *current* volume ratio is reported, not
-//! asserted: under gravity and floor contact with K = 5 some of the input's slivers invert with
+//! and consistently oriented ([`Surgery::validate`]), no tet below the quality bound (every
+//! piece a split made at or above `MIN_RATIO`), and the body keeps stepping without
+//! divergence. The worst *current* volume ratio is reported, not asserted: under gravity and floor contact with K = 5 some of the input's slivers invert with
 //! or without cutting (the solver's business, not the cut's).
 #![allow(clippy::unwrap_used)]
 
@@ -50,14 +49,28 @@ struct Stats {
     detached: usize,
     steps: usize,
     worst_volume_ratio: f64,
+    most_tets: usize,
+    split_cuts: usize,
 }
 
 /// `sessions` cuts of `per_session` continued sweeps each; `steps` steps after every cut; a
-/// fresh body every 5 sessions (20 cuts; cut pieces pile up otherwise).
-fn hammer(mesh: &TetMesh, seed: u64, sessions: usize, per_session: usize, steps: usize) -> Stats {
+/// fresh body every 2 sessions (8 cuts) with splits, every 5 (20 cuts) without (splits add
+/// tets, projected serially in the dynamic set; cut pieces pile up otherwise).
+fn hammer(
+    mesh: &TetMesh,
+    seed: u64,
+    sessions: usize,
+    per_session: usize,
+    steps: usize,
+    split: bool,
+) -> Stats {
     let material = Material::default();
     let fresh = SoftBody::new(mesh, &material).unwrap();
-    let fresh_surgery = Surgery::new(&fresh, SurgerySettings::default()).unwrap();
+    let settings = SurgerySettings {
+        split_tets: split,
+        ..SurgerySettings::default()
+    };
+    let fresh_surgery = Surgery::new(&fresh, settings).unwrap();
     fresh_surgery.validate(&fresh).unwrap();
     let (lo, hi) = mesh
         .positions()
@@ -81,6 +94,8 @@ fn hammer(mesh: &TetMesh, seed: u64, sessions: usize, per_session: usize, steps:
         detached: 0,
         steps: 0,
         worst_volume_ratio: f64::INFINITY,
+        most_tets: 0,
+        split_cuts: 0,
     };
     let (mut body, mut surgery) = (fresh.clone(), fresh_surgery.clone());
     // Parallel stepping (bit-identical to serial, tests/parallel.rs in tissue-pbd), for time.
@@ -93,7 +108,7 @@ fn hammer(mesh: &TetMesh, seed: u64, sessions: usize, per_session: usize, steps:
     body.set_settings(settings).unwrap();
     body.set_floor(Some(Floor::y(lo.y - 0.5))).unwrap();
     for session in 0..sessions {
-        if session % 5 == 0 {
+        if session % if split { 2 } else { 5 } == 0 {
             (body, surgery) = (fresh.clone(), fresh_surgery.clone());
             body.set_settings(settings).unwrap();
             body.set_floor(Some(Floor::y(lo.y - 0.5))).unwrap();
@@ -131,6 +146,9 @@ fn hammer(mesh: &TetMesh, seed: u64, sessions: usize, per_session: usize, steps:
             stats.cuts += 1;
             stats.cuts_opening += usize::from(!events.is_empty());
             for e in &events {
+                if let tissue_surgery::SurgeryEvent::CutAdvanced { split_tets, .. } = e {
+                    stats.split_cuts += usize::from(!split_tets.is_empty());
+                }
                 if let tissue_surgery::SurgeryEvent::PieceDetached { tets, .. } = e {
                     stats.detached += 1;
                     let k = (tets.len() as f64).log2() as usize;
@@ -141,6 +159,7 @@ fn hammer(mesh: &TetMesh, seed: u64, sessions: usize, per_session: usize, steps:
                 panic!("seed {seed}, cut {}: {e}", stats.cuts);
             }
             stats.seconds[1] += clock.elapsed().as_secs_f64();
+            stats.most_tets = stats.most_tets.max(body.tets().len());
             let clock = Instant::now();
             for _ in 0..steps {
                 if let Err(e) = body.step() {
@@ -173,13 +192,22 @@ fn report(name: &str, s: &Stats, seconds: f64) {
         s.piece_sizes
     );
     eprintln!(
-        "  {name}: {} cuts ({} opened faces, {} pieces detached), {} steps, worst current/rest tet volume {:.3}, {seconds:.1} s (cut {:.2} s, validate {:.2} s, steps {:.2} s)",
-        s.cuts, s.cuts_opening, s.detached, s.steps, s.worst_volume_ratio, s.seconds[0], s.seconds[1], s.seconds[2]
+        "  {name}: {} cuts ({} changed the body, {} split tets, {} pieces detached), at most {} tets, {} steps, worst current/rest tet volume {:.3}, {seconds:.1} s (cut {:.2} s, validate {:.2} s, steps {:.2} s)",
+        s.cuts, s.cuts_opening, s.split_cuts, s.detached, s.most_tets, s.steps, s.worst_volume_ratio, s.seconds[0], s.seconds[1], s.seconds[2]
     );
 }
 
 #[test]
 fn random_sweeps_over_the_bunny_keep_the_body_valid() {
+    bunny(true);
+}
+
+#[test]
+fn random_sweeps_over_the_bunny_keep_the_body_valid_without_splits() {
+    bunny(false);
+}
+
+fn bunny(split: bool) {
     let Ok(mesh) = tissue_meshio::read_tets(BUNNY) else {
         eprintln!("skipped: {BUNNY} not found (shared meshes missing)");
         return;
@@ -187,8 +215,16 @@ fn random_sweeps_over_the_bunny_keep_the_body_valid() {
     let (p, t) = mesh.into_parts();
     let mesh = TetMesh::new(p.iter().map(|p| *p * 10.0).collect(), t).unwrap();
     let start = Instant::now();
-    let s = hammer(&mesh, 0x05EE_DB0B, 250, 4, 10);
-    report("bunny", &s, start.elapsed().as_secs_f64());
+    let s = hammer(&mesh, 0x05EE_DB0B, 250, 4, 10, split);
+    report(
+        if split {
+            "bunny, split"
+        } else {
+            "bunny, faces"
+        },
+        &s,
+        start.elapsed().as_secs_f64(),
+    );
     assert_eq!(s.cuts, 1000);
     assert_eq!(s.steps, 10_000);
     assert!(
@@ -200,6 +236,15 @@ fn random_sweeps_over_the_bunny_keep_the_body_valid() {
 
 #[test]
 fn random_sweeps_over_the_liver_keep_the_body_valid() {
+    liver(true);
+}
+
+#[test]
+fn random_sweeps_over_the_liver_keep_the_body_valid_without_splits() {
+    liver(false);
+}
+
+fn liver(split: bool) {
     let Ok(surface) = tissue_meshio::read_surface(LIVER) else {
         eprintln!("skipped: {LIVER} not found (shared meshes missing)");
         return;
@@ -208,8 +253,16 @@ fn random_sweeps_over_the_liver_keep_the_body_valid() {
         .unwrap()
         .mesh;
     let start = Instant::now();
-    let s = hammer(&mesh, 0x0001_1FE2, 250, 4, 10);
-    report("liver", &s, start.elapsed().as_secs_f64());
+    let s = hammer(&mesh, 0x0001_1FE2, 250, 4, 10, split);
+    report(
+        if split {
+            "liver, split"
+        } else {
+            "liver, faces"
+        },
+        &s,
+        start.elapsed().as_secs_f64(),
+    );
     assert_eq!(s.cuts, 1000);
     assert!(
         s.cuts_opening > 500,

@@ -1,0 +1,199 @@
+//! The local edits a cut that splits tets needs: a tet split in rest space (one record reshaped,
+//! the others appended), a node on the split edge, rest lengths reset. A body split that way
+//! is still at rest (every new rest value matches its rest shape) and keeps its rest volume.
+#![allow(clippy::unwrap_used)]
+
+use glam::{DVec3, Vec3};
+use tissue_mesh::tet_box;
+use tissue_pbd::{
+    DistanceConstraint, Material, PbdError, SoftBody, StepSettings, VolumeConstraintKind,
+};
+
+fn body(kind: VolumeConstraintKind) -> SoftBody {
+    let mesh = tet_box(2, 2, 2, Vec3::splat(2.0)).unwrap();
+    let material = Material {
+        volume: kind,
+        ..Material::default()
+    };
+    let mut body = SoftBody::new(&mesh, &material).unwrap();
+    body.set_settings(StepSettings {
+        gravity: Vec3::ZERO,
+        ..StepSettings::default()
+    })
+    .unwrap();
+    body
+}
+
+fn rest(body: &SoftBody, t: [u32; 4]) -> [DVec3; 4] {
+    t.map(|i| Vec3::from(body.rest_positions()[i as usize]).as_dvec3())
+}
+
+/// Splits every tet around the edge `a b` at its midpoint `m` (each tet into two: `b` replaced
+/// by `m`, `a` replaced by `m`), the edge's constraint moved onto `a m` with half the rest
+/// length, new edges given constraints with their rest lengths. Returns the new node.
+fn split_edge(body: &mut SoftBody, a: u32, b: u32) -> u32 {
+    let m = body.duplicate_nodes(&[a]).unwrap();
+    let r = body.rest_positions();
+    let rm = (Vec3::from(r[a as usize]) + Vec3::from(r[b as usize])) * 0.5;
+    let x = body.positions();
+    let xm = (Vec3::from(x[a as usize]) + Vec3::from(x[b as usize])) * 0.5;
+    body.set_rest_position(m, rm).unwrap();
+    body.set_node_state(m, xm, xm, Vec3::ZERO).unwrap();
+    let around: Vec<usize> = (0..body.tets().len())
+        .filter(|&t| body.tets()[t].contains(&a) && body.tets()[t].contains(&b))
+        .collect();
+    let mut edges: Vec<[u32; 2]> = body
+        .distance_constraints()
+        .iter()
+        .map(|d| [d.nodes[0].min(d.nodes[1]), d.nodes[0].max(d.nodes[1])])
+        .collect();
+    let template = body.distance_constraints()[0];
+    for t in around {
+        let old = body.tets()[t];
+        let lo = old.map(|i| if i == b { m } else { i });
+        let hi = old.map(|i| if i == a { m } else { i });
+        let rest_lo = rest(body, lo);
+        body.reshape_tet(t, lo, rest_lo).unwrap();
+        let rest_hi = rest(body, hi);
+        body.add_tet(t, hi, rest_hi).unwrap();
+        for tet in [lo, hi] {
+            for i in 0..4 {
+                for j in i + 1..4 {
+                    let e = [tet[i].min(tet[j]), tet[i].max(tet[j])];
+                    if !edges.contains(&e) && e != [a.min(b), a.max(b)] {
+                        let l = body.rest_positions()[e[0] as usize]
+                            .distance(body.rest_positions()[e[1] as usize]);
+                        body.add_distance_constraint(DistanceConstraint {
+                            nodes: e,
+                            rest_length: l,
+                            ..template
+                        })
+                        .unwrap();
+                        edges.push(e);
+                    }
+                }
+            }
+        }
+    }
+    let c = edges
+        .iter()
+        .position(|e| *e == [a.min(b), a.max(b)])
+        .unwrap();
+    let l = body.rest_positions()[a as usize].distance(body.rest_positions()[m as usize]);
+    body.reset_distance_constraint(c, [a, m], l).unwrap();
+    // Masses from the tets (eq. (1)).
+    let density = body.density();
+    let mut mass = vec![0.0f32; body.node_count()];
+    for (t, tet) in body.tets().iter().enumerate() {
+        for &i in tet {
+            mass[i as usize] += density * body.tet_rest_volumes()[t] / 4.0;
+        }
+    }
+    for (i, m) in mass.into_iter().enumerate() {
+        body.set_node_mass(i as u32, m).unwrap();
+    }
+    m
+}
+
+#[test]
+fn a_body_split_in_rest_space_stays_at_rest_and_keeps_its_volume() {
+    for kind in [
+        VolumeConstraintKind::Classic,
+        VolumeConstraintKind::Centroid,
+    ] {
+        let mut body = body(kind);
+        let (volume, mass, tets) = (body.rest_volume(), body.total_mass(), body.tets().len());
+        // An inner edge: the first tet's first two nodes.
+        let [a, b, ..] = body.tets()[0];
+        let m = split_edge(&mut body, a, b);
+        assert!(body.tets().len() > tets);
+        assert!(
+            (body.rest_volume() / volume - 1.0).abs() < 1e-6,
+            "{kind:?}: rest volume {} of {volume}",
+            body.rest_volume()
+        );
+        assert!((body.total_mass() / mass - 1.0).abs() < 1e-5);
+        // Rewriting a dynamic constraint keeps its lane (no dead lane, no new batch).
+        let batches = body.dynamic_batch_counts();
+        let last = body.tets().len() - 1;
+        let (tet, shape) = (body.tets()[last], rest(&body, body.tets()[last]));
+        body.reshape_tet(last, tet, shape).unwrap();
+        body.set_tet_nodes(last, tet).unwrap();
+        let c = body.distance_constraints().len() - 1;
+        let d = body.distance_constraints()[c];
+        body.reset_distance_constraint(c, d.nodes, d.rest_length)
+            .unwrap();
+        assert_eq!(body.dynamic_batch_counts(), batches, "{kind:?}");
+        let start: Vec<_> = body.positions().to_vec();
+        for _ in 0..20 {
+            body.step().unwrap();
+        }
+        let moved = body
+            .positions()
+            .iter()
+            .zip(&start)
+            .map(|(p, q)| p.distance(*q))
+            .fold(0.0f32, f32::max);
+        assert!(moved < 1e-5, "{kind:?}: a body at rest moved {moved} cm");
+        assert!(body.positions()[m as usize].is_finite());
+    }
+}
+
+#[test]
+fn a_reset_rest_length_is_what_the_solver_pulls_to() {
+    let mut body = body(VolumeConstraintKind::None);
+    // Shrink every edge's rest length: the body contracts.
+    let before = body.volume();
+    for c in 0..body.distance_constraints().len() {
+        let d = body.distance_constraints()[c];
+        body.reset_distance_constraint(c, d.nodes, 0.5 * d.rest_length)
+            .unwrap();
+    }
+    for _ in 0..50 {
+        body.step().unwrap();
+    }
+    assert!(
+        body.volume() < 0.5 * before,
+        "{} of {before}",
+        body.volume()
+    );
+}
+
+#[test]
+fn bad_reshapes_are_refused_and_change_nothing() {
+    let mut body = body(VolumeConstraintKind::Classic);
+    let t0 = body.tets()[0];
+    let flat = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(1.0, 1.0, 0.0)];
+    let tets = body.tets().len();
+    assert!(matches!(
+        body.add_tet(0, t0, flat),
+        Err(PbdError::InvalidParameter { .. })
+    ));
+    let inverted = {
+        let r = rest(&body, t0);
+        [r[1], r[0], r[2], r[3]]
+    };
+    assert!(matches!(
+        body.reshape_tet(0, t0, inverted),
+        Err(PbdError::InvalidParameter { .. })
+    ));
+    assert!(matches!(
+        body.add_tet(tets, t0, rest(&body, t0)),
+        Err(PbdError::NoSuchElement { .. })
+    ));
+    assert!(matches!(
+        body.reset_distance_constraint(0, [0, 0], 1.0),
+        Err(PbdError::InvalidParameter { .. })
+    ));
+    assert!(matches!(
+        body.reset_distance_constraint(0, [0, 1], f32::NAN),
+        Err(PbdError::InvalidParameter { .. })
+    ));
+    assert!(matches!(
+        body.set_node_state(0, Vec3::NAN, Vec3::ZERO, Vec3::ZERO),
+        Err(PbdError::NonFinite { .. })
+    ));
+    assert_eq!(body.tets().len(), tets);
+    assert_eq!(body.tets()[0], t0);
+    assert_eq!(body.dynamic_counts(), (0, 0));
+}

@@ -1,0 +1,868 @@
+//! The geometric part of a cut: nodes snapped onto the blade's plane, tet edges the plane
+//! crosses split, and the tets around them subdivided conformingly, so that the faces the
+//! separation step then opens lie **on** the blade's plane.
+//!
+//! For one sweep (the cut surface: a planar polygon, see [`crate::BladeSweep`]), with `d(v)`
+//! the signed distance of node `v` to the plane (current positions):
+//! 1. **Snapping.** A free node with `0 < |d| < SNAP_FRACTION × its shortest rest edge` whose
+//!    projection lies in the polygon moves onto the plane (current and previous position and
+//!    rest position shifted by `−d n`) if every tet around it keeps a positive current volume,
+//!    a rest volume at or above the input's smallest and a rest radius ratio at or above
+//!    `min(MIN_RATIO, its ratio before)`; its tets' rest volumes and its edges' rest lengths
+//!    are then rebuilt ([`tissue_pbd::SoftBody::reshape_tet`],
+//!    [`tissue_pbd::SoftBody::reset_distance_constraint`]). A node that was near but is not
+//!    snapped is *near*: no edge at it is split.
+//! 2. **Edges.** An edge whose ends lie strictly on opposite sides is *valid* when neither end
+//!    is near and its crossing point lies in the polygon.
+//! 3. **Tets.** A straddling tet is split when all its crossing edges are valid; an edge is
+//!    split when all tets around it are split (repeated to a fixed point, so no tet has a
+//!    hanging node), and a tet whose pieces would fall below the quality bound
+//!    ([`MIN_RATIO`], the input's smallest rest volume) or not sum to its rest volume is not
+//!    split (and the fixed point is run again). Split edges get one node each (shared by all
+//!    tets around the edge), interpolated in current and rest space at the crossing.
+//! 4. **Subdivision**, by the signs of the four nodes (`+`, `−`, `0` on the plane): one
+//!    crossing edge (`+ − 0 0`) → 2 tets; a triangle and a pyramid (`+ − − 0`) → 1 + 2; a tet
+//!    and a prism (`+ − − −`) → 1 + 3; two prisms (`+ + − −`) → 3 + 3. Quads are split along
+//!    the diagonal from their smallest global node index (prisms as in Dompierre et al. 1999),
+//!    so two tets sharing a quad split it the same way. Each piece is oriented positively in
+//!    rest space. The split tet's record is reused for its first piece, the others appended;
+//!    volume constraints get their rest values from the rest positions, new edges distance
+//!    constraints with their rest lengths, a split edge's constraint moves onto its first half;
+//!    masses of the touched nodes are rebuilt from their tets (eq. (1)).
+//! 5. Tets the sweep reaches but does not cross completely (a crossing point outside the
+//!    polygon: the cut's front and sides) are left whole and **glued** (the separation step
+//!    does not open their faces); a later sweep that covers them splits them. A tet that could
+//!    not be split for quality or a near node is left to the face separation (the staircase).
+
+use glam::{DVec3, Vec3};
+use tissue_mesh::NO_TET;
+use tissue_pbd::{DistanceConstraint, SoftBody};
+
+use crate::geometry::radius_ratio;
+use crate::geometry::FxMap as HashMap;
+use crate::state::face_nodes;
+use crate::{SplitTriangle, Surgery, SurgeryError};
+
+/// A node closer to the blade's plane than this fraction of its shortest rest edge is snapped
+/// onto the plane (or, if that would spoil a tet, no edge at it is split).
+pub const SNAP_FRACTION: f64 = 0.25;
+
+/// Smallest rest radius ratio `3 r_in / r_circ` of a tet created by a split, and of a tet a
+/// snap reshapes unless it was already worse.
+pub const MIN_RATIO: f64 = 0.02;
+
+/// The cut's ends snap to tet boundaries: a crossing point at most this fraction of its
+/// edge's length outside the swept polygon counts as inside (so a cut may end up to this much
+/// beyond the blade, and the tets at its front are split whole or not at all).
+pub const FRONT_SNAP: f64 = 0.75;
+
+/// Two crossing points of one edge in different sweeps are the same cut when their parameters
+/// along the edge differ by at most this.
+const COVERED_SLACK: f64 = 0.1;
+
+/// Covered crossing points remembered at most (then forgotten all at once).
+const COVERED_CAP: usize = 1 << 16;
+
+/// Smallest rest volume of a tet created or reshaped by a cut, as a fraction of the input
+/// mesh's smallest rest volume.
+pub const MIN_VOLUME_FRACTION: f64 = 1e-3;
+
+/// Smallest rest volume of a piece a split creates, as a fraction of the input's median tet:
+/// with [`MAX_SPLIT_DEPTH`] it bounds how fine repeated cuts through one place refine the mesh.
+pub const MIN_PIECE_FRACTION: f64 = 0.01;
+
+/// A tet made by this many splits in a row is not split again (a later cut through it
+/// separates along its faces, as where a split is refused for quality).
+pub const MAX_SPLIT_DEPTH: u8 = 3;
+
+/// A cut wall whose normal is this close to the blade's (|cos|) counts as parallel to it.
+const WALL_PARALLEL: f64 = 0.9;
+
+/// What one sweep's split did.
+#[derive(Debug, Default)]
+pub(crate) struct SplitOutcome {
+    /// New nodes on split edges: `first..end`.
+    pub first_node: u32,
+    pub end_node: u32,
+    /// Tets split (their records now hold the first piece) and tets appended.
+    pub split: Vec<u32>,
+    pub first_tet: u32,
+    pub end_tet: u32,
+    /// Nodes snapped onto the plane.
+    pub snapped: Vec<u32>,
+    /// Boundary triangles split into pieces.
+    pub surface: Vec<SplitTriangle>,
+    /// Straddling tets left whole because the sweep did not cross them completely (sorted):
+    /// their faces stay glued this sweep.
+    pub front: Vec<u32>,
+}
+
+/// The plane and polygon of one sweep.
+pub(crate) struct CutPlane<'a> {
+    pub origin: DVec3,
+    pub normal: DVec3,
+    pub surface: &'a [[DVec3; 3]; 8],
+}
+
+impl CutPlane<'_> {
+    /// Whether point `p` of the plane lies in the polygon (one of the eight triangles).
+    pub fn contains(&self, p: DVec3) -> bool {
+        let n = self.normal;
+        self.surface.iter().any(|[a, b, c]| {
+            let (ab, bc, ca) = (
+                (*b - *a).cross(p - *a).dot(n),
+                (*c - *b).cross(p - *b).dot(n),
+                (*a - *c).cross(p - *c).dot(n),
+            );
+            (ab >= 0.0 && bc >= 0.0 && ca >= 0.0) || (ab <= 0.0 && bc <= 0.0 && ca <= 0.0)
+        })
+    }
+}
+
+impl CutPlane<'_> {
+    /// Distance from point `p` of the plane to the polygon (0 inside).
+    pub fn distance(&self, p: DVec3) -> f64 {
+        if self.contains(p) {
+            return 0.0;
+        }
+        let seg = |a: DVec3, b: DVec3| {
+            let ab = b - a;
+            let l = ab.length_squared();
+            let t = if l > 0.0 {
+                ((p - a).dot(ab) / l).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            p.distance(a + ab * t)
+        };
+        self.surface
+            .iter()
+            .map(|[a, b, c]| seg(*a, *b).min(seg(*b, *c)).min(seg(*c, *a)))
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
+fn six_volume([a, b, c, d]: [DVec3; 4]) -> f64 {
+    (b - a).cross(c - a).dot(d - a)
+}
+
+fn sorted2(a: u32, b: u32) -> [u32; 2] {
+    [a.min(b), a.max(b)]
+}
+
+/// The pieces of tet `t` when its edges in `split` (sorted edge → node on it, in the global
+/// order of the sorted edges) are bisected in that order: the first split edge of `t` is
+/// bisected (the tet into the two tets through its node and the opposite edge), then each half
+/// the same way with the later edges. Since a face's triangulation then depends only on the
+/// order of its own edges, which is global, two tets sharing a face split it alike (no
+/// hanging node); replacing an end of an edge by a point strictly inside it keeps the
+/// orientation. Once every crossing edge of `t` is split, no piece holds nodes of both sides.
+fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
+    for (k, (e, m)) in split.iter().enumerate() {
+        if let (Some(i), Some(j)) = (
+            t.iter().position(|&v| v == e[0]),
+            t.iter().position(|&v| v == e[1]),
+        ) {
+            let (mut lo, mut hi) = (t, t);
+            lo[j] = *m;
+            hi[i] = *m;
+            bisect(lo, &split[k + 1..], out);
+            bisect(hi, &split[k + 1..], out);
+            return;
+        }
+    }
+    out.push(t);
+}
+
+/// A planned split edge: its ends, the crossing parameter from the first, its new node.
+#[derive(Debug, Clone, Copy)]
+struct EdgeCut {
+    s: f64,
+    /// The crossing point is in this sweep's polygon or was in an earlier sweep's at about the
+    /// same place along the edge.
+    inside: bool,
+    valid: bool,
+    node: u32,
+}
+
+impl Surgery {
+    /// Steps 1–4 of the module docs for one sweep; `candidates` are the tets that straddle the
+    /// plane near the polygon (sorted).
+    pub(crate) fn split_along(
+        &mut self,
+        body: &mut SoftBody,
+        plane: &CutPlane<'_>,
+        candidates: &[u32],
+    ) -> Result<SplitOutcome, SurgeryError> {
+        let _span = tracing::debug_span!("split").entered();
+        let mut out = SplitOutcome {
+            first_node: body.node_count() as u32,
+            end_node: body.node_count() as u32,
+            first_tet: body.tets().len() as u32,
+            end_tet: body.tets().len() as u32,
+            ..Default::default()
+        };
+        if candidates.is_empty() {
+            return Ok(out);
+        }
+        let (o, n) = (plane.origin, plane.normal);
+        let mut nodes: Vec<u32> = candidates
+            .iter()
+            .flat_map(|&t| body.tets()[t as usize])
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        let pos = |body: &SoftBody, v: u32| body.positions()[v as usize].as_dvec3();
+        let mut dist: HashMap<u32, f64> = HashMap::default();
+        for &v in &nodes {
+            dist.insert(v, n.dot(pos(body, v) - o));
+        }
+        // 1. Snapping.
+        let mut near: Vec<u32> = Vec::new();
+        let mut reshaped: Vec<u32> = Vec::new();
+        for &v in &nodes {
+            let d = dist[&v];
+            // `node_reach` is 1.5 × the longest rest edge: far nodes are skipped cheaply.
+            if d == 0.0 || d.abs() >= SNAP_FRACTION * self.node_reach[v as usize] as f64 / 1.5 {
+                continue;
+            }
+            let star = &self.node_tets[v as usize];
+            let tets = body.tets();
+            let mut shortest = f64::INFINITY;
+            for &t in star {
+                for &u in &tets[t as usize] {
+                    if u != v {
+                        shortest =
+                            shortest.min(self.rest[v as usize].distance(self.rest[u as usize]));
+                    }
+                }
+            }
+            if d.abs() >= SNAP_FRACTION * shortest {
+                continue;
+            }
+            let x = pos(body, v);
+            let free = body.inverse_masses()[v as usize] > 0.0;
+            let target = x - d * n;
+            let moved_rest = self.rest[v as usize] - d * n;
+            let ok = free
+                && plane.contains(target)
+                && star.iter().all(|&t| {
+                    let tet = tets[t as usize];
+                    let before = tet.map(|u| self.rest[u as usize]);
+                    let after = tet.map(|u| {
+                        if u == v {
+                            moved_rest
+                        } else {
+                            self.rest[u as usize]
+                        }
+                    });
+                    let now = tet.map(|u| if u == v { target } else { pos(body, u) });
+                    let vol = six_volume(after) / 6.0;
+                    six_volume(now) > 0.0
+                        && vol >= self.volume_floor()
+                        && radius_ratio(after) >= MIN_RATIO.min(radius_ratio(before))
+                });
+            if !ok {
+                near.push(v);
+                continue;
+            }
+            let shift = (-d * n).as_vec3();
+            let (xv, pv, vv) = (
+                Vec3::from(body.positions()[v as usize]),
+                Vec3::from(body.previous_positions()[v as usize]),
+                Vec3::from(body.velocities()[v as usize]),
+            );
+            body.set_node_state(v, xv + shift, pv + shift, vv)?;
+            body.set_rest_position(v, moved_rest.as_vec3())?;
+            self.rest[v as usize] = moved_rest;
+            dist.insert(v, 0.0);
+            out.snapped.push(v);
+            reshaped.extend_from_slice(&self.node_tets[v as usize]);
+        }
+        if !out.snapped.is_empty() {
+            reshaped.sort_unstable();
+            reshaped.dedup();
+            for &t in &reshaped {
+                let tet = body.tets()[t as usize];
+                body.reshape_tet(t as usize, tet, tet.map(|u| self.rest[u as usize]))?;
+            }
+            let mut edges: Vec<[u32; 2]> = Vec::new();
+            for &v in &out.snapped {
+                for &t in &self.node_tets[v as usize] {
+                    for &u in &body.tets()[t as usize] {
+                        if u != v {
+                            edges.push(sorted2(u, v));
+                        }
+                    }
+                }
+            }
+            edges.sort_unstable();
+            edges.dedup();
+            for e in edges {
+                if let Some(&c) = self.edge_constraint.get(&e) {
+                    let l = self.rest[e[0] as usize].distance(self.rest[e[1] as usize]);
+                    body.reset_distance_constraint(c as usize, e, l as f32)?;
+                }
+            }
+            self.rebuild_masses(body, &reshaped)?;
+        }
+        near.sort_unstable();
+        let is_near = |v: u32| near.binary_search(&v).is_ok();
+        let sign = |v: u32| -> i8 {
+            let d = dist.get(&v).copied().unwrap_or(0.0);
+            if d > 0.0 {
+                1
+            } else if d < 0.0 {
+                -1
+            } else {
+                0
+            }
+        };
+        // Tets with a cut wall nearly parallel to the blade: the blade runs in a gap already
+        // opened (the tissue moved a little since the sweep that cut it); splitting them again
+        // would shave a thin slab off the wall. They are not split (their faces may still open,
+        // as where a split is refused).
+        let mut blocked: Vec<u32> = Vec::new();
+        for &(t, j) in &self.cut_faces {
+            if candidates.binary_search(&t).is_err() {
+                continue;
+            }
+            let f = face_nodes(&body.tets()[t as usize], j as usize).map(|v| pos(body, v));
+            let normal = (f[1] - f[0]).cross(f[2] - f[0]).normalize_or_zero();
+            if normal.dot(n).abs() > WALL_PARALLEL {
+                blocked.push(t);
+            }
+        }
+        blocked.sort_unstable();
+        blocked.dedup();
+        // 2. Crossing edges.
+        let mut edges: HashMap<[u32; 2], EdgeCut> = HashMap::default();
+        let mut crossed: Vec<u32> = Vec::new();
+        for &t in candidates {
+            let tet = body.tets()[t as usize];
+            let mut any = false;
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    let (p, q) = (tet[a], tet[b]);
+                    if sign(p) * sign(q) >= 0 {
+                        continue;
+                    }
+                    any = true;
+                    let e = sorted2(p, q);
+                    edges.entry(e).or_insert_with(|| {
+                        let (d0, d1) = (dist[&e[0]], dist[&e[1]]);
+                        let s = d0 / (d0 - d1);
+                        let (x0, x1) = (pos(body, e[0]), pos(body, e[1]));
+                        let reach = FRONT_SNAP * x0.distance(x1);
+                        let inside = plane.distance(x0 + (x1 - x0) * s) <= reach
+                            || self
+                                .covered
+                                .get(&e)
+                                .is_some_and(|&s0| (s0 - s).abs() <= COVERED_SLACK);
+                        EdgeCut {
+                            s,
+                            inside,
+                            valid: inside && !is_near(e[0]) && !is_near(e[1]),
+                            node: u32::MAX,
+                        }
+                    });
+                }
+            }
+            if any {
+                crossed.push(t);
+            }
+        }
+        // A tet whose centroid lies over the polygon is cut whole: its crossing points outside
+        // the polygon count as inside (the cut's end snaps to the tet's far side), so a body
+        // that moved between sweeps does not leave partly covered tets behind for good.
+        for &t in &crossed {
+            let tet = body.tets()[t as usize];
+            let c = tet.iter().map(|&v| pos(body, v)).sum::<DVec3>() * 0.25;
+            if !plane.contains(c - n * n.dot(c - o)) {
+                continue;
+            }
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    let e = sorted2(tet[a], tet[b]);
+                    if let Some(c) = edges.get_mut(&e) {
+                        c.inside = true;
+                        c.valid = !is_near(e[0]) && !is_near(e[1]);
+                    }
+                }
+            }
+        }
+        // 3. Split edges (valid ones), the tets around them bisected (see `bisect`); a tet
+        // whose pieces would fall below the quality bound or not tile it in rest space gives
+        // up its split edges, and the rest is planned again until nothing fails.
+        let first = body.node_count() as u32;
+        let mut pieces: Vec<[u32; 4]> = Vec::new();
+        let mut plan: Vec<(u32, std::ops::Range<usize>)> = Vec::new();
+        let mut new_rest: Vec<DVec3> = Vec::new();
+        let mut order: Vec<[u32; 2]> = Vec::new();
+        let mut local: Vec<([u32; 2], u32)> = Vec::new();
+        loop {
+            order.clear();
+            order.extend(edges.iter().filter(|(_, c)| c.valid).map(|(e, _)| *e));
+            order.sort_unstable();
+            new_rest.clear();
+            for (k, e) in order.iter().enumerate() {
+                let c = edges.get_mut(e).ok_or(SurgeryError::Defect {
+                    element: "edge",
+                    index: e[0] as usize,
+                    what: "split edge lost its record",
+                })?;
+                c.node = first + k as u32;
+                let (r0, r1) = (self.rest[e[0] as usize], self.rest[e[1] as usize]);
+                new_rest.push(r0 + (r1 - r0) * c.s);
+            }
+            let mut affected: Vec<u32> = order.iter().flat_map(|e| self.tets_around(e)).collect();
+            affected.sort_unstable();
+            affected.dedup();
+            let rest_of = |v: u32| -> DVec3 {
+                if v >= first {
+                    new_rest[(v - first) as usize]
+                } else {
+                    self.rest[v as usize]
+                }
+            };
+            pieces.clear();
+            plan.clear();
+            let mut failed: Vec<[u32; 2]> = Vec::new();
+            for &t in &affected {
+                let tet = body.tets()[t as usize];
+                local.clear();
+                for a in 0..4 {
+                    for b in a + 1..4 {
+                        let e = sorted2(tet[a], tet[b]);
+                        if let Some(c) = edges.get(&e).filter(|c| c.valid) {
+                            local.push((e, c.node));
+                        }
+                    }
+                }
+                local.sort_unstable();
+                let start = pieces.len();
+                bisect(tet, &local, &mut pieces);
+                let parent = six_volume(tet.map(rest_of));
+                let mut sum = 0.0;
+                let good = pieces[start..].iter().all(|p| {
+                    let r = p.map(rest_of);
+                    let v = six_volume(r);
+                    sum += v;
+                    v / 6.0 >= self.piece_floor() && radius_ratio(r) >= MIN_RATIO
+                }) && (sum - parent).abs() <= 1e-9 * parent.abs()
+                    && (local.is_empty()
+                        || (self.depth[t as usize] < MAX_SPLIT_DEPTH
+                            && blocked.binary_search(&t).is_err()));
+                if good {
+                    plan.push((t, start..pieces.len()));
+                } else {
+                    pieces.truncate(start);
+                    failed.extend(local.iter().map(|l| l.0));
+                }
+            }
+            if failed.is_empty() {
+                break;
+            }
+            for e in failed {
+                if let Some(c) = edges.get_mut(&e) {
+                    c.valid = false;
+                }
+            }
+        }
+        // Crossing points this sweep covered on edges it did not split: a later sweep in about
+        // the same place finds them covered (a cut continued over many steps).
+        if self.covered.len() > COVERED_CAP {
+            self.covered.clear();
+        }
+        for (e, c) in &edges {
+            if c.inside && !c.valid {
+                self.covered.insert(*e, c.s);
+            } else if c.valid {
+                self.covered.remove(e);
+            }
+        }
+        let outside: Vec<[u32; 2]> = edges
+            .iter()
+            .filter(|(_, c)| !c.inside)
+            .map(|(e, _)| *e)
+            .collect();
+        if !plan.is_empty() {
+            self.apply_split(body, &edges, &order, &new_rest, &plan, &pieces, &mut out)?;
+        }
+        // The front: tets (after the split) on a crossing edge outside the polygon.
+        for e in &outside {
+            out.front.extend(self.tets_around(e));
+        }
+        out.front.sort_unstable();
+        out.front.dedup();
+        Ok(out)
+    }
+    /// Smallest rest volume a cut may create (cm³): [`MIN_VOLUME_FRACTION`] of the input's.
+    pub(crate) fn volume_floor(&self) -> f64 {
+        MIN_VOLUME_FRACTION * self.min_rest_volume as f64
+    }
+
+    /// Smallest rest volume of a piece a split creates (cm³): [`MIN_PIECE_FRACTION`] of the
+    /// input's median tet, and at least [`Surgery::volume_floor`].
+    pub(crate) fn piece_floor(&self) -> f64 {
+        (MIN_PIECE_FRACTION * self.median_rest_volume).max(self.volume_floor())
+    }
+
+    /// The tets around an edge.
+    fn tets_around<'a>(&'a self, e: &'a [u32; 2]) -> impl Iterator<Item = u32> + 'a {
+        self.node_tets[e[0] as usize]
+            .iter()
+            .copied()
+            .filter(move |t| self.node_tets[e[1] as usize].contains(t))
+    }
+
+    /// Masses of the nodes of `tets` from their tets' rest volumes (eq. (1)).
+    pub(crate) fn rebuild_masses(
+        &self,
+        body: &mut SoftBody,
+        tets: &[u32],
+    ) -> Result<(), SurgeryError> {
+        let mut nodes: Vec<u32> = tets.iter().flat_map(|&t| body.tets()[t as usize]).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        let density = body.density() as f64;
+        for v in nodes {
+            let m: f64 = self.node_tets[v as usize]
+                .iter()
+                .map(|&t| density * body.tet_rest_volumes()[t as usize] as f64 / 4.0)
+                .sum();
+            body.set_node_mass(v, m as f32)?;
+        }
+        Ok(())
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn apply_split(
+        &mut self,
+        body: &mut SoftBody,
+        edges: &HashMap<[u32; 2], EdgeCut>,
+        order: &[[u32; 2]],
+        new_rest: &[DVec3],
+        plan: &[(u32, std::ops::Range<usize>)],
+        pieces: &[[u32; 4]],
+        out: &mut SplitOutcome,
+    ) -> Result<(), SurgeryError> {
+        // New nodes, one per split edge, copied from a free end (so a pinned end does not pin
+        // it), then interpolated.
+        let w = body.inverse_masses();
+        let sources: Vec<u32> = order
+            .iter()
+            .map(|e| if w[e[0] as usize] > 0.0 { e[0] } else { e[1] })
+            .collect();
+        let first = body.duplicate_nodes(&sources)?;
+        for (k, e) in order.iter().enumerate() {
+            let s = edges[e].s as f32;
+            let v = first + k as u32;
+            let lerp = |a: glam::Vec3A, b: glam::Vec3A| Vec3::from(a + (b - a) * s);
+            let (i, j) = (e[0] as usize, e[1] as usize);
+            let (x, p, vel) = (
+                lerp(body.positions()[i], body.positions()[j]),
+                lerp(body.previous_positions()[i], body.previous_positions()[j]),
+                lerp(body.velocities()[i], body.velocities()[j]),
+            );
+            body.set_node_state(v, x, p, vel)?;
+            body.set_rest_position(v, new_rest[k].as_vec3())?;
+            self.rest.push(new_rest[k]);
+            self.origin.push(v);
+            let reach = self.node_reach[i].max(self.node_reach[j]);
+            self.node_reach.push(reach);
+            self.node_tets.push(Vec::new());
+        }
+        out.first_node = first;
+        out.end_node = first + order.len() as u32;
+        let node_edge =
+            |v: u32| -> Option<[u32; 2]> { (v >= first).then(|| order[(v - first) as usize]) };
+        // Templates for new distance constraints: a constraint of each split tet's edges.
+        let template = |s: &Self, body: &SoftBody, tet: [u32; 4]| -> Option<DistanceConstraint> {
+            (0..4)
+                .flat_map(|a| (a + 1..4).map(move |b| (a, b)))
+                .find_map(|(a, b)| s.edge_constraint.get(&sorted2(tet[a], tet[b])))
+                .map(|&c| body.distance_constraints()[c as usize])
+        };
+        // Tets: the record of the split tet keeps the first piece, the others are appended.
+        let old_tets: Vec<[u32; 4]> = plan.iter().map(|(t, _)| body.tets()[*t as usize]).collect();
+        let old_neighbours: Vec<[u32; 4]> = plan
+            .iter()
+            .map(|(t, _)| self.neighbours[*t as usize])
+            .collect();
+        let templates: Vec<Option<DistanceConstraint>> =
+            old_tets.iter().map(|&t| template(self, body, t)).collect();
+        out.first_tet = body.tets().len() as u32;
+        // (piece tet index, parent position in plan)
+        let mut made: Vec<(u32, usize)> = Vec::with_capacity(pieces.len());
+        for (k, (t, range)) in plan.iter().enumerate() {
+            for (i, p) in pieces[range.clone()].iter().enumerate() {
+                let rest = p.map(|v| self.rest[v as usize]);
+                let idx = if i == 0 {
+                    body.reshape_tet(*t as usize, *p, rest)?;
+                    *t
+                } else {
+                    body.add_tet(*t as usize, *p, rest)? as u32
+                };
+                made.push((idx, k));
+            }
+            out.split.push(*t);
+        }
+        out.end_tet = body.tets().len() as u32;
+        let added = (out.end_tet - out.first_tet) as usize;
+        self.neighbours
+            .extend(std::iter::repeat_n([NO_TET; 4], added));
+        self.tet_mark.extend(std::iter::repeat_n(0, added));
+        for &(idx, k) in &made {
+            if idx >= out.first_tet {
+                let c = self.tet_component[plan[k].0 as usize];
+                self.tet_component.push(c);
+            }
+        }
+        // Node → tets.
+        for (k, (t, _)) in plan.iter().enumerate() {
+            for &v in &old_tets[k] {
+                self.node_tets[v as usize].retain(|u| u != t);
+            }
+        }
+        for &(idx, _) in &made {
+            for &v in &body.tets()[idx as usize] {
+                self.node_tets[v as usize].push(idx);
+            }
+        }
+        // Adjacency: pieces of one tet, or of two tets that were neighbours, sharing a face;
+        // whole neighbours across an unsplit face.
+        let parent_of: HashMap<u32, usize> =
+            plan.iter().enumerate().map(|(k, (t, _))| (*t, k)).collect();
+        let mut faces: HashMap<[u32; 3], (u32, u8, u32)> = HashMap::default();
+        let mut link = |s: &mut Self, key: [u32; 3], me: (u32, u8, u32)| match faces.remove(&key) {
+            Some((u, k, pu)) => {
+                let legit =
+                    pu == me.2 || old_neighbours_contains(&old_neighbours, &parent_of, me.2, pu);
+                if legit {
+                    s.neighbours[me.0 as usize][me.1 as usize] = u;
+                    s.neighbours[u as usize][k as usize] = me.0;
+                }
+            }
+            None => {
+                faces.insert(key, me);
+            }
+        };
+        for &(idx, k) in &made {
+            self.neighbours[idx as usize] = [NO_TET; 4];
+            let tet = body.tets()[idx as usize];
+            for j in 0..4 {
+                let mut key = face_nodes(&tet, j);
+                key.sort_unstable();
+                link(self, key, (idx, j as u8, plan[k].0));
+            }
+        }
+        for (k, nb) in old_neighbours.iter().enumerate() {
+            for &u in nb {
+                if u == NO_TET || parent_of.contains_key(&u) {
+                    continue;
+                }
+                let tet = body.tets()[u as usize];
+                for j in 0..4 {
+                    if self.neighbours[u as usize][j] == plan[k].0 {
+                        self.neighbours[u as usize][j] = NO_TET;
+                        let mut key = face_nodes(&tet, j);
+                        key.sort_unstable();
+                        link(self, key, (u, j as u8, u));
+                    }
+                }
+            }
+        }
+        // Which face of its parent a piece's face lies on.
+        let on_parent_face = |parent: [u32; 4], f: [u32; 3]| -> Option<usize> {
+            let mut support = [false; 4];
+            for v in f {
+                let ends = node_edge(v).map_or([v, v], |e| e);
+                for e in ends {
+                    let i = parent.iter().position(|&p| p == e)?;
+                    support[i] = true;
+                }
+            }
+            let missing: Vec<usize> = (0..4).filter(|&i| !support[i]).collect();
+            (missing.len() == 1).then(|| missing[0])
+        };
+        // Cut walls and the surface: faces of pieces on a boundary face of their parent.
+        let wall: Vec<(u32, u8)> = std::mem::take(&mut self.cut_faces);
+        let split_set = |t: u32| parent_of.contains_key(&t);
+        self.cut_faces = wall
+            .iter()
+            .copied()
+            .filter(|(t, _)| !split_set(*t))
+            .collect();
+        let mut split_walls: Vec<(u32, u8)> = wall
+            .iter()
+            .copied()
+            .filter(|(t, _)| split_set(*t))
+            .collect();
+        split_walls.sort_unstable();
+        let was_wall = |t: u32, j: usize| split_walls.binary_search(&(t, j as u8)).is_ok();
+        let mut surface: HashMap<(usize, usize), Vec<[u32; 3]>> = HashMap::default();
+        for &(idx, k) in &made {
+            let tet = body.tets()[idx as usize];
+            for j in 0..4 {
+                if self.neighbours[idx as usize][j] != NO_TET {
+                    continue;
+                }
+                let f = face_nodes(&tet, j);
+                if let Some(pj) = on_parent_face(old_tets[k], f) {
+                    if old_neighbours[k][pj] == NO_TET {
+                        if was_wall(plan[k].0, pj) {
+                            self.cut_faces.push((idx, j as u8));
+                        }
+                        surface.entry((k, pj)).or_default().push(f);
+                    }
+                }
+            }
+        }
+        let mut keys: Vec<(usize, usize)> = surface.keys().copied().collect();
+        keys.sort_unstable();
+        for key in keys {
+            if let Some(p) = surface.remove(&key) {
+                if p.len() > 1 {
+                    out.surface.push(SplitTriangle {
+                        original: face_nodes(&old_tets[key.0], key.1),
+                        pieces: p,
+                    });
+                }
+            }
+        }
+        self.pending
+            .retain(|p| !split_set(p[0]) && !split_set(p[2]));
+        // Distance constraints: a split edge's moves onto its first half, new edges get one.
+        for (k, e) in order.iter().enumerate() {
+            let m = first + k as u32;
+            if let Some(c) = self.edge_constraint.remove(e) {
+                let l = self.rest[e[0] as usize].distance(self.rest[m as usize]);
+                body.reset_distance_constraint(c as usize, [e[0], m], l as f32)?;
+                self.edge_constraint.insert(sorted2(e[0], m), c);
+            }
+        }
+        for &(idx, k) in &made {
+            let Some(record) = templates[k] else {
+                continue;
+            };
+            let tet = body.tets()[idx as usize];
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    let e = sorted2(tet[a], tet[b]);
+                    if self.edge_constraint.contains_key(&e) {
+                        continue;
+                    }
+                    let l = self.rest[e[0] as usize].distance(self.rest[e[1] as usize]);
+                    let c = body.add_distance_constraint(DistanceConstraint {
+                        nodes: e,
+                        rest_length: l as f32,
+                        ..record
+                    })?;
+                    self.edge_constraint.insert(e, c as u32);
+                }
+            }
+        }
+        let touched: Vec<u32> = made.iter().map(|m| m.0).collect();
+        self.rebuild_masses(body, &touched)?;
+        let parent_depth: Vec<u8> = plan.iter().map(|(t, _)| self.depth[*t as usize]).collect();
+        self.depth.resize(body.tets().len(), 0);
+        for &(idx, k) in &made {
+            self.depth[idx as usize] = parent_depth[k].saturating_add(1);
+        }
+        tracing::debug!(
+            split = plan.len(),
+            pieces = pieces.len(),
+            nodes = order.len(),
+            snapped = out.snapped.len(),
+            "tets split"
+        );
+        Ok(())
+    }
+}
+
+/// Whether split tets `a` and `b` (by index) were face neighbours before the split.
+fn old_neighbours_contains(
+    old: &[[u32; 4]],
+    parent_of: &HashMap<u32, usize>,
+    a: u32,
+    b: u32,
+) -> bool {
+    parent_of.get(&a).is_some_and(|&k| old[k].contains(&b))
+        || parent_of.get(&b).is_some_and(|&k| old[k].contains(&a))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every sign pattern of the unit tet, with every crossing edge split: the pieces tile the
+    /// tet (their volumes sum to its volume), none is flat or inverted, and none holds nodes of
+    /// both sides.
+    #[test]
+    fn every_sign_pattern_tiles_the_tet_and_separates_the_sides() {
+        let base = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+        for code in 0..81u32 {
+            let s: [i8; 4] = [0, 1, 2, 3].map(|k| ((code / 3u32.pow(k)) % 3) as i8 - 1);
+            let mut x = base.to_vec();
+            let mut split: Vec<([u32; 2], u32)> = Vec::new();
+            for a in 0..4u32 {
+                for b in a + 1..4 {
+                    if s[a as usize] * s[b as usize] < 0 {
+                        split.push(([a, b], x.len() as u32));
+                        x.push(base[a as usize] * 0.4 + base[b as usize] * 0.6);
+                    }
+                }
+            }
+            let mut out = Vec::new();
+            bisect([0, 1, 2, 3], &split, &mut out);
+            let v: f64 = out
+                .iter()
+                .map(|t| six_volume(t.map(|i| x[i as usize])))
+                .sum();
+            assert!((v - 1.0).abs() < 1e-12, "{s:?}: {v}");
+            for t in &out {
+                assert!(six_volume(t.map(|i| x[i as usize])) > 1e-6, "{s:?}: {t:?}");
+                let sides: Vec<i8> = t
+                    .iter()
+                    .filter(|&&i| i < 4)
+                    .map(|&i| s[i as usize])
+                    .collect();
+                assert!(!(sides.contains(&1) && sides.contains(&-1)), "{s:?}: {t:?}");
+            }
+        }
+    }
+
+    /// Two tets sharing the face 0 1 2, any subset of its edges split: both sides triangulate
+    /// the face the same way.
+    #[test]
+    fn neighbours_split_a_shared_face_alike() {
+        let edges = [([0, 1], 5), ([1, 2], 6), ([0, 2], 7)];
+        for mask in 1..8u32 {
+            let split: Vec<([u32; 2], u32)> = (0..3)
+                .filter(|k| mask & (1 << k) != 0)
+                .map(|k| edges[k])
+                .collect();
+            let mut sorted = split.clone();
+            sorted.sort_unstable();
+            let on_face = |t: &[u32; 4]| -> Vec<[u32; 3]> {
+                (0..4)
+                    .map(|j| {
+                        let mut f = face_nodes(t, j);
+                        f.sort_unstable();
+                        f
+                    })
+                    .filter(|f| f.iter().all(|&v| v != 3 && v != 4))
+                    .collect()
+            };
+            let faces = |t: [u32; 4]| {
+                let mut out = Vec::new();
+                bisect(t, &sorted, &mut out);
+                let mut f: Vec<[u32; 3]> = out.iter().flat_map(on_face).collect();
+                f.sort_unstable();
+                f
+            };
+            assert_eq!(faces([0, 1, 2, 3]), faces([0, 2, 1, 4]), "mask {mask}");
+        }
+    }
+}
