@@ -280,39 +280,34 @@ fn contacts_are_sorted_deterministic_and_thread_count_independent() {
     assert!(one.windows(2).all(|w| w[0].key() < w[1].key()));
 }
 
+/// The 65² press scene's region and sphere under two colliders at tolerance 0.002 cm, one
+/// without coherence and one with a 0.004 cm margin, and the positions (region, sphere).
+fn press_colliders() -> (Collider, Collider, Vec<Vec3A>, Vec<Vec3A>) {
+    let scene = scenes::plane_press(65, 0.05, 0.0).unwrap();
+    let options = |coherence_margin| ColliderOptions {
+        contact: ContactParams {
+            tolerance: 0.002,
+            shared_particles: false,
+        },
+        coherence_margin,
+        ..ColliderOptions::default()
+    };
+    let full = Collider::new(&scene.region, &scene.sphere, &options(0.0)).unwrap();
+    let coherent = Collider::new(&scene.region, &scene.sphere, &options(0.004)).unwrap();
+    (
+        full,
+        coherent,
+        to_vec3a(scene.region.positions()),
+        to_vec3a(scene.sphere.positions()),
+    )
+}
+
 #[test]
 fn temporal_coherence_finds_exactly_the_full_detections_contacts() {
     // The sphere rises through the 65² press region in small steps while the region sags:
     // a collider that re-tests the pairs kept within tolerance + margin gives the contacts
     // of a full detection, bit for bit, at every step, and re-tests most steps.
-    let scene = scenes::plane_press(65, 0.05, 0.0).unwrap();
-    let contact = ContactParams {
-        tolerance: 0.002,
-        shared_particles: false,
-    };
-    let mut full = Collider::new(
-        &scene.region,
-        &scene.sphere,
-        &ColliderOptions {
-            contact,
-            ..ColliderOptions::default()
-        },
-    )
-    .unwrap();
-    let mut coherent = Collider::new(
-        &scene.region,
-        &scene.sphere,
-        &ColliderOptions {
-            contact,
-            coherence_margin: 0.004,
-            ..ColliderOptions::default()
-        },
-    )
-    .unwrap();
-    let (mut pa, mut pb) = (
-        to_vec3a(scene.region.positions()),
-        to_vec3a(scene.sphere.positions()),
-    );
+    let (mut full, mut coherent, mut pa, mut pb) = press_colliders();
     let (mut retests, mut total) = (0, 0);
     for step in 0..60 {
         for p in &mut pb {
@@ -340,22 +335,7 @@ fn coherence_drops_the_margin_while_the_motion_outruns_it() {
     // separation), then creeps 0.0005 cm per step. Every call gives a full detection's contacts
     // bit for bit; while jumping, each detection is a plain one at the tolerance (its counts
     // are the full collider's: no margin pairs kept); creeping, most steps are re-tests.
-    let scene = scenes::plane_press(65, 0.05, 0.0).unwrap();
-    let contact = ContactParams {
-        tolerance: 0.002,
-        shared_particles: false,
-    };
-    let options = |coherence_margin| ColliderOptions {
-        contact,
-        coherence_margin,
-        ..ColliderOptions::default()
-    };
-    let mut full = Collider::new(&scene.region, &scene.sphere, &options(0.0)).unwrap();
-    let mut coherent = Collider::new(&scene.region, &scene.sphere, &options(0.004)).unwrap();
-    let (pa, mut pb) = (
-        to_vec3a(scene.region.positions()),
-        to_vec3a(scene.sphere.positions()),
-    );
+    let (mut full, mut coherent, pa, mut pb) = press_colliders();
     let (mut plain, mut retests, mut total) = (0, 0, 0);
     for step in 0..50 {
         let rise = if step < 10 { 0.01 } else { 0.0005 };
