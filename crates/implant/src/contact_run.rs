@@ -79,7 +79,7 @@ impl Default for RunParams {
     /// expander chattered against its anchors and never settled), 8 Gauss–Seidel sweeps
     /// warm-started from the last step's impulses (cold-started, with 4 or 2 sweeps the resting
     /// contacts chatter and the 100–150 cm³ runs do not settle, and even with 8 a 175 cm³ run
-    /// hit the step limit; warm-started, 40–160 cm³ all settle in 347–449 steps); window 50
+    /// hit the step limit; warm-started, 40–200 cm³ all settle in 295–415 steps); window 50
     /// steps (1.6 ms on Table 2), tolerance 0.01, at most 20 000 steps (the thesis's runs took 2 800–3 300);
     /// settled below a mean speed of 5 cm/s (resting contacts jitter at 1–3 cm/s, which the
     /// thesis's ratio test alone never accepts).

@@ -75,9 +75,9 @@ impl Default for PlanePressParams {
     /// tissue's waves and its damping time. The run ends with the sphere, not with the tissue at
     /// rest, so whatever the impact at the start set ringing and has not yet died away is still
     /// in the result. The cost is `travel / (speed·h)` steps, and `h` shrinks with the edge
-    /// length (1.2 µs at 65², 0.60 µs at 129², 0.30 µs at 257²: 2 571, 5 066 and 10 080 steps).
-    /// Halving the speed changes the area after by 0.06 % and the volume by 0.6 % at 65²
-    /// (`--halving` in the example measures it).
+    /// length (2.6 µs at 65², 1.3 µs at 129², 0.67 µs at 257²: 1 150, 2 266 and 4 508 steps).
+    /// Halving the speed changes the area after by 0.08 % and the volume by 0.24 % at 65²
+    /// (`--halving` in the example measures it); four times the speed changes the area by 1 %.
     fn default() -> Self {
         PlanePressParams {
             sphere_radius: 0.25,
