@@ -225,8 +225,11 @@ impl Surgery {
             self.neighbours[f.u as usize][f.k as usize] = NO_TET;
         }
         // Crumbs: a group of fewer than MIN_PIECE tets that the new faces would enclose is a
-        // staircase artefact (or a sliver between two cuts); it stays attached.
-        let mut crumbs: Vec<u32> = Vec::new();
+        // staircase artefact (or a sliver between two cuts); it stays attached. With splits, a
+        // crumb whose new faces lead to both sides of the blade's plane (a slab between an
+        // earlier wall and this one, on a body that moved between the sweeps) stays attached to
+        // one side only — the side its centroid lies on — so that it does not bridge the cut.
+        let mut crumbs: Vec<Vec<u32>> = Vec::new();
         self.stamp = self.stamp.wrapping_add(1).max(1);
         for f in &faces {
             for t in [f.t, f.u] {
@@ -235,16 +238,60 @@ impl Surgery {
                         for &g in &group {
                             self.tet_mark[g as usize] = self.stamp;
                         }
-                        crumbs.extend(group);
+                        crumbs.push(group);
                     }
                 }
             }
         }
         if !crumbs.is_empty() {
             let stamp = self.stamp;
+            let side = tet_sides(body, plane);
+            // Tet → its crumb.
+            let mut crumb_of: HashMap<u32, usize> = HashMap::default();
+            for (c, group) in crumbs.iter().enumerate() {
+                for &t in group {
+                    crumb_of.insert(t, c);
+                }
+            }
+            // Each crumb's side: where its rest-volume-weighted centroid lies; `None` keeps all
+            // of its faces glued (face separation, or every neighbour on one side).
+            let rest = body.tet_rest_volumes();
+            let crumb_side: Vec<Option<bool>> = crumbs
+                .iter()
+                .enumerate()
+                .map(|(c, group)| {
+                    if !self.settings.split_tets {
+                        return None;
+                    }
+                    let mut outer = [false; 2];
+                    for f in &faces {
+                        for (a, b) in [(f.t, f.u), (f.u, f.t)] {
+                            if crumb_of.get(&a) == Some(&c) && crumb_of.get(&b) != Some(&c) {
+                                outer[usize::from(side(b) > 0.0)] = true;
+                            }
+                        }
+                    }
+                    if !(outer[0] && outer[1]) {
+                        return None;
+                    }
+                    let d: f64 = group
+                        .iter()
+                        .map(|&t| rest[t as usize] as f64 * side(t))
+                        .sum();
+                    Some(d > 0.0)
+                })
+                .collect();
             let marks = std::mem::take(&mut self.tet_mark);
             faces.retain(|f| {
-                let glue = marks[f.t as usize] == stamp || marks[f.u as usize] == stamp;
+                let glue = if marks[f.t as usize] != stamp && marks[f.u as usize] != stamp {
+                    false
+                } else {
+                    match (crumb_of.get(&f.t), crumb_of.get(&f.u)) {
+                        (Some(&c), None) => crumb_side[c].is_none_or(|s| (side(f.u) > 0.0) == s),
+                        (None, Some(&c)) => crumb_side[c].is_none_or(|s| (side(f.t) > 0.0) == s),
+                        _ => true,
+                    }
+                };
                 if glue {
                     self.neighbours[f.t as usize][f.j as usize] = f.u;
                     self.neighbours[f.u as usize][f.k as usize] = f.t;
@@ -838,5 +885,19 @@ impl Surgery {
             "cut advanced"
         );
         Ok(events)
+    }
+}
+
+/// The signed distance of each tet's current centroid from the plane of `plane` (a closure).
+fn tet_sides<'a>(body: &'a SoftBody, plane: &CutPlane<'_>) -> impl Fn(u32) -> f64 + 'a {
+    let (origin, normal) = (plane.origin, plane.normal);
+    move |t: u32| {
+        let x = body.positions();
+        let c = body.tets()[t as usize]
+            .iter()
+            .map(|&i| x[i as usize].as_dvec3())
+            .sum::<DVec3>()
+            * 0.25;
+        normal.dot(c - origin)
     }
 }
