@@ -304,18 +304,22 @@ impl Surgery {
             }
         }
         // Glue back what would leave the surface non-manifold, until nothing does.
+        // Gluing a face back changes the plan of its three nodes only: the plan is updated, not
+        // rebuilt, between rounds.
+        let mut plan = self.plan_split(body, &faces);
         let split = loop {
-            let plan = self.plan_split(body, &faces);
             let bad = self.defects(body, &faces, &plan);
             if bad.is_empty() {
                 break plan;
             }
             let mut keep = Vec::with_capacity(faces.len());
+            let mut touched: Vec<u32> = Vec::new();
             for (i, f) in faces.iter().enumerate() {
                 if bad.contains(&i) {
                     self.neighbours[f.t as usize][f.j as usize] = f.u;
                     self.neighbours[f.u as usize][f.k as usize] = f.t;
                     self.pending.push([f.t, f.j as u32, f.u, f.k as u32]);
+                    touched.extend(face_nodes(&body.tets()[f.t as usize], f.j as usize));
                 } else {
                     keep.push(*f);
                 }
@@ -323,6 +327,20 @@ impl Surgery {
             faces = keep;
             if faces.is_empty() {
                 return Ok(Vec::new());
+            }
+            let mut on_faces: Vec<u32> = faces
+                .iter()
+                .flat_map(|f| face_nodes(&body.tets()[f.t as usize], f.j as usize))
+                .collect();
+            on_faces.sort_unstable();
+            on_faces.dedup();
+            plan.retain(|p| on_faces.binary_search(&p.0).is_ok());
+            touched.sort_unstable();
+            touched.dedup();
+            for v in touched {
+                if let Ok(i) = plan.binary_search_by_key(&v, |p| p.0) {
+                    plan[i] = self.plan_node(body, v);
+                }
             }
         };
         self.commit(body, &faces, split)
@@ -419,10 +437,14 @@ impl Surgery {
         self.stamp = self.stamp.wrapping_add(1).max(1);
         let stamp = self.stamp;
         let mut candidates = Vec::new();
+        // A straddling tet has a node on the plane or on its positive side, within that node's
+        // reach of the plane (a tet's nodes lie within their reach of each other): only those
+        // nodes' tets are looked at.
         for (v, p) in x.iter().enumerate() {
             let p = p.as_dvec3();
             let reach = self.node_reach[v] as f64;
-            if normal.dot(p - origin).abs() <= reach
+            let d = normal.dot(p - origin);
+            if (0.0..=reach).contains(&d)
                 && p.cmpge(lo - DVec3::splat(reach)).all()
                 && p.cmple(hi + DVec3::splat(reach)).all()
             {
@@ -538,37 +560,39 @@ impl Surgery {
             .collect();
         nodes.sort_unstable();
         nodes.dedup();
-        let mut out = Vec::with_capacity(nodes.len());
-        for v in nodes {
-            let mut star = self.node_tets[v as usize].clone();
-            star.sort_unstable();
-            let mut comp = vec![u32::MAX; star.len()];
-            let mut count = 0;
-            for s in 0..star.len() {
-                if comp[s] != u32::MAX {
-                    continue;
-                }
-                comp[s] = count;
-                let mut stack = vec![s];
-                while let Some(a) = stack.pop() {
-                    let t = star[a] as usize;
-                    for (&node, &u) in tets[t].iter().zip(&self.neighbours[t]) {
-                        if node == v || u == NO_TET {
-                            continue;
-                        }
-                        if let Ok(b) = star.binary_search(&u) {
-                            if comp[b] == u32::MAX {
-                                comp[b] = count;
-                                stack.push(b);
-                            }
+        nodes.into_iter().map(|v| self.plan_node(body, v)).collect()
+    }
+
+    /// One node's entry of [`Self::plan_split`].
+    fn plan_node(&self, body: &SoftBody, v: u32) -> (u32, Vec<u32>, Vec<u32>, u32) {
+        let tets = body.tets();
+        let mut star = self.node_tets[v as usize].clone();
+        star.sort_unstable();
+        let mut comp = vec![u32::MAX; star.len()];
+        let mut count = 0;
+        for s in 0..star.len() {
+            if comp[s] != u32::MAX {
+                continue;
+            }
+            comp[s] = count;
+            let mut stack = vec![s];
+            while let Some(a) = stack.pop() {
+                let t = star[a] as usize;
+                for (&node, &u) in tets[t].iter().zip(&self.neighbours[t]) {
+                    if node == v || u == NO_TET {
+                        continue;
+                    }
+                    if let Ok(b) = star.binary_search(&u) {
+                        if comp[b] == u32::MAX {
+                            comp[b] = count;
+                            stack.push(b);
                         }
                     }
                 }
-                count += 1;
             }
-            out.push((v, star, comp, count));
+            count += 1;
         }
-        out
+        (v, star, comp, count)
     }
 
     /// Indices of the new faces to glue back: those on a boundary edge that would not be
