@@ -225,8 +225,11 @@ impl Surgery {
             self.neighbours[f.u as usize][f.k as usize] = NO_TET;
         }
         // Crumbs: a group of fewer than MIN_PIECE tets that the new faces would enclose is a
-        // staircase artefact (or a sliver between two cuts); it stays attached.
-        let mut crumbs: Vec<u32> = Vec::new();
+        // staircase artefact (or a sliver between two cuts); it stays attached. With splits, a
+        // crumb whose new faces lead to both sides of the blade's plane (a slab between an
+        // earlier wall and this one, on a body that moved between the sweeps) stays attached to
+        // one side only — the side its centroid lies on — so that it does not bridge the cut.
+        let mut crumbs: Vec<Vec<u32>> = Vec::new();
         self.stamp = self.stamp.wrapping_add(1).max(1);
         for f in &faces {
             for t in [f.t, f.u] {
@@ -235,16 +238,60 @@ impl Surgery {
                         for &g in &group {
                             self.tet_mark[g as usize] = self.stamp;
                         }
-                        crumbs.extend(group);
+                        crumbs.push(group);
                     }
                 }
             }
         }
         if !crumbs.is_empty() {
             let stamp = self.stamp;
+            let side = tet_sides(body, plane);
+            // Tet → its crumb.
+            let mut crumb_of: HashMap<u32, usize> = HashMap::default();
+            for (c, group) in crumbs.iter().enumerate() {
+                for &t in group {
+                    crumb_of.insert(t, c);
+                }
+            }
+            // Each crumb's side: where its rest-volume-weighted centroid lies; `None` keeps all
+            // of its faces glued (face separation, or every neighbour on one side).
+            let rest = body.tet_rest_volumes();
+            let crumb_side: Vec<Option<bool>> = crumbs
+                .iter()
+                .enumerate()
+                .map(|(c, group)| {
+                    if !self.settings.split_tets {
+                        return None;
+                    }
+                    let mut outer = [false; 2];
+                    for f in &faces {
+                        for (a, b) in [(f.t, f.u), (f.u, f.t)] {
+                            if crumb_of.get(&a) == Some(&c) && crumb_of.get(&b) != Some(&c) {
+                                outer[usize::from(side(b) > 0.0)] = true;
+                            }
+                        }
+                    }
+                    if !(outer[0] && outer[1]) {
+                        return None;
+                    }
+                    let d: f64 = group
+                        .iter()
+                        .map(|&t| rest[t as usize] as f64 * side(t))
+                        .sum();
+                    Some(d > 0.0)
+                })
+                .collect();
             let marks = std::mem::take(&mut self.tet_mark);
             faces.retain(|f| {
-                let glue = marks[f.t as usize] == stamp || marks[f.u as usize] == stamp;
+                let glue = if marks[f.t as usize] != stamp && marks[f.u as usize] != stamp {
+                    false
+                } else {
+                    match (crumb_of.get(&f.t), crumb_of.get(&f.u)) {
+                        (Some(&c), None) => crumb_side[c].is_none_or(|s| (side(f.u) > 0.0) == s),
+                        (None, Some(&c)) => crumb_side[c].is_none_or(|s| (side(f.t) > 0.0) == s),
+                        _ => true,
+                    }
+                };
                 if glue {
                     self.neighbours[f.t as usize][f.j as usize] = f.u;
                     self.neighbours[f.u as usize][f.k as usize] = f.t;
@@ -257,18 +304,22 @@ impl Surgery {
             }
         }
         // Glue back what would leave the surface non-manifold, until nothing does.
+        // Gluing a face back changes the plan of its three nodes only: the plan is updated, not
+        // rebuilt, between rounds.
+        let mut plan = self.plan_split(body, &faces);
         let split = loop {
-            let plan = self.plan_split(body, &faces);
             let bad = self.defects(body, &faces, &plan);
             if bad.is_empty() {
                 break plan;
             }
             let mut keep = Vec::with_capacity(faces.len());
+            let mut touched: Vec<u32> = Vec::new();
             for (i, f) in faces.iter().enumerate() {
                 if bad.contains(&i) {
                     self.neighbours[f.t as usize][f.j as usize] = f.u;
                     self.neighbours[f.u as usize][f.k as usize] = f.t;
                     self.pending.push([f.t, f.j as u32, f.u, f.k as u32]);
+                    touched.extend(face_nodes(&body.tets()[f.t as usize], f.j as usize));
                 } else {
                     keep.push(*f);
                 }
@@ -276,6 +327,20 @@ impl Surgery {
             faces = keep;
             if faces.is_empty() {
                 return Ok(Vec::new());
+            }
+            let mut on_faces: Vec<u32> = faces
+                .iter()
+                .flat_map(|f| face_nodes(&body.tets()[f.t as usize], f.j as usize))
+                .collect();
+            on_faces.sort_unstable();
+            on_faces.dedup();
+            plan.retain(|p| on_faces.binary_search(&p.0).is_ok());
+            touched.sort_unstable();
+            touched.dedup();
+            for v in touched {
+                if let Ok(i) = plan.binary_search_by_key(&v, |p| p.0) {
+                    plan[i] = self.plan_node(body, v);
+                }
             }
         };
         self.commit(body, &faces, split)
@@ -372,10 +437,14 @@ impl Surgery {
         self.stamp = self.stamp.wrapping_add(1).max(1);
         let stamp = self.stamp;
         let mut candidates = Vec::new();
+        // A straddling tet has a node on the plane or on its positive side, within that node's
+        // reach of the plane (a tet's nodes lie within their reach of each other): only those
+        // nodes' tets are looked at.
         for (v, p) in x.iter().enumerate() {
             let p = p.as_dvec3();
             let reach = self.node_reach[v] as f64;
-            if normal.dot(p - origin).abs() <= reach
+            let d = normal.dot(p - origin);
+            if (0.0..=reach).contains(&d)
                 && p.cmpge(lo - DVec3::splat(reach)).all()
                 && p.cmple(hi + DVec3::splat(reach)).all()
             {
@@ -491,37 +560,39 @@ impl Surgery {
             .collect();
         nodes.sort_unstable();
         nodes.dedup();
-        let mut out = Vec::with_capacity(nodes.len());
-        for v in nodes {
-            let mut star = self.node_tets[v as usize].clone();
-            star.sort_unstable();
-            let mut comp = vec![u32::MAX; star.len()];
-            let mut count = 0;
-            for s in 0..star.len() {
-                if comp[s] != u32::MAX {
-                    continue;
-                }
-                comp[s] = count;
-                let mut stack = vec![s];
-                while let Some(a) = stack.pop() {
-                    let t = star[a] as usize;
-                    for (&node, &u) in tets[t].iter().zip(&self.neighbours[t]) {
-                        if node == v || u == NO_TET {
-                            continue;
-                        }
-                        if let Ok(b) = star.binary_search(&u) {
-                            if comp[b] == u32::MAX {
-                                comp[b] = count;
-                                stack.push(b);
-                            }
+        nodes.into_iter().map(|v| self.plan_node(body, v)).collect()
+    }
+
+    /// One node's entry of [`Self::plan_split`].
+    fn plan_node(&self, body: &SoftBody, v: u32) -> (u32, Vec<u32>, Vec<u32>, u32) {
+        let tets = body.tets();
+        let mut star = self.node_tets[v as usize].clone();
+        star.sort_unstable();
+        let mut comp = vec![u32::MAX; star.len()];
+        let mut count = 0;
+        for s in 0..star.len() {
+            if comp[s] != u32::MAX {
+                continue;
+            }
+            comp[s] = count;
+            let mut stack = vec![s];
+            while let Some(a) = stack.pop() {
+                let t = star[a] as usize;
+                for (&node, &u) in tets[t].iter().zip(&self.neighbours[t]) {
+                    if node == v || u == NO_TET {
+                        continue;
+                    }
+                    if let Ok(b) = star.binary_search(&u) {
+                        if comp[b] == u32::MAX {
+                            comp[b] = count;
+                            stack.push(b);
                         }
                     }
                 }
-                count += 1;
             }
-            out.push((v, star, comp, count));
+            count += 1;
         }
-        out
+        (v, star, comp, count)
     }
 
     /// Indices of the new faces to glue back: those on a boundary edge that would not be
@@ -838,5 +909,19 @@ impl Surgery {
             "cut advanced"
         );
         Ok(events)
+    }
+}
+
+/// The signed distance of each tet's current centroid from the plane of `plane` (a closure).
+fn tet_sides<'a>(body: &'a SoftBody, plane: &CutPlane<'_>) -> impl Fn(u32) -> f64 + 'a {
+    let (origin, normal) = (plane.origin, plane.normal);
+    move |t: u32| {
+        let x = body.positions();
+        let c = body.tets()[t as usize]
+            .iter()
+            .map(|&i| x[i as usize].as_dvec3())
+            .sum::<DVec3>()
+            * 0.25;
+        normal.dot(c - origin)
     }
 }

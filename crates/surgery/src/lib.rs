@@ -13,7 +13,7 @@
 //!
 //! ## Cutting (SPEC Part B)
 //! Each sweep of the blade cuts in two phases; the first only with
-//! [`SurgerySettings::split_tets`] on (off by default: see "Not built" below).
+//! [`SurgerySettings::split_tets`] on (the default).
 //!
 //! **Geometry** (module `split`): the cut surface is the polygon the blade swept in its own
 //! plane. Nodes closer to the plane than [`SNAP_FRACTION`] of their shortest rest edge (and
@@ -27,7 +27,10 @@
 //! both sides once all of a tet's crossing edges are split. A crossed surface triangle is so
 //! split into 3 along the path (2 where the blade passes through one of its nodes). Pieces
 //! below the quality bound ([`MIN_RATIO`], [`MIN_PIECE_FRACTION`]) or past
-//! [`MAX_SPLIT_DEPTH`] are not made: that tet's edges stay whole. New tets get volume
+//! [`MAX_SPLIT_DEPTH`] are not made: that tet's edges stay whole; so are tets at the nodes of
+//! an earlier cut's wall nearly parallel to the blade but off its plane (a body that moved
+//! against the blade between two sweeps), which separate along their faces, so that the new
+//! wall steps onto the old one instead of shaving a slab off it. New tets get volume
 //! constraints with their rest volumes, new edges distance constraints with their rest
 //! lengths, masses are rebuilt from the tets around the touched nodes (eq. (1)) — all locally
 //! through `tissue-pbd`'s edit API ([`tissue_pbd::SoftBody::reshape_tet`],
@@ -42,18 +45,19 @@
 //! duplicated once per extra face-connected group of its tets; tets on the far side move onto
 //! the copies. Before committing, new faces that would leave a non-manifold edge or a pinched
 //! vertex, faces with no node split yet (a zero-width double face) and faces that would
-//! enclose a crumb of fewer than [`MIN_PIECE`] tets are glued back and retried later. Pieces:
+//! enclose a crumb of fewer than [`MIN_PIECE`] tets are glued back and retried later (with
+//! splits, a crumb whose new faces lead to both sides of the plane is glued to the side its
+//! centroid lies on only, so that it cannot bridge the cut). Pieces:
 //! two alternating searches through shared nodes per split node prove that an incision
 //! detached nothing (cheap); only when one runs out are the pieces relabelled
 //! ([`SurgeryEvent::PieceDetached`]).
 //!
 //! Not built: a surface triangle where a cut ends *inside* it is not split into 4 (the blade's
 //! end point is not inserted): the cut's end snaps to a tet boundary instead, and a partly
-//! crossed tet stays glued. With splits on, a body that moves against the blade while it is
-//! cut (a world-fixed blade path through a falling organ) gets slightly offset walls in every
-//! sweep and may not be cut through (the trainer's appendix cut-off), hence the setting is off
-//! by default; face separation alone handles that case. A tet stretched to more than 1.5 × its
-//! longest rest edge may be missed by a sweep.
+//! crossed tet stays glued. A body that moves against the blade while it is cut (a
+//! world-fixed blade path through a falling organ) gets slightly offset walls in every sweep,
+//! joined by steps along tet faces; thin slabs between two such walls can come off as small
+//! pieces. A tet stretched to more than 1.5 × its longest rest edge may be missed by a sweep.
 //!
 //! ## Suturing
 //! No change of geometry: the needle's axis is intersected with the boundary faces; the first

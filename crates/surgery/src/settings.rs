@@ -20,11 +20,10 @@ pub struct SurgerySettings {
 }
 
 impl Default for SurgerySettings {
-    /// Face separation only (`split_tets` off), sutures with `k = 1`, compliance 0, rest
-    /// length 0.
+    /// Geometric cuts (`split_tets` on), sutures with `k = 1`, compliance 0, rest length 0.
     fn default() -> Self {
         Self {
-            split_tets: false,
+            split_tets: true,
             suture_stiffness: 1.0,
             suture_compliance: 0.0,
             suture_rest_length: 0.0,

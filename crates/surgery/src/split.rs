@@ -78,6 +78,11 @@ pub const MAX_SPLIT_DEPTH: u8 = 3;
 /// A cut wall whose normal is this close to the blade's (|cos|) counts as parallel to it.
 const WALL_PARALLEL: f64 = 0.9;
 
+/// A cut wall farther than this fraction of its node's reach (1.5 × its longest rest edge) off
+/// the blade's plane is an earlier cut's, not this one continued: the tets at its nodes are not
+/// split (they separate along their faces, see `split`).
+const WALL_OFFSET: f64 = 1e-3;
+
 /// What one sweep's split did.
 #[derive(Debug, Default)]
 pub(crate) struct SplitOutcome {
@@ -318,10 +323,11 @@ impl Surgery {
                 0
             }
         };
-        // Tets with a cut wall nearly parallel to the blade: the blade runs in a gap already
-        // opened (the tissue moved a little since the sweep that cut it); splitting them again
-        // would shave a thin slab off the wall. They are not split (their faces may still open,
-        // as where a split is refused).
+        // Tets at a node of a cut wall nearly parallel to the blade: the blade runs in or next
+        // to a gap already opened (the tissue moved a little since the sweep that cut it);
+        // splitting them again would shave a thin slab off the wall, and the slab, glued to
+        // both sides, would bridge the cut. They are not split: their faces open as where a
+        // split is refused, so the new wall steps onto the old one within one tet.
         let mut blocked: Vec<u32> = Vec::new();
         for &(t, j) in &self.cut_faces {
             if candidates.binary_search(&t).is_err() {
@@ -331,6 +337,14 @@ impl Surgery {
             let normal = (f[1] - f[0]).cross(f[2] - f[0]).normalize_or_zero();
             if normal.dot(n).abs() > WALL_PARALLEL {
                 blocked.push(t);
+                // A wall off the plane (not the same cut continued): its neighbourhood too.
+                let nodes = face_nodes(&body.tets()[t as usize], j as usize);
+                let off = f.iter().map(|p| n.dot(*p - o).abs()).fold(0.0, f64::max);
+                if off > WALL_OFFSET * self.node_reach[nodes[0] as usize] as f64 {
+                    for &v in &nodes {
+                        blocked.extend_from_slice(&self.node_tets[v as usize]);
+                    }
+                }
             }
         }
         blocked.sort_unstable();

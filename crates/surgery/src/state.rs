@@ -258,41 +258,9 @@ impl Surgery {
     /// Labels the pieces (union–find over tets through shared nodes) `0, 1, …` in the order of
     /// their smallest tet.
     pub(crate) fn count_components(&mut self, body: &SoftBody) {
-        let tets = body.tets();
-        let n = body.node_count();
-        let mut parent: Vec<u32> = (0..n as u32).collect();
-        fn find(p: &mut [u32], mut i: u32) -> u32 {
-            while p[i as usize] != i {
-                let g = p[p[i as usize] as usize];
-                p[i as usize] = g;
-                i = g;
-            }
-            i
-        }
-        for t in tets {
-            let mut r0 = find(&mut parent, t[0]);
-            for &v in &t[1..] {
-                let r = find(&mut parent, v);
-                if r != r0 {
-                    let (lo, hi) = (r.min(r0), r.max(r0));
-                    parent[hi as usize] = lo;
-                    r0 = lo;
-                }
-            }
-        }
-        let mut root_comp = vec![u32::MAX; n];
-        let mut comp = Vec::with_capacity(tets.len());
-        let mut count = 0;
-        for t in tets {
-            let r = find(&mut parent, t[0]) as usize;
-            if root_comp[r] == u32::MAX {
-                root_comp[r] = count;
-                count += 1;
-            }
-            comp.push(root_comp[r]);
-        }
+        let (comp, count) = components(body);
         self.tet_component = comp;
-        self.component_count = count as usize;
+        self.component_count = count;
     }
 
     /// After a cut that may have detached pieces: the pieces again (union–find), each keeping
@@ -421,20 +389,21 @@ impl Surgery {
             }
         }
         // Vertex links: the boundary faces around a vertex make one cycle.
-        let mut around: HashMap<u32, Vec<[u32; 2]>> = HashMap::default();
+        let mut around: Vec<(u32, [u32; 2])> = Vec::with_capacity(faces.len() * 3);
         for f in &faces {
             for k in 0..3 {
-                around
-                    .entry(f[k])
-                    .or_default()
-                    .push([f[(k + 1) % 3], f[(k + 2) % 3]]);
+                around.push((f[k], [f[(k + 1) % 3], f[(k + 2) % 3]]));
             }
         }
-        for (&v, link) in &around {
-            if !single_cycle(link) {
+        around.sort_unstable();
+        let mut link: Vec<[u32; 2]> = Vec::new();
+        for group in around.chunk_by(|a, b| a.0 == b.0) {
+            link.clear();
+            link.extend(group.iter().map(|g| g.1));
+            if !single_cycle(&link) {
                 return defect(
                     "vertex",
-                    v as usize,
+                    group[0].0 as usize,
                     "boundary faces around the vertex do not form one fan (pinched)",
                 );
             }
@@ -467,16 +436,14 @@ impl Surgery {
                 }
             }
         }
-        let mut recount = self.clone();
-        recount.count_components(body);
+        let (_, recounted) = components(body);
         let mut distinct: Vec<u32> = self.tet_component.clone();
         distinct.sort_unstable();
         distinct.dedup();
-        if recount.component_count != self.component_count || distinct.len() != self.component_count
-        {
+        if recounted != self.component_count || distinct.len() != self.component_count {
             return defect(
                 "tet",
-                recount.component_count * 1000 + self.component_count,
+                recounted * 1000 + self.component_count,
                 "the piece count is wrong (index: actual × 1000 + counted)",
             );
         }
@@ -504,34 +471,66 @@ pub(crate) fn single_cycle(link: &[[u32; 2]]) -> bool {
         return true;
     }
     // Each link vertex must start exactly one edge and end exactly one.
-    let next = |a: u32| {
-        link.iter()
-            .filter(|e| e[0] == a)
-            .map(|e| e[1])
-            .collect::<Vec<_>>()
-    };
     for e in link {
-        if next(e[0]).len() != 1 || link.iter().filter(|f| f[1] == e[1]).count() != 1 {
+        if link.iter().filter(|f| f[0] == e[0]).count() != 1
+            || link.iter().filter(|f| f[1] == e[1]).count() != 1
+        {
             return false;
         }
     }
-    let start = link[0][0];
-    let mut a = start;
-    for _ in 0..link.len() {
-        a = next(a)[0];
-        if a == start {
-            break;
-        }
-    }
     // Walked back to the start after visiting every edge exactly once.
-    let mut steps = 0;
+    let next = |a: u32| link.iter().find(|e| e[0] == a).map(|e| e[1]);
+    let start = link[0][0];
     let mut b = start;
+    let mut steps = 0;
     loop {
-        b = next(b)[0];
+        let Some(n) = next(b) else {
+            return false;
+        };
+        b = n;
         steps += 1;
         if b == start || steps > link.len() {
             break;
         }
     }
     steps == link.len()
+}
+
+/// The pieces of `body` (union–find over tets through shared nodes), labelled `0, 1, …` in the
+/// order of their smallest tet: each tet's label and the count.
+fn components(body: &SoftBody) -> (Vec<u32>, usize) {
+    let tets = body.tets();
+    let n = body.node_count();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(p: &mut [u32], mut i: u32) -> u32 {
+        while p[i as usize] != i {
+            let g = p[p[i as usize] as usize];
+            p[i as usize] = g;
+            i = g;
+        }
+        i
+    }
+    for t in tets {
+        let mut r0 = find(&mut parent, t[0]);
+        for &v in &t[1..] {
+            let r = find(&mut parent, v);
+            if r != r0 {
+                let (lo, hi) = (r.min(r0), r.max(r0));
+                parent[hi as usize] = lo;
+                r0 = lo;
+            }
+        }
+    }
+    let mut root_comp = vec![u32::MAX; n];
+    let mut comp = Vec::with_capacity(tets.len());
+    let mut count = 0;
+    for t in tets {
+        let r = find(&mut parent, t[0]) as usize;
+        if root_comp[r] == u32::MAX {
+            root_comp[r] = count;
+            count += 1;
+        }
+        comp.push(root_comp[r]);
+    }
+    (comp, count as usize)
 }

@@ -22,6 +22,11 @@ const LIVER: &str = concat!(
     "/../../../shared/meshes/sofa_liver2.obj"
 );
 
+/// Sessions (of 4 sweeps) in the runs with face separation only: the default (geometric cuts)
+/// runs the 1000 sweeps per mesh, the other mode a quarter, to keep the binary's time
+/// near 2 minutes on 2 cores.
+const SESSIONS_WITHOUT_SPLITS: usize = 63;
+
 /// xorshift64*: a fixed seed gives the same sweeps on every machine.
 struct Rng(u64);
 impl Rng {
@@ -215,7 +220,8 @@ fn bunny(split: bool) {
     let (p, t) = mesh.into_parts();
     let mesh = TetMesh::new(p.iter().map(|p| *p * 10.0).collect(), t).unwrap();
     let start = Instant::now();
-    let s = hammer(&mesh, 0x05EE_DB0B, 250, 4, 10, split);
+    let sessions = if split { 250 } else { SESSIONS_WITHOUT_SPLITS };
+    let s = hammer(&mesh, 0x05EE_DB0B, sessions, 4, 10, split);
     report(
         if split {
             "bunny, split"
@@ -225,10 +231,10 @@ fn bunny(split: bool) {
         &s,
         start.elapsed().as_secs_f64(),
     );
-    assert_eq!(s.cuts, 1000);
-    assert_eq!(s.steps, 10_000);
+    assert_eq!(s.cuts, 4 * sessions);
+    assert_eq!(s.steps, 10 * s.cuts);
     assert!(
-        s.cuts_opening > 600,
+        s.cuts_opening > s.cuts * 6 / 10,
         "too few sweeps opened anything: {}",
         s.cuts_opening
     );
@@ -253,7 +259,8 @@ fn liver(split: bool) {
         .unwrap()
         .mesh;
     let start = Instant::now();
-    let s = hammer(&mesh, 0x0001_1FE2, 250, 4, 10, split);
+    let sessions = if split { 250 } else { SESSIONS_WITHOUT_SPLITS };
+    let s = hammer(&mesh, 0x0001_1FE2, sessions, 4, 10, split);
     report(
         if split {
             "liver, split"
@@ -263,9 +270,9 @@ fn liver(split: bool) {
         &s,
         start.elapsed().as_secs_f64(),
     );
-    assert_eq!(s.cuts, 1000);
+    assert_eq!(s.cuts, 4 * sessions);
     assert!(
-        s.cuts_opening > 500,
+        s.cuts_opening > s.cuts / 2,
         "too few sweeps opened anything: {}",
         s.cuts_opening
     );
