@@ -706,25 +706,46 @@ impl SoftBody {
     pub fn set_tet_nodes(&mut self, t: usize, nodes: [u32; 4]) -> Result<(), PbdError> {
         let slot = self.live_tet(t)?;
         self.check_nodes("tet", t, &nodes)?;
+        self.rewrite_tet(t, slot, nodes, None);
+        Ok(())
+    }
+
+    /// Gives live tet `t` (in `slot`) new nodes and, with `rest`, a new rest volume and rest
+    /// heights, and moves it into the dynamic set (in place when it is there already).
+    fn rewrite_tet(
+        &mut self,
+        t: usize,
+        slot: ConstraintSlot,
+        nodes: [u32; 4],
+        rest: Option<(f32, [f32; 4])>,
+    ) {
         self.tets[t] = nodes;
+        if let Some((volume, _)) = rest {
+            self.edits.tet_rest[t] = volume;
+        }
         if let Some(c) = self.tet_volume.get_mut(t) {
             c.nodes = nodes;
+            if let Some((volume, _)) = rest {
+                c.rest_volume = volume;
+            }
         }
         if self.volume_kind == VolumeConstraintKind::Centroid {
             for j in 0..4 {
                 let c = &mut self.centroid[4 * t + j];
                 c.face = [nodes[(j + 1) & 3], nodes[(j + 2) & 3], nodes[(j + 3) & 3]];
                 c.apex = nodes[j];
+                if let Some((_, heights)) = rest {
+                    c.rest_height = heights[j];
+                }
             }
         }
         if let ConstraintSlot::Dynamic { position } = slot {
             if self.update_dyn_tet_in_place(t, position as usize) {
-                return Ok(());
+                return;
             }
         }
         self.retire_tet_slot(t, slot);
         self.push_dyn_tet(t as u32);
-        Ok(())
     }
 
     /// Gives tet `t` new nodes **and** a new rest shape: its rest volume (classic) or rest
@@ -745,28 +766,8 @@ impl SoftBody {
     ) -> Result<(), PbdError> {
         let slot = self.live_tet(t)?;
         self.check_nodes("tet", t, &nodes)?;
-        let (volume, heights) = rest_shape(&rest)?;
-        self.tets[t] = nodes;
-        self.edits.tet_rest[t] = volume;
-        if let Some(c) = self.tet_volume.get_mut(t) {
-            c.nodes = nodes;
-            c.rest_volume = volume;
-        }
-        if self.volume_kind == VolumeConstraintKind::Centroid {
-            for j in 0..4 {
-                let c = &mut self.centroid[4 * t + j];
-                c.face = [nodes[(j + 1) & 3], nodes[(j + 2) & 3], nodes[(j + 3) & 3]];
-                c.apex = nodes[j];
-                c.rest_height = heights[j];
-            }
-        }
-        if let ConstraintSlot::Dynamic { position } = slot {
-            if self.update_dyn_tet_in_place(t, position as usize) {
-                return Ok(());
-            }
-        }
-        self.retire_tet_slot(t, slot);
-        self.push_dyn_tet(t as u32);
+        let shape = rest_shape(&rest)?;
+        self.rewrite_tet(t, slot, nodes, Some(shape));
         Ok(())
     }
 
