@@ -135,7 +135,7 @@ struct Coherence {
     near: Vec<Contact>,
     anchor_a: Vec<Vec3A>,
     anchor_b: Vec<Vec3A>,
-    /// How far each particle has moved from its anchor (as of the last [`Coherence::holds`]).
+    /// How far each particle has moved from its anchor (as of the last [`Coherence::moved`]).
     moved_a: Vec<f32>,
     moved_b: Vec<f32>,
     /// Whether the anchor positions are set.

@@ -211,8 +211,6 @@ impl TissueLayers {
             }
         }
 
-        // The skin is layer 1; the slab between the layers is tissue too, and each face carries
-        // half of it.
         let skin_mass = region.area() * params.skin_thickness * params.density;
         let slab_mass = region.area() * params.depth * params.density;
         // The column of skin and slab, lumped half on each face (module docs).

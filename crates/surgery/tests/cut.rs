@@ -2,23 +2,11 @@
 //! the surface along its length and leaves one piece.
 #![allow(clippy::unwrap_used)]
 
-use glam::{Quat, Vec3};
-use tissue_mesh::tet_box;
-use tissue_pbd::{Material, Pose, SoftBody, StepSettings, ToolShape};
-use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
+mod common;
 
-/// A 6 × 3 × 3 cm block centred at the origin, cells of 0.5 cm.
-/// `split`: geometric cuts ([`SurgerySettings::split_tets`]) or face separation only.
-fn block(split: bool) -> (SoftBody, Surgery) {
-    let mesh = tet_box(12, 6, 6, Vec3::new(6.0, 3.0, 3.0)).unwrap();
-    let body = SoftBody::new(&mesh, &Material::default()).unwrap();
-    let settings = SurgerySettings {
-        split_tets: split,
-        ..SurgerySettings::default()
-    };
-    let surgery = Surgery::new(&body, settings).unwrap();
-    (body, surgery)
-}
+use glam::Vec3;
+use tissue_pbd::{Pose, SoftBody, StepSettings, ToolShape};
+use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent};
 
 fn piece_volumes(body: &SoftBody, surgery: &Surgery) -> Vec<(u32, f64)> {
     let mut v: Vec<(u32, f64)> = Vec::new();
@@ -71,7 +59,7 @@ fn a_full_cut_makes_two_pieces_and_the_free_one_falls_away() {
 }
 
 fn full_cut(split: bool) {
-    let (mut body, mut surgery) = block(split);
+    let (mut body, mut surgery) = common::block(split);
     let total = body.rest_volume();
     let blade = ToolShape::Blade {
         a: Vec3::new(0.0, 0.0, -5.0),
@@ -117,7 +105,7 @@ fn full_cut(split: bool) {
     assert!(hl > -1.5, "the pinned piece should hang on, is at {hl}");
 
     // Control: the uncut block under the same pins does not come apart.
-    let (mut whole, surgery) = block(split);
+    let (mut whole, surgery) = common::block(split);
     fall(&mut whole);
     let h = piece_height(&whole, &surgery, 0);
     assert!(h > -5.0, "uncut block sags to {h}");
@@ -130,16 +118,11 @@ fn a_partial_incision_opens_the_surface_along_its_length_and_keeps_one_piece() {
 }
 
 fn partial_incision(geometric: bool) {
-    let (mut body, mut surgery) = block(geometric);
+    let (mut body, mut surgery) = common::block(geometric);
     // A blade standing up in the plane z = 0.15, its lower edge 1 cm below the top (y = 1.5),
     // drawn along x from −1.5 to 1.5 in ten steps.
-    let blade = ToolShape::Blade {
-        a: Vec3::new(-0.3, 0.0, 0.0),
-        b: Vec3::new(0.3, 0.0, 0.0),
-        c: Vec3::new(0.0, 3.0, 0.0),
-        thickness: 0.01,
-    };
-    let at = |x: f32| Pose::new(Quat::IDENTITY, Vec3::new(x, 0.5, 0.15));
+    let blade = common::incision_blade();
+    let at = common::incision_pose;
     let mut opened = 0;
     for k in 0..10 {
         let (x0, x1) = (-1.5 + 0.3 * k as f32, -1.5 + 0.3 * (k + 1) as f32);

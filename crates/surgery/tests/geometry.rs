@@ -3,22 +3,11 @@
 //! conserved by every split, no tet below the quality bound.
 #![allow(clippy::unwrap_used)]
 
-use glam::{DVec3, Quat, Vec3};
-use tissue_mesh::tet_box;
-use tissue_pbd::{Material, Pose, SoftBody, ToolShape};
-use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings, MIN_RATIO};
+mod common;
 
-/// A 6 × 3 × 3 cm block centred at the origin, cells of 0.5 cm.
-fn block() -> (SoftBody, Surgery) {
-    let mesh = tet_box(12, 6, 6, Vec3::new(6.0, 3.0, 3.0)).unwrap();
-    let body = SoftBody::new(&mesh, &Material::default()).unwrap();
-    let settings = SurgerySettings {
-        split_tets: true,
-        ..SurgerySettings::default()
-    };
-    let surgery = Surgery::new(&body, settings).unwrap();
-    (body, surgery)
-}
+use glam::{DVec3, Vec3};
+use tissue_pbd::{Pose, SoftBody, ToolShape};
+use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, MIN_RATIO};
 
 /// A big blade in the plane x = `x`, drawn down through the whole block in four steps.
 fn full_cut(body: &mut SoftBody, surgery: &mut Surgery, x: f32) -> Vec<SurgeryEvent> {
@@ -88,7 +77,7 @@ fn check_quality(body: &SoftBody, surgery: &Surgery) {
 
 #[test]
 fn a_full_cut_makes_flat_walls_on_the_blade_plane_and_keeps_the_volume() {
-    let (mut body, mut surgery) = block();
+    let (mut body, mut surgery) = common::block(true);
     let total = body.rest_volume();
     let events = full_cut(&mut body, &mut surgery, 0.3);
     assert_eq!(surgery.component_count(), 2);
@@ -137,7 +126,7 @@ fn a_full_cut_makes_flat_walls_on_the_blade_plane_and_keeps_the_volume() {
 
 #[test]
 fn nodes_near_the_blade_are_snapped_onto_its_plane() {
-    let (mut body, mut surgery) = block();
+    let (mut body, mut surgery) = common::block(true);
     // x = 0.05 is 0.05 cm from the nodes at x = 0 (< 0.25 × 0.5 cm): they snap onto it.
     let events = full_cut(&mut body, &mut surgery, 0.05);
     assert_eq!(surgery.component_count(), 2);
@@ -166,7 +155,7 @@ fn nodes_near_the_blade_are_snapped_onto_its_plane() {
 
 #[test]
 fn a_partial_incision_splits_the_crossed_top_triangles_into_three() {
-    let (mut body, mut surgery) = block();
+    let (mut body, mut surgery) = common::block(true);
     let top_before: Vec<[u32; 3]> = surgery
         .boundary_faces(&body)
         .into_iter()
@@ -175,13 +164,8 @@ fn a_partial_incision_splits_the_crossed_top_triangles_into_three() {
     let total = body.rest_volume();
     // As tests/cut.rs: a blade in the plane z = 0.15, its edge 1 cm deep, drawn along x from
     // −1.5 to 1.5 in ten steps.
-    let blade = ToolShape::Blade {
-        a: Vec3::new(-0.3, 0.0, 0.0),
-        b: Vec3::new(0.3, 0.0, 0.0),
-        c: Vec3::new(0.0, 3.0, 0.0),
-        thickness: 0.01,
-    };
-    let at = |x: f32| Pose::new(Quat::IDENTITY, Vec3::new(x, 0.5, 0.15));
+    let blade = common::incision_blade();
+    let at = common::incision_pose;
     let mut reported = 0;
     for k in 0..10 {
         let (x0, x1) = (-1.5 + 0.3 * k as f32, -1.5 + 0.3 * (k + 1) as f32);
