@@ -5,7 +5,7 @@ use tissue_mesh::{TetMesh, ZERO_VOLUME_TOLERANCE};
 
 use crate::colour::{colour_order, greedy_colours};
 use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
-use crate::partition::{bisection_order, Tree};
+use crate::partition::{bisection_order, spare_tree, Tree};
 use crate::{
     CentroidVolumeConstraint, DistanceConstraint, Floor, Material, PbdError, StepSettings,
     TetVolumeConstraint, VolumeConstraintKind,
@@ -14,13 +14,17 @@ use crate::{
 /// A tetrahedral soft body simulated by position-based dynamics.
 ///
 /// Invariants (established by the constructors, kept by every method):
-/// - all node arrays have one entry per node; `inverse_masses[i] == 0` exactly when node `i` is
-///   pinned, attached or carries no tet; otherwise it is `1 / masses[i]`;
+/// - all public node arrays have one entry per node; `inverse_masses[i] == 0` exactly when node
+///   `i` is pinned, attached or carries no tet; otherwise it is `1 / masses[i]`;
 /// - every constraint's nodes are `< node_count`; constraints of a kind are stored block by block
 ///   of the domain decomposition (`crate::partition`, post order) and colour by colour within a
 ///   block; no two constraints (for volumes: no two tets) of one colour of a block share a node;
 /// - the public node arrays are in the caller's order; the projection works on a copy in solver
-///   order (`order[s]` = caller's index, `rank` its inverse), made at the start of every step;
+///   order, made at the start of every step. Solver order has *slots*: the block tree's slots
+///   (each leaf its real nodes, then spare slots for nodes added by edits, `crate::partition`),
+///   then a tail of nodes appended when their leaf had no spare left. `rank[i]` is node `i`'s
+///   slot, `order[s]` the node in slot `s` or [`SPARE`] for an empty slot (`q`, `qw` zero there,
+///   never touched by a step); `order`, `q` and `qw` have one entry per slot;
 /// - the hot batches (8 constraints each, see `crate::constraint`) mirror the public records,
 ///   with the per-constraint parameter of the current [`StepSettings`].
 #[derive(Debug, Clone)]
@@ -31,15 +35,16 @@ pub struct SoftBody {
     pub(crate) mass: Vec<f32>,
     pub(crate) w: Vec<f32>,
 
-    /// Solver order of the nodes: `order[s]` is the caller's index of solver node `s`.
+    /// Solver order of the nodes: `order[s]` is the caller's index of the node in solver slot `s`
+    /// ([`SPARE`] for an empty slot).
     pub(crate) order: Vec<u32>,
-    /// Its inverse: `rank[i]` is the solver index of the caller's node `i`.
+    /// Its inverse: `rank[i]` is the solver slot of the caller's node `i`.
     pub(crate) rank: Vec<u32>,
     /// Predicted positions `p` (xyz) with the inverse mass (w), in solver order, for the
     /// projection; and the inverse masses alone, also in solver order.
     pub(crate) q: Vec<Vec4>,
     pub(crate) qw: Vec<f32>,
-    /// The block tree (heap numbering), see [`Block`].
+    /// The block tree (heap numbering), see [`Block`]; its node ranges are slot ranges.
     pub(crate) blocks: Vec<Block>,
     /// Most colours in any block: distances, tets.
     pub(crate) colours: (usize, usize),
@@ -75,15 +80,21 @@ pub struct SoftBody {
     pub(crate) edits: crate::edit::Edits,
 }
 
+/// `order` of an empty solver slot.
+pub(crate) const SPARE: u32 = u32::MAX;
+
 /// One block of the domain decomposition (see [`crate::partition`]). Its batches are stored in
 /// post order, so the batches of its subtree are one contiguous range: `distance` and `tets`
-/// are `[subtree start, own start, end)` into the batch arrays.
+/// are `[subtree start, own start, end)` into the batch arrays. `dyn_distance` and `dyn_tets`
+/// are the same for the multipliers of the blocks' dynamic batches (`edit.rs`), in batches.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Block {
-    /// Solver node range `[start, mid, end)`; the children own `[start, mid)` and `[mid, end)`.
+    /// Solver slot range `[start, mid, end)`; the children own `[start, mid)` and `[mid, end)`.
     pub nodes: [u32; 3],
     pub distance: [u32; 3],
     pub tets: [u32; 3],
+    pub dyn_distance: [u32; 3],
+    pub dyn_tets: [u32; 3],
 }
 
 /// How the constraints of one kind are laid out.
@@ -166,13 +177,19 @@ impl SoftBody {
     ) -> Result<Self, PbdError> {
         material.validate()?;
         let n = positions.len();
-        if n == 0 || tets.is_empty() || n >= u32::MAX as usize {
+        // Solver slots: the nodes and the spares of the block tree (crate::partition).
+        let spare = if n == 0 || tets.is_empty() {
+            None
+        } else {
+            spare_tree(n)
+        };
+        let Some((tree, slot)) = spare else {
             return Err(PbdError::InvalidParameter {
                 name: "node/tet count",
                 value: n as f64,
-                expected: "at least one node and one tet, fewer than 2³² nodes",
+                expected: "at least one node and one tet, fewer than 2³¹ nodes",
             });
-        }
+        };
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
             return Err(PbdError::NonFinite {
                 node: i as u32,
@@ -213,13 +230,14 @@ impl SoftBody {
             .sum::<f64>()
             / 6.0;
 
-        // Solver order of the nodes and the block tree over it (crate::partition).
-        let order = bisection_order(positions);
+        // Solver order of the nodes and the block tree over it (crate::partition): the j-th
+        // node of the bisection order in slot `slot[j]`.
+        let mut order = vec![SPARE; tree.node_count];
         let mut rank = vec![0u32; n];
-        for (s, &o) in order.iter().enumerate() {
-            rank[o as usize] = s as u32;
+        for (&o, &s) in bisection_order(positions).iter().zip(&slot) {
+            rank[o as usize] = s;
+            order[s as usize] = o;
         }
-        let tree = Tree::for_nodes(n);
         let post = tree.post_order();
 
         // Unique edges in solver indices, sorted by node for locality, then laid out by block.
@@ -257,6 +275,8 @@ impl SoftBody {
                     nodes: [start, mid, end],
                     distance: [dl.ranges[leaf][0], dl.ranges[h][0], dl.ranges[h][1]],
                     tets: [tl.ranges[leaf][0], tl.ranges[h][0], tl.ranges[h][1]],
+                    dyn_distance: [0; 3],
+                    dyn_tets: [0; 3],
                 }
             })
             .collect();
@@ -377,8 +397,8 @@ impl SoftBody {
             w,
             order,
             rank,
-            q: vec![Vec4::ZERO; n],
-            qw: vec![0.0; n],
+            q: vec![Vec4::ZERO; tree.node_count],
+            qw: vec![0.0; tree.node_count],
             blocks,
             colours: (dl.colours, tl.colours),
             distance_lambda: vec![F::ZERO; distance_batches.len()],
@@ -401,7 +421,7 @@ impl SoftBody {
             rest_volume,
             edits: Default::default(),
         };
-        body.edits = crate::edit::Edits::new(&body, material.density);
+        body.edits = crate::edit::Edits::new(&body, material.density, tree, post);
         body.set_settings(StepSettings::default())?;
         Ok(body)
     }

@@ -2,37 +2,50 @@
 //! distance constraints added, relabelled or removed, masses set — without rebuilding the
 //! domain decomposition.
 //!
-//! Design (kept apart from the block tree on purpose):
-//! - **Nodes are appended**: a new node gets the next caller index *and* the next solver index,
-//!   after the block tree's node range `[0, n₀)`. The tree never sees it.
-//! - **A constraint that changes leaves the tree**: its lanes in its block's batch are switched
-//!   off in place — all the lane's nodes set to the lane's first node (a zero-length distance, a
-//!   flat tet: the kernels' validity masks skip it), its rest value 0 and its parameter "off"
-//!   (`k = 0`; for XPBD `α̃ = f32::MAX`, so `Δλ = −C/α̃` underflows to 0). A switched-off lane
-//!   touches only its own node and writes back exactly what it read, so the batch's other lanes
-//!   and the colouring are untouched.
-//! - **The dynamic set** holds every added or relabelled constraint, in the order the edits
-//!   made them, in solver indices, packed eight to a batch: a new constraint takes the next lane
-//!   of one of the last 16 batches where no lane touches its nodes, else opens a new batch whose unused
-//!   lanes copy its lane 0 (as padding does). A changed or removed dynamic constraint's lane is
-//!   switched off like a tree lane and the constraint, if changed, is appended again. Each iteration projects it serially after the block tree (its volumes, then
-//!   its distances, so that links added last, like sutures, are projected last) and before the
-//!   floor and contacts. So serial and parallel stay bit-identical, and steps allocate nothing.
+//! Design (the block tree is built once; edits fit into it where they can):
+//! - **Nodes are appended** to the caller's numbering (a new node gets the next caller index).
+//!   Its *solver slot* is a spare slot of the leaf block holding its source node
+//!   ([`SoftBody::duplicate_nodes`]; every leaf has as many spare slots as real nodes, see
+//!   `crate::partition`), so the constraints on it still fall into the block tree. Only when
+//!   that leaf has no spare left (or the source is itself past the tree) does the node go to the
+//!   *tail*, after the tree's slots, which no block covers.
+//! - **A constraint that changes leaves its tree batch**: its lanes in its block's batch are
+//!   switched off in place — all the lane's nodes set to the lane's first node (a zero-length
+//!   distance, a flat tet: the kernels' validity masks skip it), its rest value 0 and its
+//!   parameter "off" (`k = 0`; for XPBD `α̃ = f32::MAX`, so `Δλ = −C/α̃` underflows to 0). A
+//!   switched-off lane touches only its own node and writes back exactly what it read, so the
+//!   batch's other lanes and the colouring are untouched.
+//! - **Dynamic batches**: every added or changed constraint is *dynamic*, packed eight to a
+//!   batch in a *dynamic set*: a new constraint takes the next lane of one of the set's last
+//!   [`SEARCH`] batches where no lane touches its nodes, else opens a new batch whose unused
+//!   lanes copy its lane 0 (as padding does). A constraint whose slots all lie in the tree goes
+//!   to the set of the deepest block holding them ([`ConstraintSlot::Block`]), in that block's
+//!   slot-local indices: it is projected right after that block's own tree constraints (the
+//!   block's distances, then its volumes, each kind tree batches first), in parallel with the
+//!   sibling subtree like them. A constraint touching a tail node goes to the **serial set**
+//!   ([`ConstraintSlot::Dynamic`]), projected serially after the whole tree (its volumes, then
+//!   its distances) and before the links, the floor and contacts. A changed dynamic constraint
+//!   keeps its lane when it stays in the same set and no other lane of its batch touches its
+//!   new nodes; otherwise, and when removed, its lane is switched off like a tree lane and the
+//!   constraint, if changed, is packed again. The order of the batches depends on the edits
+//!   alone, so serial and parallel stay bit-identical, and steps allocate nothing.
 //! - **Links** ([`SoftBody::add_link_constraint`], for sutures) are kept apart from the packed
-//!   dynamic set and projected after it, one per batch, in the order added: a link of stiffness
-//!   1 is satisfied at the end of every iteration.
+//!   dynamic sets and projected after the serial set, one per batch, in the order added: a link
+//!   of stiffness 1 is satisfied at the end of every iteration.
 //! - Removed constraints keep their record (so indices stay stable) with
 //!   [`ConstraintSlot::Removed`]; [`SoftBody::distance_slot`] says where each record is.
 //! - Masses are set per node ([`SoftBody::set_node_mass`]); [`SoftBody::tet_rest_volumes`] and
 //!   [`SoftBody::density`] let the caller rebuild them locally (eq. (1)).
 //!
 //! Edits allocate (they are rare); a step after an edit allocates nothing. No re-partition is
-//! done: after very many edits the dynamic set grows and with it the serial part of a step.
+//! done: after very many edits the dynamic batches grow, and once leaves run out of spares, so
+//! does the serial set.
 
 use glam::{DVec3, Vec3, Vec3A, Vec4};
 
 use crate::body::SoftBody;
 use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
+use crate::partition::Tree;
 use crate::{
     CentroidVolumeConstraint, DistanceConstraint, PbdError, Solver, TetVolumeConstraint,
     VolumeConstraintKind,
@@ -46,9 +59,20 @@ pub enum ConstraintSlot {
         /// Batch index.
         batch: u32,
     },
-    /// In the dynamic set, at this position (projected after the tree).
+    /// In the dynamic batches of block `block` of the tree (heap numbering: root 0, children
+    /// `2h+1`, `2h+2`), at this position: an added or changed constraint whose nodes all lie in
+    /// the block, projected right after the block's own tree constraints (in parallel with the
+    /// sibling subtree).
+    Block {
+        /// Heap index of the block.
+        block: u32,
+        /// Position (batch × 8 + lane) in the block's dynamic batches.
+        position: u32,
+    },
+    /// In the serial dynamic set, at this position (batch × 8 + lane): an added or changed
+    /// constraint on a node past the block tree's slots, projected serially after the tree.
     Dynamic {
-        /// Position in the dynamic set.
+        /// Position in the serial dynamic set.
         position: u32,
     },
     /// A link (e.g. a suture), at this position of the link list: projected after everything
@@ -61,6 +85,21 @@ pub enum ConstraintSlot {
     Removed,
 }
 
+/// One dynamic set: added or changed constraints packed eight to a batch (lanes sharing no
+/// node), in the slot-local indices of its block (absolute slots for the serial set). For each
+/// kind, the record of each lane (unused lanes repeat lane 0, as padding does), the lanes in use
+/// and the batches (volumes: of the body's volume kind).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct DynSet {
+    pub distance_lanes: Vec<[u32; LANES]>,
+    pub distance_fill: Vec<u8>,
+    pub distance_batches: Vec<DistanceBatch>,
+    pub tet_lanes: Vec<[u32; LANES]>,
+    pub tet_fill: Vec<u8>,
+    pub tet_batches: Vec<TetBatch>,
+    pub centroid_batches: Vec<CentroidBatch>,
+}
+
 /// The edit state of a body.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Edits {
@@ -68,27 +107,29 @@ pub(crate) struct Edits {
     /// Rest position of each node (cm): the positions at construction, then whatever
     /// [`SoftBody::set_rest_position`] set (appended nodes copy their source's).
     pub rest_x: Vec<Vec3A>,
-    /// Nodes of the block tree, `n₀`.
+    /// Nodes at construction, `n₀`.
     pub tree_nodes: usize,
+    /// The block tree over the solver slots (`crate::partition`): slots `[0, tree.node_count)`,
+    /// the tail after them.
+    pub tree: Tree,
+    /// The blocks in post order.
+    pub post: Vec<usize>,
+    /// Slots in use (real nodes, then filled spares) of each leaf, by leaf number.
+    pub leaf_fill: Vec<u32>,
     pub tet_rest: Vec<f32>,
     pub distance_slot: Vec<ConstraintSlot>,
     pub tet_slot: Vec<ConstraintSlot>,
-    /// Dynamic distance constraints, packed eight to a batch (lanes sharing no node, solver
-    /// indices): the record of each lane (unused lanes repeat lane 0, as padding does), lanes
-    /// in use, multipliers.
-    pub dyn_distance_lanes: Vec<[u32; LANES]>,
-    pub dyn_distance_fill: Vec<u8>,
-    pub dyn_distance_batches: Vec<DistanceBatch>,
+    /// The dynamic sets: one per block (heap index), then the serial set.
+    pub sets: Vec<DynSet>,
+    /// Multipliers of the dynamic batches: the blocks' in post order (ranges in
+    /// `Block::dyn_distance`, `Block::dyn_tets`), then the serial set's; one per distance batch,
+    /// 1 or 4 per volume batch. Zeroed at the start of every step, so a new batch just extends
+    /// them.
     pub dyn_distance_lambda: Vec<F>,
-    /// Dynamic tets, the same way: batches of the body's volume kind, multipliers (1 or 4 per
-    /// batch).
-    pub dyn_tet_lanes: Vec<[u32; LANES]>,
-    pub dyn_tet_fill: Vec<u8>,
-    pub dyn_tet_batches: Vec<TetBatch>,
-    pub dyn_centroid_batches: Vec<CentroidBatch>,
     pub dyn_volume_lambda: Vec<F>,
-    /// Live dynamic constraints: distances, tets.
+    /// Live dynamic constraints: (distances, tets) in all sets, and in the serial set.
     pub dyn_live: (usize, usize),
+    pub serial_live: (usize, usize),
     /// Links: record per position, batches (all lanes equal), multipliers.
     pub links: Vec<u32>,
     pub link_batches: Vec<DistanceBatch>,
@@ -96,7 +137,8 @@ pub(crate) struct Edits {
 }
 
 impl Edits {
-    pub(crate) fn new(body: &SoftBody, density: f32) -> Self {
+    /// `tree`: the block tree over the solver slots, `post` its blocks in post order.
+    pub(crate) fn new(body: &SoftBody, density: f32, tree: Tree, post: Vec<usize>) -> Self {
         let mut distance_slot = vec![ConstraintSlot::Removed; body.distance.len()];
         for (b, lanes) in body.distance_lanes.iter().enumerate() {
             for &r in lanes {
@@ -117,14 +159,84 @@ impl Edits {
                 (b - a).cross(c - a).dot(d - a) / 6.0
             })
             .collect();
+        // Real nodes take the first slots of each leaf.
+        let leaves = 1usize << tree.depth;
+        let mut leaf_fill = vec![0u32; leaves];
+        for &r in &body.rank {
+            leaf_fill[tree.leaf_of(r as usize) + 1 - leaves] += 1;
+        }
         Self {
             density,
             rest_x: body.x.clone(),
             tree_nodes: body.x.len(),
+            tree,
+            post,
+            leaf_fill,
             tet_rest,
             distance_slot,
             tet_slot,
+            sets: vec![DynSet::default(); tree.block_count() + 1],
             ..Default::default()
+        }
+    }
+
+    /// The serial set's index.
+    fn serial(&self) -> usize {
+        self.sets.len() - 1
+    }
+
+    /// The dynamic set for a constraint on solver slots `s`: the deepest block holding them all,
+    /// the serial set when one is past the tree.
+    fn set_for(&self, s: &[u32]) -> usize {
+        if s.iter().all(|&i| (i as usize) < self.tree.node_count) {
+            self.tree.block_of(s)
+        } else {
+            self.serial()
+        }
+    }
+
+    /// The slot of position `position` of set `set`.
+    fn slot_at(&self, set: usize, position: usize) -> ConstraintSlot {
+        slot_at(set, self.serial(), position)
+    }
+
+    /// Set and position of a dynamic slot.
+    fn position(&self, slot: ConstraintSlot) -> Option<(usize, usize)> {
+        match slot {
+            ConstraintSlot::Block { block, position } => Some((block as usize, position as usize)),
+            ConstraintSlot::Dynamic { position } => Some((self.serial(), position as usize)),
+            _ => None,
+        }
+    }
+
+    /// Counts a constraint into (`by = 1`) or out of (`by = -1`) set `set`'s live ones; `tet`
+    /// for a tet.
+    fn count(&mut self, set: usize, tet: bool, by: isize) {
+        let serial = set == self.serial();
+        for (on, live) in [(true, &mut self.dyn_live), (serial, &mut self.serial_live)] {
+            if on {
+                let n = if tet { &mut live.1 } else { &mut live.0 };
+                *n = n.saturating_add_signed(by);
+            }
+        }
+    }
+
+    /// A free spare slot of the leaf holding slot `source` (taken), `None` when that leaf has
+    /// none left or `source` is past the tree.
+    fn spare(&mut self, source: u32) -> Option<u32> {
+        let s = source as usize;
+        if s >= self.tree.node_count {
+            return None;
+        }
+        let leaves = 1usize << self.tree.depth;
+        let k = self.tree.leaf_of(s) + 1 - leaves;
+        let per = self.tree.leaf_slots();
+        let fill = &mut self.leaf_fill[k];
+        if (*fill as usize) < per {
+            *fill += 1;
+            Some((k * per) as u32 + *fill - 1)
+        } else {
+            None
         }
     }
 }
@@ -176,36 +288,21 @@ impl SoftBody {
                 }
             }
         }
-        // Dynamic constraints, lane by lane.
-        for (b, (batch, lanes)) in self
-            .edits
-            .dyn_distance_batches
-            .iter_mut()
-            .zip(&self.edits.dyn_distance_lanes)
-            .enumerate()
-        {
-            let fill = self.edits.dyn_distance_fill[b] as usize;
-            for (l, &r) in lanes.iter().enumerate() {
-                let live = dyn_live(&self.edits.distance_slot, r, b, l, fill);
-                let c = &self.distance[r as usize];
-                set_lane(
-                    &mut batch.param,
-                    l,
-                    if live {
-                        s.param(c.stiffness, c.compliance)
-                    } else {
-                        off
-                    },
-                );
-            }
-        }
-        for (b, lanes) in self.edits.dyn_tet_lanes.iter().enumerate() {
-            let fill = self.edits.dyn_tet_fill[b] as usize;
-            for (l, &r) in lanes.iter().enumerate() {
-                let live = dyn_live(&self.edits.tet_slot, r, b, l, fill);
-                let t = r as usize;
-                if let Some(batch) = self.edits.dyn_tet_batches.get_mut(b) {
-                    let c = &self.tet_volume[t];
+        // Dynamic constraints, set by set, lane by lane.
+        let e = &mut self.edits;
+        let serial = e.sets.len() - 1;
+        for (set, d) in e.sets.iter_mut().enumerate() {
+            let at = |position| slot_at(set, serial, position);
+            for (b, (batch, lanes)) in d
+                .distance_batches
+                .iter_mut()
+                .zip(&d.distance_lanes)
+                .enumerate()
+            {
+                let fill = d.distance_fill[b] as usize;
+                for (l, &r) in lanes.iter().enumerate() {
+                    let live = dyn_live(&e.distance_slot, r, at, b, l, fill);
+                    let c = &self.distance[r as usize];
                     set_lane(
                         &mut batch.param,
                         l,
@@ -216,11 +313,16 @@ impl SoftBody {
                         },
                     );
                 }
-                if let Some(batch) = self.edits.dyn_centroid_batches.get_mut(b) {
-                    for j in 0..4 {
-                        let c = &self.centroid[4 * t + j];
+            }
+            for (b, lanes) in d.tet_lanes.iter().enumerate() {
+                let fill = d.tet_fill[b] as usize;
+                for (l, &r) in lanes.iter().enumerate() {
+                    let live = dyn_live(&e.tet_slot, r, at, b, l, fill);
+                    let t = r as usize;
+                    if let Some(batch) = d.tet_batches.get_mut(b) {
+                        let c = &self.tet_volume[t];
                         set_lane(
-                            &mut batch.param[j],
+                            &mut batch.param,
                             l,
                             if live {
                                 s.param(c.stiffness, c.compliance)
@@ -228,6 +330,20 @@ impl SoftBody {
                                 off
                             },
                         );
+                    }
+                    if let Some(batch) = d.centroid_batches.get_mut(b) {
+                        for j in 0..4 {
+                            let c = &self.centroid[4 * t + j];
+                            set_lane(
+                                &mut batch.param[j],
+                                l,
+                                if live {
+                                    s.param(c.stiffness, c.compliance)
+                                } else {
+                                    off
+                                },
+                            );
+                        }
                     }
                 }
             }
@@ -263,22 +379,36 @@ impl SoftBody {
     pub fn tet_slot(&self, t: usize) -> Option<ConstraintSlot> {
         self.edits.tet_slot.get(t).copied()
     }
-    /// Sizes of the dynamic set: (distance constraints, tets), live ones.
+    /// Sizes of the dynamic sets: (distance constraints, tets), the live ones of all of them —
+    /// every added or changed constraint but the links, whether in a block of the tree
+    /// ([`ConstraintSlot::Block`]) or in the serial set ([`ConstraintSlot::Dynamic`]).
     pub fn dynamic_counts(&self) -> (usize, usize) {
         self.edits.dyn_live
     }
-    /// Batches of the dynamic set: (distance, tet); up to eight constraints each.
+    /// Batches of the dynamic sets, of all of them: (distance, tet); up to eight constraints
+    /// each.
     pub fn dynamic_batch_counts(&self) -> (usize, usize) {
-        (
-            self.edits.dyn_distance_lanes.len(),
-            self.edits.dyn_tet_lanes.len(),
-        )
+        self.edits.sets.iter().fold((0, 0), |(d, t), set| {
+            (d + set.distance_lanes.len(), t + set.tet_lanes.len())
+        })
+    }
+    /// The part of [`SoftBody::dynamic_counts`] in the serial set (constraints on nodes past the
+    /// block tree's slots, projected serially after the tree).
+    pub fn serial_dynamic_counts(&self) -> (usize, usize) {
+        self.edits.serial_live
+    }
+    /// Batches of the serial set: (distance, tet).
+    pub fn serial_dynamic_batch_counts(&self) -> (usize, usize) {
+        let set = &self.edits.sets[self.edits.serial()];
+        (set.distance_lanes.len(), set.tet_lanes.len())
     }
 
     /// Appends one node per entry of `sources`, each a copy of its source (position, previous
     /// position, velocity, mass, inverse mass: a pinned source gives a pinned copy). Returns the
     /// index of the first new node; the others follow. The new nodes carry no constraint until
-    /// tets or constraints are moved onto them.
+    /// tets or constraints are moved onto them. Each copy is projected with its source's leaf
+    /// block while that block has spare slots (constraints on it then stay in the parallel
+    /// tree), past the tree otherwise (see the module docs).
     ///
     /// # Errors
     /// [`PbdError::NodeOutOfRange`] for a bad source (nothing is changed).
@@ -292,11 +422,12 @@ impl SoftBody {
                 count: n,
             });
         }
-        if n + sources.len() >= u32::MAX as usize {
+        // Solver slots (at least one per node) must stay below SPARE.
+        if self.q.len() + sources.len() >= u32::MAX as usize {
             return Err(PbdError::InvalidParameter {
                 name: "node count",
                 value: (n + sources.len()) as f64,
-                expected: "fewer than 2³² nodes",
+                expected: "fewer than 2³² solver slots",
             });
         }
         for &s in sources {
@@ -307,10 +438,19 @@ impl SoftBody {
             self.v.push(self.v[s]);
             self.mass.push(self.mass[s]);
             self.w.push(self.w[s]);
-            self.order.push(i);
-            self.rank.push(i);
-            self.q.push(Vec4::ZERO);
-            self.qw.push(0.0);
+            let slot = match self.edits.spare(self.rank[s]) {
+                Some(slot) => {
+                    self.order[slot as usize] = i;
+                    slot
+                }
+                None => {
+                    self.order.push(i);
+                    self.q.push(Vec4::ZERO);
+                    self.qw.push(0.0);
+                    (self.q.len() - 1) as u32
+                }
+            };
+            self.rank.push(slot);
             let r = self.edits.rest_x[s];
             self.edits.rest_x.push(r);
         }
@@ -411,20 +551,55 @@ impl SoftBody {
         }
     }
 
-    /// Puts distance record `r` into the dynamic set: into a free lane of one of the last
-    /// [`SEARCH`] batches none of whose lanes touches its nodes, else into a new batch (all
-    /// lanes copies).
+    /// The dynamic set for a constraint on the caller's nodes `nodes`, and its nodes in that
+    /// set's indices (slots local to the block; absolute slots in the serial set).
+    fn dyn_place<const N: usize>(&self, nodes: [u32; N]) -> (usize, [u32; N]) {
+        let s = nodes.map(|i| self.rank[i as usize]);
+        let set = self.edits.set_for(&s);
+        let base = if set == self.edits.serial() {
+            0
+        } else {
+            self.blocks[set].nodes[0]
+        };
+        (set, s.map(|i| i - base))
+    }
+
+    /// Lays the blocks' dynamic multipliers out in post order, the serial set's after them
+    /// (after a set got a new batch).
+    fn layout_dyn(&mut self) {
+        let (mut d, mut t) = (0u32, 0u32);
+        for &h in &self.edits.post {
+            let set = &self.edits.sets[h];
+            let start = if self.edits.tree.is_leaf(h) {
+                (d, t)
+            } else {
+                let left = &self.blocks[2 * h + 1];
+                (left.dyn_distance[0], left.dyn_tets[0])
+            };
+            let end = (
+                d + set.distance_lanes.len() as u32,
+                t + set.tet_lanes.len() as u32,
+            );
+            let b = &mut self.blocks[h];
+            b.dyn_distance = [start.0, d, end.0];
+            b.dyn_tets = [start.1, t, end.1];
+            (d, t) = end;
+        }
+    }
+
+    /// Puts distance record `r` into its dynamic set (the deepest block holding its nodes, else
+    /// the serial set): into a free lane of one of the set's last [`SEARCH`] batches none of
+    /// whose lanes touches its nodes, else into a new batch (all lanes copies).
     fn push_dyn_distance(&mut self, r: u32) {
         let c = self.distance[r as usize];
-        let s = c.nodes.map(|i| self.rank[i as usize]);
+        let (set, s) = self.dyn_place(c.nodes);
         let param = self.settings.param(c.stiffness, c.compliance);
         let e = &mut self.edits;
-        let count = e.dyn_distance_batches.len();
+        let d = &mut e.sets[set];
+        let count = d.distance_batches.len();
+        let mut found = None;
         for batch in (count.saturating_sub(SEARCH)..count).rev() {
-            let (b, fill) = (
-                &mut e.dyn_distance_batches[batch],
-                &mut e.dyn_distance_fill[batch],
-            );
+            let (b, fill) = (&mut d.distance_batches[batch], &mut d.distance_fill[batch]);
             let lane = *fill as usize;
             if lane >= LANES || b.nodes.iter().any(|ids| ids.iter().any(|n| s.contains(n))) {
                 continue;
@@ -435,36 +610,41 @@ impl SoftBody {
             set_lane(&mut b.rest, lane, c.rest_length);
             set_lane(&mut b.param, lane, param);
             *fill += 1;
-            e.dyn_distance_lanes[batch][lane] = r;
-            e.distance_slot[r as usize] = ConstraintSlot::Dynamic {
-                position: (batch * LANES + lane) as u32,
-            };
-            e.dyn_live.0 += 1;
-            return;
+            d.distance_lanes[batch][lane] = r;
+            found = Some(batch * LANES + lane);
+            break;
         }
-        let batch = e.dyn_distance_batches.len();
-        e.dyn_distance_batches.push(DistanceBatch {
-            nodes: [[s[0]; LANES], [s[1]; LANES]],
-            rest: F::splat(c.rest_length),
-            param: F::splat(param),
+        let position = found.unwrap_or_else(|| {
+            let batch = d.distance_batches.len();
+            d.distance_batches.push(DistanceBatch {
+                nodes: [[s[0]; LANES], [s[1]; LANES]],
+                rest: F::splat(c.rest_length),
+                param: F::splat(param),
+            });
+            d.distance_lanes.push([r; LANES]);
+            d.distance_fill.push(1);
+            e.dyn_distance_lambda.push(F::ZERO);
+            batch * LANES
         });
-        e.dyn_distance_lanes.push([r; LANES]);
-        e.dyn_distance_fill.push(1);
-        e.dyn_distance_lambda.push(F::ZERO);
-        e.distance_slot[r as usize] = ConstraintSlot::Dynamic {
-            position: (batch * LANES) as u32,
-        };
-        e.dyn_live.0 += 1;
+        e.distance_slot[r as usize] = e.slot_at(set, position);
+        e.count(set, false, 1);
+        if found.is_none() {
+            self.layout_dyn();
+        }
     }
 
-    /// Switches off the lanes of dynamic distance batch `b` that hold no live constraint.
-    fn switch_off_dyn_distance_lanes(&mut self, b: usize) {
+    /// Switches off the lanes of batch `b` of dynamic set `set` that hold no live distance
+    /// constraint.
+    fn switch_off_dyn_distance_lanes(&mut self, set: usize, b: usize) {
         let off = off(self.settings.solver);
         let e = &mut self.edits;
-        let fill = e.dyn_distance_fill[b] as usize;
-        let batch = &mut e.dyn_distance_batches[b];
-        for (l, &r) in e.dyn_distance_lanes[b].iter().enumerate() {
-            if !dyn_live(&e.distance_slot, r, b, l, fill) {
+        let serial = e.serial();
+        let d = &mut e.sets[set];
+        let fill = d.distance_fill[b] as usize;
+        let batch = &mut d.distance_batches[b];
+        let at = |position| slot_at(set, serial, position);
+        for (l, &r) in d.distance_lanes[b].iter().enumerate() {
+            if !dyn_live(&e.distance_slot, r, at, b, l, fill) {
                 batch.nodes[1][l] = batch.nodes[0][l];
                 set_lane(&mut batch.rest, l, 0.0);
                 set_lane(&mut batch.param, l, off);
@@ -472,10 +652,9 @@ impl SoftBody {
         }
     }
 
-    /// Puts tet `t` into the dynamic set (as [`SoftBody::push_dyn_distance`]).
+    /// Puts tet `t` into its dynamic set (as [`SoftBody::push_dyn_distance`]).
     fn push_dyn_tet(&mut self, t: u32) {
-        let nodes = self.tets[t as usize];
-        let s = nodes.map(|i| self.rank[i as usize]);
+        let (set, s) = self.dyn_place(self.tets[t as usize]);
         let tet = self.tet_volume.get(t as usize).map(|c| {
             (
                 c.rest_volume,
@@ -495,79 +674,84 @@ impl SoftBody {
             VolumeConstraintKind::Centroid => 4,
         };
         let e = &mut self.edits;
-        let count = e.dyn_tet_lanes.len();
+        let d = &mut e.sets[set];
+        let count = d.tet_lanes.len();
+        let mut found = None;
         for b in (count.saturating_sub(SEARCH)..count).rev() {
-            let lane = e.dyn_tet_fill[b] as usize;
-            let ids = e
-                .dyn_tet_batches
+            let lane = d.tet_fill[b] as usize;
+            let ids = d
+                .tet_batches
                 .get(b)
                 .map(|x| x.nodes)
-                .or_else(|| e.dyn_centroid_batches.get(b).map(|x| x.nodes));
+                .or_else(|| d.centroid_batches.get(b).map(|x| x.nodes));
             let clash = ids.is_some_and(|ids| ids.iter().any(|l| l.iter().any(|n| s.contains(n))));
-            if lane < LANES && !clash {
-                if let (Some(x), Some((rest, param))) = (e.dyn_tet_batches.get_mut(b), tet) {
-                    for (ids, &n) in x.nodes.iter_mut().zip(&s) {
-                        ids[lane] = n;
-                    }
-                    set_lane(&mut x.rest, lane, rest);
-                    set_lane(&mut x.param, lane, param);
-                }
-                if let (Some(x), Some((rest, param))) =
-                    (e.dyn_centroid_batches.get_mut(b), centroid)
-                {
-                    for k in 0..4 {
-                        x.nodes[k][lane] = s[k];
-                        set_lane(&mut x.rest[k], lane, rest[k]);
-                        set_lane(&mut x.param[k], lane, param[k]);
-                    }
-                }
-                e.dyn_tet_fill[b] += 1;
-                e.dyn_tet_lanes[b][lane] = t;
-                e.tet_slot[t as usize] = ConstraintSlot::Dynamic {
-                    position: (b * LANES + lane) as u32,
-                };
-                e.dyn_live.1 += 1;
-                return;
+            if lane >= LANES || clash {
+                continue;
             }
+            if let (Some(x), Some((rest, param))) = (d.tet_batches.get_mut(b), tet) {
+                for (ids, &n) in x.nodes.iter_mut().zip(&s) {
+                    ids[lane] = n;
+                }
+                set_lane(&mut x.rest, lane, rest);
+                set_lane(&mut x.param, lane, param);
+            }
+            if let (Some(x), Some((rest, param))) = (d.centroid_batches.get_mut(b), centroid) {
+                for k in 0..4 {
+                    x.nodes[k][lane] = s[k];
+                    set_lane(&mut x.rest[k], lane, rest[k]);
+                    set_lane(&mut x.param[k], lane, param[k]);
+                }
+            }
+            d.tet_fill[b] += 1;
+            d.tet_lanes[b][lane] = t;
+            found = Some(b * LANES + lane);
+            break;
         }
-        let b = e.dyn_tet_lanes.len();
-        let ids = s.map(|n| [n; LANES]);
-        if let Some((rest, param)) = tet {
-            e.dyn_tet_batches.push(TetBatch {
-                nodes: ids,
-                rest: F::splat(rest),
-                param: F::splat(param),
-            });
+        let position = found.unwrap_or_else(|| {
+            let b = d.tet_lanes.len();
+            let ids = s.map(|n| [n; LANES]);
+            if let Some((rest, param)) = tet {
+                d.tet_batches.push(TetBatch {
+                    nodes: ids,
+                    rest: F::splat(rest),
+                    param: F::splat(param),
+                });
+            }
+            if let Some((rest, param)) = centroid {
+                d.centroid_batches.push(CentroidBatch {
+                    nodes: ids,
+                    rest: rest.map(F::splat),
+                    param: param.map(F::splat),
+                });
+            }
+            d.tet_lanes.push([t; LANES]);
+            d.tet_fill.push(1);
+            e.dyn_volume_lambda
+                .extend(std::iter::repeat_n(F::ZERO, per_tet));
+            b * LANES
+        });
+        e.tet_slot[t as usize] = e.slot_at(set, position);
+        e.count(set, true, 1);
+        if found.is_none() {
+            self.layout_dyn();
         }
-        if let Some((rest, param)) = centroid {
-            e.dyn_centroid_batches.push(CentroidBatch {
-                nodes: ids,
-                rest: rest.map(F::splat),
-                param: param.map(F::splat),
-            });
-        }
-        e.dyn_tet_lanes.push([t; LANES]);
-        e.dyn_tet_fill.push(1);
-        e.dyn_volume_lambda
-            .extend(std::iter::repeat_n(F::ZERO, per_tet));
-        e.tet_slot[t as usize] = ConstraintSlot::Dynamic {
-            position: (b * LANES) as u32,
-        };
-        e.dyn_live.1 += 1;
     }
 
-    /// Switches off the lanes of dynamic tet batch `b` that hold no live tet.
-    fn switch_off_dyn_tet_lanes(&mut self, b: usize) {
+    /// Switches off the lanes of batch `b` of dynamic set `set` that hold no live tet.
+    fn switch_off_dyn_tet_lanes(&mut self, set: usize, b: usize) {
         let off = off(self.settings.solver);
         let e = &mut self.edits;
-        let fill = e.dyn_tet_fill[b] as usize;
-        for (l, &r) in e.dyn_tet_lanes[b].iter().enumerate() {
-            if dyn_live(&e.tet_slot, r, b, l, fill) {
+        let serial = e.serial();
+        let d = &mut e.sets[set];
+        let fill = d.tet_fill[b] as usize;
+        let at = |position| slot_at(set, serial, position);
+        for (l, &r) in d.tet_lanes[b].iter().enumerate() {
+            if dyn_live(&e.tet_slot, r, at, b, l, fill) {
                 continue;
             }
             switch_off_tet_lane(
-                e.dyn_tet_batches.get_mut(b),
-                e.dyn_centroid_batches.get_mut(b),
+                d.tet_batches.get_mut(b),
+                d.centroid_batches.get_mut(b),
                 l,
                 off,
             );
@@ -605,21 +789,18 @@ impl SoftBody {
             self.edits.link_batches[position as usize].nodes = s;
             return Ok(());
         }
-        if let ConstraintSlot::Dynamic { position } = slot {
-            if self.update_dyn_distance_in_place(c, position as usize) {
+        let dynamic = self.edits.position(slot);
+        if let Some((set, position)) = dynamic {
+            if self.update_dyn_distance_in_place(c, set, position) {
                 return Ok(());
             }
         }
         self.edits.distance_slot[c] = ConstraintSlot::Removed;
-        match slot {
-            ConstraintSlot::Dynamic { position } => {
-                self.edits.dyn_live.0 -= 1;
-                self.switch_off_dyn_distance_lanes(position as usize / LANES);
-            }
-            ConstraintSlot::Tree { batch } => {
-                self.switch_off_distance_lanes(batch as usize);
-            }
-            ConstraintSlot::Link { .. } | ConstraintSlot::Removed => {}
+        if let Some((set, position)) = dynamic {
+            self.edits.count(set, false, -1);
+            self.switch_off_dyn_distance_lanes(set, position / LANES);
+        } else if let ConstraintSlot::Tree { batch } = slot {
+            self.switch_off_distance_lanes(batch as usize);
         }
         self.push_dyn_distance(c as u32);
         Ok(())
@@ -636,10 +817,12 @@ impl SoftBody {
                 self.edits.distance_slot[c] = ConstraintSlot::Removed;
                 self.switch_off_distance_lanes(batch as usize);
             }
-            ConstraintSlot::Dynamic { position } => {
+            slot @ (ConstraintSlot::Dynamic { .. } | ConstraintSlot::Block { .. }) => {
                 self.edits.distance_slot[c] = ConstraintSlot::Removed;
-                self.edits.dyn_live.0 -= 1;
-                self.switch_off_dyn_distance_lanes(position as usize / LANES);
+                if let Some((set, position)) = self.edits.position(slot) {
+                    self.edits.count(set, false, -1);
+                    self.switch_off_dyn_distance_lanes(set, position / LANES);
+                }
             }
             ConstraintSlot::Link { position } => {
                 let p = position as usize;
@@ -739,8 +922,8 @@ impl SoftBody {
                 }
             }
         }
-        if let ConstraintSlot::Dynamic { position } = slot {
-            if self.update_dyn_tet_in_place(t, position as usize) {
+        if let Some((set, position)) = self.edits.position(slot) {
+            if self.update_dyn_tet_in_place(t, set, position) {
                 return;
             }
         }
@@ -925,18 +1108,21 @@ impl SoftBody {
         }
     }
 
-    /// Rewrites dynamic distance constraint `c`'s lane at `position` (its nodes, rest length and
-    /// parameter, and the padding lanes that copy it) when no other lane of its batch touches
-    /// its new nodes: a changed constraint then keeps its lane instead of leaving a dead one.
-    /// `false` (nothing changed) when a node clashes.
-    fn update_dyn_distance_in_place(&mut self, c: usize, position: usize) -> bool {
+    /// Rewrites dynamic distance constraint `c`'s lane at `position` of set `set` (its nodes,
+    /// rest length and parameter, and the padding lanes that copy it) when its new nodes belong
+    /// to the same set and no other lane of its batch touches them: a changed constraint then
+    /// keeps its lane instead of leaving a dead one. `false` (nothing changed) otherwise.
+    fn update_dyn_distance_in_place(&mut self, c: usize, set: usize, position: usize) -> bool {
         let (b, l) = (position / LANES, position % LANES);
         let d = self.distance[c];
-        let s = d.nodes.map(|i| self.rank[i as usize]);
+        let (target, s) = self.dyn_place(d.nodes);
+        if target != set {
+            return false;
+        }
         let param = self.settings.param(d.stiffness, d.compliance);
-        let e = &mut self.edits;
-        let fill = e.dyn_distance_fill[b] as usize;
-        let batch = &mut e.dyn_distance_batches[b];
+        let e = &mut self.edits.sets[set];
+        let fill = e.distance_fill[b] as usize;
+        let batch = &mut e.distance_batches[b];
         let clash = (0..fill)
             .filter(|&lane| lane != l)
             .any(|lane| s.contains(&batch.nodes[0][lane]) || s.contains(&batch.nodes[1][lane]));
@@ -955,9 +1141,12 @@ impl SoftBody {
 
     /// As [`SoftBody::update_dyn_distance_in_place`] for tet `t` (nodes and rest values of its
     /// volume constraints).
-    fn update_dyn_tet_in_place(&mut self, t: usize, position: usize) -> bool {
+    fn update_dyn_tet_in_place(&mut self, t: usize, set: usize, position: usize) -> bool {
         let (b, l) = (position / LANES, position % LANES);
-        let s = self.tets[t].map(|i| self.rank[i as usize]);
+        let (target, s) = self.dyn_place(self.tets[t]);
+        if target != set {
+            return false;
+        }
         let tet = self.tet_volume.get(t).map(|c| {
             (
                 c.rest_volume,
@@ -971,13 +1160,13 @@ impl SoftBody {
                 [0, 1, 2, 3].map(|j| self.settings.param(c[j].stiffness, c[j].compliance)),
             )
         });
-        let e = &mut self.edits;
-        let fill = e.dyn_tet_fill[b] as usize;
+        let e = &mut self.edits.sets[set];
+        let fill = e.tet_fill[b] as usize;
         let ids = e
-            .dyn_tet_batches
+            .tet_batches
             .get(b)
             .map(|x| x.nodes)
-            .or_else(|| e.dyn_centroid_batches.get(b).map(|x| x.nodes));
+            .or_else(|| e.centroid_batches.get(b).map(|x| x.nodes));
         if let Some(ids) = ids {
             let clash = (0..fill)
                 .filter(|&lane| lane != l)
@@ -988,14 +1177,14 @@ impl SoftBody {
         }
         let padding = if l == 0 { fill..LANES } else { 0..0 };
         for lane in std::iter::once(l).chain(padding) {
-            if let (Some(x), Some((rest, param))) = (e.dyn_tet_batches.get_mut(b), tet) {
+            if let (Some(x), Some((rest, param))) = (e.tet_batches.get_mut(b), tet) {
                 for (ids, &n) in x.nodes.iter_mut().zip(&s) {
                     ids[lane] = n;
                 }
                 set_lane(&mut x.rest, lane, rest);
                 set_lane(&mut x.param, lane, param);
             }
-            if let (Some(x), Some((rest, param))) = (e.dyn_centroid_batches.get_mut(b), centroid) {
+            if let (Some(x), Some((rest, param))) = (e.centroid_batches.get_mut(b), centroid) {
                 for k in 0..4 {
                     x.nodes[k][lane] = s[k];
                     set_lane(&mut x.rest[k], lane, rest[k]);
@@ -1009,13 +1198,11 @@ impl SoftBody {
     /// Takes tet `t` out of its current slot (its lane switched off).
     fn retire_tet_slot(&mut self, t: usize, slot: ConstraintSlot) {
         self.edits.tet_slot[t] = ConstraintSlot::Removed;
-        match slot {
-            ConstraintSlot::Dynamic { position } => {
-                self.edits.dyn_live.1 -= 1;
-                self.switch_off_dyn_tet_lanes(position as usize / LANES);
-            }
-            ConstraintSlot::Tree { batch } => self.switch_off_tet_lanes(batch as usize),
-            ConstraintSlot::Link { .. } | ConstraintSlot::Removed => {}
+        if let Some((set, position)) = self.edits.position(slot) {
+            self.edits.count(set, true, -1);
+            self.switch_off_dyn_tet_lanes(set, position / LANES);
+        } else if let ConstraintSlot::Tree { batch } = slot {
+            self.switch_off_tet_lanes(batch as usize);
         }
     }
 }
@@ -1039,14 +1226,33 @@ fn rest_shape(r: &[DVec3; 4]) -> Result<(f32, [f32; 4]), PbdError> {
     Ok((volume as f32, heights))
 }
 
-/// Whether lane `l` of dynamic batch `b` (`fill` lanes in use) holds a live constraint: its
-/// record's slot is this lane, or it is a padding lane copying a live lane 0.
-fn dyn_live(slots: &[ConstraintSlot], r: u32, b: usize, l: usize, fill: usize) -> bool {
-    let at = |lane: usize| ConstraintSlot::Dynamic {
-        position: (b * LANES + lane) as u32,
-    };
+/// Whether lane `l` of batch `b` (`fill` lanes in use) of a dynamic set, whose slots `at`
+/// gives by position, holds a live constraint: its record's slot is this lane, or it is a
+/// padding lane copying a live lane 0.
+fn dyn_live(
+    slots: &[ConstraintSlot],
+    r: u32,
+    at: impl Fn(usize) -> ConstraintSlot,
+    b: usize,
+    l: usize,
+    fill: usize,
+) -> bool {
     let slot = slots[r as usize];
-    slot == at(l) || (l >= fill && slot == at(0))
+    slot == at(b * LANES + l) || (l >= fill && slot == at(b * LANES))
+}
+
+/// The slot of position `position` of dynamic set `set` (`serial`: the serial set's index).
+fn slot_at(set: usize, serial: usize, position: usize) -> ConstraintSlot {
+    if set == serial {
+        ConstraintSlot::Dynamic {
+            position: position as u32,
+        }
+    } else {
+        ConstraintSlot::Block {
+            block: set as u32,
+            position: position as u32,
+        }
+    }
 }
 
 fn check_distance_values(c: &DistanceConstraint) -> Result<(), PbdError> {

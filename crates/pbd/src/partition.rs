@@ -7,6 +7,16 @@
 //! ancestor and descendant touch disjoint node ranges: sibling subtrees can be projected at the
 //! same time on disjoint `&mut` slices, and a block's own constraints (those crossing the cut
 //! between its children) come after both children.
+//!
+//! **Spare slots.** The tree is laid over *solver slots*, not over the nodes themselves: every
+//! leaf owns [`Tree::leaf_slots`] slots, twice its most real nodes ([`spare_tree`]). The real
+//! nodes of leaf `k` (the `k`-th chunk of the bisection order, at most [`LEAF_NODES`]) take the
+//! first slots of its range, the rest are spares for nodes that cutting adds near them
+//! (`edit.rs`): a copy of a node takes a spare of its source's leaf, so the constraints an edit
+//! adds on it still fall into the tree and are projected in parallel. A spare slot that holds no
+//! node is never touched by a step (no constraint names it, its inverse mass is 0). As every
+//! leaf has the same number of slots, the halving of [`Tree::range`] is exact and leaf `k` is
+//! `[k·slots, (k+1)·slots)`.
 
 use glam::Vec3;
 
@@ -14,6 +24,30 @@ use glam::Vec3;
 /// serial, K = 10: 320 nodes 4.45 ms, 640 4.20, 1280 4.03, 2560 4.00; larger leaves mean fewer,
 /// fuller colours, smaller ones more blocks for more threads.)
 pub(crate) const LEAF_NODES: usize = 1280;
+
+/// The solver slots of `n` nodes: the tree of [`Tree::for_nodes`] over the nodes, each leaf
+/// given as many spare slots as its most real nodes, and the slot of each position of the
+/// bisection order (the `j`-th node of leaf `k` takes slot `k·slots + j`). `None` when the slots
+/// would not fit below `u32::MAX`.
+pub(crate) fn spare_tree(n: usize) -> Option<(Tree, Vec<u32>)> {
+    let real = Tree::for_nodes(n);
+    let leaves = 1usize << real.depth;
+    let slots = 2 * n.div_ceil(leaves);
+    let total = slots.checked_mul(leaves)?;
+    if total >= u32::MAX as usize {
+        return None;
+    }
+    let tree = Tree {
+        node_count: total,
+        depth: real.depth,
+    };
+    let mut slot = Vec::with_capacity(n);
+    for k in 0..leaves {
+        let [start, _, end] = real.range(leaves - 1 + k);
+        slot.extend((0..end - start).map(|j| (k * slots + j) as u32));
+    }
+    Some((tree, slot))
+}
 
 /// Solver order of the nodes: recursive coordinate bisection of `positions` (split at the median
 /// along the longest side of the bounding box, halves as [`Tree::range`] makes them), down to
@@ -54,9 +88,9 @@ fn bisect(ids: &mut [u32], positions: &[Vec3]) {
     bisect(right, positions);
 }
 
-/// The block tree over `node_count` renumbered nodes: `depth` levels below the root, `2^depth`
-/// leaves.
-#[derive(Debug, Clone, Copy)]
+/// The block tree over `node_count` renumbered nodes (or solver slots, see [`spare_tree`]):
+/// `depth` levels below the root, `2^depth` leaves.
+#[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Tree {
     pub node_count: usize,
     pub depth: u32,
@@ -70,6 +104,16 @@ impl Tree {
             depth += 1;
         }
         Self { node_count, depth }
+    }
+
+    /// Slots per leaf: `node_count / 2^depth` (exact in a tree of [`spare_tree`]).
+    pub(crate) fn leaf_slots(&self) -> usize {
+        self.node_count >> self.depth
+    }
+
+    /// Heap index of the leaf holding slot `s` (`s < node_count`, a tree of [`spare_tree`]).
+    pub(crate) fn leaf_of(&self, s: usize) -> usize {
+        (1 << self.depth) - 1 + s / self.leaf_slots()
     }
 
     /// Number of blocks, `2^(depth+1) − 1`.
@@ -159,6 +203,34 @@ mod tests {
         assert_eq!(Tree::for_nodes(LEAF_NODES).depth, 0);
         assert_eq!(Tree::for_nodes(LEAF_NODES + 1).depth, 1);
         assert_eq!(Tree::for_nodes(8 * LEAF_NODES + 1).depth, 4);
+    }
+
+    #[test]
+    fn spare_slots_keep_each_leaf_of_the_bisection_order_together() {
+        for n in [1, 7, 1000, LEAF_NODES, LEAF_NODES + 1, 9261, 8 * LEAF_NODES + 3] {
+            let real = Tree::for_nodes(n);
+            let (tree, slot) = spare_tree(n).unwrap_or_default();
+            assert_eq!(slot.len(), n);
+            assert_eq!(tree.depth, real.depth);
+            let leaves = 1 << tree.depth;
+            let per = tree.leaf_slots();
+            assert_eq!(per * leaves, tree.node_count);
+            for k in 0..leaves {
+                let h = leaves - 1 + k;
+                let [s, _, e] = real.range(h);
+                let [ps, _, pe] = tree.range(h);
+                assert_eq!((ps, pe), (k * per, (k + 1) * per));
+                // Real nodes first, then at least as many spares.
+                for j in s..e {
+                    assert_eq!(slot[j] as usize, ps + j - s);
+                    assert_eq!(tree.leaf_of(slot[j] as usize), h);
+                }
+                assert!(2 * (e - s) <= pe - ps);
+            }
+            // Monotone: the constraints' order and blocks are those of the unpadded tree.
+            assert!(slot.windows(2).all(|w| w[0] < w[1]));
+        }
+        assert!(spare_tree(u32::MAX as usize / 2 + 1).is_none());
     }
 
     #[test]

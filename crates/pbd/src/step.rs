@@ -2,7 +2,8 @@
 //! contact generation → `K` × (distance, volume, floor projection, contacts) → velocity and
 //! position update → rigid-mode damping.
 
-use crate::body::Block;
+use crate::body::{Block, SPARE};
+use crate::edit::DynSet;
 use crate::constraint::{
     gather, project_centroid, project_distance, project_tet_volume, scatter, CentroidBatch,
     DistanceBatch, TetBatch, F, LANES, P4,
@@ -41,40 +42,88 @@ struct Sweep<'a> {
     distance: &'a [DistanceBatch],
     tet: &'a [TetBatch],
     centroid: &'a [CentroidBatch],
+    /// The blocks' dynamic batches (`edit.rs`), by heap index.
+    dynamic: &'a [DynSet],
     kind: VolumeConstraintKind,
     parallel: bool,
 }
 
+/// The multipliers of a subtree's batches: tree distances, tree volumes, dynamic distances,
+/// dynamic volumes.
+struct Lambdas<'a> {
+    d: &'a mut [F],
+    v: &'a mut [F],
+    dd: &'a mut [F],
+    dv: &'a mut [F],
+}
+
+impl<'a> Lambdas<'a> {
+    /// Splits off the multipliers of the left and the right child's subtrees (`l`, `r`) of
+    /// block `b`; `self` keeps the block's own.
+    fn split(self, b: &Block, l: &Block, r: &Block, per_tet: usize) -> [Self; 3] {
+        fn cut<'s>(
+            x: &'s mut [F],
+            b: [u32; 3],
+            l: [u32; 3],
+            r: [u32; 3],
+            per: usize,
+        ) -> [&'s mut [F]; 3] {
+            let (left, rest) = x.split_at_mut((l[2] - b[0]) as usize * per);
+            let (right, own) = rest.split_at_mut((r[2] - l[2]) as usize * per);
+            [left, right, own]
+        }
+        let [dl, dr, d] = cut(self.d, b.distance, l.distance, r.distance, 1);
+        let [vl, vr, v] = cut(self.v, b.tets, l.tets, r.tets, per_tet);
+        let [ddl, ddr, dd] = cut(self.dd, b.dyn_distance, l.dyn_distance, r.dyn_distance, 1);
+        let [dvl, dvr, dv] = cut(self.dv, b.dyn_tets, l.dyn_tets, r.dyn_tets, per_tet);
+        [
+            Lambdas {
+                d: dl,
+                v: vl,
+                dd: ddl,
+                dv: dvl,
+            },
+            Lambdas {
+                d: dr,
+                v: vr,
+                dd: ddr,
+                dv: dvr,
+            },
+            Lambdas { d, v, dd, dv },
+        ]
+    }
+}
+
 impl Sweep<'_> {
-    /// Projects the constraints of block `h`'s subtree: both children (at the same time in
-    /// parallel mode: they touch disjoint node ranges), then the block's own constraints. `p` is
-    /// the block's node range, `ld`, `lv` the multipliers of its subtree's batches.
-    fn block<const XPBD: bool>(&self, h: usize, p: &mut [Vec4], ld: &mut [F], lv: &mut [F]) {
-        let b = self.blocks[h];
-        let per_tet = match self.kind {
+    fn per_tet(&self) -> usize {
+        match self.kind {
             VolumeConstraintKind::None => 0,
             VolumeConstraintKind::Classic => 1,
             VolumeConstraintKind::Centroid => 4,
-        };
-        let (ld, lv) = if 2 * h + 1 < self.blocks.len() {
+        }
+    }
+
+    /// Projects the constraints of block `h`'s subtree: both children (at the same time in
+    /// parallel mode: they touch disjoint node ranges), then the block's own constraints. `p` is
+    /// the block's slot range, `lam` the multipliers of its subtree's batches.
+    fn block<const XPBD: bool>(&self, h: usize, p: &mut [Vec4], lam: Lambdas<'_>) {
+        let b = self.blocks[h];
+        let lam = if 2 * h + 1 < self.blocks.len() {
             let (l, r) = (self.blocks[2 * h + 1], self.blocks[2 * h + 2]);
             let (pl, pr) = p.split_at_mut((b.nodes[1] - b.nodes[0]) as usize);
-            let (ldl, rest) = ld.split_at_mut((l.distance[2] - b.distance[0]) as usize);
-            let (ldr, ld) = rest.split_at_mut((r.distance[2] - l.distance[2]) as usize);
-            let (lvl, rest) = lv.split_at_mut((l.tets[2] - b.tets[0]) as usize * per_tet);
-            let (lvr, lv) = rest.split_at_mut((r.tets[2] - l.tets[2]) as usize * per_tet);
+            let [laml, lamr, lam] = lam.split(&b, &l, &r, self.per_tet());
             if self.parallel {
                 rayon::join(
-                    || self.block::<XPBD>(2 * h + 1, pl, ldl, lvl),
-                    || self.block::<XPBD>(2 * h + 2, pr, ldr, lvr),
+                    || self.block::<XPBD>(2 * h + 1, pl, laml),
+                    || self.block::<XPBD>(2 * h + 2, pr, lamr),
                 );
             } else {
-                self.block::<XPBD>(2 * h + 1, pl, ldl, lvl);
-                self.block::<XPBD>(2 * h + 2, pr, ldr, lvr);
+                self.block::<XPBD>(2 * h + 1, pl, laml);
+                self.block::<XPBD>(2 * h + 2, pr, lamr);
             }
-            (ld, lv)
+            lam
         } else {
-            (ld, lv)
+            lam
         };
         if self.parallel && h == 0 && 2 * h + 1 < self.blocks.len() {
             // The root's own constraints are the one serial phase of an iteration. Meanwhile
@@ -84,7 +133,7 @@ impl Sweep<'_> {
             let done = AtomicBool::new(false);
             rayon::join(
                 || {
-                    self.own::<XPBD>(&b, p, ld, lv);
+                    self.own::<XPBD>(h, p, lam);
                     done.store(true, Ordering::Release);
                 },
                 || {
@@ -100,37 +149,65 @@ impl Sweep<'_> {
                 },
             );
         } else {
-            self.own::<XPBD>(&b, p, ld, lv);
+            self.own::<XPBD>(h, p, lam);
         }
     }
 
-    /// Projects the block's own constraints: distances, then volumes.
-    fn own<const XPBD: bool>(&self, b: &Block, p: &mut [Vec4], ld: &mut [F], lv: &mut [F]) {
+    /// Projects block `h`'s own constraints: its tree distances, its dynamic distances, its tree
+    /// volumes, its dynamic volumes.
+    fn own<const XPBD: bool>(&self, h: usize, p: &mut [Vec4], lam: Lambdas<'_>) {
+        let b = &self.blocks[h];
         let [_, ds, de] = b.distance.map(|i| i as usize);
         let [_, ts, te] = b.tets.map(|i| i as usize);
         project_batches::<_, 2, 1>(
             &self.distance[ds..de],
-            ld,
+            lam.d,
+            p,
+            |b| &b.nodes,
+            project_distance::<XPBD>,
+        );
+        let dynamic = &self.dynamic[h];
+        project_batches::<_, 2, 1>(
+            &dynamic.distance_batches,
+            lam.dd,
             p,
             |b| &b.nodes,
             project_distance::<XPBD>,
         );
         match self.kind {
             VolumeConstraintKind::None => {}
-            VolumeConstraintKind::Classic => project_batches::<_, 4, 1>(
-                &self.tet[ts..te],
-                lv,
-                p,
-                |b| &b.nodes,
-                project_tet_volume::<XPBD>,
-            ),
-            VolumeConstraintKind::Centroid => project_batches::<_, 4, 4>(
-                &self.centroid[ts..te],
-                lv,
-                p,
-                |b| &b.nodes,
-                project_centroid::<XPBD>,
-            ),
+            VolumeConstraintKind::Classic => {
+                project_batches::<_, 4, 1>(
+                    &self.tet[ts..te],
+                    lam.v,
+                    p,
+                    |b| &b.nodes,
+                    project_tet_volume::<XPBD>,
+                );
+                project_batches::<_, 4, 1>(
+                    &dynamic.tet_batches,
+                    lam.dv,
+                    p,
+                    |b| &b.nodes,
+                    project_tet_volume::<XPBD>,
+                );
+            }
+            VolumeConstraintKind::Centroid => {
+                project_batches::<_, 4, 4>(
+                    &self.centroid[ts..te],
+                    lam.v,
+                    p,
+                    |b| &b.nodes,
+                    project_centroid::<XPBD>,
+                );
+                project_batches::<_, 4, 4>(
+                    &dynamic.centroid_batches,
+                    lam.dv,
+                    p,
+                    |b| &b.nodes,
+                    project_centroid::<XPBD>,
+                );
+            }
         }
     }
 }
@@ -155,7 +232,11 @@ impl SoftBody {
         let s = self.settings;
         let (dt, g) = (s.dt, Vec3A::from(s.gravity));
         // 1–2, straight into solver order (crate::partition): the projection works on `q`.
+        // Empty slots (SPARE) stay as they are: zero, never touched.
         for ((q, qw), &o) in self.q.iter_mut().zip(&mut self.qw).zip(&self.order) {
+            if o == SPARE {
+                continue;
+            }
             let (o, w) = (o as usize, self.w[o as usize]);
             if w > 0.0 {
                 self.v[o] += dt * g;
@@ -225,48 +306,69 @@ impl SoftBody {
         Ok(())
     }
 
-    /// One sweep over all constraints (the block tree, then the dynamic set of `edit.rs`), then
-    /// the floor. `p` and `w` are in solver order.
+    /// One sweep over all constraints (the block tree with its blocks' dynamic batches, then the
+    /// serial dynamic set and the links of `edit.rs`), then the floor. `p` and `w` are in solver
+    /// order.
     fn project_once<const XPBD: bool>(&mut self) {
         let (p, w) = (&mut self.q, &self.qw);
+        let e = &mut self.edits;
+        let root = self.blocks[0];
+        let per_tet = match self.volume_kind {
+            VolumeConstraintKind::None => 0,
+            VolumeConstraintKind::Classic => 1,
+            VolumeConstraintKind::Centroid => 4,
+        };
+        // The blocks' dynamic multipliers come first, the serial set's after them.
+        let (dd, serial_dd) = e
+            .dyn_distance_lambda
+            .split_at_mut(root.dyn_distance[2] as usize);
+        let (dv, serial_dv) = e
+            .dyn_volume_lambda
+            .split_at_mut(root.dyn_tets[2] as usize * per_tet);
+        let (tree_p, _) = p.split_at_mut(e.tree.node_count);
         Sweep {
             blocks: &self.blocks,
             distance: &self.distance_batches,
             tet: &self.tet_batches,
             centroid: &self.centroid_batches,
+            dynamic: &e.sets,
             kind: self.volume_kind,
             parallel: self.settings.parallel,
         }
         .block::<XPBD>(
             0,
-            &mut p[..self.edits.tree_nodes],
-            &mut self.distance_lambda,
-            &mut self.volume_lambda,
+            tree_p,
+            Lambdas {
+                d: &mut self.distance_lambda,
+                v: &mut self.volume_lambda,
+                dd,
+                dv,
+            },
         );
-        // The dynamic set (edited and added constraints), serially, in edit order, on all nodes:
-        // volumes, then distances, then links (sutures).
-        let e = &mut self.edits;
+        // The serial dynamic set (edited and added constraints on nodes past the tree's slots),
+        // in edit order, on all nodes: volumes, then distances, then links (sutures).
+        let serial = &e.sets[self.blocks.len()];
         match self.volume_kind {
             VolumeConstraintKind::None => {}
             VolumeConstraintKind::Classic => project_batches::<_, 4, 1>(
-                &e.dyn_tet_batches,
-                &mut e.dyn_volume_lambda,
+                &serial.tet_batches,
+                serial_dv,
                 p,
                 |b| &b.nodes,
                 project_tet_volume::<XPBD>,
             ),
             VolumeConstraintKind::Centroid => project_batches::<_, 4, 4>(
-                &e.dyn_centroid_batches,
-                &mut e.dyn_volume_lambda,
+                &serial.centroid_batches,
+                serial_dv,
                 p,
                 |b| &b.nodes,
                 project_centroid::<XPBD>,
             ),
         }
-        if !e.dyn_distance_batches.is_empty() {
+        if !serial.distance_batches.is_empty() {
             project_batches::<_, 2, 1>(
-                &e.dyn_distance_batches,
-                &mut e.dyn_distance_lambda,
+                &serial.distance_batches,
+                serial_dd,
                 p,
                 |b| &b.nodes,
                 project_distance::<XPBD>,
