@@ -207,7 +207,15 @@ mod tests {
 
     #[test]
     fn spare_slots_keep_each_leaf_of_the_bisection_order_together() {
-        for n in [1, 7, 1000, LEAF_NODES, LEAF_NODES + 1, 9261, 8 * LEAF_NODES + 3] {
+        for n in [
+            1,
+            7,
+            1000,
+            LEAF_NODES,
+            LEAF_NODES + 1,
+            9261,
+            8 * LEAF_NODES + 3,
+        ] {
             let real = Tree::for_nodes(n);
             let (tree, slot) = spare_tree(n).unwrap_or_default();
             assert_eq!(slot.len(), n);

@@ -3,11 +3,11 @@
 //! position update → rigid-mode damping.
 
 use crate::body::{Block, SPARE};
-use crate::edit::DynSet;
 use crate::constraint::{
     gather, project_centroid, project_distance, project_tet_volume, scatter, CentroidBatch,
     DistanceBatch, TetBatch, F, LANES, P4,
 };
+use crate::edit::DynSet;
 use crate::{PbdError, SoftBody, Solver, VolumeConstraintKind};
 use std::sync::atomic::{AtomicBool, Ordering};
 

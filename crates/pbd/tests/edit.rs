@@ -6,7 +6,8 @@
 use glam::{DVec3, Vec3};
 use tissue_mesh::tet_box;
 use tissue_pbd::{
-    DistanceConstraint, Material, PbdError, SoftBody, StepSettings, VolumeConstraintKind,
+    ConstraintSlot, DistanceConstraint, Material, PbdError, SoftBody, StepSettings,
+    VolumeConstraintKind,
 };
 
 fn body(kind: VolumeConstraintKind) -> SoftBody {
@@ -95,17 +96,49 @@ fn split_edge(body: &mut SoftBody, a: u32, b: u32) -> u32 {
     m
 }
 
+/// Loose copies of node `source` (no constraint, no mass) until its leaf has no spare slot
+/// left: every copy after them goes past the block tree. Returns how many were made.
+fn fill_leaf(body: &mut SoftBody, source: u32) -> usize {
+    // A leaf has at most twice as many slots as the body has nodes.
+    let count = 2 * body.node_count();
+    let first = body.duplicate_nodes(&vec![source; count]).unwrap();
+    for i in first..first + count as u32 {
+        body.set_node_mass(i, 0.0).unwrap();
+    }
+    count
+}
+
 #[test]
 fn a_body_split_in_rest_space_stays_at_rest_and_keeps_its_volume() {
-    for kind in [
-        VolumeConstraintKind::Classic,
-        VolumeConstraintKind::Centroid,
+    for (kind, full) in [
+        (VolumeConstraintKind::Classic, false),
+        (VolumeConstraintKind::Centroid, false),
+        (VolumeConstraintKind::Classic, true),
+        (VolumeConstraintKind::Centroid, true),
     ] {
         let mut body = body(kind);
         let (volume, mass, tets) = (body.rest_volume(), body.total_mass(), body.tets().len());
         // An inner edge: the first tet's first two nodes.
         let [a, b, ..] = body.tets()[0];
+        if full {
+            fill_leaf(&mut body, a);
+        }
         let m = split_edge(&mut body, a, b);
+        // The new node takes a spare slot of its leaf and the split's constraints stay in the
+        // block tree; with the leaf full, it goes past the tree and they are projected serially.
+        let serial = body.serial_dynamic_counts();
+        if full {
+            assert_eq!(serial, body.dynamic_counts(), "{kind:?}");
+            assert!(serial.0 > 0 && serial.1 > 0);
+        } else {
+            assert_eq!(serial, (0, 0), "{kind:?}");
+            assert!(body.dynamic_counts().0 > 0 && body.dynamic_counts().1 > 0);
+            let last = body.tets().len() - 1;
+            assert!(matches!(
+                body.tet_slot(last),
+                Some(ConstraintSlot::Block { .. })
+            ));
+        }
         assert!(body.tets().len() > tets);
         assert!(
             (body.rest_volume() / volume - 1.0).abs() < 1e-6,
@@ -134,7 +167,10 @@ fn a_body_split_in_rest_space_stays_at_rest_and_keeps_its_volume() {
             .zip(&start)
             .map(|(p, q)| p.distance(*q))
             .fold(0.0f32, f32::max);
-        assert!(moved < 1e-5, "{kind:?}: a body at rest moved {moved} cm");
+        assert!(
+            moved < 1e-5,
+            "{kind:?} full {full}: a body at rest moved {moved} cm"
+        );
         assert!(body.positions()[m as usize].is_finite());
     }
 }
@@ -196,4 +232,102 @@ fn bad_reshapes_are_refused_and_change_nothing() {
     assert_eq!(body.tets().len(), tets);
     assert_eq!(body.tets()[0], t0);
     assert_eq!(body.dynamic_counts(), (0, 0));
+}
+
+#[test]
+fn copies_take_spare_slots_of_their_leaf_then_go_past_the_tree() {
+    // A 4×4×4-cell box: 125 nodes in one leaf, the root.
+    let mesh = tet_box(4, 4, 4, Vec3::splat(2.0)).unwrap();
+    let mut body = SoftBody::new(&mesh, &Material::default()).unwrap();
+    assert_eq!(body.block_count(), 1);
+    let n = body.node_count();
+    let template = body.distance_constraints()[0];
+    // Copies of node 0 one at a time, each tied to node 1 by a new distance constraint.
+    let mut slots = Vec::new();
+    for k in 0..3 * n {
+        let copy = body.duplicate_nodes(&[0]).unwrap();
+        assert_eq!(copy as usize, n + k);
+        let c = body
+            .add_distance_constraint(DistanceConstraint {
+                nodes: [1, copy],
+                ..template
+            })
+            .unwrap();
+        slots.push(body.distance_slot(c).unwrap());
+    }
+    // At least as many spares as real nodes, then the tail, for good.
+    let spares = slots
+        .iter()
+        .position(|s| matches!(s, ConstraintSlot::Dynamic { .. }))
+        .unwrap();
+    assert!(spares >= n, "{spares} spares for {n} nodes");
+    assert!(slots[..spares]
+        .iter()
+        .all(|s| matches!(s, ConstraintSlot::Block { block: 0, .. })));
+    assert!(slots[spares..]
+        .iter()
+        .all(|s| matches!(s, ConstraintSlot::Dynamic { .. })));
+    assert_eq!(body.serial_dynamic_counts(), (3 * n - spares, 0));
+    assert_eq!(body.dynamic_counts(), (3 * n, 0));
+    // A copy of a tail node stays in the tail; a constraint between a spare-slot node and a
+    // tail node is serial, one between two spare-slot nodes is in the tree.
+    let tail = body.node_count() as u32 - 1;
+    let copy = body.duplicate_nodes(&[tail]).unwrap();
+    let c = body
+        .add_distance_constraint(DistanceConstraint {
+            nodes: [n as u32, copy],
+            ..template
+        })
+        .unwrap();
+    assert!(matches!(
+        body.distance_slot(c),
+        Some(ConstraintSlot::Dynamic { .. })
+    ));
+    // (The copies coincide: rest length 0.)
+    let c = body
+        .add_distance_constraint(DistanceConstraint {
+            nodes: [n as u32, n as u32 + 1],
+            rest_length: 0.0,
+            ..template
+        })
+        .unwrap();
+    assert!(matches!(
+        body.distance_slot(c),
+        Some(ConstraintSlot::Block { block: 0, .. })
+    ));
+    // Moving a tree-slot constraint onto a tail node moves it to the serial set, and back.
+    body.set_distance_nodes(c, [n as u32, copy]).unwrap();
+    assert!(matches!(
+        body.distance_slot(c),
+        Some(ConstraintSlot::Dynamic { .. })
+    ));
+    body.set_distance_nodes(c, [n as u32, n as u32 + 1])
+        .unwrap();
+    assert!(matches!(
+        body.distance_slot(c),
+        Some(ConstraintSlot::Block { block: 0, .. })
+    ));
+    // Node 1 pinned, under gravity: every copy swings from node 1 at the rest length, the
+    // same way (bit for bit) whether in a spare slot or past the tree (but for the first two,
+    // also tied to each other).
+    body.set_settings(StepSettings::default()).unwrap();
+    body.pin(1).unwrap();
+    let start = Vec3::from(body.positions()[n]);
+    for _ in 0..30 {
+        body.step().unwrap();
+    }
+    let x = body.positions();
+    for k in 0..3 * n {
+        let d = x[1].distance(x[n + k]);
+        assert!(
+            (d - template.rest_length).abs() < 1e-4,
+            "copy {k}: {d} vs {}",
+            template.rest_length
+        );
+        if k >= 2 {
+            assert_eq!(x[n + k], x[n + 2], "copy {k}");
+        }
+    }
+    assert!(Vec3::from(x[n]).distance(start) > 0.1);
+    assert!(x.iter().all(|p| p.is_finite()));
 }

@@ -55,7 +55,7 @@ fn steps_allocate_nothing_after_the_first() {
                 body.set_floor(Some(Floor::y(-3.5))).unwrap();
                 let id = body.attach(0, Vec3::new(-3.0, -3.0, -3.0)).unwrap();
                 // A topology edit (it may allocate; the steps after it must not): a node
-                // duplicated, one tet moved onto it, a link added, an edge removed.
+                // duplicated, one tet moved onto it, an edge added, an edge removed.
                 let t = body.tets()[7];
                 let copy = body.duplicate_nodes(&[t[0]]).unwrap();
                 body.set_tet_nodes(7, [copy, t[1], t[2], t[3]]).unwrap();
@@ -67,6 +67,18 @@ fn steps_allocate_nothing_after_the_first() {
                 })
                 .unwrap();
                 body.remove_distance_constraint(3).unwrap();
+                // Copies of another node until its leaf is full, the last one (past the block
+                // tree) tied to it: a constraint of the serial dynamic set.
+                let count = 2 * body.node_count();
+                let first = body.duplicate_nodes(&vec![t[1]; count]).unwrap();
+                body.add_distance_constraint(tissue_pbd::DistanceConstraint {
+                    nodes: [t[1], first + count as u32 - 1],
+                    rest_length: 0.0,
+                    stiffness: 1.0,
+                    compliance: 0.0,
+                })
+                .unwrap();
+                assert_eq!(body.serial_dynamic_counts(), (1, 0));
                 body.set_settings(StepSettings {
                     solver,
                     parallel,

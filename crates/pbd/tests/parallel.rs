@@ -4,7 +4,9 @@
 
 use glam::Vec3;
 use tissue_mesh::tet_box;
-use tissue_pbd::{Floor, Material, SoftBody, Solver, StepSettings, VolumeConstraintKind};
+use tissue_pbd::{
+    ConstraintSlot, Floor, Material, SoftBody, Solver, StepSettings, VolumeConstraintKind,
+};
 
 /// The 20³-cell test box (colours of a few thousand constraints, so the parallel path really
 /// forks), on a floor `floor` below, node 0 pinned.
@@ -77,9 +79,17 @@ fn parallel_is_bit_identical_for_any_thread_count_and_to_serial() {
 }
 
 /// A body cut in place through the edit API (nodes on the plane x = 0 duplicated, the tets on
-/// the right moved onto the copies, new edges and a link constraint added, one edge removed):
-/// the dynamic set is projected serially, so parallel stays bit-identical.
-fn run_cut(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: usize) -> Vec<u32> {
+/// the right moved onto the copies, new edges and a link constraint added, one edge removed).
+/// The changed and added constraints are projected in their blocks of the tree (the copies take
+/// spare slots of their sources' leaves), with `full` (the leaves' spare slots used up before
+/// the cut) mostly in the serial set after the tree: parallel stays bit-identical either way.
+fn run_cut(
+    kind: VolumeConstraintKind,
+    solver: Solver,
+    parallel: bool,
+    threads: usize,
+    full: bool,
+) -> Vec<u32> {
     let mut body = box_body(kind, -6.0);
     // Separate along x = 0 for z > 0 (a partial cut): nodes on that half-plane get a copy used
     // by the tets whose centroid is at x > 0.
@@ -87,6 +97,12 @@ fn run_cut(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: 
     let on_cut: Vec<u32> = (0..x.len() as u32)
         .filter(|&i| x[i as usize].x.abs() < 1e-4 && x[i as usize].z > 0.1)
         .collect();
+    if full {
+        // Loose copies (no constraint) until every leaf of a cut node is full: each leaf has as
+        // many spares as real nodes, fewer than the box's nodes.
+        let sources: Vec<u32> = (0..x.len() as u32).collect();
+        body.duplicate_nodes(&sources).unwrap();
+    }
     let first = body.duplicate_nodes(&on_cut).unwrap();
     let copy = |i: u32| {
         on_cut
@@ -95,11 +111,13 @@ fn run_cut(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: 
             .map(|k| first + k as u32)
     };
     let tets: Vec<[u32; 4]> = body.tets().to_vec();
+    let mut moved = Vec::new();
     for (t, tet) in tets.iter().enumerate() {
         let c: f32 = tet.iter().map(|&i| x[i as usize].x).sum::<f32>() / 4.0;
         if c > 0.0 && tet.iter().any(|&i| copy(i).is_some()) {
             body.set_tet_nodes(t, tet.map(|i| copy(i).unwrap_or(i)))
                 .unwrap();
+            moved.push(t);
         }
     }
     // Edges between two cut nodes now exist on both sides.
@@ -175,6 +193,41 @@ fn run_cut(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: 
     // Packed: several dynamic constraints share a batch.
     assert!(body.dynamic_batch_counts().0 * 2 < body.dynamic_counts().0);
     assert!(body.dynamic_batch_counts().1 * 2 < body.dynamic_counts().1);
+    let serial = body.serial_dynamic_counts();
+    if full {
+        // The copies are past the tree: their constraints are projected serially; the reset
+        // edge (two tree nodes) stays in the tree.
+        assert!(serial.0 > 0 && serial.1 > 0, "{serial:?}");
+        assert!(body.dynamic_counts().0 > serial.0);
+        assert!(matches!(
+            body.distance_slot(3),
+            Some(ConstraintSlot::Block { .. })
+        ));
+        assert!(moved
+            .iter()
+            .all(|&t| matches!(body.tet_slot(t), Some(ConstraintSlot::Dynamic { .. }))));
+    } else {
+        // Everything the cut changed or added is in the tree, none of it serial.
+        assert_eq!(serial, (0, 0));
+        assert_eq!(body.serial_dynamic_batch_counts(), (0, 0));
+        let blocks = (0..body.distance_constraints().len())
+            .filter(|&c| matches!(body.distance_slot(c), Some(ConstraintSlot::Block { .. })))
+            .count();
+        assert_eq!(blocks, body.dynamic_counts().0);
+        assert!(moved
+            .iter()
+            .all(|&t| matches!(body.tet_slot(t), Some(ConstraintSlot::Block { .. }))));
+        // Spread over several blocks, i.e. projected in parallel.
+        let mut used: Vec<u32> = (0..body.tets().len())
+            .filter_map(|t| match body.tet_slot(t) {
+                Some(ConstraintSlot::Block { block, .. }) => Some(block),
+                _ => None,
+            })
+            .collect();
+        used.sort_unstable();
+        used.dedup();
+        assert!(used.len() >= 4, "{used:?}");
+    }
     five_steps(body, solver, parallel, threads)
 }
 
@@ -184,12 +237,14 @@ fn a_cut_body_is_bit_identical_in_parallel_and_serial() {
         (VolumeConstraintKind::Centroid, Solver::PbdLinearised),
         (VolumeConstraintKind::Classic, Solver::Xpbd),
     ] {
-        let serial = run_cut(kind, solver, false, 1);
-        for threads in [1, 2, 3] {
-            assert!(
-                run_cut(kind, solver, true, threads) == serial,
-                "{kind:?} {solver:?}: cut body, {threads} threads differ from serial"
-            );
+        for full in [false, true] {
+            let serial = run_cut(kind, solver, false, 1, full);
+            for threads in [1, 2, 3] {
+                assert!(
+                    run_cut(kind, solver, true, threads, full) == serial,
+                    "{kind:?} {solver:?} full {full}: cut body, {threads} threads differ from serial"
+                );
+            }
         }
     }
 }

@@ -3,15 +3,16 @@
 //! and p99 of the plain steps before the cut, of the steps during it (the step plus the cut),
 //! of the cut alone, and the wall triangles each cut opened.
 //!
-//! `cargo run --release -p tissue-surgery --example cut_timing [-- STEP_CM [EDGE_CM [faces]]]`
-//! (`faces`: face separation only, `SurgerySettings::split_tets` off; default on).
+//! `cargo run --release -p tissue-surgery --example cut_timing [-- STEP_CM [EDGE_CM [faces]
+//! [parallel]]]` (`faces`: face separation only, `SurgerySettings::split_tets` off; default on;
+//! `parallel`: `StepSettings::parallel` on, on rayon's global pool; default serial).
 #![allow(clippy::unwrap_used, clippy::print_stdout)]
 
 use std::time::Instant;
 
 use glam::{Quat, Vec3};
 use tissue_mesh::TetMesh;
-use tissue_pbd::{Floor, Material, Pose, SoftBody, StepSettings, ToolShape};
+use tissue_pbd::{ConstraintSlot, Floor, Material, Pose, SoftBody, StepSettings, ToolShape};
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
 
 const BUNNY: &str = concat!(
@@ -57,9 +58,16 @@ fn main() {
         .fold(Vec3::NEG_INFINITY, |a, p| a.max(*p));
     let mut body = SoftBody::new(&mesh, &Material::default()).unwrap();
     body.set_floor(Some(Floor::y(lo.y))).unwrap();
-    body.set_settings(StepSettings::default()).unwrap();
-    // Geometric cuts (tets split on the blade's plane) unless the third argument is `faces`.
-    let split_tets = std::env::args().nth(3).as_deref() != Some("faces");
+    // Geometric cuts (tets split on the blade's plane) unless a word after the numbers is
+    // `faces`; parallel projection if one is `parallel`.
+    let words: Vec<String> = std::env::args().skip(3).collect();
+    let split_tets = !words.iter().any(|w| w == "faces");
+    let parallel = words.iter().any(|w| w == "parallel");
+    body.set_settings(StepSettings {
+        parallel,
+        ..StepSettings::default()
+    })
+    .unwrap();
     let settings = SurgerySettings {
         split_tets,
         ..SurgerySettings::default()
@@ -138,6 +146,28 @@ fn main() {
         body.tets().len(),
         body.dynamic_counts(),
         body.dynamic_batch_counts()
+    );
+    // Where the dynamic constraints are projected: by depth of their block in the tree (0 =
+    // the root), and serially.
+    let depth = |b: u32| (b + 1).ilog2() as usize;
+    let (mut distances, mut tets) = (vec![0usize; 16], vec![0usize; 16]);
+    for c in 0..body.distance_constraints().len() {
+        if let Some(ConstraintSlot::Block { block, .. }) = body.distance_slot(c) {
+            distances[depth(block)] += 1;
+        }
+    }
+    for t in 0..body.tets().len() {
+        if let Some(ConstraintSlot::Block { block, .. }) = body.tet_slot(t) {
+            tets[depth(block)] += 1;
+        }
+    }
+    let last = |v: &[usize]| v.iter().rposition(|&n| n > 0).map_or(0, |k| k + 1);
+    println!(
+        "  in the tree by depth: distances {:?}, tets {:?}; serial {:?} in {:?} batches",
+        &distances[..last(&distances)],
+        &tets[..last(&tets)],
+        body.serial_dynamic_counts(),
+        body.serial_dynamic_batch_counts()
     );
     stats("step, before the cut", &mut plain);
     stats("step + cut (cutting steps)", &mut with_cut);
