@@ -43,7 +43,7 @@
 
 use glam::{DVec3, Vec3, Vec3A, Vec4};
 
-use crate::body::SoftBody;
+use crate::body::{Block, SoftBody};
 use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
 use crate::partition::Tree;
 use crate::{
@@ -178,6 +178,20 @@ impl Edits {
             sets: vec![DynSet::default(); tree.block_count() + 1],
             ..Default::default()
         }
+    }
+
+    /// The solver slots in use, `slot_count` in all: each leaf's (its real nodes, then its
+    /// filled spares), then the tail.
+    pub(crate) fn used_slots(
+        &self,
+        slot_count: usize,
+    ) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+        let per = self.tree.leaf_slots();
+        self.leaf_fill
+            .iter()
+            .enumerate()
+            .map(move |(k, &fill)| k * per..k * per + fill as usize)
+            .chain(std::iter::once(self.tree.node_count..slot_count))
     }
 
     /// The serial set's index.
@@ -789,6 +803,11 @@ impl SoftBody {
             self.edits.link_batches[position as usize].nodes = s;
             return Ok(());
         }
+        if let ConstraintSlot::Tree { batch } = slot {
+            if self.update_tree_distance_in_place(c, batch as usize) {
+                return Ok(());
+            }
+        }
         let dynamic = self.edits.position(slot);
         if let Some((set, position)) = dynamic {
             if self.update_dyn_distance_in_place(c, set, position) {
@@ -920,6 +939,11 @@ impl SoftBody {
                 if let Some((_, heights)) = rest {
                     c.rest_height = heights[j];
                 }
+            }
+        }
+        if let ConstraintSlot::Tree { batch } = slot {
+            if self.update_tree_tet_in_place(t, batch as usize) {
+                return;
             }
         }
         if let Some((set, position)) = self.edits.position(slot) {
@@ -1106,6 +1130,100 @@ impl SoftBody {
                 count: self.tets.len(),
             }),
         }
+    }
+
+    /// The slots of the caller's `nodes` local to block `h`, `None` when one is outside its
+    /// slot range.
+    fn local_to<const N: usize>(&self, h: usize, nodes: [u32; N]) -> Option<[u32; N]> {
+        let [start, _, end] = self.blocks[h].nodes;
+        let s = nodes.map(|i| self.rank[i as usize]);
+        s.iter()
+            .all(|i| (start..end).contains(i))
+            .then(|| s.map(|i| i - start))
+    }
+
+    /// The block whose own tree batches (`range`: its `distance` or `tets`) hold batch `batch`.
+    fn tree_block(&self, batch: usize, range: impl Fn(&Block) -> [u32; 3]) -> usize {
+        self.blocks
+            .iter()
+            .position(|b| {
+                let [_, start, end] = range(b);
+                (start as usize..end as usize).contains(&batch)
+            })
+            .unwrap_or(0)
+    }
+
+    /// Rewrites tree distance constraint `c`'s lanes in tree batch `batch` (its lane and, for
+    /// lane 0, the padding lanes that copy it: nodes, rest length, parameter) when its new
+    /// nodes lie in the batch's block and no other lane of the batch touches them: a changed
+    /// constraint then stays where it is, adding no work to a step. `false` (nothing changed)
+    /// otherwise.
+    fn update_tree_distance_in_place(&mut self, c: usize, batch: usize) -> bool {
+        let d = self.distance[c];
+        let Some(s) = self.local_to(self.tree_block(batch, |b| b.distance), d.nodes) else {
+            return false;
+        };
+        let param = self.settings.param(d.stiffness, d.compliance);
+        let lanes = self.distance_lanes[batch];
+        let b = &mut self.distance_batches[batch];
+        let clash = (0..LANES)
+            .filter(|&l| lanes[l] != c as u32)
+            .any(|l| b.nodes.iter().any(|ids| s.contains(&ids[l])));
+        if clash {
+            return false;
+        }
+        for l in (0..LANES).filter(|&l| lanes[l] == c as u32) {
+            b.nodes[0][l] = s[0];
+            b.nodes[1][l] = s[1];
+            set_lane(&mut b.rest, l, d.rest_length);
+            set_lane(&mut b.param, l, param);
+        }
+        true
+    }
+
+    /// As [`SoftBody::update_tree_distance_in_place`] for tet `t` (nodes, rest values and
+    /// parameters of its volume constraints).
+    fn update_tree_tet_in_place(&mut self, t: usize, batch: usize) -> bool {
+        let Some(s) = self.local_to(self.tree_block(batch, |b| b.tets), self.tets[t]) else {
+            return false;
+        };
+        let settings = self.settings;
+        let lanes = self.tet_lanes[batch];
+        let ids = self
+            .tet_batches
+            .get(batch)
+            .map(|x| x.nodes)
+            .or_else(|| self.centroid_batches.get(batch).map(|x| x.nodes));
+        if let Some(ids) = ids {
+            let clash = (0..LANES)
+                .filter(|&l| lanes[l] != t as u32)
+                .any(|l| ids.iter().any(|k| s.contains(&k[l])));
+            if clash {
+                return false;
+            }
+        }
+        for l in (0..LANES).filter(|&l| lanes[l] == t as u32) {
+            if let (Some(x), Some(c)) = (self.tet_batches.get_mut(batch), self.tet_volume.get(t)) {
+                for (ids, &n) in x.nodes.iter_mut().zip(&s) {
+                    ids[l] = n;
+                }
+                set_lane(&mut x.rest, l, c.rest_volume);
+                set_lane(&mut x.param, l, settings.param(c.stiffness, c.compliance));
+            }
+            if let Some(x) = self.centroid_batches.get_mut(batch) {
+                for (k, &n) in s.iter().enumerate() {
+                    let c = &self.centroid[4 * t + k];
+                    x.nodes[k][l] = n;
+                    set_lane(&mut x.rest[k], l, c.rest_height);
+                    set_lane(
+                        &mut x.param[k],
+                        l,
+                        settings.param(c.stiffness, c.compliance),
+                    );
+                }
+            }
+        }
+        true
     }
 
     /// Rewrites dynamic distance constraint `c`'s lane at `position` of set `set` (its nodes,

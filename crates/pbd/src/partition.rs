@@ -229,9 +229,9 @@ mod tests {
                 let [ps, _, pe] = tree.range(h);
                 assert_eq!((ps, pe), (k * per, (k + 1) * per));
                 // Real nodes first, then at least as many spares.
-                for j in s..e {
-                    assert_eq!(slot[j] as usize, ps + j - s);
-                    assert_eq!(tree.leaf_of(slot[j] as usize), h);
+                for (j, &sj) in slot[s..e].iter().enumerate() {
+                    assert_eq!(sj as usize, ps + j);
+                    assert_eq!(tree.leaf_of(sj as usize), h);
                 }
                 assert!(2 * (e - s) <= pe - ps);
             }

@@ -61,13 +61,7 @@ impl<'a> Lambdas<'a> {
     /// Splits off the multipliers of the left and the right child's subtrees (`l`, `r`) of
     /// block `b`; `self` keeps the block's own.
     fn split(self, b: &Block, l: &Block, r: &Block, per_tet: usize) -> [Self; 3] {
-        fn cut<'s>(
-            x: &'s mut [F],
-            b: [u32; 3],
-            l: [u32; 3],
-            r: [u32; 3],
-            per: usize,
-        ) -> [&'s mut [F]; 3] {
+        fn cut(x: &mut [F], b: [u32; 3], l: [u32; 3], r: [u32; 3], per: usize) -> [&mut [F]; 3] {
             let (left, rest) = x.split_at_mut((l[2] - b[0]) as usize * per);
             let (right, own) = rest.split_at_mut((r[2] - l[2]) as usize * per);
             [left, right, own]
@@ -153,61 +147,57 @@ impl Sweep<'_> {
         }
     }
 
-    /// Projects block `h`'s own constraints: its tree distances, its dynamic distances, its tree
-    /// volumes, its dynamic volumes.
+    /// Projects block `h`'s own constraints: its tree batches (distances, then volumes), then
+    /// its dynamic batches (the same way).
     fn own<const XPBD: bool>(&self, h: usize, p: &mut [Vec4], lam: Lambdas<'_>) {
         let b = &self.blocks[h];
         let [_, ds, de] = b.distance.map(|i| i as usize);
         let [_, ts, te] = b.tets.map(|i| i as usize);
-        project_batches::<_, 2, 1>(
+        // (Only the batches of the body's volume kind exist.)
+        project_set::<XPBD>(
+            self.kind,
             &self.distance[ds..de],
+            self.tet.get(ts..te).unwrap_or_default(),
+            self.centroid.get(ts..te).unwrap_or_default(),
             lam.d,
+            lam.v,
             p,
-            |b| &b.nodes,
-            project_distance::<XPBD>,
         );
         let dynamic = &self.dynamic[h];
-        project_batches::<_, 2, 1>(
-            &dynamic.distance_batches,
-            lam.dd,
-            p,
-            |b| &b.nodes,
-            project_distance::<XPBD>,
-        );
-        match self.kind {
-            VolumeConstraintKind::None => {}
-            VolumeConstraintKind::Classic => {
-                project_batches::<_, 4, 1>(
-                    &self.tet[ts..te],
-                    lam.v,
-                    p,
-                    |b| &b.nodes,
-                    project_tet_volume::<XPBD>,
-                );
-                project_batches::<_, 4, 1>(
-                    &dynamic.tet_batches,
-                    lam.dv,
-                    p,
-                    |b| &b.nodes,
-                    project_tet_volume::<XPBD>,
-                );
-            }
-            VolumeConstraintKind::Centroid => {
-                project_batches::<_, 4, 4>(
-                    &self.centroid[ts..te],
-                    lam.v,
-                    p,
-                    |b| &b.nodes,
-                    project_centroid::<XPBD>,
-                );
-                project_batches::<_, 4, 4>(
-                    &dynamic.centroid_batches,
-                    lam.dv,
-                    p,
-                    |b| &b.nodes,
-                    project_centroid::<XPBD>,
-                );
-            }
+        if !(dynamic.distance_lanes.is_empty() && dynamic.tet_lanes.is_empty()) {
+            project_set::<XPBD>(
+                self.kind,
+                &dynamic.distance_batches,
+                &dynamic.tet_batches,
+                &dynamic.centroid_batches,
+                lam.dd,
+                lam.dv,
+                p,
+            );
+        }
+    }
+}
+
+/// Projects distance batches, then the volume batches of `kind`, on `p` with their multipliers
+/// `ld`, `lv`.
+#[inline(never)]
+fn project_set<const XPBD: bool>(
+    kind: VolumeConstraintKind,
+    distance: &[DistanceBatch],
+    tet: &[TetBatch],
+    centroid: &[CentroidBatch],
+    ld: &mut [F],
+    lv: &mut [F],
+    p: &mut [Vec4],
+) {
+    project_batches::<_, 2, 1>(distance, ld, p, |b| &b.nodes, project_distance::<XPBD>);
+    match kind {
+        VolumeConstraintKind::None => {}
+        VolumeConstraintKind::Classic => {
+            project_batches::<_, 4, 1>(tet, lv, p, |b| &b.nodes, project_tet_volume::<XPBD>)
+        }
+        VolumeConstraintKind::Centroid => {
+            project_batches::<_, 4, 4>(centroid, lv, p, |b| &b.nodes, project_centroid::<XPBD>)
         }
     }
 }
@@ -232,17 +222,21 @@ impl SoftBody {
         let s = self.settings;
         let (dt, g) = (s.dt, Vec3A::from(s.gravity));
         // 1–2, straight into solver order (crate::partition): the projection works on `q`.
-        // Empty slots (SPARE) stay as they are: zero, never touched.
-        for ((q, qw), &o) in self.q.iter_mut().zip(&mut self.qw).zip(&self.order) {
-            if o == SPARE {
-                continue;
+        // Over the slots in use: empty ones (SPARE) stay as they are, zero, never touched.
+        for r in self.edits.used_slots(self.q.len()) {
+            for ((q, qw), &o) in self.q[r.clone()]
+                .iter_mut()
+                .zip(&mut self.qw[r.clone()])
+                .zip(&self.order[r])
+            {
+                debug_assert_ne!(o, SPARE);
+                let (o, w) = (o as usize, self.w[o as usize]);
+                if w > 0.0 {
+                    self.v[o] += dt * g;
+                }
+                *qw = w;
+                *q = (self.x[o] + dt * self.v[o]).extend(w);
             }
-            let (o, w) = (o as usize, self.w[o as usize]);
-            if w > 0.0 {
-                self.v[o] += dt * g;
-            }
-            *qw = w;
-            *q = (self.x[o] + dt * self.v[o]).extend(w);
         }
         for &(node, target) in &self.attachments {
             let s = self.rank[node as usize] as usize;
@@ -387,9 +381,11 @@ impl SoftBody {
         // Per-node projections from here on: `p` (xyz; w = inverse mass) and `w` are in solver
         // order, the caller's node `i` is `p[self.rank[i]]`.
         if let Some(f) = self.floor {
-            for (p, &w) in p.iter_mut().zip(w) {
-                if w > 0.0 && p[f.axis] < f.height {
-                    p[f.axis] = f.height;
+            for r in e.used_slots(p.len()) {
+                for (p, &w) in p[r.clone()].iter_mut().zip(&w[r]) {
+                    if w > 0.0 && p[f.axis] < f.height {
+                        p[f.axis] = f.height;
+                    }
                 }
             }
         }

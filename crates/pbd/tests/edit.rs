@@ -331,3 +331,60 @@ fn copies_take_spare_slots_of_their_leaf_then_go_past_the_tree() {
     assert!(Vec3::from(x[n]).distance(start) > 0.1);
     assert!(x.iter().all(|p| p.is_finite()));
 }
+
+#[test]
+fn a_changed_tree_constraint_keeps_its_lane_unless_its_batch_has_its_new_nodes() {
+    let mesh = tet_box(6, 6, 6, Vec3::splat(3.0)).unwrap();
+    let mut body = SoftBody::new(&mesh, &Material::default()).unwrap();
+    let slot = |b: &SoftBody, c: usize| b.distance_slot(c).unwrap();
+    // Two constraints of one tree batch.
+    let n = body.distance_constraints().len();
+    let (c1, c2) = (0..n)
+        .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
+        .find(|&(a, b)| {
+            matches!(slot(&body, a), ConstraintSlot::Tree { .. })
+                && slot(&body, a) == slot(&body, b)
+        })
+        .unwrap();
+    let before = slot(&body, c1);
+    let [a, b] = body.distance_constraints()[c1].nodes;
+    // Onto a copy of its own node (a spare slot of the same leaf): the same lane.
+    let copy = body.duplicate_nodes(&[a]).unwrap();
+    body.set_distance_nodes(c1, [copy, b]).unwrap();
+    assert_eq!(slot(&body, c1), before);
+    assert_eq!(body.distance_constraints()[c1].nodes, [copy, b]);
+    assert_eq!(body.dynamic_counts(), (0, 0));
+    // Onto a node another lane of its batch has: it leaves the tree batch.
+    let other = body.distance_constraints()[c2].nodes[0];
+    body.set_distance_nodes(c1, [copy, other]).unwrap();
+    assert!(matches!(slot(&body, c1), ConstraintSlot::Block { .. }));
+    assert_eq!(slot(&body, c2), before);
+    assert_eq!(body.dynamic_counts(), (1, 0));
+    // Tets likewise: moved onto a copy, a tet keeps its lane.
+    let t = body.tets()[0];
+    let before = body.tet_slot(0).unwrap();
+    assert!(matches!(before, ConstraintSlot::Tree { .. }));
+    let copy2 = body.duplicate_nodes(&[t[2]]).unwrap();
+    body.set_tet_nodes(0, [t[0], t[1], copy2, t[3]]).unwrap();
+    assert_eq!(body.tet_slot(0).unwrap(), before);
+    assert_eq!(body.dynamic_counts(), (1, 0));
+    // The body is still at rest: the rewritten lanes pull to the same rest values.
+    body.set_settings(StepSettings {
+        gravity: Vec3::ZERO,
+        ..StepSettings::default()
+    })
+    .unwrap();
+    body.set_distance_nodes(c1, [a, b]).unwrap();
+    body.set_distance_nodes(c1, [copy, b]).unwrap();
+    let start = body.positions().to_vec();
+    for _ in 0..10 {
+        body.step().unwrap();
+    }
+    let moved = body
+        .positions()
+        .iter()
+        .zip(&start)
+        .map(|(p, q)| p.distance(*q))
+        .fold(0.0f32, f32::max);
+    assert!(moved < 1e-5, "{moved}");
+}

@@ -79,10 +79,11 @@ fn parallel_is_bit_identical_for_any_thread_count_and_to_serial() {
 }
 
 /// A body cut in place through the edit API (nodes on the plane x = 0 duplicated, the tets on
-/// the right moved onto the copies, new edges and a link constraint added, one edge removed).
-/// The changed and added constraints are projected in their blocks of the tree (the copies take
-/// spare slots of their sources' leaves), with `full` (the leaves' spare slots used up before
-/// the cut) mostly in the serial set after the tree: parallel stays bit-identical either way.
+/// the right moved onto the copies, new tets, edges and a link constraint added, one edge
+/// removed). The changed constraints keep their tree lanes, the added ones are projected in
+/// their blocks of the tree (the copies take spare slots of their sources' leaves); with `full`
+/// (the leaves' spare slots used up before the cut) most of both are in the serial set after
+/// the tree. Parallel stays bit-identical either way.
 fn run_cut(
     kind: VolumeConstraintKind,
     solver: Solver,
@@ -111,13 +112,18 @@ fn run_cut(
             .map(|k| first + k as u32)
     };
     let tets: Vec<[u32; 4]> = body.tets().to_vec();
-    let mut moved = Vec::new();
+    let (mut moved, mut added) = (Vec::new(), Vec::new());
     for (t, tet) in tets.iter().enumerate() {
         let c: f32 = tet.iter().map(|&i| x[i as usize].x).sum::<f32>() / 4.0;
         if c > 0.0 && tet.iter().any(|&i| copy(i).is_some()) {
-            body.set_tet_nodes(t, tet.map(|i| copy(i).unwrap_or(i)))
-                .unwrap();
+            let nodes = tet.map(|i| copy(i).unwrap_or(i));
+            body.set_tet_nodes(t, nodes).unwrap();
             moved.push(t);
+            // Every third one doubled by a new tet (the same rest shape).
+            if moved.len() % 3 == 0 {
+                let rest = nodes.map(|i| Vec3::from(body.rest_positions()[i as usize]).as_dvec3());
+                added.push(body.add_tet(t, nodes, rest).unwrap());
+            }
         }
     }
     // Edges between two cut nodes now exist on both sides.
@@ -193,18 +199,18 @@ fn run_cut(
     // Packed: several dynamic constraints share a batch.
     assert!(body.dynamic_batch_counts().0 * 2 < body.dynamic_counts().0);
     assert!(body.dynamic_batch_counts().1 * 2 < body.dynamic_counts().1);
+    // The reset edge (two tree nodes) keeps its lane.
+    assert!(matches!(
+        body.distance_slot(3),
+        Some(ConstraintSlot::Tree { .. })
+    ));
     let serial = body.serial_dynamic_counts();
     if full {
-        // The copies are past the tree: their constraints are projected serially; the reset
-        // edge (two tree nodes) stays in the tree.
+        // The copies are past the tree: their constraints are projected serially.
         assert!(serial.0 > 0 && serial.1 > 0, "{serial:?}");
-        assert!(body.dynamic_counts().0 > serial.0);
-        assert!(matches!(
-            body.distance_slot(3),
-            Some(ConstraintSlot::Block { .. })
-        ));
         assert!(moved
             .iter()
+            .chain(&added)
             .all(|&t| matches!(body.tet_slot(t), Some(ConstraintSlot::Dynamic { .. }))));
     } else {
         // Everything the cut changed or added is in the tree, none of it serial.
@@ -214,7 +220,12 @@ fn run_cut(
             .filter(|&c| matches!(body.distance_slot(c), Some(ConstraintSlot::Block { .. })))
             .count();
         assert_eq!(blocks, body.dynamic_counts().0);
+        // The moved tets keep their lanes in the tree (a copy is in its source's leaf, and no
+        // other lane of a batch has the source); the added ones are in blocks of the tree.
         assert!(moved
+            .iter()
+            .all(|&t| matches!(body.tet_slot(t), Some(ConstraintSlot::Tree { .. }))));
+        assert!(added
             .iter()
             .all(|&t| matches!(body.tet_slot(t), Some(ConstraintSlot::Block { .. }))));
         // Spread over several blocks, i.e. projected in parallel.
