@@ -9,20 +9,25 @@
 //!   `crate::partition`), so the constraints on it still fall into the block tree. Only when
 //!   that leaf has no spare left (or the source is itself past the tree) does the node go to the
 //!   *tail*, after the tree's slots, which no block covers.
-//! - **A constraint that changes leaves its tree batch**: its lanes in its block's batch are
-//!   switched off in place — all the lane's nodes set to the lane's first node (a zero-length
-//!   distance, a flat tet: the kernels' validity masks skip it), its rest value 0 and its
-//!   parameter "off" (`k = 0`; for XPBD `α̃ = f32::MAX`, so `Δλ = −C/α̃` underflows to 0). A
-//!   switched-off lane touches only its own node and writes back exactly what it read, so the
-//!   batch's other lanes and the colouring are untouched.
-//! - **Dynamic batches**: every added or changed constraint is *dynamic*, packed eight to a
-//!   batch in a *dynamic set*: a new constraint takes the next lane of one of the set's last
-//!   [`SEARCH`] batches where no lane touches its nodes, else opens a new batch whose unused
-//!   lanes copy its lane 0 (as padding does). A constraint whose slots all lie in the tree goes
-//!   to the set of the deepest block holding them ([`ConstraintSlot::Block`]), in that block's
-//!   slot-local indices: it is projected right after that block's own tree constraints (the
-//!   block's distances, then its volumes, each kind tree batches first), in parallel with the
-//!   sibling subtree like them. A constraint touching a tail node goes to the **serial set**
+//! - **A constraint that changes keeps its tree lane when it can**: when its new nodes lie in
+//!   its tree batch's block and no other lane of that batch touches them (the usual case for a
+//!   tet or edge moved onto the copy of one of its nodes: the copy is in its source's leaf, and
+//!   no other lane of the batch has the source), its lane (and the padding lanes that copy it)
+//!   is rewritten in place: a step does the same work as before. Otherwise it **leaves its tree
+//!   batch**: its lanes are switched off in place — all the lane's nodes set to the lane's first
+//!   node (a zero-length distance, a flat tet: the kernels' validity masks skip it), its rest
+//!   value 0 and its parameter "off" (`k = 0`; for XPBD `α̃ = f32::MAX`, so `Δλ = −C/α̃`
+//!   underflows to 0). A switched-off lane touches only its own node and writes back exactly
+//!   what it read, so the batch's other lanes and the colouring are untouched.
+//! - **Dynamic batches**: every added constraint, and every changed one that left its tree
+//!   batch, is *dynamic*, packed eight to a batch in a *dynamic set*: it takes the next lane of
+//!   one of the set's last [`SEARCH`] batches where no lane touches its nodes, else opens a new
+//!   batch whose unused lanes copy its lane 0 (as padding does). A constraint whose slots all
+//!   lie in the tree goes to the set of the deepest block holding them
+//!   ([`ConstraintSlot::Block`]), in that block's slot-local indices: it is projected right
+//!   after that block's own tree batches (the block's tree distances and volumes, then its
+//!   dynamic volumes and distances, the order of the serial set), in parallel with the sibling
+//!   subtree like them. A constraint touching a tail node goes to the **serial set**
 //!   ([`ConstraintSlot::Dynamic`]), projected serially after the whole tree (its volumes, then
 //!   its distances) and before the links, the floor and contacts. A changed dynamic constraint
 //!   keeps its lane when it stays in the same set and no other lane of its batch touches its
@@ -54,7 +59,7 @@ use crate::{
 /// Where a distance constraint or tet is projected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ConstraintSlot {
-    /// In batch `batch` of the block tree (as built).
+    /// In batch `batch` of the block tree (as built; a changed constraint may keep its lane).
     Tree {
         /// Batch index.
         batch: u32,
@@ -394,8 +399,9 @@ impl SoftBody {
         self.edits.tet_slot.get(t).copied()
     }
     /// Sizes of the dynamic sets: (distance constraints, tets), the live ones of all of them —
-    /// every added or changed constraint but the links, whether in a block of the tree
-    /// ([`ConstraintSlot::Block`]) or in the serial set ([`ConstraintSlot::Dynamic`]).
+    /// every added constraint but the links, and every changed one that could not keep its tree
+    /// lane, whether in a block of the tree ([`ConstraintSlot::Block`]) or in the serial set
+    /// ([`ConstraintSlot::Dynamic`]).
     pub fn dynamic_counts(&self) -> (usize, usize) {
         self.edits.dyn_live
     }
@@ -772,8 +778,9 @@ impl SoftBody {
         }
     }
 
-    /// Adds a distance constraint to the dynamic set (a suture link, a new edge after a cut).
-    /// Returns its record index.
+    /// Adds a distance constraint (a new edge after a cut) to the dynamic batches of the deepest
+    /// block holding its nodes, or the serial set when one is past the tree. Returns its record
+    /// index.
     ///
     /// # Errors
     /// [`PbdError::NodeOutOfRange`], [`PbdError::InvalidParameter`] for repeated nodes or a
@@ -788,8 +795,9 @@ impl SoftBody {
         Ok(index)
     }
 
-    /// Moves distance constraint `c` onto other nodes (rest length, stiffness, compliance kept);
-    /// it is projected in the dynamic set from now on.
+    /// Moves distance constraint `c` onto other nodes (rest length, stiffness, compliance kept).
+    /// It keeps its lane if it can (see the module docs), else it is projected in a dynamic set
+    /// from now on.
     ///
     /// # Errors
     /// [`PbdError::NoSuchElement`] for a bad or removed record, [`PbdError::NodeOutOfRange`],
@@ -900,7 +908,8 @@ impl SoftBody {
     /// Moves tet `t` (and its volume constraints) onto other nodes, keeping its rest values: the
     /// way a cut separates the two sides (a node duplicated, the tets of one side moved onto the
     /// copy). The new nodes must keep the tet positively oriented (the caller's duty; the rest
-    /// values are not recomputed). From now on the tet is projected in the dynamic set.
+    /// values are not recomputed). The tet keeps its lane if it can (see the module docs), else
+    /// it is projected in a dynamic set from now on.
     ///
     /// # Errors
     /// [`PbdError::NoSuchElement`], [`PbdError::NodeOutOfRange`],
@@ -913,7 +922,7 @@ impl SoftBody {
     }
 
     /// Gives live tet `t` (in `slot`) new nodes and, with `rest`, a new rest volume and rest
-    /// heights, and moves it into the dynamic set (in place when it is there already).
+    /// heights: in place in its lane when it can, else moved into its dynamic set.
     fn rewrite_tet(
         &mut self,
         t: usize,
@@ -958,8 +967,8 @@ impl SoftBody {
     /// Gives tet `t` new nodes **and** a new rest shape: its rest volume (classic) or rest
     /// heights (centroid) are computed from `rest`, the rest positions of `nodes` (cm, `f64`),
     /// which must be positively oriented. The way a cut reuses a tet it splits for one of the
-    /// pieces, or rebuilds a tet whose node was snapped onto the cut. From now on the tet is
-    /// projected in the dynamic set.
+    /// pieces, or rebuilds a tet whose node was snapped onto the cut. The tet keeps its lane if
+    /// it can (see the module docs), else it is projected in a dynamic set from now on.
     ///
     /// # Errors
     /// [`PbdError::NoSuchElement`], [`PbdError::NodeOutOfRange`],
@@ -979,7 +988,8 @@ impl SoftBody {
     }
 
     /// Appends a tet on `nodes` with the rest shape `rest` (as [`SoftBody::reshape_tet`]) and
-    /// the volume stiffness and compliance of tet `like`; it is projected in the dynamic set.
+    /// the volume stiffness and compliance of tet `like`; it is projected in a dynamic set (that
+    /// of the deepest block holding its nodes, or the serial set).
     /// Returns its index (the next one of [`SoftBody::tets`]). Masses are not changed: set them
     /// with [`SoftBody::set_node_mass`].
     ///
@@ -1040,8 +1050,8 @@ impl SoftBody {
     }
 
     /// Moves distance constraint `c` onto `nodes` with a new rest length (stiffness and
-    /// compliance kept): an edge split by a cut, an edge whose node was snapped. Projected in
-    /// the dynamic set from now on (a link stays a link).
+    /// compliance kept): an edge split by a cut, an edge whose node was snapped. As
+    /// [`SoftBody::set_distance_nodes`] (a link stays a link).
     ///
     /// # Errors
     /// [`PbdError::NoSuchElement`] for a bad or removed record, [`PbdError::NodeOutOfRange`],

@@ -23,7 +23,8 @@
 //!   [`SoftBody::add_distance_constraint`], [`SoftBody::add_link_constraint`] (sutures),
 //!   [`SoftBody::set_distance_nodes`],
 //!   [`SoftBody::remove_distance_constraint`], [`SoftBody::set_node_mass`]; where each record is
-//!   projected: [`ConstraintSlot`].
+//!   projected: [`ConstraintSlot`]; how many were edited: [`SoftBody::dynamic_counts`],
+//!   [`SoftBody::serial_dynamic_counts`].
 //! - [`PbdError`]: bad input, naming the element.
 //!
 //! ## Units
@@ -43,8 +44,9 @@
 //! - Architecture Invariant: a step allocates nothing; every buffer is made in the constructor.
 //! - Solver order (module `partition`), fixed by the mesh alone, never by the thread count: at
 //!   construction the nodes are renumbered by recursive coordinate bisection, and a binary tree
-//!   of blocks is laid over the renumbered nodes: each block a contiguous node range, its
-//!   children its two halves, leaves of at most 1280 nodes (a leaf's positions fit in L1). Each
+//!   of blocks is laid over the renumbered nodes: each block a contiguous range of solver slots,
+//!   its children its two halves, leaves of at most 1280 nodes (a leaf's positions fit in L1),
+//!   each followed by as many spare slots for the nodes that edits add near them. Each
 //!   constraint belongs to the deepest block holding all its nodes. The public API keeps the
 //!   caller's node order: a step predicts straight into a solver-order buffer and copies the
 //!   result back; node indices in records and errors are the caller's.
@@ -54,8 +56,9 @@
 //!   its lane 0, which compute and write back exactly what lane 0 does; so projecting a batch is
 //!   projecting its constraints one after another.
 //! - One iteration is one Gauss–Seidel sweep in a fixed order: the blocks in post order (left
-//!   subtree, right subtree, then the block's own constraints: distances, then volumes), then the
-//!   floor. It is not the mesh order a naive Gauss–Seidel would use (it converges about as fast;
+//!   subtree, right subtree, then the block's own constraints: distances, then volumes, then
+//!   its dynamic batches of edits: volumes, then distances), then the serial dynamic set and
+//!   links of edits, then the floor. It is not the mesh order a naive Gauss–Seidel would use (it converges about as fast;
 //!   results differ at float level from other orders) and it depends on the node positions and
 //!   count given.
 //! - The parallel mode runs the two subtrees of a block at the same time (`rayon::join` on
@@ -68,13 +71,16 @@
 //!   flag instead of going to sleep, so that the next iteration's fork does not wait for a
 //!   thread to wake up (it yields to the OS after a few thousand spins). It touches no data.
 //! - No I/O; meshes come in as [`tissue_mesh::TetMesh`] or raw arrays.
-//! - Edits (module `edit`) leave the block tree as built: new nodes are appended after the tree's
-//!   node range (caller's and solver index alike); a changed constraint's lane is switched off in
-//!   place (its nodes collapsed onto one, rest 0, parameter off: the kernels skip it exactly) and
-//!   the constraint joins the *dynamic set*, projected serially after the tree in every iteration
-//!   (volumes, then distances, packed eight to a batch, then links such as sutures, last). Serial and
-//!   parallel stay bit-identical (`tests/parallel.rs` also runs a cut body). No re-partition:
-//!   after very many edits the serial dynamic set grows.
+//! - Edits (module `edit`) keep the block tree as built and fit into it: a new node takes a spare
+//!   slot of its source's leaf (after the tree's slots, serially projected, only once that leaf
+//!   is full); a changed constraint keeps its tree lane when its block holds its new nodes and
+//!   no other lane of its batch does, else its lane is switched off in place (its nodes
+//!   collapsed onto one, rest 0, parameter off: the kernels skip it exactly) and it joins, like
+//!   an added constraint, the *dynamic batches* of the deepest block holding its nodes,
+//!   projected right after that block's own tree constraints (in parallel like them); only
+//!   constraints on nodes past the tree go to the *serial set*, projected after the tree, then
+//!   links such as sutures, last. Serial and parallel stay bit-identical (`tests/parallel.rs`
+//!   also runs cut bodies). No re-partition: after very many edits the dynamic batches grow.
 //! - Contacts are generated and projected serially, in a fixed order (colliders by id, then tools,
 //!   nodes in order within each), so they are deterministic and the same in parallel mode. Their
 //!   buffer is reserved when a collider or tool is added, so steps stay allocation-free.

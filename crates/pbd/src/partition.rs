@@ -9,14 +9,16 @@
 //! between its children) come after both children.
 //!
 //! **Spare slots.** The tree is laid over *solver slots*, not over the nodes themselves: every
-//! leaf owns [`Tree::leaf_slots`] slots, twice its most real nodes ([`spare_tree`]). The real
-//! nodes of leaf `k` (the `k`-th chunk of the bisection order, at most [`LEAF_NODES`]) take the
-//! first slots of its range, the rest are spares for nodes that cutting adds near them
-//! (`edit.rs`): a copy of a node takes a spare of its source's leaf, so the constraints an edit
-//! adds on it still fall into the tree and are projected in parallel. A spare slot that holds no
-//! node is never touched by a step (no constraint names it, its inverse mass is 0). As every
-//! leaf has the same number of slots, the halving of [`Tree::range`] is exact and leaf `k` is
-//! `[k·slots, (k+1)·slots)`.
+//! leaf owns [`Tree::leaf_slots`] slots, twice the most real nodes of any leaf
+//! ([`spare_tree`]). The real nodes of leaf `k` (the `k`-th chunk of the bisection order, at
+//! most [`LEAF_NODES`]) take the first slots of its range, the rest are spares for nodes that
+//! cutting adds near them (`edit.rs`): a copy of a node takes a spare of its source's leaf, so
+//! the constraints an edit adds on it still fall into the tree and are projected in parallel.
+//! A spare slot that holds no node is never touched by a step (no constraint names it, the
+//! step's per-node loops skip it). As every leaf has the same number of slots, the halving of
+//! [`Tree::range`] is exact and leaf `k` is `[k·slots, (k+1)·slots)`; the tree's constraints
+//! and their blocks are those of the tree over the nodes alone (the slots keep the bisection
+//! order).
 
 use glam::Vec3;
 
