@@ -154,7 +154,7 @@ impl Sweep<'_> {
         let [_, ds, de] = b.distance.map(|i| i as usize);
         let [_, ts, te] = b.tets.map(|i| i as usize);
         // (Only the batches of the body's volume kind exist.)
-        project_set::<XPBD, false>(
+        project_set::<XPBD>(
             self.kind,
             &self.distance[ds..de],
             self.tet.get(ts..te).unwrap_or_default(),
@@ -165,25 +165,34 @@ impl Sweep<'_> {
         );
         let dynamic = &self.dynamic[h];
         if !(dynamic.distance_lanes.is_empty() && dynamic.tet_lanes.is_empty()) {
-            project_set::<XPBD, true>(
+            // Volumes, then distances: the same routine, one kind at a time.
+            project_set::<XPBD>(
                 self.kind,
-                &dynamic.distance_batches,
+                &[],
                 &dynamic.tet_batches,
                 &dynamic.centroid_batches,
-                lam.dd,
+                &mut [],
                 lam.dv,
+                p,
+            );
+            project_set::<XPBD>(
+                self.kind,
+                &dynamic.distance_batches,
+                &[],
+                &[],
+                lam.dd,
+                &mut [],
                 p,
             );
         }
     }
 }
 
-/// Projects distance batches, then the volume batches of `kind` (the other way round with
-/// `VOLUMES_FIRST`), on `p` with their multipliers `ld`, `lv`. Not inlined: one copy for the
-/// tree's and the dynamic batches keeps the plain step's code as it was (inlining both cost
-/// the plain bunny step about 5 %).
+/// Projects distance batches, then the volume batches of `kind`, on `p` with their multipliers
+/// `ld`, `lv`. Not inlined: one copy for the tree's and the dynamic batches keeps the plain
+/// step's code as it was (inlining both cost the plain bunny step about 5 %).
 #[inline(never)]
-fn project_set<const XPBD: bool, const VOLUMES_FIRST: bool>(
+fn project_set<const XPBD: bool>(
     kind: VolumeConstraintKind,
     distance: &[DistanceBatch],
     tet: &[TetBatch],
@@ -192,9 +201,7 @@ fn project_set<const XPBD: bool, const VOLUMES_FIRST: bool>(
     lv: &mut [F],
     p: &mut [Vec4],
 ) {
-    if !VOLUMES_FIRST {
-        project_batches::<_, 2, 1>(distance, ld, p, |b| &b.nodes, project_distance::<XPBD>);
-    }
+    project_batches::<_, 2, 1>(distance, ld, p, |b| &b.nodes, project_distance::<XPBD>);
     match kind {
         VolumeConstraintKind::None => {}
         VolumeConstraintKind::Classic => {
@@ -203,9 +210,6 @@ fn project_set<const XPBD: bool, const VOLUMES_FIRST: bool>(
         VolumeConstraintKind::Centroid => {
             project_batches::<_, 4, 4>(centroid, lv, p, |b| &b.nodes, project_centroid::<XPBD>)
         }
-    }
-    if VOLUMES_FIRST {
-        project_batches::<_, 2, 1>(distance, ld, p, |b| &b.nodes, project_distance::<XPBD>);
     }
 }
 
