@@ -18,12 +18,17 @@ use crate::{
 ///   `i` is pinned, attached or carries no tet; otherwise it is `1 / masses[i]`;
 /// - every constraint's nodes are `< node_count`; constraints of a kind are stored block by block
 ///   of the domain decomposition (`crate::partition`, post order) and colour by colour within a
-///   block; no two constraints (for volumes: no two tets) of one colour of a block share a node;
+///   block; as built, no two constraints (for volumes: no two tets) of one colour of a block
+///   share a node, and edits keep the lanes of every batch free of shared nodes;
+/// - after edits (`crate::edit`) every record is in one place, its [`crate::ConstraintSlot`]: a
+///   lane of its tree batch (possibly rewritten in place), the dynamic batches of the deepest
+///   block holding its slots, the serial set (a node past the tree), the links, or nowhere
+///   (removed); the batches of a block, tree or dynamic, touch only that block's slots;
 /// - the public node arrays are in the caller's order; the projection works on a copy in solver
 ///   order, made at the start of every step. Solver order has *slots*: the block tree's slots
 ///   (each leaf its real nodes, then spare slots for nodes added by edits, `crate::partition`),
 ///   then a tail of nodes appended when their leaf had no spare left. `rank[i]` is node `i`'s
-///   slot, `order[s]` the node in slot `s` or [`SPARE`] for an empty slot (`q`, `qw` zero there,
+///   slot, `order[s]` the node in slot `s` or `SPARE` for an empty slot (`q`, `qw` zero there,
 ///   never touched by a step); `order`, `q` and `qw` have one entry per slot;
 /// - the hot batches (8 constraints each, see `crate::constraint`) mirror the public records,
 ///   with the per-constraint parameter of the current [`StepSettings`].

@@ -377,8 +377,9 @@ impl SoftBody {
         }
     }
 
-    /// Number of nodes of the block tree (the node count at construction); nodes past it were
-    /// appended by [`SoftBody::duplicate_nodes`].
+    /// Number of nodes the block tree was built on (the node count at construction); nodes past
+    /// it were appended by [`SoftBody::duplicate_nodes`] (and are projected in spare slots of the
+    /// tree's leaves while there are any, see the module docs).
     pub fn tree_node_count(&self) -> usize {
         self.edits.tree_nodes
     }
