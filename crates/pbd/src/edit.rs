@@ -1153,15 +1153,13 @@ impl SoftBody {
             .then(|| s.map(|i| i - start))
     }
 
-    /// The block whose own tree batches (`range`: its `distance` or `tets`) hold batch `batch`.
+    /// The block whose own tree batches (`range`: its `distance` or `tets`) hold batch `batch`:
+    /// in post order the blocks' own batch ranges follow one another, so it is the first block
+    /// whose range ends past `batch`.
     fn tree_block(&self, batch: usize, range: impl Fn(&Block) -> [u32; 3]) -> usize {
-        self.blocks
-            .iter()
-            .position(|b| {
-                let [_, start, end] = range(b);
-                (start as usize..end as usize).contains(&batch)
-            })
-            .unwrap_or(0)
+        let post = &self.edits.post;
+        let k = post.partition_point(|&h| range(&self.blocks[h])[2] as usize <= batch);
+        post.get(k).copied().unwrap_or(0)
     }
 
     /// Rewrites tree distance constraint `c`'s lanes in tree batch `batch` (its lane and, for
