@@ -231,10 +231,11 @@ impl Surgery {
         // one side only — the side its centroid lies on — so that it does not bridge the cut.
         let mut crumbs: Vec<Vec<u32>> = Vec::new();
         self.stamp = self.stamp.wrapping_add(1).max(1);
+        let big = self.next_group_stamp();
         for f in &faces {
             for t in [f.t, f.u] {
                 if self.tet_mark[t as usize] != self.stamp {
-                    if let Some(group) = self.small_group(body, t) {
+                    if let Some(group) = self.small_group(body, t, big) {
                         for &g in &group {
                             self.tet_mark[g as usize] = self.stamp;
                         }
@@ -395,30 +396,52 @@ impl Surgery {
     /// The tets face-connected to `t` when they are a crumb: fewer than [`MIN_PIECE`] tets, or
     /// less rest volume than [`MIN_PIECE`] median tets of the input (pieces of splits are
     /// small tets). `None` for a bigger group (the search stops early).
-    fn small_group(&self, body: &SoftBody, t: u32) -> Option<Vec<u32>> {
+    ///
+    /// Tets marked `big` (found in a bigger group by an earlier search of this cut) end the
+    /// search at once; a search that finds a bigger group marks every tet it saw `big`.
+    fn small_group(&mut self, body: &SoftBody, t: u32, big: u32) -> Option<Vec<u32>> {
         let rest = body.tet_rest_volumes();
         let limit = MIN_PIECE as f64 * self.median_rest_volume;
+        let stamp = self.next_group_stamp();
         let mut group = vec![t];
-        let mut seen: HashMap<u32, ()> = HashMap::default();
-        seen.insert(t, ());
+        if self.group_mark[t as usize] == big {
+            return None;
+        }
+        self.group_mark[t as usize] = stamp;
         let mut volume = rest[t as usize] as f64;
         let mut i = 0;
         while i < group.len() {
             for &u in &self.neighbours[group[i] as usize] {
-                if u != NO_TET && seen.insert(u, ()).is_none() {
-                    volume += rest[u as usize] as f64;
-                    if (group.len() + 1 >= MIN_PIECE
-                        && (volume >= limit || !self.settings.split_tets))
-                        || group.len() >= 64 * MIN_PIECE
-                    {
-                        return None;
-                    }
-                    group.push(u);
+                if u == NO_TET || self.group_mark[u as usize] == stamp {
+                    continue;
                 }
+                volume += rest[u as usize] as f64;
+                if self.group_mark[u as usize] == big
+                    || (group.len() + 1 >= MIN_PIECE
+                        && (volume >= limit || !self.settings.split_tets))
+                    || group.len() >= 64 * MIN_PIECE
+                {
+                    for &g in &group {
+                        self.group_mark[g as usize] = big;
+                    }
+                    return None;
+                }
+                self.group_mark[u as usize] = stamp;
+                group.push(u);
             }
             i += 1;
         }
         Some(group)
+    }
+
+    /// A fresh stamp for `group_mark` (sized to the tets).
+    fn next_group_stamp(&mut self) -> u32 {
+        self.group_mark.resize(self.neighbours.len(), 0);
+        self.group_stamp = self.group_stamp.wrapping_add(1).max(1);
+        if self.group_stamp == 1 {
+            self.group_mark.fill(0);
+        }
+        self.group_stamp
     }
 
     /// The tets that straddle the plane of `plane` and meet the box of its polygon (sorted):
@@ -437,35 +460,44 @@ impl Surgery {
         self.stamp = self.stamp.wrapping_add(1).max(1);
         let stamp = self.stamp;
         let mut candidates = Vec::new();
+        // Each node's signed distance, once: a tet's straddling test reads four of them.
+        let mut side = std::mem::take(&mut self.side);
+        side.clear();
+        side.extend(x.iter().map(|p| normal.dot(p.as_dvec3() - origin)));
         // A straddling tet has a node on the plane or on its positive side, within that node's
         // reach of the plane (a tet's nodes lie within their reach of each other): only those
         // nodes' tets are looked at.
-        for (v, p) in x.iter().enumerate() {
-            let p = p.as_dvec3();
+        for (v, (p, &d)) in x.iter().zip(&side).enumerate() {
             let reach = self.node_reach[v] as f64;
-            let d = normal.dot(p - origin);
-            if (0.0..=reach).contains(&d)
-                && p.cmpge(lo - DVec3::splat(reach)).all()
-                && p.cmple(hi + DVec3::splat(reach)).all()
-            {
-                for &t in &self.node_tets[v] {
-                    if self.tet_mark[t as usize] == stamp {
-                        continue;
-                    }
-                    self.tet_mark[t as usize] = stamp;
-                    let q = tets[t as usize].map(|i| x[i as usize].as_dvec3());
-                    let (tlo, thi) = (
-                        q[0].min(q[1]).min(q[2].min(q[3])),
-                        q[0].max(q[1]).max(q[2].max(q[3])),
-                    );
-                    let d = q.map(|p| normal.dot(p - origin));
-                    let straddles = d.iter().any(|&d| d >= 0.0) && d.iter().any(|&d| d <= 0.0);
-                    if straddles && tlo.cmple(hi).all() && thi.cmpge(lo).all() {
-                        candidates.push(t);
-                    }
+            if !(0.0..=reach).contains(&d) {
+                continue;
+            }
+            let p = p.as_dvec3();
+            if p.cmplt(lo - DVec3::splat(reach)).any() || p.cmpgt(hi + DVec3::splat(reach)).any() {
+                continue;
+            }
+            for &t in &self.node_tets[v] {
+                // Most of these tets lie wholly on the positive side: tested before the mark
+                // (a tet seen again from another node is in cache by then).
+                let tet = tets[t as usize];
+                let d = tet.map(|i| side[i as usize]);
+                if !(d.iter().any(|&d| d >= 0.0) && d.iter().any(|&d| d <= 0.0))
+                    || self.tet_mark[t as usize] == stamp
+                {
+                    continue;
+                }
+                self.tet_mark[t as usize] = stamp;
+                let q = tet.map(|i| x[i as usize].as_dvec3());
+                let (tlo, thi) = (
+                    q[0].min(q[1]).min(q[2].min(q[3])),
+                    q[0].max(q[1]).max(q[2].max(q[3])),
+                );
+                if tlo.cmple(hi).all() && thi.cmpge(lo).all() {
+                    candidates.push(t);
                 }
             }
         }
+        self.side = side;
         candidates.sort_unstable();
         candidates
     }
@@ -605,10 +637,12 @@ impl Surgery {
     ) -> Vec<usize> {
         let tets = body.tets();
         // Tentative labels: (tet, node) → label; copies numbered from `first`.
-        let mut label: HashMap<(u32, u32), u32> = HashMap::default();
+        let star_total: usize = plan.iter().map(|p| p.1.len()).sum();
+        let mut label: HashMap<(u32, u32), u32> =
+            HashMap::with_capacity_and_hasher(star_total, Default::default());
         let mut copy_of: HashMap<u32, u32> = HashMap::default();
         let mut next = body.node_count() as u32;
-        let mut local: Vec<u32> = Vec::new();
+        let mut local: Vec<u32> = Vec::with_capacity(star_total);
         for (v, star, comp, count) in plan {
             local.extend(star);
             if *count > 1 {
@@ -630,7 +664,8 @@ impl Surgery {
         let touched: Vec<u32> = plan.iter().map(|p| p.0).collect();
         let is_touched = |v: u32| touched.binary_search(&v).is_ok();
         // Boundary faces of the local tets, in tentative labels, with the original labels.
-        let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> = HashMap::default();
+        let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> =
+            HashMap::with_capacity_and_hasher(4 * plan.len(), Default::default());
         // (vertex, link edge) of each boundary face at a touched vertex, grouped by sorting.
         let mut around: Vec<(u32, [u32; 2])> = Vec::new();
         for &t in &local {
@@ -724,7 +759,6 @@ impl Surgery {
         faces: &[NewFace],
         plan: Vec<(u32, Vec<u32>, Vec<u32>, u32)>,
     ) -> Result<Vec<SurgeryEvent>, SurgeryError> {
-        let old_tets: Vec<[u32; 4]> = body.tets().to_vec();
         // New nodes: one per extra component of each split node.
         let sources: Vec<u32> = plan
             .iter()
@@ -762,7 +796,7 @@ impl Surgery {
                 if c == 0 {
                     keep.push(t);
                 } else {
-                    let nodes = new_tets.entry(t).or_insert(old_tets[t as usize]);
+                    let nodes = new_tets.entry(t).or_insert(body.tets()[t as usize]);
                     for n in nodes.iter_mut() {
                         if *n == *v {
                             *n = base + c - 1;
@@ -781,6 +815,14 @@ impl Surgery {
         }
         let mut changed: Vec<u32> = new_tets.keys().copied().collect();
         changed.sort_unstable();
+        // The tets around the split nodes, with their nodes before the move.
+        let mut region: Vec<(u32, [u32; 4])> = plan
+            .iter()
+            .filter(|p| p.3 > 1)
+            .flat_map(|p| p.1.iter().map(|&t| (t, body.tets()[t as usize])))
+            .collect();
+        region.sort_unstable();
+        region.dedup();
         for &t in &changed {
             body.set_tet_nodes(t as usize, new_tets[&t])?;
         }
@@ -788,16 +830,9 @@ impl Surgery {
         split_nodes.sort_unstable();
         let is_split = |v: u32| split_nodes.binary_search(&v).is_ok();
         let mut images: Vec<([u32; 2], [u32; 2])> = Vec::new();
-        let mut region: Vec<u32> = plan
-            .iter()
-            .filter(|p| p.3 > 1)
-            .flat_map(|p| p.1.iter().copied())
-            .collect();
-        region.sort_unstable();
-        region.dedup();
         let tets_now = body.tets();
-        for &t in &region {
-            let (o, n) = (old_tets[t as usize], tets_now[t as usize]);
+        for &(t, o) in &region {
+            let n = tets_now[t as usize];
             for a in 0..4 {
                 for b in a + 1..4 {
                     if is_split(o[a]) || is_split(o[b]) {
@@ -858,6 +893,8 @@ impl Surgery {
         for f in faces {
             self.cut_faces.push((f.t, f.j));
             self.cut_faces.push((f.u, f.k));
+            self.wall[f.t as usize] |= 1 << f.j;
+            self.wall[f.u as usize] |= 1 << f.k;
         }
         let opened: Vec<[u32; 3]> = faces
             .iter()

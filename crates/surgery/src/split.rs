@@ -218,15 +218,18 @@ impl Surgery {
         nodes.sort_unstable();
         nodes.dedup();
         let pos = |body: &SoftBody, v: u32| body.positions()[v as usize].as_dvec3();
-        let mut dist: HashMap<u32, f64> = HashMap::default();
-        for &v in &nodes {
-            dist.insert(v, n.dot(pos(body, v) - o));
+        // Signed distances of the nodes from the plane: those `straddling_tets` left in
+        // `side` (the same expression), recomputed if it did not run for this body.
+        let mut dist = std::mem::take(&mut self.side);
+        if dist.len() != body.node_count() {
+            dist.clear();
+            dist.extend(body.positions().iter().map(|p| n.dot(p.as_dvec3() - o)));
         }
         // 1. Snapping.
         let mut near: Vec<u32> = Vec::new();
         let mut reshaped: Vec<u32> = Vec::new();
         for &v in &nodes {
-            let d = dist[&v];
+            let d = dist[v as usize];
             // `node_reach` is 1.5 × the longest rest edge: far nodes are skipped cheaply.
             if d == 0.0 || d.abs() >= SNAP_FRACTION * self.node_reach[v as usize] as f64 / 1.5 {
                 continue;
@@ -280,7 +283,7 @@ impl Surgery {
             body.set_node_state(v, xv + shift, pv + shift, vv)?;
             body.set_rest_position(v, moved_rest.as_vec3())?;
             self.rest[v as usize] = moved_rest;
-            dist.insert(v, 0.0);
+            dist[v as usize] = 0.0;
             out.snapped.push(v);
             reshaped.extend_from_slice(&self.node_tets[v as usize]);
         }
@@ -314,7 +317,7 @@ impl Surgery {
         near.sort_unstable();
         let is_near = |v: u32| near.binary_search(&v).is_ok();
         let sign = |v: u32| -> i8 {
-            let d = dist.get(&v).copied().unwrap_or(0.0);
+            let d = dist[v as usize];
             if d > 0.0 {
                 1
             } else if d < 0.0 {
@@ -329,10 +332,13 @@ impl Surgery {
         // both sides, would bridge the cut. They are not split: their faces open as where a
         // split is refused, so the new wall steps onto the old one within one tet.
         let mut blocked: Vec<u32> = Vec::new();
-        for &(t, j) in &self.cut_faces {
-            if candidates.binary_search(&t).is_err() {
-                continue;
-            }
+        let walls = candidates.iter().flat_map(|&t| {
+            let bits = self.wall[t as usize];
+            (0..4u8)
+                .filter(move |j| bits >> j & 1 == 1)
+                .map(move |j| (t, j))
+        });
+        for (t, j) in walls {
             let f = face_nodes(&body.tets()[t as usize], j as usize).map(|v| pos(body, v));
             let normal = (f[1] - f[0]).cross(f[2] - f[0]).normalize_or_zero();
             if normal.dot(n).abs() > WALL_PARALLEL {
@@ -364,7 +370,7 @@ impl Surgery {
                     any = true;
                     let e = sorted2(p, q);
                     edges.entry(e).or_insert_with(|| {
-                        let (d0, d1) = (dist[&e[0]], dist[&e[1]]);
+                        let (d0, d1) = (dist[e[0] as usize], dist[e[1] as usize]);
                         let s = d0 / (d0 - d1);
                         let (x0, x1) = (pos(body, e[0]), pos(body, e[1]));
                         let reach = FRONT_SNAP * x0.distance(x1);
@@ -405,6 +411,7 @@ impl Surgery {
                 }
             }
         }
+        self.side = dist;
         // 3. Split edges (valid ones), the tets around them bisected (see `bisect`); a tet
         // whose pieces would fall below the quality bound or not tile it in rest space gives
         // up its split edges, and the rest is planned again until nothing fails.
@@ -701,20 +708,18 @@ impl Surgery {
             (missing.len() == 1).then(|| missing[0])
         };
         // Cut walls and the surface: faces of pieces on a boundary face of their parent.
-        let wall: Vec<(u32, u8)> = std::mem::take(&mut self.cut_faces);
+        // The split tets' wall bits, before their records (now their first pieces) lose them.
+        let parent_wall: Vec<u8> = plan.iter().map(|(t, _)| self.wall[*t as usize]).collect();
+        self.wall.resize(body.tets().len(), 0);
+        if parent_wall.iter().any(|&b| b != 0) {
+            for (t, _) in plan {
+                self.wall[*t as usize] = 0;
+            }
+            let wall = &self.wall;
+            self.cut_faces
+                .retain(|&(t, j)| wall[t as usize] >> j & 1 == 1);
+        }
         let split_set = |t: u32| parent_of.contains_key(&t);
-        self.cut_faces = wall
-            .iter()
-            .copied()
-            .filter(|(t, _)| !split_set(*t))
-            .collect();
-        let mut split_walls: Vec<(u32, u8)> = wall
-            .iter()
-            .copied()
-            .filter(|(t, _)| split_set(*t))
-            .collect();
-        split_walls.sort_unstable();
-        let was_wall = |t: u32, j: usize| split_walls.binary_search(&(t, j as u8)).is_ok();
         let mut surface: HashMap<(usize, usize), Vec<[u32; 3]>> = HashMap::default();
         for &(idx, k) in &made {
             let tet = body.tets()[idx as usize];
@@ -725,8 +730,9 @@ impl Surgery {
                 let f = face_nodes(&tet, j);
                 if let Some(pj) = on_parent_face(old_tets[k], f) {
                     if old_neighbours[k][pj] == NO_TET {
-                        if was_wall(plan[k].0, pj) {
+                        if parent_wall[k] >> pj & 1 == 1 {
                             self.cut_faces.push((idx, j as u8));
+                            self.wall[idx as usize] |= 1 << j;
                         }
                         surface.entry((k, pj)).or_default().push(f);
                     }
