@@ -308,8 +308,9 @@ impl Surgery {
         // Gluing a face back changes the plan of its three nodes only: the plan is updated, not
         // rebuilt, between rounds.
         let mut plan = self.plan_split(body, &faces);
+        let mut changed: Option<Vec<u32>> = None;
         let split = loop {
-            let bad = self.defects(body, &faces, &plan);
+            let bad = self.defects(body, &faces, &plan, changed.as_deref());
             if bad.is_empty() {
                 break plan;
             }
@@ -338,11 +339,12 @@ impl Surgery {
             plan.retain(|p| on_faces.binary_search(&p.0).is_ok());
             touched.sort_unstable();
             touched.dedup();
-            for v in touched {
+            for &v in &touched {
                 if let Ok(i) = plan.binary_search_by_key(&v, |p| p.0) {
                     plan[i] = self.plan_node(body, v);
                 }
             }
+            changed = Some(touched);
         };
         self.commit(body, &faces, split)
     }
@@ -629,44 +631,91 @@ impl Surgery {
 
     /// Indices of the new faces to glue back: those on a boundary edge that would not be
     /// manifold, and all new faces at a vertex whose boundary would be pinched.
+    ///
+    /// `changed` (sorted) limits the check to what gluing those nodes' faces back can change:
+    /// edges at a changed node and vertices sharing a boundary face with one. The caller passes
+    /// the nodes of the faces glued back since the last call, whose plans alone changed; every
+    /// defect elsewhere was there before and gave no face to glue, so the result is the same
+    /// as a full check (`None`).
     fn defects(
         &self,
         body: &SoftBody,
         faces: &[NewFace],
         plan: &[(u32, Vec<u32>, Vec<u32>, u32)],
+        changed: Option<&[u32]>,
     ) -> Vec<usize> {
         let tets = body.tets();
-        // Tentative labels: (tet, node) → label; copies numbered from `first`.
-        let star_total: usize = plan.iter().map(|p| p.1.len()).sum();
-        let mut label: HashMap<(u32, u32), u32> =
-            HashMap::with_capacity_and_hasher(star_total, Default::default());
-        let mut copy_of: HashMap<u32, u32> = HashMap::default();
+        // Tentative labels: the copies of plan entry `i` are numbered from `base[i]`.
+        let mut base = Vec::with_capacity(plan.len());
         let mut next = body.node_count() as u32;
-        let mut local: Vec<u32> = Vec::with_capacity(star_total);
-        for (v, star, comp, count) in plan {
-            local.extend(star);
-            if *count > 1 {
-                let base = next;
-                next += count - 1;
-                for c in base..next {
-                    copy_of.insert(c, *v);
-                }
-                for (t, &c) in star.iter().zip(comp) {
-                    if c > 0 {
-                        label.insert((*t, *v), base + c - 1);
+        for p in plan {
+            base.push(next);
+            next += p.3.saturating_sub(1);
+        }
+        let entry = |v: u32| plan.binary_search_by_key(&v, |p| p.0).ok();
+        let relabel = |t: u32, v: u32| -> u32 {
+            if let Some(i) = entry(v) {
+                let (_, star, comp, count) = &plan[i];
+                if *count > 1 {
+                    if let Ok(s) = star.binary_search(&t) {
+                        if comp[s] > 0 {
+                            return base[i] + comp[s] - 1;
+                        }
                     }
                 }
             }
-        }
+            v
+        };
+        let original = |label: u32| -> u32 {
+            let i = base.partition_point(|&b| b <= label);
+            if label < body.node_count() as u32 || i == 0 {
+                label
+            } else {
+                plan[i - 1].0
+            }
+        };
+        let is_touched = |v: u32| entry(v).is_some();
+        let in_changed = |v: u32| changed.is_none_or(|c| c.binary_search(&v).is_ok());
+        // The vertices to check: the touched ones, or, limited, those on a boundary face of
+        // a tet at a changed node.
+        let vertices: Option<Vec<u32>> = changed.map(|c| {
+            let mut w: Vec<u32> = c.to_vec();
+            for &g in c {
+                for &t in &self.node_tets[g as usize] {
+                    for j in 0..4 {
+                        if self.neighbours[t as usize][j] == NO_TET {
+                            let f = face_nodes(&tets[t as usize], j);
+                            if f.contains(&g) {
+                                w.extend(f.iter().copied().filter(|&v| is_touched(v)));
+                            }
+                        }
+                    }
+                }
+            }
+            w.sort_unstable();
+            w.dedup();
+            w
+        });
+        let check_vertex = |v: u32| {
+            is_touched(v)
+                && vertices
+                    .as_ref()
+                    .is_none_or(|w| w.binary_search(&v).is_ok())
+        };
+        // The tets whose boundary faces hold every face at those edges and vertices.
+        let mut local: Vec<u32> = match &vertices {
+            None => plan.iter().flat_map(|p| p.1.iter().copied()).collect(),
+            Some(w) => w
+                .iter()
+                .flat_map(|&v| self.node_tets[v as usize].iter().copied())
+                .collect(),
+        };
         local.sort_unstable();
         local.dedup();
-        let relabel = |t: u32, v: u32| label.get(&(t, v)).copied().unwrap_or(v);
-        let touched: Vec<u32> = plan.iter().map(|p| p.0).collect();
-        let is_touched = |v: u32| touched.binary_search(&v).is_ok();
         // Boundary faces of the local tets, in tentative labels, with the original labels.
         let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> =
-            HashMap::with_capacity_and_hasher(4 * plan.len(), Default::default());
-        // (vertex, link edge) of each boundary face at a touched vertex, grouped by sorting.
+            HashMap::with_capacity_and_hasher(2 * local.len(), Default::default());
+        // (vertex, link edge) of each boundary face at a checked vertex, grouped by sorting.
         let mut around: Vec<(u32, [u32; 2])> = Vec::new();
         for &t in &local {
             for j in 0..4 {
@@ -677,13 +726,13 @@ impl Surgery {
                 let f = orig.map(|v| relabel(t, v));
                 for k in 0..3 {
                     let (a, b) = (orig[k], orig[(k + 1) % 3]);
-                    if is_touched(a) || is_touched(b) {
+                    if (is_touched(a) || is_touched(b)) && (in_changed(a) || in_changed(b)) {
                         let e = directed
                             .entry([f[k], f[(k + 1) % 3]])
                             .or_insert((0, [a, b]));
                         e.0 += 1;
                     }
-                    if is_touched(orig[k]) {
+                    if check_vertex(orig[k]) {
                         around.push((f[k], [f[(k + 1) % 3], f[(k + 2) % 3]]));
                     }
                 }
@@ -704,8 +753,7 @@ impl Surgery {
             link.extend(group.iter().map(|g| g.1));
             if !single_cycle(&link) {
                 // Back to the original label: the node itself or the one it copies.
-                let v = group[0].0;
-                bad_vertices.push(copy_of.get(&v).copied().unwrap_or(v));
+                bad_vertices.push(original(group[0].0));
             }
         }
         // One face per defect: the last new face on the bad edge or at the bad vertex (a chord
@@ -742,6 +790,7 @@ impl Surgery {
         // A new face none of whose nodes is split would be a zero-width double face: it waits.
         for (i, f) in faces.iter().enumerate() {
             if !out.contains(&i)
+                && nodes_of[i].iter().any(|&v| in_changed(v))
                 && nodes_of[i]
                     .iter()
                     .all(|&v| relabel(f.t, v) == relabel(f.u, v))
