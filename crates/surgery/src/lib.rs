@@ -119,6 +119,7 @@ mod settings;
 mod split;
 mod state;
 mod suture;
+mod tip;
 
 pub use cut::{BladeSweep, MIN_PIECE};
 pub use error::SurgeryError;
@@ -128,3 +129,4 @@ pub use split::{
     FRONT_SNAP, MAX_SPLIT_DEPTH, MIN_PIECE_FRACTION, MIN_RATIO, MIN_VOLUME_FRACTION, SNAP_FRACTION,
 };
 pub use state::{Surgery, Suture};
+pub use tip::TIP_MARGIN;

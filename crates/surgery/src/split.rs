@@ -147,11 +147,11 @@ impl CutPlane<'_> {
     }
 }
 
-fn six_volume([a, b, c, d]: [DVec3; 4]) -> f64 {
+pub(crate) fn six_volume([a, b, c, d]: [DVec3; 4]) -> f64 {
     (b - a).cross(c - a).dot(d - a)
 }
 
-fn sorted2(a: u32, b: u32) -> [u32; 2] {
+pub(crate) fn sorted2(a: u32, b: u32) -> [u32; 2] {
     [a.min(b), a.max(b)]
 }
 
@@ -162,7 +162,7 @@ fn sorted2(a: u32, b: u32) -> [u32; 2] {
 /// order of its own edges, which is global, two tets sharing a face split it alike (no
 /// hanging node); replacing an end of an edge by a point strictly inside it keeps the
 /// orientation. Once every crossing edge of `t` is split, no piece holds nodes of both sides.
-fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
+pub(crate) fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
     for (k, (e, m)) in split.iter().enumerate() {
         if let (Some(i), Some(j)) = (
             t.iter().position(|&v| v == e[0]),
@@ -181,13 +181,13 @@ fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
 
 /// A planned split edge: its ends, the crossing parameter from the first, its new node.
 #[derive(Debug, Clone, Copy)]
-struct EdgeCut {
-    s: f64,
+pub(crate) struct EdgeCut {
+    pub s: f64,
     /// The crossing point is in this sweep's polygon or was in an earlier sweep's at about the
     /// same place along the edge.
-    inside: bool,
-    valid: bool,
-    node: u32,
+    pub inside: bool,
+    pub valid: bool,
+    pub node: u32,
 }
 
 impl Surgery {
@@ -510,8 +510,10 @@ impl Surgery {
         if !plan.is_empty() {
             self.apply_split(body, &edges, &order, &new_rest, &plan, &pieces, &mut out)?;
         }
+        // The tips on the surface (module `tip`): the edges beyond them join the front.
+        let beyond = self.split_tips(body, plane, candidates, &mut out)?;
         // The front: tets (after the split) on a crossing edge outside the polygon.
-        for e in &outside {
+        for e in outside.iter().chain(&beyond) {
             out.front.extend(self.tets_around(e));
         }
         out.front.sort_unstable();
@@ -530,7 +532,7 @@ impl Surgery {
     }
 
     /// The tets around an edge.
-    fn tets_around<'a>(&'a self, e: &'a [u32; 2]) -> impl Iterator<Item = u32> + 'a {
+    pub(crate) fn tets_around<'a>(&'a self, e: &'a [u32; 2]) -> impl Iterator<Item = u32> + 'a {
         self.node_tets[e[0] as usize]
             .iter()
             .copied()
@@ -558,7 +560,7 @@ impl Surgery {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn apply_split(
+    pub(crate) fn apply_split(
         &mut self,
         body: &mut SoftBody,
         edges: &HashMap<[u32; 2], EdgeCut>,
