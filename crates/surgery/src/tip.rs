@@ -217,6 +217,7 @@ impl Surgery {
                 }
             }
         }
+        tracing::debug!(tips = order.len(), tets = plan.len(), "tips split");
         let mut second = SplitOutcome::default();
         self.apply_split(body, &edges, &order, &new_rest, &plan, &pieces, &mut second)?;
         // Merge into the first split's outcome: nodes and tets were appended right after its.
