@@ -214,3 +214,60 @@ fn check_quality(body: &SoftBody, surgery: &Surgery) {
     }
     assert!(worst >= ratio.min(MIN_RATIO) * 0.999, "worst ratio {worst}");
 }
+
+/// A blade whose front edge leans forward (1 cm ahead per 1 cm down): under the tip the cut
+/// runs ahead of it, so the faces on the plane just beyond the tip have their centroid segments
+/// inside the swept polygon; they stay glued all the same (the tets beyond the tip are the
+/// cut's front), so the opening on the top still ends at the tip, which keeps one node.
+#[test]
+fn under_a_forward_leaning_blade_the_surface_opening_still_ends_at_the_tip() {
+    let (mut body, mut surgery) = common::block(true);
+    // Its front edge from (3, 0) to (0, 3) in the blade's frame: at the top (y = 1.5 at the
+    // pose's y = 0.5) 2 cm ahead of the pose, 1 cm below it 3 cm ahead.
+    let blade = tissue_pbd::ToolShape::Blade {
+        a: glam::Vec3::new(-0.3, 0.0, 0.0),
+        b: glam::Vec3::new(3.0, 0.0, 0.0),
+        c: glam::Vec3::new(0.0, 3.0, 0.0),
+        thickness: 0.01,
+    };
+    let at = common::incision_pose;
+    // One sweep from x = −3.5 (its rear out of the block) to −2.175: the front at the top is at
+    // x = −0.175, halfway along the crossing segment [−0.35, 0].
+    let events = surgery
+        .cut(
+            &mut body,
+            &BladeSweep::new(&blade, &at(-3.5), &at(-2.175)).unwrap(),
+        )
+        .unwrap();
+    surgery.validate(&body).unwrap();
+    let mut reported = Vec::new();
+    for e in events {
+        assert!(!matches!(e, SurgeryEvent::PieceDetached { .. }));
+        if let SurgeryEvent::CutAdvanced {
+            split_triangles, ..
+        } = e
+        {
+            reported.extend(split_triangles);
+        }
+    }
+    let top = |x: f64, z: f64| DVec3::new(x, 1.5, z);
+    check_tip(
+        &body,
+        &surgery,
+        &reported,
+        [top(-0.5, 0.0), top(0.0, 0.0), top(0.0, 0.5)],
+        -0.175,
+    );
+    let open = opening_on_top(&body, &surgery);
+    eprintln!("leaning blade: opening on top (duplicated nodes): {open:?}");
+    assert!((open[open.len() - 1] + 0.35).abs() < 1e-6, "{open:?}");
+    // Under the top the cut went on ahead of the tip: duplicated nodes on the plane below.
+    let ahead = (0..body.node_count())
+        .filter(|&i| surgery.origins()[i] as usize != i)
+        .map(|i| rest(&body, surgery.origins()[i]))
+        .filter(|p| p.y < 1.5 - 1e-6 && p.x > -0.175)
+        .count();
+    eprintln!("leaning blade: {ahead} duplicated nodes below the top ahead of the tip");
+    assert_eq!(surgery.component_count(), 1);
+    check_quality(&body, &surgery);
+}
