@@ -33,6 +33,10 @@
 //!    polygon: the cut's front and sides) are left whole and **glued** (the separation step
 //!    does not open their faces); a later sweep that covers them splits them. A tet that could
 //!    not be split for quality or a near node is left to the face separation (the staircase).
+//! 6. **Tips** (module `tip`, after the split above is applied): a crossed surface triangle's
+//!    edge on the plane that leaves the polygon is split again where it leaves it (the tip),
+//!    the tets around it bisected once more, and the tets beyond the tip join the front, so
+//!    the opening on the surface ends at the tip.
 
 use glam::{DVec3, Vec3};
 use tissue_mesh::NO_TET;
@@ -147,11 +151,11 @@ impl CutPlane<'_> {
     }
 }
 
-fn six_volume([a, b, c, d]: [DVec3; 4]) -> f64 {
+pub(crate) fn six_volume([a, b, c, d]: [DVec3; 4]) -> f64 {
     (b - a).cross(c - a).dot(d - a)
 }
 
-fn sorted2(a: u32, b: u32) -> [u32; 2] {
+pub(crate) fn sorted2(a: u32, b: u32) -> [u32; 2] {
     [a.min(b), a.max(b)]
 }
 
@@ -162,7 +166,7 @@ fn sorted2(a: u32, b: u32) -> [u32; 2] {
 /// order of its own edges, which is global, two tets sharing a face split it alike (no
 /// hanging node); replacing an end of an edge by a point strictly inside it keeps the
 /// orientation. Once every crossing edge of `t` is split, no piece holds nodes of both sides.
-fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
+pub(crate) fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
     for (k, (e, m)) in split.iter().enumerate() {
         if let (Some(i), Some(j)) = (
             t.iter().position(|&v| v == e[0]),
@@ -181,13 +185,13 @@ fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
 
 /// A planned split edge: its ends, the crossing parameter from the first, its new node.
 #[derive(Debug, Clone, Copy)]
-struct EdgeCut {
-    s: f64,
+pub(crate) struct EdgeCut {
+    pub s: f64,
     /// The crossing point is in this sweep's polygon or was in an earlier sweep's at about the
     /// same place along the edge.
-    inside: bool,
-    valid: bool,
-    node: u32,
+    pub inside: bool,
+    pub valid: bool,
+    pub node: u32,
 }
 
 impl Surgery {
@@ -510,8 +514,10 @@ impl Surgery {
         if !plan.is_empty() {
             self.apply_split(body, &edges, &order, &new_rest, &plan, &pieces, &mut out)?;
         }
+        // The tips on the surface (module `tip`): the edges beyond them join the front.
+        let beyond = self.split_tips(body, plane, candidates, &mut out)?;
         // The front: tets (after the split) on a crossing edge outside the polygon.
-        for e in &outside {
+        for e in outside.iter().chain(&beyond) {
             out.front.extend(self.tets_around(e));
         }
         out.front.sort_unstable();
@@ -530,7 +536,7 @@ impl Surgery {
     }
 
     /// The tets around an edge.
-    fn tets_around<'a>(&'a self, e: &'a [u32; 2]) -> impl Iterator<Item = u32> + 'a {
+    pub(crate) fn tets_around<'a>(&'a self, e: &'a [u32; 2]) -> impl Iterator<Item = u32> + 'a {
         self.node_tets[e[0] as usize]
             .iter()
             .copied()
@@ -558,7 +564,7 @@ impl Surgery {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn apply_split(
+    pub(crate) fn apply_split(
         &mut self,
         body: &mut SoftBody,
         edges: &HashMap<[u32; 2], EdgeCut>,
