@@ -23,6 +23,7 @@
 use crate::geometry::FxMap as HashMap;
 
 use glam::{DVec3, Vec3};
+use rayon::prelude::*;
 use tissue_mesh::NO_TET;
 use tissue_pbd::{DistanceConstraint, Pose, SoftBody, Tool, ToolShape};
 
@@ -100,6 +101,9 @@ impl BladeSweep {
 /// enclose stay glued, and so do groups of less rest volume than this many median tets of the
 /// input (a slab between two nearly parallel walls, made of pieces of splits).
 pub const MIN_PIECE: usize = 16;
+
+/// Nodes per parallel job of the straddling search (smaller bodies run on one thread).
+const PARALLEL_NODES: usize = 2048;
 
 /// A face opened by this cut: tet `t` face `j` against tet `u` face `k`.
 #[derive(Debug, Clone, Copy)]
@@ -231,10 +235,11 @@ impl Surgery {
         // one side only — the side its centroid lies on — so that it does not bridge the cut.
         let mut crumbs: Vec<Vec<u32>> = Vec::new();
         self.stamp = self.stamp.wrapping_add(1).max(1);
+        let big = self.next_group_stamp();
         for f in &faces {
             for t in [f.t, f.u] {
                 if self.tet_mark[t as usize] != self.stamp {
-                    if let Some(group) = self.small_group(body, t) {
+                    if let Some(group) = self.small_group(body, t, big) {
                         for &g in &group {
                             self.tet_mark[g as usize] = self.stamp;
                         }
@@ -307,8 +312,9 @@ impl Surgery {
         // Gluing a face back changes the plan of its three nodes only: the plan is updated, not
         // rebuilt, between rounds.
         let mut plan = self.plan_split(body, &faces);
+        let mut changed: Option<Vec<u32>> = None;
         let split = loop {
-            let bad = self.defects(body, &faces, &plan);
+            let bad = self.defects(body, &faces, &plan, changed.as_deref());
             if bad.is_empty() {
                 break plan;
             }
@@ -337,11 +343,12 @@ impl Surgery {
             plan.retain(|p| on_faces.binary_search(&p.0).is_ok());
             touched.sort_unstable();
             touched.dedup();
-            for v in touched {
+            for &v in &touched {
                 if let Ok(i) = plan.binary_search_by_key(&v, |p| p.0) {
                     plan[i] = self.plan_node(body, v);
                 }
             }
+            changed = Some(touched);
         };
         self.commit(body, &faces, split)
     }
@@ -395,30 +402,52 @@ impl Surgery {
     /// The tets face-connected to `t` when they are a crumb: fewer than [`MIN_PIECE`] tets, or
     /// less rest volume than [`MIN_PIECE`] median tets of the input (pieces of splits are
     /// small tets). `None` for a bigger group (the search stops early).
-    fn small_group(&self, body: &SoftBody, t: u32) -> Option<Vec<u32>> {
+    ///
+    /// Tets marked `big` (found in a bigger group by an earlier search of this cut) end the
+    /// search at once; a search that finds a bigger group marks every tet it saw `big`.
+    fn small_group(&mut self, body: &SoftBody, t: u32, big: u32) -> Option<Vec<u32>> {
         let rest = body.tet_rest_volumes();
         let limit = MIN_PIECE as f64 * self.median_rest_volume;
+        let stamp = self.next_group_stamp();
         let mut group = vec![t];
-        let mut seen: HashMap<u32, ()> = HashMap::default();
-        seen.insert(t, ());
+        if self.group_mark[t as usize] == big {
+            return None;
+        }
+        self.group_mark[t as usize] = stamp;
         let mut volume = rest[t as usize] as f64;
         let mut i = 0;
         while i < group.len() {
             for &u in &self.neighbours[group[i] as usize] {
-                if u != NO_TET && seen.insert(u, ()).is_none() {
-                    volume += rest[u as usize] as f64;
-                    if (group.len() + 1 >= MIN_PIECE
-                        && (volume >= limit || !self.settings.split_tets))
-                        || group.len() >= 64 * MIN_PIECE
-                    {
-                        return None;
-                    }
-                    group.push(u);
+                if u == NO_TET || self.group_mark[u as usize] == stamp {
+                    continue;
                 }
+                volume += rest[u as usize] as f64;
+                if self.group_mark[u as usize] == big
+                    || (group.len() + 1 >= MIN_PIECE
+                        && (volume >= limit || !self.settings.split_tets))
+                    || group.len() >= 64 * MIN_PIECE
+                {
+                    for &g in &group {
+                        self.group_mark[g as usize] = big;
+                    }
+                    return None;
+                }
+                self.group_mark[u as usize] = stamp;
+                group.push(u);
             }
             i += 1;
         }
         Some(group)
+    }
+
+    /// A fresh stamp for `group_mark` (sized to the tets).
+    fn next_group_stamp(&mut self) -> u32 {
+        self.group_mark.resize(self.neighbours.len(), 0);
+        self.group_stamp = self.group_stamp.wrapping_add(1).max(1);
+        if self.group_stamp == 1 {
+            self.group_mark.fill(0);
+        }
+        self.group_stamp
     }
 
     /// The tets that straddle the plane of `plane` and meet the box of its polygon (sorted):
@@ -434,39 +463,58 @@ impl Surgery {
             }
         }
         let (origin, normal) = (plane.origin, plane.normal);
-        self.stamp = self.stamp.wrapping_add(1).max(1);
-        let stamp = self.stamp;
-        let mut candidates = Vec::new();
+        // Each node's signed distance, once: a tet's straddling test reads four of them.
+        let mut side = std::mem::take(&mut self.side);
+        side.clear();
+        side.par_extend(
+            x.par_iter()
+                .with_min_len(PARALLEL_NODES)
+                .map(|p| normal.dot(p.as_dvec3() - origin)),
+        );
         // A straddling tet has a node on the plane or on its positive side, within that node's
         // reach of the plane (a tet's nodes lie within their reach of each other): only those
-        // nodes' tets are looked at.
-        for (v, p) in x.iter().enumerate() {
-            let p = p.as_dvec3();
-            let reach = self.node_reach[v] as f64;
-            let d = normal.dot(p - origin);
-            if (0.0..=reach).contains(&d)
-                && p.cmpge(lo - DVec3::splat(reach)).all()
-                && p.cmple(hi + DVec3::splat(reach)).all()
-            {
-                for &t in &self.node_tets[v] {
-                    if self.tet_mark[t as usize] == stamp {
+        // nodes' tets are looked at. Both passes run on the pool (the two sides of a step's
+        // cut otherwise leave a core idle); a tet found from several nodes is deduplicated by
+        // the final sort, so the result does not depend on the number of threads.
+        let (reach, node_tets, side_ref) = (&self.node_reach, &self.node_tets, &side);
+        let mut candidates: Vec<u32> = (0..x.len())
+            .into_par_iter()
+            .with_min_len(PARALLEL_NODES)
+            .fold(Vec::new, |mut found, v| {
+                let (d, reach) = (side_ref[v], reach[v] as f64);
+                if !(0.0..=reach).contains(&d) {
+                    return found;
+                }
+                let p = x[v].as_dvec3();
+                if p.cmplt(lo - DVec3::splat(reach)).any()
+                    || p.cmpgt(hi + DVec3::splat(reach)).any()
+                {
+                    return found;
+                }
+                for &t in &node_tets[v] {
+                    let tet = tets[t as usize];
+                    let d = tet.map(|i| side_ref[i as usize]);
+                    if !(d.iter().any(|&d| d >= 0.0) && d.iter().any(|&d| d <= 0.0)) {
                         continue;
                     }
-                    self.tet_mark[t as usize] = stamp;
-                    let q = tets[t as usize].map(|i| x[i as usize].as_dvec3());
+                    let q = tet.map(|i| x[i as usize].as_dvec3());
                     let (tlo, thi) = (
                         q[0].min(q[1]).min(q[2].min(q[3])),
                         q[0].max(q[1]).max(q[2].max(q[3])),
                     );
-                    let d = q.map(|p| normal.dot(p - origin));
-                    let straddles = d.iter().any(|&d| d >= 0.0) && d.iter().any(|&d| d <= 0.0);
-                    if straddles && tlo.cmple(hi).all() && thi.cmpge(lo).all() {
-                        candidates.push(t);
+                    if tlo.cmple(hi).all() && thi.cmpge(lo).all() {
+                        found.push(t);
                     }
                 }
-            }
-        }
+                found
+            })
+            .reduce(Vec::new, |mut a, mut b| {
+                a.append(&mut b);
+                a
+            });
+        self.side = side;
         candidates.sort_unstable();
+        candidates.dedup();
         candidates
     }
 
@@ -597,41 +645,91 @@ impl Surgery {
 
     /// Indices of the new faces to glue back: those on a boundary edge that would not be
     /// manifold, and all new faces at a vertex whose boundary would be pinched.
+    ///
+    /// `changed` (sorted) limits the check to what gluing those nodes' faces back can change:
+    /// edges at a changed node and vertices sharing a boundary face with one. The caller passes
+    /// the nodes of the faces glued back since the last call, whose plans alone changed; every
+    /// defect elsewhere was there before and gave no face to glue, so the result is the same
+    /// as a full check (`None`).
     fn defects(
         &self,
         body: &SoftBody,
         faces: &[NewFace],
         plan: &[(u32, Vec<u32>, Vec<u32>, u32)],
+        changed: Option<&[u32]>,
     ) -> Vec<usize> {
         let tets = body.tets();
-        // Tentative labels: (tet, node) → label; copies numbered from `first`.
-        let mut label: HashMap<(u32, u32), u32> = HashMap::default();
-        let mut copy_of: HashMap<u32, u32> = HashMap::default();
+        // Tentative labels: the copies of plan entry `i` are numbered from `base[i]`.
+        let mut base = Vec::with_capacity(plan.len());
         let mut next = body.node_count() as u32;
-        let mut local: Vec<u32> = Vec::new();
-        for (v, star, comp, count) in plan {
-            local.extend(star);
-            if *count > 1 {
-                let base = next;
-                next += count - 1;
-                for c in base..next {
-                    copy_of.insert(c, *v);
-                }
-                for (t, &c) in star.iter().zip(comp) {
-                    if c > 0 {
-                        label.insert((*t, *v), base + c - 1);
+        for p in plan {
+            base.push(next);
+            next += p.3.saturating_sub(1);
+        }
+        let entry = |v: u32| plan.binary_search_by_key(&v, |p| p.0).ok();
+        let relabel = |t: u32, v: u32| -> u32 {
+            if let Some(i) = entry(v) {
+                let (_, star, comp, count) = &plan[i];
+                if *count > 1 {
+                    if let Ok(s) = star.binary_search(&t) {
+                        if comp[s] > 0 {
+                            return base[i] + comp[s] - 1;
+                        }
                     }
                 }
             }
-        }
+            v
+        };
+        let original = |label: u32| -> u32 {
+            let i = base.partition_point(|&b| b <= label);
+            if label < body.node_count() as u32 || i == 0 {
+                label
+            } else {
+                plan[i - 1].0
+            }
+        };
+        let is_touched = |v: u32| entry(v).is_some();
+        let in_changed = |v: u32| changed.is_none_or(|c| c.binary_search(&v).is_ok());
+        // The vertices to check: the touched ones, or, limited, those on a boundary face of
+        // a tet at a changed node.
+        let vertices: Option<Vec<u32>> = changed.map(|c| {
+            let mut w: Vec<u32> = c.to_vec();
+            for &g in c {
+                for &t in &self.node_tets[g as usize] {
+                    for j in 0..4 {
+                        if self.neighbours[t as usize][j] == NO_TET {
+                            let f = face_nodes(&tets[t as usize], j);
+                            if f.contains(&g) {
+                                w.extend(f.iter().copied().filter(|&v| is_touched(v)));
+                            }
+                        }
+                    }
+                }
+            }
+            w.sort_unstable();
+            w.dedup();
+            w
+        });
+        let check_vertex = |v: u32| {
+            is_touched(v)
+                && vertices
+                    .as_ref()
+                    .is_none_or(|w| w.binary_search(&v).is_ok())
+        };
+        // The tets whose boundary faces hold every face at those edges and vertices.
+        let mut local: Vec<u32> = match &vertices {
+            None => plan.iter().flat_map(|p| p.1.iter().copied()).collect(),
+            Some(w) => w
+                .iter()
+                .flat_map(|&v| self.node_tets[v as usize].iter().copied())
+                .collect(),
+        };
         local.sort_unstable();
         local.dedup();
-        let relabel = |t: u32, v: u32| label.get(&(t, v)).copied().unwrap_or(v);
-        let touched: Vec<u32> = plan.iter().map(|p| p.0).collect();
-        let is_touched = |v: u32| touched.binary_search(&v).is_ok();
         // Boundary faces of the local tets, in tentative labels, with the original labels.
-        let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> = HashMap::default();
-        // (vertex, link edge) of each boundary face at a touched vertex, grouped by sorting.
+        let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> =
+            HashMap::with_capacity_and_hasher(2 * local.len(), Default::default());
+        // (vertex, link edge) of each boundary face at a checked vertex, grouped by sorting.
         let mut around: Vec<(u32, [u32; 2])> = Vec::new();
         for &t in &local {
             for j in 0..4 {
@@ -642,13 +740,13 @@ impl Surgery {
                 let f = orig.map(|v| relabel(t, v));
                 for k in 0..3 {
                     let (a, b) = (orig[k], orig[(k + 1) % 3]);
-                    if is_touched(a) || is_touched(b) {
+                    if (is_touched(a) || is_touched(b)) && (in_changed(a) || in_changed(b)) {
                         let e = directed
                             .entry([f[k], f[(k + 1) % 3]])
                             .or_insert((0, [a, b]));
                         e.0 += 1;
                     }
-                    if is_touched(orig[k]) {
+                    if check_vertex(orig[k]) {
                         around.push((f[k], [f[(k + 1) % 3], f[(k + 2) % 3]]));
                     }
                 }
@@ -669,8 +767,7 @@ impl Surgery {
             link.extend(group.iter().map(|g| g.1));
             if !single_cycle(&link) {
                 // Back to the original label: the node itself or the one it copies.
-                let v = group[0].0;
-                bad_vertices.push(copy_of.get(&v).copied().unwrap_or(v));
+                bad_vertices.push(original(group[0].0));
             }
         }
         // One face per defect: the last new face on the bad edge or at the bad vertex (a chord
@@ -707,6 +804,7 @@ impl Surgery {
         // A new face none of whose nodes is split would be a zero-width double face: it waits.
         for (i, f) in faces.iter().enumerate() {
             if !out.contains(&i)
+                && nodes_of[i].iter().any(|&v| in_changed(v))
                 && nodes_of[i]
                     .iter()
                     .all(|&v| relabel(f.t, v) == relabel(f.u, v))
@@ -724,7 +822,6 @@ impl Surgery {
         faces: &[NewFace],
         plan: Vec<(u32, Vec<u32>, Vec<u32>, u32)>,
     ) -> Result<Vec<SurgeryEvent>, SurgeryError> {
-        let old_tets: Vec<[u32; 4]> = body.tets().to_vec();
         // New nodes: one per extra component of each split node.
         let sources: Vec<u32> = plan
             .iter()
@@ -762,7 +859,7 @@ impl Surgery {
                 if c == 0 {
                     keep.push(t);
                 } else {
-                    let nodes = new_tets.entry(t).or_insert(old_tets[t as usize]);
+                    let nodes = new_tets.entry(t).or_insert(body.tets()[t as usize]);
                     for n in nodes.iter_mut() {
                         if *n == *v {
                             *n = base + c - 1;
@@ -781,6 +878,14 @@ impl Surgery {
         }
         let mut changed: Vec<u32> = new_tets.keys().copied().collect();
         changed.sort_unstable();
+        // The tets around the split nodes, with their nodes before the move.
+        let mut region: Vec<(u32, [u32; 4])> = plan
+            .iter()
+            .filter(|p| p.3 > 1)
+            .flat_map(|p| p.1.iter().map(|&t| (t, body.tets()[t as usize])))
+            .collect();
+        region.sort_unstable();
+        region.dedup();
         for &t in &changed {
             body.set_tet_nodes(t as usize, new_tets[&t])?;
         }
@@ -788,16 +893,9 @@ impl Surgery {
         split_nodes.sort_unstable();
         let is_split = |v: u32| split_nodes.binary_search(&v).is_ok();
         let mut images: Vec<([u32; 2], [u32; 2])> = Vec::new();
-        let mut region: Vec<u32> = plan
-            .iter()
-            .filter(|p| p.3 > 1)
-            .flat_map(|p| p.1.iter().copied())
-            .collect();
-        region.sort_unstable();
-        region.dedup();
         let tets_now = body.tets();
-        for &t in &region {
-            let (o, n) = (old_tets[t as usize], tets_now[t as usize]);
+        for &(t, o) in &region {
+            let n = tets_now[t as usize];
             for a in 0..4 {
                 for b in a + 1..4 {
                     if is_split(o[a]) || is_split(o[b]) {
@@ -858,6 +956,8 @@ impl Surgery {
         for f in faces {
             self.cut_faces.push((f.t, f.j));
             self.cut_faces.push((f.u, f.k));
+            self.wall[f.t as usize] |= 1 << f.j;
+            self.wall[f.u as usize] |= 1 << f.k;
         }
         let opened: Vec<[u32; 3]> = faces
             .iter()

@@ -18,7 +18,9 @@ pub enum SurgeryEvent {
         /// Nodes moved onto the blade's plane (current and rest position).
         snapped_nodes: Vec<u32>,
         /// Boundary triangles (surface or earlier walls) split into pieces: 3 where the blade
-        /// crossed two of their edges, 2 where it crossed one edge and a node.
+        /// crossed two of their edges, 2 where it crossed one edge and a node, 5 where the
+        /// cut's end (its tip) lies inside the triangle. A triangle an earlier sweep split is
+        /// reported again as one of its pieces split further.
         split_triangles: Vec<SplitTriangle>,
         /// Tets moved onto new nodes (indices into [`tissue_pbd::SoftBody::tets`]).
         changed_tets: Vec<u32>,

@@ -52,9 +52,17 @@
 //! detached nothing (cheap); only when one runs out are the pieces relabelled
 //! ([`SurgeryEvent::PieceDetached`]).
 //!
-//! Not built: a surface triangle where a cut ends *inside* it is not split into 4 (the blade's
-//! end point is not inserted): the cut's end snaps to a tet boundary instead, and a partly
-//! crossed tet stays glued. A body that moves against the blade while it is cut (a
+//! **Tips** (module `tip`): where the polygon's boundary (the blade's front, or where the cut
+//! started) crosses the surface, the crossed surface triangle's edge on the plane — from its
+//! crossing point in the polygon to the one just outside it — is split again at the tip (where
+//! it leaves the polygon) by a second pass of the same bisection, and the tets beyond the tip
+//! stay glued this sweep: the triangle is in 5 pieces and the opening on the surface ends
+//! exactly at the tip, which keeps one node. No tip within [`TIP_MARGIN`] of the edge's ends
+//! or where a piece would fall below the quality bound (the cut then ends at a tet boundary).
+//!
+//! Not built: a true 4-way split of the triangle where a cut ends (the tip lies on the crack
+//! line, not joined to the corners); inside the body the cut's front snaps to a tet boundary,
+//! and a partly crossed tet stays glued. A body that moves against the blade while it is cut (a
 //! world-fixed blade path through a falling organ) gets slightly offset walls in every sweep,
 //! joined by steps along tet faces; thin slabs between two such walls can come off as small
 //! pieces. A tet stretched to more than 1.5 × its longest rest edge may be missed by a sweep.
@@ -119,6 +127,7 @@ mod settings;
 mod split;
 mod state;
 mod suture;
+mod tip;
 
 pub use cut::{BladeSweep, MIN_PIECE};
 pub use error::SurgeryError;
@@ -128,3 +137,4 @@ pub use split::{
     FRONT_SNAP, MAX_SPLIT_DEPTH, MIN_PIECE_FRACTION, MIN_RATIO, MIN_VOLUME_FRACTION, SNAP_FRACTION,
 };
 pub use state::{Surgery, Suture};
+pub use tip::TIP_MARGIN;

@@ -33,6 +33,10 @@
 //!    polygon: the cut's front and sides) are left whole and **glued** (the separation step
 //!    does not open their faces); a later sweep that covers them splits them. A tet that could
 //!    not be split for quality or a near node is left to the face separation (the staircase).
+//! 6. **Tips** (module `tip`, after the split above is applied): a crossed surface triangle's
+//!    edge on the plane that leaves the polygon is split again where it leaves it (the tip),
+//!    the tets around it bisected once more, and the tets beyond the tip join the front, so
+//!    the opening on the surface ends at the tip.
 
 use glam::{DVec3, Vec3};
 use tissue_mesh::NO_TET;
@@ -147,11 +151,11 @@ impl CutPlane<'_> {
     }
 }
 
-fn six_volume([a, b, c, d]: [DVec3; 4]) -> f64 {
+pub(crate) fn six_volume([a, b, c, d]: [DVec3; 4]) -> f64 {
     (b - a).cross(c - a).dot(d - a)
 }
 
-fn sorted2(a: u32, b: u32) -> [u32; 2] {
+pub(crate) fn sorted2(a: u32, b: u32) -> [u32; 2] {
     [a.min(b), a.max(b)]
 }
 
@@ -162,7 +166,7 @@ fn sorted2(a: u32, b: u32) -> [u32; 2] {
 /// order of its own edges, which is global, two tets sharing a face split it alike (no
 /// hanging node); replacing an end of an edge by a point strictly inside it keeps the
 /// orientation. Once every crossing edge of `t` is split, no piece holds nodes of both sides.
-fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
+pub(crate) fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
     for (k, (e, m)) in split.iter().enumerate() {
         if let (Some(i), Some(j)) = (
             t.iter().position(|&v| v == e[0]),
@@ -181,13 +185,13 @@ fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
 
 /// A planned split edge: its ends, the crossing parameter from the first, its new node.
 #[derive(Debug, Clone, Copy)]
-struct EdgeCut {
-    s: f64,
+pub(crate) struct EdgeCut {
+    pub s: f64,
     /// The crossing point is in this sweep's polygon or was in an earlier sweep's at about the
     /// same place along the edge.
-    inside: bool,
-    valid: bool,
-    node: u32,
+    pub inside: bool,
+    pub valid: bool,
+    pub node: u32,
 }
 
 impl Surgery {
@@ -218,15 +222,18 @@ impl Surgery {
         nodes.sort_unstable();
         nodes.dedup();
         let pos = |body: &SoftBody, v: u32| body.positions()[v as usize].as_dvec3();
-        let mut dist: HashMap<u32, f64> = HashMap::default();
-        for &v in &nodes {
-            dist.insert(v, n.dot(pos(body, v) - o));
+        // Signed distances of the nodes from the plane: those `straddling_tets` left in
+        // `side` (the same expression), recomputed if it did not run for this body.
+        let mut dist = std::mem::take(&mut self.side);
+        if dist.len() != body.node_count() {
+            dist.clear();
+            dist.extend(body.positions().iter().map(|p| n.dot(p.as_dvec3() - o)));
         }
         // 1. Snapping.
         let mut near: Vec<u32> = Vec::new();
         let mut reshaped: Vec<u32> = Vec::new();
         for &v in &nodes {
-            let d = dist[&v];
+            let d = dist[v as usize];
             // `node_reach` is 1.5 × the longest rest edge: far nodes are skipped cheaply.
             if d == 0.0 || d.abs() >= SNAP_FRACTION * self.node_reach[v as usize] as f64 / 1.5 {
                 continue;
@@ -280,7 +287,7 @@ impl Surgery {
             body.set_node_state(v, xv + shift, pv + shift, vv)?;
             body.set_rest_position(v, moved_rest.as_vec3())?;
             self.rest[v as usize] = moved_rest;
-            dist.insert(v, 0.0);
+            dist[v as usize] = 0.0;
             out.snapped.push(v);
             reshaped.extend_from_slice(&self.node_tets[v as usize]);
         }
@@ -314,7 +321,7 @@ impl Surgery {
         near.sort_unstable();
         let is_near = |v: u32| near.binary_search(&v).is_ok();
         let sign = |v: u32| -> i8 {
-            let d = dist.get(&v).copied().unwrap_or(0.0);
+            let d = dist[v as usize];
             if d > 0.0 {
                 1
             } else if d < 0.0 {
@@ -329,10 +336,13 @@ impl Surgery {
         // both sides, would bridge the cut. They are not split: their faces open as where a
         // split is refused, so the new wall steps onto the old one within one tet.
         let mut blocked: Vec<u32> = Vec::new();
-        for &(t, j) in &self.cut_faces {
-            if candidates.binary_search(&t).is_err() {
-                continue;
-            }
+        let walls = candidates.iter().flat_map(|&t| {
+            let bits = self.wall[t as usize];
+            (0..4u8)
+                .filter(move |j| bits >> j & 1 == 1)
+                .map(move |j| (t, j))
+        });
+        for (t, j) in walls {
             let f = face_nodes(&body.tets()[t as usize], j as usize).map(|v| pos(body, v));
             let normal = (f[1] - f[0]).cross(f[2] - f[0]).normalize_or_zero();
             if normal.dot(n).abs() > WALL_PARALLEL {
@@ -364,7 +374,7 @@ impl Surgery {
                     any = true;
                     let e = sorted2(p, q);
                     edges.entry(e).or_insert_with(|| {
-                        let (d0, d1) = (dist[&e[0]], dist[&e[1]]);
+                        let (d0, d1) = (dist[e[0] as usize], dist[e[1] as usize]);
                         let s = d0 / (d0 - d1);
                         let (x0, x1) = (pos(body, e[0]), pos(body, e[1]));
                         let reach = FRONT_SNAP * x0.distance(x1);
@@ -405,6 +415,7 @@ impl Surgery {
                 }
             }
         }
+        self.side = dist;
         // 3. Split edges (valid ones), the tets around them bisected (see `bisect`); a tet
         // whose pieces would fall below the quality bound or not tile it in rest space gives
         // up its split edges, and the rest is planned again until nothing fails.
@@ -503,8 +514,10 @@ impl Surgery {
         if !plan.is_empty() {
             self.apply_split(body, &edges, &order, &new_rest, &plan, &pieces, &mut out)?;
         }
+        // The tips on the surface (module `tip`): the edges beyond them join the front.
+        let beyond = self.split_tips(body, plane, candidates, &mut out)?;
         // The front: tets (after the split) on a crossing edge outside the polygon.
-        for e in &outside {
+        for e in outside.iter().chain(&beyond) {
             out.front.extend(self.tets_around(e));
         }
         out.front.sort_unstable();
@@ -523,7 +536,7 @@ impl Surgery {
     }
 
     /// The tets around an edge.
-    fn tets_around<'a>(&'a self, e: &'a [u32; 2]) -> impl Iterator<Item = u32> + 'a {
+    pub(crate) fn tets_around<'a>(&'a self, e: &'a [u32; 2]) -> impl Iterator<Item = u32> + 'a {
         self.node_tets[e[0] as usize]
             .iter()
             .copied()
@@ -551,7 +564,7 @@ impl Surgery {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn apply_split(
+    pub(crate) fn apply_split(
         &mut self,
         body: &mut SoftBody,
         edges: &HashMap<[u32; 2], EdgeCut>,
@@ -701,20 +714,18 @@ impl Surgery {
             (missing.len() == 1).then(|| missing[0])
         };
         // Cut walls and the surface: faces of pieces on a boundary face of their parent.
-        let wall: Vec<(u32, u8)> = std::mem::take(&mut self.cut_faces);
+        // The split tets' wall bits, before their records (now their first pieces) lose them.
+        let parent_wall: Vec<u8> = plan.iter().map(|(t, _)| self.wall[*t as usize]).collect();
+        self.wall.resize(body.tets().len(), 0);
+        if parent_wall.iter().any(|&b| b != 0) {
+            for (t, _) in plan {
+                self.wall[*t as usize] = 0;
+            }
+            let wall = &self.wall;
+            self.cut_faces
+                .retain(|&(t, j)| wall[t as usize] >> j & 1 == 1);
+        }
         let split_set = |t: u32| parent_of.contains_key(&t);
-        self.cut_faces = wall
-            .iter()
-            .copied()
-            .filter(|(t, _)| !split_set(*t))
-            .collect();
-        let mut split_walls: Vec<(u32, u8)> = wall
-            .iter()
-            .copied()
-            .filter(|(t, _)| split_set(*t))
-            .collect();
-        split_walls.sort_unstable();
-        let was_wall = |t: u32, j: usize| split_walls.binary_search(&(t, j as u8)).is_ok();
         let mut surface: HashMap<(usize, usize), Vec<[u32; 3]>> = HashMap::default();
         for &(idx, k) in &made {
             let tet = body.tets()[idx as usize];
@@ -725,8 +736,9 @@ impl Surgery {
                 let f = face_nodes(&tet, j);
                 if let Some(pj) = on_parent_face(old_tets[k], f) {
                     if old_neighbours[k][pj] == NO_TET {
-                        if was_wall(plan[k].0, pj) {
+                        if parent_wall[k] >> pj & 1 == 1 {
                             self.cut_faces.push((idx, j as u8));
+                            self.wall[idx as usize] |= 1 << j;
                         }
                         surface.entry((k, pj)).or_default().push(f);
                     }

@@ -44,6 +44,8 @@ pub struct Surgery {
     pub(crate) edge_constraint: HashMap<[u32; 2], u32>,
     /// Faces opened by cuts: (tet, local face).
     pub(crate) cut_faces: Vec<(u32, u8)>,
+    /// The same per tet: bit `j` set when face `j` is in `cut_faces`.
+    pub(crate) wall: Vec<u8>,
     /// Faces crossed by the blade but kept glued (they would have made the surface
     /// non-manifold at the cut's front): (tet, face, neighbour, its face), retried next cut.
     pub(crate) pending: Vec<[u32; 4]>,
@@ -71,6 +73,11 @@ pub struct Surgery {
     /// Scratch marks per tet and node (stamped with `stamp`), reused by every cut.
     pub(crate) tet_mark: Vec<u32>,
     pub(crate) stamp: u32,
+    /// Scratch: each node's signed distance from the current blade's plane (cm).
+    pub(crate) side: Vec<f64>,
+    /// Scratch marks per tet for the crumb searches, stamped with `group_stamp`.
+    pub(crate) group_mark: Vec<u32>,
+    pub(crate) group_stamp: u32,
 }
 
 /// The face of tet `t` opposite local node `j`, wound outward.
@@ -150,6 +157,7 @@ impl Surgery {
             origin: (0..n as u32).collect(),
             edge_constraint,
             cut_faces: Vec::new(),
+            wall: vec![0; tets.len()],
             pending: Vec::new(),
             sutures: Vec::new(),
             tet_component: Vec::new(),
@@ -167,6 +175,9 @@ impl Surgery {
             covered: HashMap::default(),
             tet_mark: vec![0; tets.len()],
             stamp: 0,
+            side: Vec::new(),
+            group_mark: Vec::new(),
+            group_stamp: 0,
         };
         s.count_components(body);
         Ok(s)

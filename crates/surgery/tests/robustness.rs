@@ -60,7 +60,7 @@ struct Stats {
 
 /// `sessions` cuts of `per_session` continued sweeps each; `steps` steps after every cut; a
 /// fresh body every 2 sessions (8 cuts) with splits, every 5 (20 cuts) without (splits add
-/// tets, projected serially in the dynamic set; cut pieces pile up otherwise).
+/// tets, projected as dynamic batches; cut pieces pile up otherwise).
 fn hammer(
     mesh: &TetMesh,
     seed: u64,

@@ -1,0 +1,273 @@
+//! The cut's ends on the surface: an incision that stops in the middle of the block's top
+//! splits the top triangle where the blade's front crosses the surface (the tip split), and
+//! the opening on the top ends exactly at the tip; continued, it goes on from there.
+#![allow(clippy::unwrap_used)]
+
+mod common;
+
+use glam::DVec3;
+use tissue_pbd::{SoftBody, StepSettings};
+use tissue_surgery::{BladeSweep, SplitTriangle, Surgery, SurgeryEvent, MIN_RATIO};
+
+fn rest(body: &SoftBody, v: u32) -> DVec3 {
+    body.rest_positions()[v as usize].as_dvec3()
+}
+
+/// The node at rest position `p` (within 1e-4 cm).
+fn node_at(body: &SoftBody, p: DVec3) -> Option<u32> {
+    (0..body.node_count() as u32).find(|&v| rest(body, v).distance(p) < 1e-4)
+}
+
+/// Whether node `v` was duplicated by an opening (some other node copies it).
+fn duplicated(surgery: &Surgery, v: u32) -> bool {
+    surgery
+        .origins()
+        .iter()
+        .enumerate()
+        .any(|(i, &o)| o == v && i as u32 != v)
+}
+
+/// x of the top nodes (rest y = 1.5, on the blade's plane z = 0.15) an opening duplicated.
+fn opening_on_top(body: &SoftBody, surgery: &Surgery) -> Vec<f64> {
+    let mut x: Vec<f64> = (0..body.node_count())
+        .filter(|&i| surgery.origins()[i] as usize != i)
+        .map(|i| rest(body, surgery.origins()[i]))
+        .filter(|p| (p.y - 1.5).abs() < 1e-6 && (p.z - 0.15).abs() < 1e-6)
+        .map(|p| p.x)
+        .collect();
+    x.sort_by(f64::total_cmp);
+    x
+}
+
+fn area(p: [DVec3; 3]) -> f64 {
+    0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
+}
+
+/// The top boundary triangles (rest y = 1.5) whose rest centroids lie in the top triangle `t`.
+fn pieces_in(body: &SoftBody, surgery: &Surgery, t: [DVec3; 3]) -> Vec<[u32; 3]> {
+    let inside = |c: DVec3| {
+        let s = |a: DVec3, b: DVec3| (b.x - a.x) * (c.z - a.z) - (b.z - a.z) * (c.x - a.x);
+        let (u, v, w) = (s(t[0], t[1]), s(t[1], t[2]), s(t[2], t[0]));
+        (u >= 0.0 && v >= 0.0 && w >= 0.0) || (u <= 0.0 && v <= 0.0 && w <= 0.0)
+    };
+    surgery
+        .boundary_faces(body)
+        .into_iter()
+        .filter(|f| f.iter().all(|&v| (rest(body, v).y - 1.5).abs() < 1e-6))
+        .filter(|f| inside(f.iter().map(|&v| rest(body, v)).sum::<DVec3>() / 3.0))
+        .collect()
+}
+
+/// Checks the tip split of the top triangle `corners` (rest positions) where the polygon's
+/// boundary crosses the top at `x_tip` (on z = 0.15): 5 boundary pieces tiling it, reported as
+/// one split triangle; the tip node there, not duplicated, on the opened walls; the opening on
+/// the top reaching it from `inner` (the side of the path).
+fn check_tip(
+    body: &SoftBody,
+    surgery: &Surgery,
+    reported: &[SplitTriangle],
+    corners: [DVec3; 3],
+    x_tip: f64,
+) {
+    let pieces = pieces_in(body, surgery, corners);
+    let sum: f64 = pieces.iter().map(|f| area(f.map(|v| rest(body, v)))).sum();
+    eprintln!(
+        "tip at x = {x_tip}: {} pieces, area {sum:.9} of {:.9}",
+        pieces.len(),
+        area(corners)
+    );
+    assert_eq!(pieces.len(), 5, "pieces of the tip triangle");
+    assert!((sum - area(corners)).abs() < 1e-6);
+    // Reported as one triangle split into its 5 pieces.
+    let original = corners.map(|p| node_at(body, p).unwrap());
+    let mut key = original;
+    key.sort_unstable();
+    let entry = reported
+        .iter()
+        .find(|s| {
+            let mut k = s.original;
+            k.sort_unstable();
+            k == key
+        })
+        .expect("the tip triangle is reported");
+    assert_eq!(entry.pieces.len(), 5);
+    // The tip: a node at the crossing, on the plane, not duplicated, on the opened walls.
+    let tip = node_at(body, DVec3::new(x_tip, 1.5, 0.15));
+    let tip = tip.unwrap_or_else(|| panic!("no node at the tip x = {x_tip}"));
+    assert!(!duplicated(surgery, tip), "the tip is duplicated");
+    let on_wall = surgery.cut_faces().iter().any(|&(t, j)| {
+        let tet = body.tets()[t as usize];
+        (0..4).any(|k| k != j as usize && tet[k] == tip)
+    });
+    assert!(on_wall, "the opening does not reach the tip");
+}
+
+/// The blade's front crosses the top (y = 1.5) 0.2 cm ahead of the pose: the tip on the top
+/// row of triangles z ∈ [0, 0.5] is at x = x1 + 0.2; a first sweep from −1.5 to −0.375 puts
+/// the front at −0.175, halfway along the crossing segment [−0.35, 0] of the top triangle
+/// (−0.5, 0) (0, 0) (0, 0.5) (x, z), and the start at −1.7, along [−1.85, −1.5] of the
+/// triangle (−2, 0) (−1.5, 0) (−1.5, 0.5).
+#[test]
+fn an_incision_ending_inside_a_top_triangle_splits_it_at_the_tip_and_opens_up_to_it() {
+    let (mut body, mut surgery) = common::block(true);
+    let total = body.rest_volume();
+    let blade = common::incision_blade();
+    let at = common::incision_pose;
+    let events = surgery
+        .cut(
+            &mut body,
+            &BladeSweep::new(&blade, &at(-1.5), &at(-0.375)).unwrap(),
+        )
+        .unwrap();
+    surgery.validate(&body).unwrap();
+    let mut reported = Vec::new();
+    for e in events {
+        assert!(!matches!(e, SurgeryEvent::PieceDetached { .. }));
+        if let SurgeryEvent::CutAdvanced {
+            split_triangles, ..
+        } = e
+        {
+            reported.extend(split_triangles);
+        }
+    }
+    let top = |x: f64, z: f64| DVec3::new(x, 1.5, z);
+    // The front end and the start.
+    check_tip(
+        &body,
+        &surgery,
+        &reported,
+        [top(-0.5, 0.0), top(0.0, 0.0), top(0.0, 0.5)],
+        -0.175,
+    );
+    check_tip(
+        &body,
+        &surgery,
+        &reported,
+        [top(-2.0, 0.0), top(-1.5, 0.0), top(-1.5, 0.5)],
+        -1.7,
+    );
+    // The opening on the top: from the first node past the start's tip to the last before the
+    // front's; nothing beyond the tips.
+    let open = opening_on_top(&body, &surgery);
+    eprintln!("opening on top (duplicated nodes): {open:?}");
+    let near = |a: f64, b: f64| (a - b).abs() < 1e-6;
+    assert!(near(open[0], -1.5) && near(open[open.len() - 1], -0.35));
+    assert!((body.rest_volume() / total - 1.0).abs() < 1e-6);
+    assert_eq!(surgery.component_count(), 1);
+    check_quality(&body, &surgery);
+
+    // Continued from there in steps of 0.3 cm to x = 1.5: still valid, one piece, and the
+    // opening runs on past the old tip to the new front's.
+    let mut x = -0.375f32;
+    let mut k = 0;
+    while x < 1.5 {
+        let x1 = (x + 0.3).min(1.5);
+        for e in surgery
+            .cut(
+                &mut body,
+                &BladeSweep::new(&blade, &at(x), &at(x1)).unwrap(),
+            )
+            .unwrap()
+        {
+            assert!(!matches!(e, SurgeryEvent::PieceDetached { .. }));
+        }
+        surgery.validate(&body).unwrap();
+        x = x1;
+        k += 1;
+    }
+    let open = opening_on_top(&body, &surgery);
+    let (lo, hi) = (open[0], open[open.len() - 1]);
+    eprintln!("continued over {k} sweeps: opening on top from x = {lo} to {hi}");
+    assert!(hi > 1.0, "the opening did not extend: {hi}");
+    assert!((lo + 1.5).abs() < 1e-6);
+    // The old tip is now an ordinary wall node (duplicated).
+    let old = node_at(&body, DVec3::new(-0.175, 1.5, 0.15)).unwrap();
+    assert!(duplicated(&surgery, old), "the old tip was not opened");
+    assert_eq!(surgery.component_count(), 1);
+    assert!((body.rest_volume() / total - 1.0).abs() < 1e-6);
+    check_quality(&body, &surgery);
+    body.set_settings(StepSettings::default()).unwrap();
+    for _ in 0..10 {
+        body.step().unwrap();
+    }
+}
+
+fn radius_ratio([a, b, c, d]: [DVec3; 4]) -> f64 {
+    let (u, v, w) = (b - a, c - a, d - a);
+    let six_v = u.cross(v).dot(w);
+    let area = |p: DVec3, q: DVec3, r: DVec3| 0.5 * (q - p).cross(r - p).length();
+    let s = area(a, b, c) + area(a, b, d) + area(a, c, d) + area(b, c, d);
+    let o = (u.length_squared() * v.cross(w)
+        + v.length_squared() * w.cross(u)
+        + w.length_squared() * u.cross(v))
+        / (2.0 * six_v);
+    3.0 * (0.5 * six_v / s) / o.length()
+}
+
+/// The quality bound holds for every tet in rest space.
+fn check_quality(body: &SoftBody, surgery: &Surgery) {
+    let (volume, ratio) = surgery.quality_bound();
+    let mut worst = f64::INFINITY;
+    for (t, tet) in body.tets().iter().enumerate() {
+        assert!(body.tet_rest_volumes()[t] >= volume, "tet {t}");
+        worst = worst.min(radius_ratio(tet.map(|v| rest(body, v))));
+    }
+    assert!(worst >= ratio.min(MIN_RATIO) * 0.999, "worst ratio {worst}");
+}
+
+/// A blade whose front edge leans forward (1 cm ahead per 1 cm down): under the tip the cut
+/// runs ahead of it, so the faces on the plane just beyond the tip have their centroid segments
+/// inside the swept polygon; they stay glued all the same (the tets beyond the tip are the
+/// cut's front), so the opening on the top still ends at the tip, which keeps one node.
+#[test]
+fn under_a_forward_leaning_blade_the_surface_opening_still_ends_at_the_tip() {
+    let (mut body, mut surgery) = common::block(true);
+    // Its front edge from (3, 0) to (0, 3) in the blade's frame: at the top (y = 1.5 at the
+    // pose's y = 0.5) 2 cm ahead of the pose, 1 cm below it 3 cm ahead.
+    let blade = tissue_pbd::ToolShape::Blade {
+        a: glam::Vec3::new(-0.3, 0.0, 0.0),
+        b: glam::Vec3::new(3.0, 0.0, 0.0),
+        c: glam::Vec3::new(0.0, 3.0, 0.0),
+        thickness: 0.01,
+    };
+    let at = common::incision_pose;
+    // One sweep from x = −3.5 (its rear out of the block) to −2.175: the front at the top is at
+    // x = −0.175, halfway along the crossing segment [−0.35, 0].
+    let events = surgery
+        .cut(
+            &mut body,
+            &BladeSweep::new(&blade, &at(-3.5), &at(-2.175)).unwrap(),
+        )
+        .unwrap();
+    surgery.validate(&body).unwrap();
+    let mut reported = Vec::new();
+    for e in events {
+        assert!(!matches!(e, SurgeryEvent::PieceDetached { .. }));
+        if let SurgeryEvent::CutAdvanced {
+            split_triangles, ..
+        } = e
+        {
+            reported.extend(split_triangles);
+        }
+    }
+    let top = |x: f64, z: f64| DVec3::new(x, 1.5, z);
+    check_tip(
+        &body,
+        &surgery,
+        &reported,
+        [top(-0.5, 0.0), top(0.0, 0.0), top(0.0, 0.5)],
+        -0.175,
+    );
+    let open = opening_on_top(&body, &surgery);
+    eprintln!("leaning blade: opening on top (duplicated nodes): {open:?}");
+    assert!((open[open.len() - 1] + 0.35).abs() < 1e-6, "{open:?}");
+    // Under the top the cut went on ahead of the tip: duplicated nodes on the plane below.
+    let ahead = (0..body.node_count())
+        .filter(|&i| surgery.origins()[i] as usize != i)
+        .map(|i| rest(&body, surgery.origins()[i]))
+        .filter(|p| p.y < 1.5 - 1e-6 && p.x > -0.175)
+        .count();
+    eprintln!("leaning blade: {ahead} duplicated nodes below the top ahead of the tip");
+    assert_eq!(surgery.component_count(), 1);
+    check_quality(&body, &surgery);
+}
