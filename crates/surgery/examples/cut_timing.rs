@@ -1,7 +1,10 @@
 //! Step time with and without a cut on the bunny (9217 nodes, 42117 tets, scaled to 16.7 cm):
-//! a scalpel (its edge `EDGE_CM` above the bunny's mid-height, default 1) is drawn across it, one cut per step; prints the median
-//! and p99 of the plain steps before the cut, of the steps during it (the step plus the cut),
-//! of the cut alone, and the wall triangles each cut opened.
+//! a scalpel (its edge `EDGE_CM` above the bunny's mid-height, default 1) is drawn across it,
+//! one cut per step, three times from the same settled state; prints the median and p99 of the
+//! plain steps before the cut, of the steps during it (the step plus the cut), of the cut
+//! alone, of the same step of a copy of the body without the cut, and of the time the cut adds
+//! (step + cut − that same step, paired per cutting step so that the machine's drift cancels),
+//! and the wall and surface triangles each cut opened or split.
 //!
 //! `cargo run --release -p tissue-surgery --example cut_timing [-- STEP_CM [EDGE_CM [faces]
 //! [parallel]]]` (`faces`: face separation only, `SurgerySettings::split_tets` off; default on;
@@ -19,6 +22,9 @@ const BUNNY: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../../shared/meshes/bunny_10k_tet42k"
 );
+
+/// Traverses of the bunny, each from the same settled state.
+const TRAVERSES: usize = 3;
 
 fn stats(name: &str, v: &mut [f64]) {
     v.sort_by(f64::total_cmp);
@@ -99,37 +105,51 @@ fn main() {
     let at = |x: f32| Pose::new(Quat::IDENTITY, Vec3::new(x, y, cz));
     let (mut with_cut, mut cut_only, mut step_only, mut opened, mut split) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let mut x = x0;
-    while x < hi.x + 0.5 {
-        let t = Instant::now();
-        body.step().unwrap();
-        let s = t.elapsed().as_secs_f64();
-        let c = Instant::now();
-        let events = surgery
-            .cut(
-                &mut body,
-                &BladeSweep::new(&blade, &at(x), &at(x + step_cm)).unwrap(),
-            )
-            .unwrap();
-        let c = c.elapsed().as_secs_f64();
-        x += step_cm;
-        let (faces, triangles): (usize, usize) = events
-            .iter()
-            .map(|e| match e {
-                SurgeryEvent::CutAdvanced {
-                    opened_faces,
-                    split_triangles,
-                    ..
-                } => (opened_faces.len(), split_triangles.len()),
-                _ => (0, 0),
-            })
-            .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
-        if faces > 0 || triangles > 0 {
-            opened.push(faces as f64);
-            split.push(triangles as f64);
-            with_cut.push(s + c);
-            cut_only.push(c);
-            step_only.push(s);
+    let (mut same_step, mut added) = (Vec::new(), Vec::new());
+    // The traverse, `TRAVERSES` times from the same settled state (the last one is kept). Each
+    // cutting step is paired with the same step of a copy of the body without the cut, taken
+    // right after it, so that the machine's drift cancels out of the added time.
+    let settled = (body.clone(), surgery.clone());
+    for _ in 0..TRAVERSES {
+        (body, surgery) = settled.clone();
+        let mut x = x0;
+        while x < hi.x + 0.5 {
+            let mut shadow = body.clone();
+            let t = Instant::now();
+            body.step().unwrap();
+            let s = t.elapsed().as_secs_f64();
+            let c = Instant::now();
+            let events = surgery
+                .cut(
+                    &mut body,
+                    &BladeSweep::new(&blade, &at(x), &at(x + step_cm)).unwrap(),
+                )
+                .unwrap();
+            let c = c.elapsed().as_secs_f64();
+            let t = Instant::now();
+            shadow.step().unwrap();
+            let plain_now = t.elapsed().as_secs_f64();
+            x += step_cm;
+            let (faces, triangles): (usize, usize) = events
+                .iter()
+                .map(|e| match e {
+                    SurgeryEvent::CutAdvanced {
+                        opened_faces,
+                        split_triangles,
+                        ..
+                    } => (opened_faces.len(), split_triangles.len()),
+                    _ => (0, 0),
+                })
+                .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+            if faces > 0 || triangles > 0 {
+                opened.push(faces as f64);
+                split.push(triangles as f64);
+                with_cut.push(s + c);
+                cut_only.push(c);
+                step_only.push(s);
+                same_step.push(plain_now);
+                added.push(s + c - plain_now);
+            }
         }
     }
     surgery.validate(&body).unwrap();
@@ -174,6 +194,8 @@ fn main() {
     stats("  of which the step", &mut step_only);
     stats("  of which the cut", &mut cut_only);
     stats("step, after the cut", &mut after);
+    stats("same step without the cut", &mut same_step);
+    stats("added by the cut (paired)", &mut added);
     opened.sort_by(f64::total_cmp);
     split.sort_by(f64::total_cmp);
     println!(

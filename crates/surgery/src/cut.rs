@@ -23,7 +23,6 @@
 use crate::geometry::FxMap as HashMap;
 
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 use tissue_mesh::NO_TET;
 use tissue_pbd::{DistanceConstraint, Pose, SoftBody, Tool, ToolShape};
 
@@ -101,9 +100,6 @@ impl BladeSweep {
 /// enclose stay glued, and so do groups of less rest volume than this many median tets of the
 /// input (a slab between two nearly parallel walls, made of pieces of splits).
 pub const MIN_PIECE: usize = 16;
-
-/// Nodes per parallel job of the straddling search (smaller bodies run on one thread).
-const PARALLEL_NODES: usize = 2048;
 
 /// A face opened by this cut: tet `t` face `j` against tet `u` face `k`.
 #[derive(Debug, Clone, Copy)]
@@ -463,58 +459,48 @@ impl Surgery {
             }
         }
         let (origin, normal) = (plane.origin, plane.normal);
+        self.stamp = self.stamp.wrapping_add(1).max(1);
+        let stamp = self.stamp;
+        let mut candidates = Vec::new();
         // Each node's signed distance, once: a tet's straddling test reads four of them.
         let mut side = std::mem::take(&mut self.side);
         side.clear();
-        side.par_extend(
-            x.par_iter()
-                .with_min_len(PARALLEL_NODES)
-                .map(|p| normal.dot(p.as_dvec3() - origin)),
-        );
+        side.extend(x.iter().map(|p| normal.dot(p.as_dvec3() - origin)));
         // A straddling tet has a node on the plane or on its positive side, within that node's
         // reach of the plane (a tet's nodes lie within their reach of each other): only those
-        // nodes' tets are looked at. Both passes run on the pool (the two sides of a step's
-        // cut otherwise leave a core idle); a tet found from several nodes is deduplicated by
-        // the final sort, so the result does not depend on the number of threads.
-        let (reach, node_tets, side_ref) = (&self.node_reach, &self.node_tets, &side);
-        let mut candidates: Vec<u32> = (0..x.len())
-            .into_par_iter()
-            .with_min_len(PARALLEL_NODES)
-            .fold(Vec::new, |mut found, v| {
-                let (d, reach) = (side_ref[v], reach[v] as f64);
-                if !(0.0..=reach).contains(&d) {
-                    return found;
-                }
-                let p = x[v].as_dvec3();
-                if p.cmplt(lo - DVec3::splat(reach)).any()
-                    || p.cmpgt(hi + DVec3::splat(reach)).any()
+        // nodes' tets are looked at.
+        for (v, (p, &d)) in x.iter().zip(&side).enumerate() {
+            let reach = self.node_reach[v] as f64;
+            if !(0.0..=reach).contains(&d) {
+                continue;
+            }
+            let p = p.as_dvec3();
+            if p.cmplt(lo - DVec3::splat(reach)).any() || p.cmpgt(hi + DVec3::splat(reach)).any() {
+                continue;
+            }
+            for &t in &self.node_tets[v] {
+                // Most of these tets lie wholly on the positive side: tested before the mark
+                // (a tet seen again from another node is in cache by then).
+                let tet = tets[t as usize];
+                let d = tet.map(|i| side[i as usize]);
+                if !(d.iter().any(|&d| d >= 0.0) && d.iter().any(|&d| d <= 0.0))
+                    || self.tet_mark[t as usize] == stamp
                 {
-                    return found;
+                    continue;
                 }
-                for &t in &node_tets[v] {
-                    let tet = tets[t as usize];
-                    let d = tet.map(|i| side_ref[i as usize]);
-                    if !(d.iter().any(|&d| d >= 0.0) && d.iter().any(|&d| d <= 0.0)) {
-                        continue;
-                    }
-                    let q = tet.map(|i| x[i as usize].as_dvec3());
-                    let (tlo, thi) = (
-                        q[0].min(q[1]).min(q[2].min(q[3])),
-                        q[0].max(q[1]).max(q[2].max(q[3])),
-                    );
-                    if tlo.cmple(hi).all() && thi.cmpge(lo).all() {
-                        found.push(t);
-                    }
+                self.tet_mark[t as usize] = stamp;
+                let q = tet.map(|i| x[i as usize].as_dvec3());
+                let (tlo, thi) = (
+                    q[0].min(q[1]).min(q[2].min(q[3])),
+                    q[0].max(q[1]).max(q[2].max(q[3])),
+                );
+                if tlo.cmple(hi).all() && thi.cmpge(lo).all() {
+                    candidates.push(t);
                 }
-                found
-            })
-            .reduce(Vec::new, |mut a, mut b| {
-                a.append(&mut b);
-                a
-            });
+            }
+        }
         self.side = side;
         candidates.sort_unstable();
-        candidates.dedup();
         candidates
     }
 
