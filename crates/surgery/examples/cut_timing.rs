@@ -1,10 +1,11 @@
 //! Step time with and without a cut on the bunny (9217 nodes, 42117 tets, scaled to 16.7 cm):
 //! a scalpel (its edge `EDGE_CM` above the bunny's mid-height, default 1) is drawn across it,
-//! one cut per step, three times from the same settled state, each traverse after 40 plain
-//! steps of a copy of that state; prints the median and p99 of the plain steps before the cut,
-//! of the steps during it (the step plus the cut), of the cut alone, of the plain steps timed
-//! between the traverses, the time a cut adds (the medians of step + cut and of those plain
-//! steps), and the wall and surface triangles each cut opened or split.
+//! one cut per step, three times from the same settled state; prints the median and p99 of the
+//! plain steps before the cut, of the steps during it (the step plus the cut), of the cut
+//! alone, of the same step of a copy of the body without the cut (timed just before the real
+//! one), and of the time the cut adds (step + cut − that same step, paired per cutting step so
+//! that the machine's drift cancels), and the wall and surface triangles each cut opened or
+//! split.
 //!
 //! `cargo run --release -p tissue-surgery --example cut_timing [-- STEP_CM [EDGE_CM [faces]
 //! [parallel]]]` (`faces`: face separation only, `SurgerySettings::split_tets` off; default on;
@@ -105,22 +106,21 @@ fn main() {
     let at = |x: f32| Pose::new(Quat::IDENTITY, Vec3::new(x, y, cz));
     let (mut with_cut, mut cut_only, mut step_only, mut opened, mut split) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let mut same_step = Vec::new();
-    // The traverse, `TRAVERSES` times from the same settled state (the last one is kept), each
-    // after 40 plain steps of a copy of that state: the plain steps and the cutting steps are
-    // timed in turns, so that a machine whose speed drifts over seconds weighs on both alike.
+    let (mut same_step, mut added) = (Vec::new(), Vec::new());
+    // The traverse, `TRAVERSES` times from the same settled state (the last one is kept). Each
+    // cutting step is paired with the same step of a copy of the body without the cut, timed
+    // just before it, so that the machine's drift cancels out of the added time. (The copy's
+    // clone runs before both steps, so both find the body's data in the shared cache alike.)
     let settled = (body.clone(), surgery.clone());
     for _ in 0..TRAVERSES {
-        let mut probe = settled.0.clone();
-        for _ in 0..40 {
-            let t = Instant::now();
-            probe.step().unwrap();
-            same_step.push(t.elapsed().as_secs_f64());
-        }
-        drop(probe);
         (body, surgery) = settled.clone();
         let mut x = x0;
         while x < hi.x + 0.5 {
+            let mut shadow = body.clone();
+            let t = Instant::now();
+            shadow.step().unwrap();
+            let plain_now = t.elapsed().as_secs_f64();
+            drop(shadow);
             let t = Instant::now();
             body.step().unwrap();
             let s = t.elapsed().as_secs_f64();
@@ -150,6 +150,8 @@ fn main() {
                 with_cut.push(s + c);
                 cut_only.push(c);
                 step_only.push(s);
+                same_step.push(plain_now);
+                added.push(s + c - plain_now);
             }
         }
     }
@@ -195,15 +197,8 @@ fn main() {
     stats("  of which the step", &mut step_only);
     stats("  of which the cut", &mut cut_only);
     stats("step, after the cut", &mut after);
-    stats("plain steps between traverses", &mut same_step);
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
-    println!(
-        "added by a cut: {:.3} ms (median step + cut − median plain step between traverses)",
-        (median(&mut with_cut) - median(&mut same_step)) * 1e3
-    );
+    stats("same step without the cut", &mut same_step);
+    stats("added by the cut (paired)", &mut added);
     opened.sort_by(f64::total_cmp);
     split.sort_by(f64::total_cmp);
     println!(
