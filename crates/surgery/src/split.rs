@@ -420,79 +420,130 @@ impl Surgery {
         // whose pieces would fall below the quality bound or not tile it in rest space gives
         // up its split edges, and the rest is planned again until nothing fails.
         let first = body.node_count() as u32;
-        let mut pieces: Vec<[u32; 4]> = Vec::new();
-        let mut plan: Vec<(u32, std::ops::Range<usize>)> = Vec::new();
-        let mut new_rest: Vec<DVec3> = Vec::new();
-        let mut order: Vec<[u32; 2]> = Vec::new();
-        let mut local: Vec<([u32; 2], u32)> = Vec::new();
-        loop {
-            order.clear();
-            order.extend(edges.iter().filter(|(_, c)| c.valid).map(|(e, _)| *e));
-            order.sort_unstable();
-            new_rest.clear();
-            for (k, e) in order.iter().enumerate() {
-                let c = edges.get_mut(e).ok_or(SurgeryError::Defect {
-                    element: "edge",
-                    index: e[0] as usize,
-                    what: "split edge lost its record",
-                })?;
-                c.node = first + k as u32;
-                let (r0, r1) = (self.rest[e[0] as usize], self.rest[e[1] as usize]);
-                new_rest.push(r0 + (r1 - r0) * c.s);
+        // The quality of a tet's pieces depends on which of its edges are split and on rest
+        // positions, not on the new nodes' numbers: tets are judged with a placeholder node
+        // per candidate edge (`u32::MAX − i`, never a node of the body), and after a round of
+        // failures only the tets around the edges given up are judged again. The numbers and
+        // the pieces are made once the plan holds.
+        let mut candidate_edges: Vec<[u32; 2]> = edges
+            .iter()
+            .filter(|(_, c)| c.valid)
+            .map(|(e, _)| *e)
+            .collect();
+        candidate_edges.sort_unstable();
+        let mut placeholder_rest: Vec<DVec3> = Vec::with_capacity(candidate_edges.len());
+        for (i, e) in candidate_edges.iter().enumerate() {
+            let c = edges.get_mut(e).ok_or(SurgeryError::Defect {
+                element: "edge",
+                index: e[0] as usize,
+                what: "split edge lost its record",
+            })?;
+            c.node = u32::MAX - i as u32;
+            let (r0, r1) = (self.rest[e[0] as usize], self.rest[e[1] as usize]);
+            placeholder_rest.push(r0 + (r1 - r0) * c.s);
+        }
+        let rest_of = |v: u32| -> DVec3 {
+            if v as usize >= self.rest.len() {
+                placeholder_rest[(u32::MAX - v) as usize]
+            } else {
+                self.rest[v as usize]
             }
-            let mut affected: Vec<u32> = order.iter().flat_map(|e| self.tets_around(e)).collect();
-            affected.sort_unstable();
-            affected.dedup();
-            let rest_of = |v: u32| -> DVec3 {
-                if v >= first {
-                    new_rest[(v - first) as usize]
-                } else {
-                    self.rest[v as usize]
-                }
-            };
-            pieces.clear();
-            plan.clear();
-            let mut failed: Vec<[u32; 2]> = Vec::new();
-            for &t in &affected {
-                let tet = body.tets()[t as usize];
-                local.clear();
-                for a in 0..4 {
-                    for b in a + 1..4 {
-                        let e = sorted2(tet[a], tet[b]);
-                        if let Some(c) = edges.get(&e).filter(|c| c.valid) {
-                            local.push((e, c.node));
-                        }
+        };
+        let mut local: Vec<([u32; 2], u32)> = Vec::new();
+        let mut scratch: Vec<[u32; 4]> = Vec::new();
+        // Whether tet `t`'s pieces under the valid edges meet the bound; `local` is left with
+        // its valid edges.
+        let mut judge = |t: u32, edges: &HashMap<[u32; 2], EdgeCut>, local: &mut Vec<_>| {
+            let tet = body.tets()[t as usize];
+            local.clear();
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    let e = sorted2(tet[a], tet[b]);
+                    if let Some(c) = edges.get(&e).filter(|c| c.valid) {
+                        local.push((e, c.node));
                     }
                 }
-                local.sort_unstable();
-                let start = pieces.len();
-                bisect(tet, &local, &mut pieces);
-                let parent = six_volume(tet.map(rest_of));
-                let mut sum = 0.0;
-                let good = pieces[start..].iter().all(|p| {
-                    let r = p.map(rest_of);
-                    let v = six_volume(r);
-                    sum += v;
-                    v / 6.0 >= self.piece_floor() && radius_ratio(r) >= MIN_RATIO
-                }) && (sum - parent).abs() <= 1e-9 * parent.abs()
-                    && (local.is_empty()
-                        || (self.depth[t as usize] < MAX_SPLIT_DEPTH
-                            && blocked.binary_search(&t).is_err()));
-                if good {
-                    plan.push((t, start..pieces.len()));
-                } else {
-                    pieces.truncate(start);
+            }
+            local.sort_unstable();
+            scratch.clear();
+            bisect(tet, local, &mut scratch);
+            let parent = six_volume(tet.map(rest_of));
+            let mut sum = 0.0;
+            scratch.iter().all(|p| {
+                let r = p.map(rest_of);
+                let v = six_volume(r);
+                sum += v;
+                v / 6.0 >= self.piece_floor() && radius_ratio(r) >= MIN_RATIO
+            }) && (sum - parent).abs() <= 1e-9 * parent.abs()
+                && (local.is_empty()
+                    || (self.depth[t as usize] < MAX_SPLIT_DEPTH
+                        && blocked.binary_search(&t).is_err()))
+        };
+        let mut affected: Vec<u32> = candidate_edges
+            .iter()
+            .flat_map(|e| self.tets_around(e))
+            .collect();
+        affected.sort_unstable();
+        affected.dedup();
+        let mut to_judge = affected.clone();
+        loop {
+            let mut failed: Vec<[u32; 2]> = Vec::new();
+            for &t in &to_judge {
+                if !judge(t, &edges, &mut local) {
                     failed.extend(local.iter().map(|l| l.0));
                 }
             }
             if failed.is_empty() {
                 break;
             }
-            for e in failed {
-                if let Some(c) = edges.get_mut(&e) {
+            failed.sort_unstable();
+            failed.dedup();
+            for e in &failed {
+                if let Some(c) = edges.get_mut(e) {
                     c.valid = false;
                 }
             }
+            // Judged again: the tets around the edges given up that still split an edge.
+            to_judge = failed.iter().flat_map(|e| self.tets_around(e)).collect();
+            to_judge.sort_unstable();
+            to_judge.dedup();
+            let has_valid = |t: u32| {
+                let tet = body.tets()[t as usize];
+                (0..4).any(|a| {
+                    (a + 1..4).any(|b| edges.get(&sorted2(tet[a], tet[b])).is_some_and(|c| c.valid))
+                })
+            };
+            to_judge.retain(|&t| has_valid(t));
+            affected.retain(|&t| has_valid(t));
+        }
+        // The plan: new nodes numbered in the order of the split edges, each affected tet's
+        // pieces with them.
+        let mut order: Vec<[u32; 2]> = Vec::new();
+        let mut new_rest: Vec<DVec3> = Vec::new();
+        for (i, e) in candidate_edges.iter().enumerate() {
+            if let Some(c) = edges.get_mut(e).filter(|c| c.valid) {
+                c.node = first + order.len() as u32;
+                order.push(*e);
+                new_rest.push(placeholder_rest[i]);
+            }
+        }
+        let mut pieces: Vec<[u32; 4]> = Vec::new();
+        let mut plan: Vec<(u32, std::ops::Range<usize>)> = Vec::with_capacity(affected.len());
+        for &t in &affected {
+            let tet = body.tets()[t as usize];
+            local.clear();
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    let e = sorted2(tet[a], tet[b]);
+                    if let Some(c) = edges.get(&e).filter(|c| c.valid) {
+                        local.push((e, c.node));
+                    }
+                }
+            }
+            local.sort_unstable();
+            let start = pieces.len();
+            bisect(tet, &local, &mut pieces);
+            plan.push((t, start..pieces.len()));
         }
         // Crossing points this sweep covered on edges it did not split: a later sweep in about
         // the same place finds them covered (a cut continued over many steps).
