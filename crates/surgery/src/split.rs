@@ -183,6 +183,25 @@ pub(crate) fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32;
     out.push(t);
 }
 
+/// Tet `tet`'s edges planned for a split (valid in `edges`), sorted, each with its new node:
+/// the input of [`bisect`]. `local` is cleared first.
+pub(crate) fn split_edges_of(
+    tet: [u32; 4],
+    edges: &HashMap<[u32; 2], EdgeCut>,
+    local: &mut Vec<([u32; 2], u32)>,
+) {
+    local.clear();
+    for a in 0..4 {
+        for b in a + 1..4 {
+            let e = sorted2(tet[a], tet[b]);
+            if let Some(c) = edges.get(&e).filter(|c| c.valid) {
+                local.push((e, c.node));
+            }
+        }
+    }
+    local.sort_unstable();
+}
+
 /// A planned split edge: its ends, the crossing parameter from the first, its new node.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct EdgeCut {
@@ -455,26 +474,10 @@ impl Surgery {
         // its valid edges.
         let mut judge = |t: u32, edges: &HashMap<[u32; 2], EdgeCut>, local: &mut Vec<_>| {
             let tet = body.tets()[t as usize];
-            local.clear();
-            for a in 0..4 {
-                for b in a + 1..4 {
-                    let e = sorted2(tet[a], tet[b]);
-                    if let Some(c) = edges.get(&e).filter(|c| c.valid) {
-                        local.push((e, c.node));
-                    }
-                }
-            }
-            local.sort_unstable();
+            split_edges_of(tet, edges, local);
             scratch.clear();
             bisect(tet, local, &mut scratch);
-            let parent = six_volume(tet.map(rest_of));
-            let mut sum = 0.0;
-            scratch.iter().all(|p| {
-                let r = p.map(rest_of);
-                let v = six_volume(r);
-                sum += v;
-                v / 6.0 >= self.piece_floor() && radius_ratio(r) >= MIN_RATIO
-            }) && (sum - parent).abs() <= 1e-9 * parent.abs()
+            self.pieces_meet_bound(tet, &scratch, rest_of)
                 && (local.is_empty()
                     || (self.depth[t as usize] < MAX_SPLIT_DEPTH
                         && blocked.binary_search(&t).is_err()))
@@ -531,16 +534,7 @@ impl Surgery {
         let mut plan: Vec<(u32, std::ops::Range<usize>)> = Vec::with_capacity(affected.len());
         for &t in &affected {
             let tet = body.tets()[t as usize];
-            local.clear();
-            for a in 0..4 {
-                for b in a + 1..4 {
-                    let e = sorted2(tet[a], tet[b]);
-                    if let Some(c) = edges.get(&e).filter(|c| c.valid) {
-                        local.push((e, c.node));
-                    }
-                }
-            }
-            local.sort_unstable();
+            split_edges_of(tet, &edges, &mut local);
             let start = pieces.len();
             bisect(tet, &local, &mut pieces);
             plan.push((t, start..pieces.len()));
@@ -584,6 +578,25 @@ impl Surgery {
     /// input's median tet, and at least [`Surgery::volume_floor`].
     pub(crate) fn piece_floor(&self) -> f64 {
         (MIN_PIECE_FRACTION * self.median_rest_volume).max(self.volume_floor())
+    }
+
+    /// Whether the `pieces` of `tet` (rest corners by `rest_of`) meet a split's bound: each
+    /// piece's rest volume ≥ [`Surgery::piece_floor`] and radius ratio ≥ [`MIN_RATIO`], and
+    /// together they tile the tet in rest space (volumes summing to its own within 10⁻⁹).
+    pub(crate) fn pieces_meet_bound(
+        &self,
+        tet: [u32; 4],
+        pieces: &[[u32; 4]],
+        rest_of: impl Fn(u32) -> DVec3,
+    ) -> bool {
+        let parent = six_volume(tet.map(&rest_of));
+        let mut sum = 0.0;
+        pieces.iter().all(|p| {
+            let r = p.map(&rest_of);
+            let v = six_volume(r);
+            sum += v;
+            v / 6.0 >= self.piece_floor() && radius_ratio(r) >= MIN_RATIO
+        }) && (sum - parent).abs() <= 1e-9 * parent.abs()
     }
 
     /// The tets around an edge.

@@ -27,10 +27,9 @@ use glam::DVec3;
 use tissue_mesh::NO_TET;
 use tissue_pbd::SoftBody;
 
-use crate::geometry::radius_ratio;
 use crate::geometry::FxMap as HashMap;
-use crate::split::{bisect, six_volume, sorted2, CutPlane, EdgeCut, SplitOutcome};
-use crate::split::{MAX_SPLIT_DEPTH, MIN_RATIO};
+use crate::split::MAX_SPLIT_DEPTH;
+use crate::split::{bisect, sorted2, split_edges_of, CutPlane, EdgeCut, SplitOutcome};
 use crate::state::face_nodes;
 use crate::{SplitTriangle, Surgery, SurgeryError};
 
@@ -180,26 +179,10 @@ impl Surgery {
             let mut failed: Vec<[u32; 2]> = Vec::new();
             for &t in &affected {
                 let tet = body.tets()[t as usize];
-                local.clear();
-                for a in 0..4 {
-                    for b in a + 1..4 {
-                        let e = sorted2(tet[a], tet[b]);
-                        if let Some(c) = edges.get(&e).filter(|c| c.valid) {
-                            local.push((e, c.node));
-                        }
-                    }
-                }
-                local.sort_unstable();
+                split_edges_of(tet, &edges, &mut local);
                 let start = pieces.len();
                 bisect(tet, &local, &mut pieces);
-                let parent = six_volume(tet.map(rest_of));
-                let mut sum = 0.0;
-                let good = pieces[start..].iter().all(|p| {
-                    let r = p.map(rest_of);
-                    let v = six_volume(r);
-                    sum += v;
-                    v / 6.0 >= self.piece_floor() && radius_ratio(r) >= MIN_RATIO
-                }) && (sum - parent).abs() <= 1e-9 * parent.abs()
+                let good = self.pieces_meet_bound(tet, &pieces[start..], rest_of)
                     && self.depth[t as usize] < MAX_SPLIT_DEPTH;
                 if good {
                     plan.push((t, start..pieces.len()));
