@@ -468,7 +468,11 @@ impl Surgery {
         side.extend(x.iter().map(|p| normal.dot(p.as_dvec3() - origin)));
         // A straddling tet has a node on the plane or on its positive side, within that node's
         // reach of the plane (a tet's nodes lie within their reach of each other): only those
-        // nodes' tets are looked at.
+        // nodes' tets are looked at. Their tets are gathered first and their nodes loaded in a
+        // loop of independent loads, apart from the tests that branch on them: the body's
+        // arrays are out of cache after a step, and the misses then overlap.
+        let mut near_tets = std::mem::take(&mut self.near_tets);
+        near_tets.clear();
         for (v, (p, &d)) in x.iter().zip(&side).enumerate() {
             let reach = self.node_reach[v] as f64;
             if !(0.0..=reach).contains(&d) {
@@ -478,27 +482,30 @@ impl Surgery {
             if p.cmplt(lo - DVec3::splat(reach)).any() || p.cmpgt(hi + DVec3::splat(reach)).any() {
                 continue;
             }
-            for &t in &self.node_tets[v] {
-                // Most of these tets lie wholly on the positive side: tested before the mark
-                // (a tet seen again from another node is in cache by then).
-                let tet = tets[t as usize];
-                let d = tet.map(|i| side[i as usize]);
-                if !(d.iter().any(|&d| d >= 0.0) && d.iter().any(|&d| d <= 0.0))
-                    || self.tet_mark[t as usize] == stamp
-                {
-                    continue;
-                }
-                self.tet_mark[t as usize] = stamp;
-                let q = tet.map(|i| x[i as usize].as_dvec3());
-                let (tlo, thi) = (
-                    q[0].min(q[1]).min(q[2].min(q[3])),
-                    q[0].max(q[1]).max(q[2].max(q[3])),
-                );
-                if tlo.cmple(hi).all() && thi.cmpge(lo).all() {
-                    candidates.push(t);
-                }
+            near_tets.extend_from_slice(&self.node_tets[v]);
+        }
+        let mut near_nodes = std::mem::take(&mut self.near_nodes);
+        near_nodes.clear();
+        near_nodes.extend(near_tets.iter().map(|&t| tets[t as usize]));
+        for (&t, tet) in near_tets.iter().zip(&near_nodes) {
+            let d = tet.map(|i| side[i as usize]);
+            if !(d.iter().any(|&d| d >= 0.0) && d.iter().any(|&d| d <= 0.0))
+                || self.tet_mark[t as usize] == stamp
+            {
+                continue;
+            }
+            self.tet_mark[t as usize] = stamp;
+            let q = tet.map(|i| x[i as usize].as_dvec3());
+            let (tlo, thi) = (
+                q[0].min(q[1]).min(q[2].min(q[3])),
+                q[0].max(q[1]).max(q[2].max(q[3])),
+            );
+            if tlo.cmple(hi).all() && thi.cmpge(lo).all() {
+                candidates.push(t);
             }
         }
+        self.near_tets = near_tets;
+        self.near_nodes = near_nodes;
         self.side = side;
         candidates.sort_unstable();
         candidates

@@ -75,6 +75,9 @@ pub struct Surgery {
     pub(crate) stamp: u32,
     /// Scratch: each node's signed distance from the current blade's plane (cm).
     pub(crate) side: Vec<f64>,
+    /// Scratch of the straddling search: the tets of the nodes near the plane, their nodes.
+    pub(crate) near_tets: Vec<u32>,
+    pub(crate) near_nodes: Vec<[u32; 4]>,
     /// Scratch marks per tet for the crumb searches, stamped with `group_stamp`.
     pub(crate) group_mark: Vec<u32>,
     pub(crate) group_stamp: u32,
@@ -176,6 +179,8 @@ impl Surgery {
             tet_mark: vec![0; tets.len()],
             stamp: 0,
             side: Vec::new(),
+            near_tets: Vec::new(),
+            near_nodes: Vec::new(),
             group_mark: Vec::new(),
             group_stamp: 0,
         };
