@@ -609,6 +609,12 @@ impl Surgery {
         let tets = body.tets();
         let mut star = self.node_tets[v as usize].clone();
         star.sort_unstable();
+        // The star's nodes and neighbours, loaded before the search branches on them (the
+        // loads are independent, so their cache misses overlap).
+        let around: Vec<([u32; 4], [u32; 4])> = star
+            .iter()
+            .map(|&t| (tets[t as usize], self.neighbours[t as usize]))
+            .collect();
         let mut comp = vec![u32::MAX; star.len()];
         let mut count = 0;
         for s in 0..star.len() {
@@ -618,8 +624,8 @@ impl Surgery {
             comp[s] = count;
             let mut stack = vec![s];
             while let Some(a) = stack.pop() {
-                let t = star[a] as usize;
-                for (&node, &u) in tets[t].iter().zip(&self.neighbours[t]) {
+                let (nodes, neighbours) = &around[a];
+                for (&node, &u) in nodes.iter().zip(neighbours) {
                     if node == v || u == NO_TET {
                         continue;
                     }
@@ -724,12 +730,18 @@ impl Surgery {
             HashMap::with_capacity_and_hasher(2 * local.len(), Default::default());
         // (vertex, link edge) of each boundary face at a checked vertex, grouped by sorting.
         let mut around: Vec<(u32, [u32; 2])> = Vec::new();
-        for &t in &local {
+        // The local tets' nodes and neighbours, loaded before the loop that branches on them
+        // (independent loads: their cache misses overlap).
+        let local_tets: Vec<([u32; 4], [u32; 4])> = local
+            .iter()
+            .map(|&t| (tets[t as usize], self.neighbours[t as usize]))
+            .collect();
+        for (&t, (nodes, neighbours)) in local.iter().zip(&local_tets) {
             for j in 0..4 {
-                if self.neighbours[t as usize][j] != NO_TET {
+                if neighbours[j] != NO_TET {
                     continue;
                 }
-                let orig = face_nodes(&tets[t as usize], j);
+                let orig = face_nodes(nodes, j);
                 let f = orig.map(|v| relabel(t, v));
                 for k in 0..3 {
                     let (a, b) = (orig[k], orig[(k + 1) % 3]);
