@@ -737,8 +737,8 @@ impl Surgery {
             .map(|&t| (tets[t as usize], self.neighbours[t as usize]))
             .collect();
         for (&t, (nodes, neighbours)) in local.iter().zip(&local_tets) {
-            for j in 0..4 {
-                if neighbours[j] != NO_TET {
+            for (j, &u) in neighbours.iter().enumerate() {
+                if u != NO_TET {
                     continue;
                 }
                 let orig = face_nodes(nodes, j);
