@@ -102,6 +102,33 @@ fn check_tip(
     assert!(on_wall, "the opening does not reach the tip");
 }
 
+/// One sweep of `blade` from `from` to `to` (incision poses): the body stays valid and in one
+/// piece; returns the split boundary triangles the events reported.
+fn sweep_once(
+    body: &mut SoftBody,
+    surgery: &mut Surgery,
+    blade: &tissue_pbd::ToolShape,
+    from: f32,
+    to: f32,
+) -> Vec<SplitTriangle> {
+    let at = common::incision_pose;
+    let events = surgery
+        .cut(body, &BladeSweep::new(blade, &at(from), &at(to)).unwrap())
+        .unwrap();
+    surgery.validate(body).unwrap();
+    let mut reported = Vec::new();
+    for e in events {
+        assert!(!matches!(e, SurgeryEvent::PieceDetached { .. }));
+        if let SurgeryEvent::CutAdvanced {
+            split_triangles, ..
+        } = e
+        {
+            reported.extend(split_triangles);
+        }
+    }
+    reported
+}
+
 /// The blade's front crosses the top (y = 1.5) 0.2 cm ahead of the pose: the tip on the top
 /// row of triangles z ∈ [0, 0.5] is at x = x1 + 0.2; a first sweep from −1.5 to −0.375 puts
 /// the front at −0.175, halfway along the crossing segment [−0.35, 0] of the top triangle
@@ -113,23 +140,7 @@ fn an_incision_ending_inside_a_top_triangle_splits_it_at_the_tip_and_opens_up_to
     let total = body.rest_volume();
     let blade = common::incision_blade();
     let at = common::incision_pose;
-    let events = surgery
-        .cut(
-            &mut body,
-            &BladeSweep::new(&blade, &at(-1.5), &at(-0.375)).unwrap(),
-        )
-        .unwrap();
-    surgery.validate(&body).unwrap();
-    let mut reported = Vec::new();
-    for e in events {
-        assert!(!matches!(e, SurgeryEvent::PieceDetached { .. }));
-        if let SurgeryEvent::CutAdvanced {
-            split_triangles, ..
-        } = e
-        {
-            reported.extend(split_triangles);
-        }
-    }
+    let reported = sweep_once(&mut body, &mut surgery, &blade, -1.5, -0.375);
     let top = |x: f64, z: f64| DVec3::new(x, 1.5, z);
     // The front end and the start.
     check_tip(
@@ -230,26 +241,9 @@ fn under_a_forward_leaning_blade_the_surface_opening_still_ends_at_the_tip() {
         c: glam::Vec3::new(0.0, 3.0, 0.0),
         thickness: 0.01,
     };
-    let at = common::incision_pose;
     // One sweep from x = −3.5 (its rear out of the block) to −2.175: the front at the top is at
     // x = −0.175, halfway along the crossing segment [−0.35, 0].
-    let events = surgery
-        .cut(
-            &mut body,
-            &BladeSweep::new(&blade, &at(-3.5), &at(-2.175)).unwrap(),
-        )
-        .unwrap();
-    surgery.validate(&body).unwrap();
-    let mut reported = Vec::new();
-    for e in events {
-        assert!(!matches!(e, SurgeryEvent::PieceDetached { .. }));
-        if let SurgeryEvent::CutAdvanced {
-            split_triangles, ..
-        } = e
-        {
-            reported.extend(split_triangles);
-        }
-    }
+    let reported = sweep_once(&mut body, &mut surgery, &blade, -3.5, -2.175);
     let top = |x: f64, z: f64| DVec3::new(x, 1.5, z);
     check_tip(
         &body,
