@@ -27,7 +27,7 @@ use tissue_mesh::NO_TET;
 use tissue_pbd::{DistanceConstraint, Pose, SoftBody, Tool, ToolShape};
 
 use crate::split::CutPlane;
-use crate::state::{face_nodes, single_cycle};
+use crate::state::{face_nodes, pinched_vertices};
 use crate::{Surgery, SurgeryError, SurgeryEvent};
 
 /// A blade's sweep over one step, in world coordinates: its corners at the start and the end.
@@ -405,10 +405,10 @@ impl Surgery {
         let rest = body.tet_rest_volumes();
         let limit = MIN_PIECE as f64 * self.median_rest_volume;
         let stamp = self.next_group_stamp();
-        let mut group = vec![t];
         if self.group_mark[t as usize] == big {
             return None;
         }
+        let mut group = vec![t];
         self.group_mark[t as usize] = stamp;
         let mut volume = rest[t as usize] as f64;
         let mut i = 0;
@@ -764,17 +764,11 @@ impl Surgery {
                 bad_edges.push([orig[0].min(orig[1]), orig[0].max(orig[1])]);
             }
         }
-        let mut bad_vertices: Vec<u32> = Vec::new();
-        around.sort_unstable();
-        let mut link: Vec<[u32; 2]> = Vec::new();
-        for group in around.chunk_by(|a, b| a.0 == b.0) {
-            link.clear();
-            link.extend(group.iter().map(|g| g.1));
-            if !single_cycle(&link) {
-                // Back to the original label: the node itself or the one it copies.
-                bad_vertices.push(original(group[0].0));
-            }
-        }
+        // Back to the original label: the node itself or the one it copies.
+        let mut bad_vertices: Vec<u32> = pinched_vertices(&mut around)
+            .into_iter()
+            .map(original)
+            .collect();
         // One face per defect: the last new face on the bad edge or at the bad vertex (a chord
         // of the crack between two front nodes, or a crack touching the surface at a point).
         let mut out: Vec<usize> = Vec::new();

@@ -510,11 +510,9 @@ impl Surgery {
             to_judge = failed.iter().flat_map(|e| self.tets_around(e)).collect();
             to_judge.sort_unstable();
             to_judge.dedup();
-            let has_valid = |t: u32| {
-                let tet = body.tets()[t as usize];
-                (0..4).any(|a| {
-                    (a + 1..4).any(|b| edges.get(&sorted2(tet[a], tet[b])).is_some_and(|c| c.valid))
-                })
+            let mut has_valid = |t: u32| {
+                split_edges_of(body.tets()[t as usize], &edges, &mut local);
+                !local.is_empty()
             };
             to_judge.retain(|&t| has_valid(t));
             affected.retain(|&t| has_valid(t));

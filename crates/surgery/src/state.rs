@@ -411,18 +411,12 @@ impl Surgery {
                 around.push((f[k], [f[(k + 1) % 3], f[(k + 2) % 3]]));
             }
         }
-        around.sort_unstable();
-        let mut link: Vec<[u32; 2]> = Vec::new();
-        for group in around.chunk_by(|a, b| a.0 == b.0) {
-            link.clear();
-            link.extend(group.iter().map(|g| g.1));
-            if !single_cycle(&link) {
-                return defect(
-                    "vertex",
-                    group[0].0 as usize,
-                    "boundary faces around the vertex do not form one fan (pinched)",
-                );
-            }
+        if let Some(&v) = pinched_vertices(&mut around).first() {
+            return defect(
+                "vertex",
+                v as usize,
+                "boundary faces around the vertex do not form one fan (pinched)",
+            );
         }
         let x = body.positions();
         let rest = body.tet_rest_volumes();
@@ -480,9 +474,26 @@ impl Surgery {
     }
 }
 
+/// The vertices of `around` — (vertex, link edge `(b, c)`), one entry per boundary face at
+/// the vertex — whose link edges do not form a single cycle (a pinch), in increasing order;
+/// `around` is sorted on the way.
+pub(crate) fn pinched_vertices(around: &mut [(u32, [u32; 2])]) -> Vec<u32> {
+    around.sort_unstable();
+    let mut link: Vec<[u32; 2]> = Vec::new();
+    let mut out = Vec::new();
+    for group in around.chunk_by(|a, b| a.0 == b.0) {
+        link.clear();
+        link.extend(group.iter().map(|g| g.1));
+        if !single_cycle(&link) {
+            out.push(group[0].0);
+        }
+    }
+    out
+}
+
 /// Whether the directed link edges `(b, c)` (one per boundary face around a vertex) form a
 /// single cycle.
-pub(crate) fn single_cycle(link: &[[u32; 2]]) -> bool {
+fn single_cycle(link: &[[u32; 2]]) -> bool {
     if link.is_empty() {
         return true;
     }
