@@ -700,13 +700,16 @@ impl SoftBody {
         let mut found = None;
         for b in (count.saturating_sub(SEARCH)..count).rev() {
             let lane = d.tet_fill[b] as usize;
+            if lane >= LANES {
+                continue;
+            }
             let ids = d
                 .tet_batches
                 .get(b)
                 .map(|x| x.nodes)
                 .or_else(|| d.centroid_batches.get(b).map(|x| x.nodes));
             let clash = ids.is_some_and(|ids| ids.iter().any(|l| l.iter().any(|n| s.contains(n))));
-            if lane >= LANES || clash {
+            if clash {
                 continue;
             }
             if let (Some(x), Some((rest, param))) = (d.tet_batches.get_mut(b), tet) {

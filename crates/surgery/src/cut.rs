@@ -310,7 +310,16 @@ impl Surgery {
         let mut plan = self.plan_split(body, &faces);
         let mut changed: Option<Vec<u32>> = None;
         let split = loop {
-            let bad = self.defects(body, &faces, &plan, changed.as_deref());
+            let mut entry = std::mem::take(&mut self.plan_entry);
+            entry.resize(body.node_count(), u32::MAX);
+            for (i, p) in plan.iter().enumerate() {
+                entry[p.0 as usize] = i as u32;
+            }
+            let bad = self.defects(body, &faces, &plan, &entry, changed.as_deref());
+            for p in &plan {
+                entry[p.0 as usize] = u32::MAX;
+            }
+            self.plan_entry = entry;
             if bad.is_empty() {
                 break plan;
             }
@@ -649,12 +658,14 @@ impl Surgery {
     /// edges at a changed node and vertices sharing a boundary face with one. The caller passes
     /// the nodes of the faces glued back since the last call, whose plans alone changed; every
     /// defect elsewhere was there before and gave no face to glue, so the result is the same
-    /// as a full check (`None`).
+    /// as a full check (`None`). `plan_entry[v]` is node `v`'s index in `plan` (`u32::MAX`
+    /// for none).
     fn defects(
         &self,
         body: &SoftBody,
         faces: &[NewFace],
         plan: &[(u32, Vec<u32>, Vec<u32>, u32)],
+        plan_entry: &[u32],
         changed: Option<&[u32]>,
     ) -> Vec<usize> {
         let tets = body.tets();
@@ -665,7 +676,10 @@ impl Surgery {
             base.push(next);
             next += p.3.saturating_sub(1);
         }
-        let entry = |v: u32| plan.binary_search_by_key(&v, |p| p.0).ok();
+        let entry = |v: u32| {
+            let i = plan_entry.get(v as usize).copied().unwrap_or(u32::MAX);
+            (i != u32::MAX).then_some(i as usize)
+        };
         let relabel = |t: u32, v: u32| -> u32 {
             if let Some(i) = entry(v) {
                 let (_, star, comp, count) = &plan[i];
@@ -914,8 +928,13 @@ impl Surgery {
             while j < images.len() && images[j].0 == oe {
                 j += 1;
             }
+            let unchanged = j == i + 1 && images[i].1 == oe;
             let group: Vec<[u32; 2]> = images[i..j].iter().map(|p| p.1).collect();
             i = j;
+            if unchanged {
+                // The edge kept its nodes: its constraint stays as it is.
+                continue;
+            }
             let Some(&c) = self.edge_constraint.get(&oe) else {
                 continue;
             };

@@ -97,7 +97,14 @@ impl FxHasher {
 impl std::hash::Hasher for FxHasher {
     #[inline]
     fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
+        // Eight bytes per round (an edge `[u32; 2]` is one), then the tail.
+        let mut words = bytes.chunks_exact(8);
+        for w in &mut words {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(w);
+            self.add(u64::from_le_bytes(b));
+        }
+        for &b in words.remainder() {
             self.add(b as u64);
         }
     }
@@ -119,7 +126,9 @@ impl std::hash::Hasher for FxHasher {
     }
     #[inline]
     fn finish(&self) -> u64 {
-        self.0
+        // The product's high bits depend on every input bit, its low ones (the table's bucket)
+        // only on the low input bits: rotate the high ones down.
+        self.0.rotate_left(26)
     }
 }
 

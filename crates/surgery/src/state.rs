@@ -81,6 +81,9 @@ pub struct Surgery {
     /// Scratch marks per tet for the crumb searches, stamped with `group_stamp`.
     pub(crate) group_mark: Vec<u32>,
     pub(crate) group_stamp: u32,
+    /// Scratch of the manifold guard: per node, its entry in the split plan (`u32::MAX` when
+    /// it has none; reset after each use).
+    pub(crate) plan_entry: Vec<u32>,
 }
 
 /// The face of tet `t` opposite local node `j`, wound outward.
@@ -183,6 +186,7 @@ impl Surgery {
             near_nodes: Vec::new(),
             group_mark: Vec::new(),
             group_stamp: 0,
+            plan_entry: Vec::new(),
         };
         s.count_components(body);
         Ok(s)
