@@ -626,19 +626,22 @@ impl Surgery {
             .collect();
         let mut comp = vec![u32::MAX; star.len()];
         let mut count = 0;
+        let mut stack = Vec::new();
         for s in 0..star.len() {
             if comp[s] != u32::MAX {
                 continue;
             }
             comp[s] = count;
-            let mut stack = vec![s];
+            stack.push(s);
             while let Some(a) = stack.pop() {
                 let (nodes, neighbours) = &around[a];
                 for (&node, &u) in nodes.iter().zip(neighbours) {
                     if node == v || u == NO_TET {
                         continue;
                     }
-                    if let Ok(b) = star.binary_search(&u) {
+                    // A neighbour across a face at `v` is in its star (a short list: a scan
+                    // beats a binary search's unpredictable branches).
+                    if let Some(b) = star.iter().position(|&x| x == u) {
                         if comp[b] == u32::MAX {
                             comp[b] = count;
                             stack.push(b);

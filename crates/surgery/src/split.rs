@@ -259,16 +259,14 @@ impl Surgery {
             }
             let star = &self.node_tets[v as usize];
             let tets = body.tets();
-            let mut shortest = f64::INFINITY;
-            for &t in star {
-                for &u in &tets[t as usize] {
-                    if u != v {
-                        shortest =
-                            shortest.min(self.rest[v as usize].distance(self.rest[u as usize]));
-                    }
-                }
-            }
-            if d.abs() >= SNAP_FRACTION * shortest {
+            // Not snapped when some rest edge at `v` is shorter than |d| / SNAP_FRACTION.
+            let (rv, limit) = (self.rest[v as usize], d.abs() / SNAP_FRACTION);
+            let short_edge = star.iter().any(|&t| {
+                tets[t as usize]
+                    .iter()
+                    .any(|&u| u != v && rv.distance(self.rest[u as usize]) <= limit)
+            });
+            if short_edge {
                 continue;
             }
             let x = pos(body, v);

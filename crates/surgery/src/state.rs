@@ -480,9 +480,10 @@ impl Surgery {
 
 /// The vertices of `around` — (vertex, link edge `(b, c)`), one entry per boundary face at
 /// the vertex — whose link edges do not form a single cycle (a pinch), in increasing order;
-/// `around` is sorted on the way.
+/// `around` is grouped by vertex on the way (sorted by vertex only: a cycle does not depend
+/// on the order of its edges).
 pub(crate) fn pinched_vertices(around: &mut [(u32, [u32; 2])]) -> Vec<u32> {
-    around.sort_unstable();
+    around.sort_unstable_by_key(|a| a.0);
     let mut link: Vec<[u32; 2]> = Vec::new();
     let mut out = Vec::new();
     for group in around.chunk_by(|a, b| a.0 == b.0) {
