@@ -315,7 +315,9 @@ impl Surgery {
             for (i, p) in plan.iter().enumerate() {
                 entry[p.0 as usize] = i as u32;
             }
-            let bad = self.defects(body, &faces, &plan, &entry, changed.as_deref());
+            let mut seen = std::mem::take(&mut self.tet_seen);
+            let bad = self.defects(body, &faces, &plan, &entry, &mut seen, changed.as_deref());
+            self.tet_seen = seen;
             for p in &plan {
                 entry[p.0 as usize] = u32::MAX;
             }
@@ -599,7 +601,7 @@ impl Surgery {
     /// For each node on a new face: its tets grouped into face-connected components (through
     /// faces containing the node). `(node, tets, component of each tet, component count)`.
     fn plan_split(
-        &self,
+        &mut self,
         body: &SoftBody,
         faces: &[NewFace],
     ) -> Vec<(u32, Vec<u32>, Vec<u32>, u32)> {
@@ -610,11 +612,15 @@ impl Surgery {
             .collect();
         nodes.sort_unstable();
         nodes.dedup();
-        nodes.into_iter().map(|v| self.plan_node(body, v)).collect()
+        let mut plan = Vec::with_capacity(nodes.len());
+        for v in nodes {
+            plan.push(self.plan_node(body, v));
+        }
+        plan
     }
 
     /// One node's entry of [`Self::plan_split`].
-    fn plan_node(&self, body: &SoftBody, v: u32) -> (u32, Vec<u32>, Vec<u32>, u32) {
+    fn plan_node(&mut self, body: &SoftBody, v: u32) -> (u32, Vec<u32>, Vec<u32>, u32) {
         let tets = body.tets();
         let mut star = self.node_tets[v as usize].clone();
         star.sort_unstable();
@@ -624,6 +630,13 @@ impl Surgery {
             .iter()
             .map(|&t| (tets[t as usize], self.neighbours[t as usize]))
             .collect();
+        // Each star tet's index in the star, by tet (a scratch array: entries of other tets
+        // are stale, so a hit is checked against the star).
+        let mut slot = std::mem::take(&mut self.star_slot);
+        slot.resize(self.neighbours.len(), u32::MAX);
+        for (i, &t) in star.iter().enumerate() {
+            slot[t as usize] = i as u32;
+        }
         let mut comp = vec![u32::MAX; star.len()];
         let mut count = 0;
         let mut stack = Vec::new();
@@ -639,18 +652,17 @@ impl Surgery {
                     if node == v || u == NO_TET {
                         continue;
                     }
-                    // A neighbour across a face at `v` is in its star (a short list: a scan
-                    // beats a binary search's unpredictable branches).
-                    if let Some(b) = star.iter().position(|&x| x == u) {
-                        if comp[b] == u32::MAX {
-                            comp[b] = count;
-                            stack.push(b);
-                        }
+                    // A neighbour across a face at `v` is in its star.
+                    let b = slot.get(u as usize).map_or(usize::MAX, |&b| b as usize);
+                    if star.get(b) == Some(&u) && comp[b] == u32::MAX {
+                        comp[b] = count;
+                        stack.push(b);
                     }
                 }
             }
             count += 1;
         }
+        self.star_slot = slot;
         (v, star, comp, count)
     }
 
@@ -662,13 +674,14 @@ impl Surgery {
     /// the nodes of the faces glued back since the last call, whose plans alone changed; every
     /// defect elsewhere was there before and gave no face to glue, so the result is the same
     /// as a full check (`None`). `plan_entry[v]` is node `v`'s index in `plan` (`u32::MAX`
-    /// for none).
+    /// for none); `seen` is scratch, all `false` (and left so).
     fn defects(
         &self,
         body: &SoftBody,
         faces: &[NewFace],
         plan: &[(u32, Vec<u32>, Vec<u32>, u32)],
         plan_entry: &[u32],
+        seen: &mut Vec<bool>,
         changed: Option<&[u32]>,
     ) -> Vec<usize> {
         let tets = body.tets();
@@ -733,15 +746,21 @@ impl Surgery {
                     .is_none_or(|w| w.binary_search(&v).is_ok())
         };
         // The tets whose boundary faces hold every face at those edges and vertices.
-        let mut local: Vec<u32> = match &vertices {
-            None => plan.iter().flat_map(|p| p.1.iter().copied()).collect(),
-            Some(w) => w
-                .iter()
-                .flat_map(|&v| self.node_tets[v as usize].iter().copied())
-                .collect(),
+        // Each once, in the order found (marked in `seen`, cleared after).
+        let mut local: Vec<u32> = Vec::new();
+        seen.resize(tets.len(), false);
+        let stars: Box<dyn Iterator<Item = &u32>> = match &vertices {
+            None => Box::new(plan.iter().flat_map(|p| p.1.iter())),
+            Some(w) => Box::new(w.iter().flat_map(|&v| self.node_tets[v as usize].iter())),
         };
-        local.sort_unstable();
-        local.dedup();
+        for &t in stars {
+            if !std::mem::replace(&mut seen[t as usize], true) {
+                local.push(t);
+            }
+        }
+        for &t in &local {
+            seen[t as usize] = false;
+        }
         // Boundary faces of the local tets, in tentative labels, with the original labels.
         let mut directed: HashMap<[u32; 2], (u32, [u32; 2])> =
             HashMap::with_capacity_and_hasher(2 * local.len(), Default::default());

@@ -84,6 +84,11 @@ pub struct Surgery {
     /// Scratch of the manifold guard: per node, its entry in the split plan (`u32::MAX` when
     /// it has none; reset after each use).
     pub(crate) plan_entry: Vec<u32>,
+    /// Scratch of a node's split plan: per tet, its index in the node's star (stale for
+    /// other tets).
+    pub(crate) star_slot: Vec<u32>,
+    /// Scratch of the manifold guard: per tet, all `false` between uses.
+    pub(crate) tet_seen: Vec<bool>,
 }
 
 /// The face of tet `t` opposite local node `j`, wound outward.
@@ -187,6 +192,8 @@ impl Surgery {
             group_mark: Vec::new(),
             group_stamp: 0,
             plan_entry: Vec::new(),
+            star_slot: Vec::new(),
+            tet_seen: Vec::new(),
         };
         s.count_components(body);
         Ok(s)
