@@ -81,6 +81,8 @@ pub struct Surgery {
     /// Scratch marks per tet for the crumb searches, stamped with `group_stamp`.
     pub(crate) group_mark: Vec<u32>,
     pub(crate) group_stamp: u32,
+    /// How the cuts so far ended on the surface (see [`Surgery::tip_counts`]).
+    pub(crate) tip_counts: crate::TipCounts,
 }
 
 /// The face of tet `t` opposite local node `j`, wound outward.
@@ -183,6 +185,7 @@ impl Surgery {
             near_nodes: Vec::new(),
             group_mark: Vec::new(),
             group_stamp: 0,
+            tip_counts: crate::TipCounts::default(),
         };
         s.count_components(body);
         Ok(s)
@@ -204,6 +207,12 @@ impl Surgery {
             });
         }
         Ok(())
+    }
+
+    /// How the cuts so far ended on the surface: tips split into 4 and into 5, and four-way
+    /// candidates refused (`docs/surgery.md`, "Tip split").
+    pub fn tip_counts(&self) -> crate::TipCounts {
+        self.tip_counts
     }
 
     /// The settings.
