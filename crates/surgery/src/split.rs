@@ -33,10 +33,13 @@
 //!    polygon: the cut's front and sides) are left whole and **glued** (the separation step
 //!    does not open their faces); a later sweep that covers them splits them. A tet that could
 //!    not be split for quality or a near node is left to the face separation (the staircase).
-//! 6. **Tips** (module `tip`, after the split above is applied): a crossed surface triangle's
-//!    edge on the plane that leaves the polygon is split again where it leaves it (the tip),
-//!    the tets around it bisected once more, and the tets beyond the tip join the front, so
-//!    the opening on the surface ends at the tip.
+//! 6. **Tips** (module `tip`): where the polygon's boundary crosses a crossed surface
+//!    triangle, the triangle's far crossing edge is dropped from the plan and the tip inserted
+//!    inside the triangle by a face split of the piece on it (four-way, planned before the
+//!    split is applied); where that is refused, after the split is applied, the triangle's
+//!    edge on the plane is split again at the tip and the tets around it bisected once more
+//!    (the fallback). Either way the tets beyond the tip join the front, so the opening on the
+//!    surface ends at the tip.
 
 use glam::{DVec3, Vec3};
 use tissue_mesh::NO_TET;

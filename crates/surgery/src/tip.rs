@@ -1,27 +1,59 @@
-//! The cut's ends on the surface: a second, "tip" split of the surface triangle in which the
-//! swept polygon's boundary crosses the surface.
+//! The cut's ends on the surface: the surface triangle in which the swept polygon's boundary
+//! (the blade's front, or where the cut started) crosses the surface is split at the **tip**,
+//! the point where that boundary crosses it, and the opening on the surface ends there.
 //!
-//! After the first split (module `split`), a crossed boundary triangle `A B C` holds an edge
-//! `E–E2` on the blade's plane (both its crossing points split). When `E` lies in the swept
-//! polygon and `E2` outside it (the polygon's boundary — the blade's front, or where the cut
-//! started — crosses the surface between them), that edge is split again at the **tip** `P`
-//! where it leaves the polygon (found by bisection on [`crate::split`]'s `CutPlane::contains`;
-//! both ends lie on the plane, so `P` does too), and every tet around it is bisected once more
-//! (the same ordered bisection, a second pass after the first split is applied). The triangle
-//! `A B C` is then in 5 boundary pieces: the triangle and the quad piece on the two sides of
-//! `E–E2` each halved at `P` (4 pieces around `P`), and the quad's other piece. The tets around
-//! `P–E2` (beyond the tip) join the cut's front for this sweep: their faces stay glued, so `P`
-//! keeps one node while `E` is duplicated, and the surface opening ends exactly at `P`. A later
-//! sweep that covers `P–E2` opens them as any other faces on the plane (`P` becomes an ordinary
-//! wall node).
+//! **Four-way tips** ([`Surgery::plan_four_way_tips`], in the first split's plan, before
+//! anything is applied). A crossed boundary triangle `A B C` of a tet `A B C D` to be split,
+//! `A` alone on its side of the plane, both `A B` and `A C` planned for a split, the crossing
+//! point `E` of `A B` in the polygon and `E2` of `A C` outside it (within `FRONT_SNAP`):
+//! the edge `A C` is dropped from the split edges (globally: every tet around it is bisected
+//! without it, which keeps the ordered bisection conforming) and marked outside the polygon,
+//! so the tets around it after the split — the pieces holding both `A` and `C`, which are the
+//! only pieces with nodes of both sides — are the cut's front and stay glued this sweep. `A B
+//! C D`'s pieces then include one `(A, E, C, Y)` with its face `A E C` on the boundary
+//! triangle and `Y` a new node on the plane (the crossing point of `A D`, `B D` or `C D`, or
+//! `D` itself on the plane); for some orders with `D` on `A`'s side one more piece holds `A`
+//! and `C` (unit test). The tip `P`, where the polygon's boundary crosses the segment `E–E2`
+//! (bisection on `CutPlane::contains`, `E2` a point only), is inserted into `A E C` by a 1→3
+//! face split ([`split_face`]): `(A, E, P, Y)`, `(P, E, C, Y)`, `(A, P, C, Y)`. `A B C` is then
+//! in exactly 4 boundary pieces `A E P`, `E C P`, `C A P`, `E B C` (one `SplitTriangle`). The
+//! wall `E P Y` lies on the plane and is queued to open with the sweep's faces
+//! ([`Surgery::open_tip_wall`]: the centroid rule alone can miss it, the polygon's boundary
+//! passing through `P`); `(A, P, C, Y)` is in the front, so `P` keeps one node while `E` is
+//! duplicated. A later sweep that continues the cut splits `A C` (and the piece) normally; `P`
+//! then lies on the crack between `E` and `E2` and becomes an ordinary wall node. `P` is a new
+//! node interpolated (current, previous, rest position, velocity) as the weighted sum of `A`,
+//! `B`, `C`; masses and constraints are rebuilt by the same `apply_split` as edge nodes.
 //!
-//! Rules: the edge must have tets on both sides of the plane (an edge of an opening already
-//! made has only one side: it is not split again), exactly two nodes of the boundary triangle
-//! on the plane (a wall lying in the plane is not a crossed triangle), and `P` at least
-//! [`TIP_MARGIN`] of the edge from either end; the pieces must meet the same quality bound as
-//! the first split's ([`crate::MIN_RATIO`], [`crate::MIN_PIECE_FRACTION`],
-//! [`crate::MAX_SPLIT_DEPTH`], pieces tiling the parent in rest space). Otherwise the tip is not
-//! inserted and the cut ends there as without it (at a tet boundary).
+//! A candidate is refused — `A C` stays split and the triangle goes to the fallback below —
+//! when: `P` is within [`FACE_TIP_MARGIN`] (barycentric) of a side of `A E C`; another
+//! boundary triangle at `A C` would want a tip (a node on the plane, or its other crossing
+//! point split and in the polygon); a face on the plane at `E2` (other than at `E–E2`) would
+//! open under the rules of the face separation (its two pieces not at the front and their
+//! centroid segment crossing the polygon: the cut needs `E2` there, e.g. under a blade whose
+//! front leans forward); or a tet around `A C`, bisected without it (with the face split in
+//! `A B C D`), would have a piece below the split's bound ([`crate::MIN_RATIO`],
+//! [`crate::MIN_PIECE_FRACTION`], tiling the parent in rest space) or no piece on `A E C` with
+//! `Y` on the plane. [`Surgery::tip_counts`] counts each way.
+//!
+//! **Fallback: tips on the crack line** ([`Surgery::split_tips`], after the first split is
+//! applied). A crossed boundary triangle `A B C` holding an edge `E–E2` on the plane (both
+//! crossing points split, or a node on the plane and a crossing point) with `E` in the polygon
+//! and `E2` outside: that edge is split again at the tip `P` where it leaves the polygon, and
+//! every tet around it is bisected once more (the same ordered bisection, a second pass). The
+//! triangle is then in 5 boundary pieces (4 where the plane enters it through a node): the
+//! triangle and the quad piece on the two sides of `E–E2` each halved at `P`, and the quad's
+//! other piece. The tets around `P–E2` (beyond the tip) join the cut's front for this sweep:
+//! their faces stay glued, so `P` keeps one node while `E` is duplicated.
+//!
+//! Rules of the fallback: the edge must have tets on both sides of the plane (an edge of an
+//! opening already made has only one side: it is not split again), exactly two nodes of the
+//! boundary triangle on the plane (a wall lying in the plane is not a crossed triangle), not a
+//! four-way tip's, and `P` at least [`TIP_MARGIN`] of the edge from either end; the pieces must
+//! meet the same quality bound as the first split's ([`crate::MIN_RATIO`],
+//! [`crate::MIN_PIECE_FRACTION`], [`crate::MAX_SPLIT_DEPTH`], pieces tiling the parent in rest
+//! space). Otherwise no tip is inserted and the cut ends there as without it (at a tet
+//! boundary).
 
 use glam::DVec3;
 use tissue_mesh::NO_TET;
@@ -37,7 +69,7 @@ use crate::{SplitTriangle, Surgery, SurgeryError};
 /// `A E C` (module docs) is at least this: the tip lies clearly inside that triangle, so the
 /// three tets it splits the piece on `A E C` into are each at least this fraction of it and
 /// none is flat. Otherwise the tip falls back to the five-way split.
-pub const FACE_TIP_MARGIN: f64 = 0.1;
+pub const FACE_TIP_MARGIN: f64 = 0.05;
 
 /// How the cuts of a [`Surgery`] ended on the surface, counted per tip since it was made
 /// ([`Surgery::tip_counts`]).
@@ -53,10 +85,11 @@ pub struct TipCounts {
     /// Candidates for a four-way tip refused (each falls back to the five-way split or to no
     /// tip), by reason: the tip too close to the triangle `A E C`'s sides ([`FACE_TIP_MARGIN`]),
     pub refused_margin: u64,
+    /// another boundary triangle at `A C` would want a tip of its own,
+    pub refused_neighbour: u64,
     /// an on-plane face at the crossing point `E2` would open (the edge `A C` is needed),
     pub refused_needed: u64,
-    /// or the pieces would fall below the quality bound (or another boundary triangle on `A C`
-    /// is not a candidate).
+    /// or the pieces would fall below the quality bound.
     pub refused_quality: u64,
 }
 
@@ -438,7 +471,7 @@ impl Surgery {
                 })
             });
             if !only_candidates {
-                counts.refused_quality += refused;
+                counts.refused_neighbour += refused;
                 continue;
             }
             // The tips: where the polygon's boundary crosses E–E2.
