@@ -87,6 +87,10 @@ pub struct TipCounts {
     pub refused_margin: u64,
     /// another boundary triangle at `A C` would want a tip of its own,
     pub refused_neighbour: u64,
+    /// the tet under the triangle has no piece on `A E C` whose fourth node is on the plane (it
+    /// keeps another crossing edge whole: given up by the split's quality rounds, or at a node
+    /// near the plane that could not be snapped),
+    pub refused_unsplit: u64,
     /// an on-plane face at the crossing point `E2` would open (the edge `A C` is needed),
     pub refused_needed: u64,
     /// or the pieces would fall below the quality bound.
@@ -533,8 +537,11 @@ impl Surgery {
             if let Some(c) = edges.get_mut(&ac) {
                 c.valid = false;
             }
-            let good = ring.iter().all(|&u| {
-                self.four_way_pieces(
+            // `Some(true)`: a piece below the bound; `Some(false)`: no piece on `A E C` ending
+            // on the plane.
+            let mut failure: Option<bool> = None;
+            for &u in &ring {
+                if !self.four_way_pieces(
                     body,
                     u,
                     edges,
@@ -542,22 +549,32 @@ impl Surgery {
                     candidate_edges.len(),
                     &mut local,
                     &mut scratch,
-                ) && {
-                    let tet = body.tets()[u as usize];
-                    let rest_of =
-                        |v: u32| -> DVec3 { self.rest_with_tips(v, placeholder_rest, &tips) };
-                    self.pieces_meet_bound(tet, &scratch, rest_of)
+                ) {
+                    failure = Some(false);
+                    break;
                 }
-            });
+                let tet = body.tets()[u as usize];
+                let rest_of = |v: u32| -> DVec3 { self.rest_with_tips(v, placeholder_rest, &tips) };
+                if !self.pieces_meet_bound(tet, &scratch, rest_of) {
+                    failure = Some(true);
+                    break;
+                }
+            }
+            let good = failure.is_none();
             if let Some(c) = edges.get_mut(&ac) {
                 c.valid = !good;
                 c.inside = !good;
             }
-            if good {
-                counts.four_way += refused;
-            } else {
-                tips.truncate(base);
-                counts.refused_quality += refused;
+            match failure {
+                None => counts.four_way += refused,
+                Some(quality) => {
+                    tips.truncate(base);
+                    if quality {
+                        counts.refused_quality += refused;
+                    } else {
+                        counts.refused_unsplit += refused;
+                    }
+                }
             }
         }
         if !tips.is_empty() {

@@ -65,6 +65,7 @@ fn add_tips(sum: &mut TipCounts, t: TipCounts) {
     sum.fallback += t.fallback;
     sum.refused_margin += t.refused_margin;
     sum.refused_neighbour += t.refused_neighbour;
+    sum.refused_unsplit += t.refused_unsplit;
     sum.refused_needed += t.refused_needed;
     sum.refused_quality += t.refused_quality;
 }
@@ -216,8 +217,8 @@ fn report(name: &str, s: &Stats, seconds: f64) {
     );
     let t = s.tips;
     eprintln!(
-        "  {name}: tips split into 4: {}, on the crack line (fallback): {}; four-way candidates refused: {} margin, {} neighbour, {} needed, {} quality",
-        t.four_way, t.fallback, t.refused_margin, t.refused_neighbour, t.refused_needed, t.refused_quality
+        "  {name}: tips split into 4: {}, on the crack line (fallback): {}; four-way candidates refused: {} margin, {} neighbour, {} unsplit, {} needed, {} quality",
+        t.four_way, t.fallback, t.refused_margin, t.refused_neighbour, t.refused_unsplit, t.refused_needed, t.refused_quality
     );
 }
 
