@@ -527,7 +527,7 @@ impl Surgery {
                 counts.refused_margin += refused;
                 continue;
             }
-            if self.crossing_needed(body, plane, &ring, e2_node, &e_nodes, edges, &point_of) {
+            if self.crossing_needed(body, plane, &ring, ac, e2_node, &e_nodes, edges, &point_of) {
                 counts.refused_needed += refused;
                 continue;
             }
@@ -667,17 +667,20 @@ impl Surgery {
         true
     }
 
-    /// Whether a face on the plane at the crossing point `e2` of the tets `ring` (with `A C`
-    /// still split) would open — neither of its two pieces at the cut's front (holding both ends
-    /// of a crossing edge outside the polygon), and the segment between their centroids crossing
-    /// the polygon — other than the faces at `e_nodes` (`E–E2`, which the tip splits). Such a
-    /// face needs `E2`: `A C` is then not dropped.
+    /// Whether the tets `ring` around `A C` need it split: a face on the plane between two of a
+    /// ring tet's pieces with `A C` split that is not one without it (lost with `E2`: the
+    /// pieces holding both `A` and `C` straddle it), other than the faces at `E–E2` (`e2`
+    /// and one of `e_nodes`, which the tip replaces by `E P Y`), would open — neither of its
+    /// two pieces at the cut's front (holding both ends of a crossing edge outside the
+    /// polygon), and the segment between their centroids crossing the polygon. Such a face is
+    /// part of the cut inside the polygon: `A C` is then not dropped.
     #[allow(clippy::too_many_arguments)]
     fn crossing_needed(
         &self,
         body: &SoftBody,
         plane: &CutPlane<'_>,
         ring: &[u32],
+        ac: [u32; 2],
         e2: u32,
         e_nodes: &[u32],
         edges: &HashMap<[u32; 2], EdgeCut>,
@@ -693,34 +696,59 @@ impl Surgery {
         };
         let centroid = |p: &[u32; 4]| p.iter().map(|&v| point_of(v)).sum::<DVec3>() * 0.25;
         let (o, n) = (plane.origin, plane.normal);
+        // The faces on the plane between two of `pieces` (sorted nodes, the two pieces).
+        let on_plane_faces = |pieces: &[[u32; 4]], out: &mut Vec<([u32; 3], usize, usize)>| {
+            out.clear();
+            for (i, p) in pieces.iter().enumerate() {
+                for (k, q) in pieces.iter().enumerate().skip(i + 1) {
+                    let mut shared = [0u32; 3];
+                    let mut m = 0;
+                    for v in p.iter().copied().filter(|v| q.contains(v)) {
+                        if m < 3 {
+                            shared[m] = v;
+                        }
+                        m += 1;
+                    }
+                    if m == 3 && shared.iter().all(|&v| on_plane(v)) {
+                        shared.sort_unstable();
+                        out.push((shared, i, k));
+                    }
+                }
+            }
+        };
         let mut local: Vec<([u32; 2], u32)> = Vec::new();
         let mut pieces: Vec<[u32; 4]> = Vec::new();
+        let mut without: Vec<[u32; 4]> = Vec::new();
+        let (mut faces, mut kept) = (Vec::new(), Vec::new());
         for &u in ring {
             let tet = body.tets()[u as usize];
             split_edges_of(tet, edges, &mut local);
             pieces.clear();
             bisect(tet, &local, &mut pieces);
-            for (i, p) in pieces.iter().enumerate() {
-                if !p.contains(&e2) || front(p) {
+            on_plane_faces(&pieces, &mut faces);
+            if faces.is_empty() {
+                continue;
+            }
+            local.retain(|l| l.0 != ac);
+            without.clear();
+            bisect(tet, &local, &mut without);
+            on_plane_faces(&without, &mut kept);
+            for &(f, i, k) in &faces {
+                let at_tip = f.contains(&e2) && f.iter().any(|v| e_nodes.contains(v));
+                if at_tip || kept.iter().any(|g| g.0 == f) {
                     continue;
                 }
-                for q in &pieces[i + 1..] {
-                    let shared: Vec<u32> = p.iter().copied().filter(|v| q.contains(v)).collect();
-                    if shared.len() != 3
-                        || !shared.contains(&e2)
-                        || shared.iter().any(|v| e_nodes.contains(v) || !on_plane(*v))
-                        || front(q)
-                    {
-                        continue;
-                    }
-                    let (cp, cq) = (centroid(p), centroid(q));
-                    let (dp, dq) = (n.dot(cp - o), n.dot(cq - o));
-                    if (dp > 0.0) == (dq > 0.0) || dp == dq {
-                        continue;
-                    }
-                    if plane.contains(cp + (cq - cp) * (dp / (dp - dq))) {
-                        return true;
-                    }
+                let (p, q) = (&pieces[i], &pieces[k]);
+                if front(p) || front(q) {
+                    continue;
+                }
+                let (cp, cq) = (centroid(p), centroid(q));
+                let (dp, dq) = (n.dot(cp - o), n.dot(cq - o));
+                if (dp > 0.0) == (dq > 0.0) || dp == dq {
+                    continue;
+                }
+                if plane.contains(cp + (cq - cp) * (dp / (dp - dq))) {
+                    return true;
                 }
             }
         }
@@ -739,8 +767,9 @@ mod tests {
     /// bisection): with every crossing edge but `A C` split and the tip `P` at the middle of
     /// `E–E2`, the pieces tile the tet (volumes sum to its own), none is flat or inverted,
     /// the face `A B C` is in exactly 4 triangles tiling it (`P` joined to `A`, `E`, `C`),
-    /// `E`, `P` and `Y` lie on the plane, and only the piece `(A, P, C, Y)` holds nodes of both
-    /// sides.
+    /// `E`, `P` and `Y` lie on the plane with `E P Y` a face of two pieces, and only pieces
+    /// holding both `A` and `C` hold nodes of both sides (`(A, P, C, Y)`, and for some orders a
+    /// second one).
     #[test]
     fn the_face_point_split_tiles_the_tet_and_puts_the_tip_wall_on_the_plane() {
         let base = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
