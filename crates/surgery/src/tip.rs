@@ -28,10 +28,11 @@
 //! A candidate is refused — `A C` stays split and the triangle goes to the fallback below —
 //! when: `P` is within [`FACE_TIP_MARGIN`] (barycentric) of a side of `A E C`; another
 //! boundary triangle at `A C` would want a tip (a node on the plane, or its other crossing
-//! point split and in the polygon); a face on the plane at `E2` (other than at `E–E2`) would
-//! open under the rules of the face separation (its two pieces not at the front and their
-//! centroid segment crossing the polygon: the cut needs `E2` there, e.g. under a blade whose
-//! front leans forward); or a tet around `A C`, bisected without it (with the face split in
+//! point split and in the polygon); a face on the plane that the tets around `A C` have with
+//! it split but not without it (other than those at `E–E2`, which `E P Y` replaces) would open
+//! under the rules of the face separation (its two pieces not at the front and their centroid
+//! segment crossing the polygon: the cut runs there, e.g. under a blade whose front leans
+//! forward); or a tet around `A C`, bisected without it (with the face split in
 //! `A B C D`), would have a piece below the split's bound ([`crate::MIN_RATIO`],
 //! [`crate::MIN_PIECE_FRACTION`], tiling the parent in rest space) or no piece on `A E C` with
 //! `Y` on the plane. [`Surgery::tip_counts`] counts each way.
