@@ -447,7 +447,7 @@ impl Surgery {
         let mut scratch: Vec<[u32; 4]> = Vec::new();
         for group in found.chunk_by(|x, y| x.0 == y.0) {
             let ac = group[0].0;
-            let refused = group.len() as u64;
+            let triangles = group.len() as u64;
             let ring: Vec<u32> = self.tets_around(&ac).collect();
             // Any other boundary triangle `A C X` at A C (dropping A C leaves it unsplit along
             // it) must not want a tip: `X` off the plane, and its other crossing point, if
@@ -476,7 +476,7 @@ impl Surgery {
                 })
             });
             if !only_candidates {
-                counts.refused_neighbour += refused;
+                counts.refused_neighbour += triangles;
                 continue;
             }
             // The tips: where the polygon's boundary crosses E–E2.
@@ -525,11 +525,11 @@ impl Surgery {
                 });
             }
             if planned.len() != group.len() {
-                counts.refused_margin += refused;
+                counts.refused_margin += triangles;
                 continue;
             }
             if self.crossing_needed(body, plane, &ring, ac, e2_node, &e_nodes, edges, &point_of) {
-                counts.refused_needed += refused;
+                counts.refused_needed += triangles;
                 continue;
             }
             // Dropped tentatively; the tets around A C judged again with the tips.
@@ -567,13 +567,13 @@ impl Surgery {
                 c.inside = !good;
             }
             match failure {
-                None => counts.four_way += refused,
+                None => counts.four_way += triangles,
                 Some(quality) => {
                     tips.truncate(base);
                     if quality {
-                        counts.refused_quality += refused;
+                        counts.refused_quality += triangles;
                     } else {
-                        counts.refused_unsplit += refused;
+                        counts.refused_unsplit += triangles;
                     }
                 }
             }
