@@ -220,4 +220,15 @@ fn main() {
         split[split.len() / 2],
         split[split.len() - 1]
     );
+    let tips = surgery.tip_counts();
+    println!(
+        "tips of the last traverse: {} split into 4, {} on the crack line (fallback); four-way candidates refused: {} margin, {} neighbour, {} unsplit, {} needed, {} quality",
+        tips.four_way,
+        tips.fallback,
+        tips.refused_margin,
+        tips.refused_neighbour,
+        tips.refused_unsplit,
+        tips.refused_needed,
+        tips.refused_quality
+    );
 }

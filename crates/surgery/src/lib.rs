@@ -137,4 +137,4 @@ pub use split::{
     FRONT_SNAP, MAX_SPLIT_DEPTH, MIN_PIECE_FRACTION, MIN_RATIO, MIN_VOLUME_FRACTION, SNAP_FRACTION,
 };
 pub use state::{Surgery, Suture};
-pub use tip::TIP_MARGIN;
+pub use tip::{TipCounts, FACE_TIP_MARGIN, TIP_MARGIN};

@@ -10,6 +10,11 @@ pub struct SurgerySettings {
     /// faces (walls within one tet of the blade), which is what a body that moves relative to
     /// the blade during a cut needs today (see `docs/surgery.md`).
     pub split_tets: bool,
+    /// With `split_tets`: the surface triangle where a sweep's polygon ends is split into 4 at
+    /// the tip (the tip inside it, joined to its corners), where that meets the quality bound;
+    /// off, or where it does not, into 5 with the tip on the crack line (see `docs/surgery.md`,
+    /// "Tip split").
+    pub four_way_tips: bool,
     /// PBD stiffness `k ∈ [0, 1]` of a suture link (1 = the linked nodes are pulled together
     /// fully each iteration).
     pub suture_stiffness: f32,
@@ -20,10 +25,11 @@ pub struct SurgerySettings {
 }
 
 impl Default for SurgerySettings {
-    /// Geometric cuts (`split_tets` on), sutures with `k = 1`, compliance 0, rest length 0.
+    /// Geometric cuts (`split_tets` and `four_way_tips` on), sutures with `k = 1`, compliance 0, rest length 0.
     fn default() -> Self {
         Self {
             split_tets: true,
+            four_way_tips: true,
             suture_stiffness: 1.0,
             suture_compliance: 0.0,
             suture_rest_length: 0.0,

@@ -33,10 +33,13 @@
 //!    polygon: the cut's front and sides) are left whole and **glued** (the separation step
 //!    does not open their faces); a later sweep that covers them splits them. A tet that could
 //!    not be split for quality or a near node is left to the face separation (the staircase).
-//! 6. **Tips** (module `tip`, after the split above is applied): a crossed surface triangle's
-//!    edge on the plane that leaves the polygon is split again where it leaves it (the tip),
-//!    the tets around it bisected once more, and the tets beyond the tip join the front, so
-//!    the opening on the surface ends at the tip.
+//! 6. **Tips** (module `tip`): where the polygon's boundary crosses a crossed surface
+//!    triangle, the triangle's far crossing edge is dropped from the plan and the tip inserted
+//!    inside the triangle by a face split of the piece on it (four-way, planned before the
+//!    split is applied); where that is refused, after the split is applied, the triangle's
+//!    edge on the plane is split again at the tip and the tets around it bisected once more
+//!    (the fallback). Either way the tets beyond the tip join the front, so the opening on the
+//!    surface ends at the tip.
 
 use glam::{DVec3, Vec3};
 use tissue_mesh::NO_TET;
@@ -45,6 +48,7 @@ use tissue_pbd::{DistanceConstraint, SoftBody};
 use crate::geometry::radius_ratio;
 use crate::geometry::FxMap as HashMap;
 use crate::state::face_nodes;
+use crate::tip::split_face;
 use crate::{SplitTriangle, Surgery, SurgeryError};
 
 /// A node closer to the blade's plane than this fraction of its shortest rest edge is snapped
@@ -104,6 +108,8 @@ pub(crate) struct SplitOutcome {
     /// Straddling tets left whole because the sweep did not cross them completely (sorted):
     /// their faces stay glued this sweep.
     pub front: Vec<u32>,
+    /// The four-way tips' nodes (module `tip`), within `first_node..end_node`.
+    pub four_way: std::ops::Range<u32>,
 }
 
 /// The plane and polygon of one sweep.
@@ -211,6 +217,15 @@ pub(crate) struct EdgeCut {
     pub inside: bool,
     pub valid: bool,
     pub node: u32,
+}
+
+/// A new node inside a boundary triangle (a four-way tip, module `tip`): the weighted sum of
+/// three existing nodes (weights positive, summing to 1), in current, previous and rest
+/// position and velocity.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct FacePoint {
+    pub nodes: [u32; 3],
+    pub weights: [f64; 3],
 }
 
 impl Surgery {
@@ -515,8 +530,18 @@ impl Surgery {
             to_judge.retain(|&t| has_valid(t));
             affected.retain(|&t| has_valid(t));
         }
-        // The plan: new nodes numbered in the order of the split edges, each affected tet's
-        // pieces with them.
+        // 4. The four-way tips (module `tip`): triangles where the polygon's boundary crosses
+        // the surface, their far crossing edge dropped and the tip planned inside them.
+        let tips = self.plan_four_way_tips(
+            body,
+            plane,
+            &mut affected,
+            &mut edges,
+            &candidate_edges,
+            &placeholder_rest,
+        );
+        // The plan: new nodes numbered in the order of the split edges, then the tips, each
+        // affected tet's pieces with them.
         let mut order: Vec<[u32; 2]> = Vec::new();
         let mut new_rest: Vec<DVec3> = Vec::new();
         for (i, e) in candidate_edges.iter().enumerate() {
@@ -526,6 +551,15 @@ impl Surgery {
                 new_rest.push(placeholder_rest[i]);
             }
         }
+        let first_tip = first + order.len() as u32;
+        let points: Vec<FacePoint> = tips.iter().map(|tip| tip.point).collect();
+        for p in &points {
+            new_rest.push(
+                (0..3)
+                    .map(|k| self.rest[p.nodes[k] as usize] * p.weights[k])
+                    .sum(),
+            );
+        }
         let mut pieces: Vec<[u32; 4]> = Vec::new();
         let mut plan: Vec<(u32, std::ops::Range<usize>)> = Vec::with_capacity(affected.len());
         for &t in &affected {
@@ -533,8 +567,21 @@ impl Surgery {
             split_edges_of(tet, &edges, &mut local);
             let start = pieces.len();
             bisect(tet, &local, &mut pieces);
+            for (k, tip) in tips.iter().enumerate().filter(|(_, tip)| tip.tet == t) {
+                let e = edges.get(&tip.ab).map_or(u32::MAX, |c| c.node);
+                let mut own = pieces.split_off(start);
+                if split_face(&mut own, [tip.a, e, tip.c], first_tip + k as u32).is_none() {
+                    return Err(SurgeryError::Defect {
+                        element: "tet",
+                        index: t as usize,
+                        what: "a four-way tip's face is in none of its pieces",
+                    });
+                }
+                pieces.append(&mut own);
+            }
             plan.push((t, start..pieces.len()));
         }
+        out.four_way = first_tip..first_tip + points.len() as u32;
         // Crossing points this sweep covered on edges it did not split: a later sweep in about
         // the same place finds them covered (a cut continued over many steps).
         if self.covered.len() > COVERED_CAP {
@@ -553,7 +600,13 @@ impl Surgery {
             .map(|(e, _)| *e)
             .collect();
         if !plan.is_empty() {
-            self.apply_split(body, &edges, &order, &new_rest, &plan, &pieces, &mut out)?;
+            self.apply_split(
+                body, &edges, &order, &new_rest, &points, &plan, &pieces, &mut out,
+            )?;
+        }
+        for (k, tip) in tips.iter().enumerate() {
+            let e = edges.get(&tip.ab).map_or(u32::MAX, |c| c.node);
+            self.open_tip_wall(body, tip, e, first_tip + k as u32);
         }
         // The tips on the surface (module `tip`): the edges beyond them join the front.
         let beyond = self.split_tips(body, plane, candidates, &mut out)?;
@@ -630,40 +683,71 @@ impl Surgery {
         edges: &HashMap<[u32; 2], EdgeCut>,
         order: &[[u32; 2]],
         new_rest: &[DVec3],
+        points: &[FacePoint],
         plan: &[(u32, std::ops::Range<usize>)],
         pieces: &[[u32; 4]],
         out: &mut SplitOutcome,
     ) -> Result<(), SurgeryError> {
-        // New nodes, one per split edge, copied from a free end (so a pinned end does not pin
-        // it), then interpolated.
+        // New nodes, one per split edge and then one per face point, copied from a free
+        // support node (so a pinned one does not pin it), then interpolated.
         let w = body.inverse_masses();
+        let free_of = |nodes: &[u32]| {
+            nodes
+                .iter()
+                .copied()
+                .find(|&v| w[v as usize] > 0.0)
+                .unwrap_or(nodes[0])
+        };
         let sources: Vec<u32> = order
             .iter()
-            .map(|e| if w[e[0] as usize] > 0.0 { e[0] } else { e[1] })
+            .map(|e| free_of(e))
+            .chain(points.iter().map(|p| free_of(&p.nodes)))
             .collect();
         let first = body.duplicate_nodes(&sources)?;
-        for (k, e) in order.iter().enumerate() {
-            let s = edges[e].s as f32;
+        // Each new node as a weighted sum of existing nodes.
+        let weighted: Vec<([u32; 3], [f64; 3])> = order
+            .iter()
+            .map(|e| {
+                let s = edges[e].s;
+                ([e[0], e[1], e[1]], [1.0 - s, s, 0.0])
+            })
+            .chain(points.iter().map(|p| (p.nodes, p.weights)))
+            .collect();
+        for (k, (nodes, weights)) in weighted.iter().enumerate() {
             let v = first + k as u32;
-            let lerp = |a: glam::Vec3A, b: glam::Vec3A| Vec3::from(a + (b - a) * s);
-            let (i, j) = (e[0] as usize, e[1] as usize);
+            // Edge nodes as `a + (b − a) s` in `f32`; face points as the weighted sum in `f64`.
+            let sum = |field: &[glam::Vec3A]| {
+                if k < order.len() {
+                    let (a, b) = (field[nodes[0] as usize], field[nodes[1] as usize]);
+                    return Vec3::from(a + (b - a) * weights[1] as f32);
+                }
+                let mut acc = DVec3::ZERO;
+                for (&u, &wu) in nodes.iter().zip(weights) {
+                    acc += field[u as usize].as_dvec3() * wu;
+                }
+                acc.as_vec3()
+            };
             let (x, p, vel) = (
-                lerp(body.positions()[i], body.positions()[j]),
-                lerp(body.previous_positions()[i], body.previous_positions()[j]),
-                lerp(body.velocities()[i], body.velocities()[j]),
+                sum(body.positions()),
+                sum(body.previous_positions()),
+                sum(body.velocities()),
             );
             body.set_node_state(v, x, p, vel)?;
             body.set_rest_position(v, new_rest[k].as_vec3())?;
             self.rest.push(new_rest[k]);
             self.origin.push(v);
-            let reach = self.node_reach[i].max(self.node_reach[j]);
+            let reach = nodes
+                .iter()
+                .map(|&u| self.node_reach[u as usize])
+                .fold(0.0f32, f32::max);
             self.node_reach.push(reach);
             self.node_tets.push(Vec::new());
         }
         out.first_node = first;
-        out.end_node = first + order.len() as u32;
-        let node_edge =
-            |v: u32| -> Option<[u32; 2]> { (v >= first).then(|| order[(v - first) as usize]) };
+        out.end_node = first + weighted.len() as u32;
+        // The existing nodes a new node lies between (on their edge or triangle).
+        let support_of =
+            |v: u32| -> Option<[u32; 3]> { (v >= first).then(|| weighted[(v - first) as usize].0) };
         // Templates for new distance constraints: a constraint of each split tet's edges.
         let template = |s: &Self, body: &SoftBody, tet: [u32; 4]| -> Option<DistanceConstraint> {
             (0..4)
@@ -764,7 +848,7 @@ impl Surgery {
         let on_parent_face = |parent: [u32; 4], f: [u32; 3]| -> Option<usize> {
             let mut support = [false; 4];
             for v in f {
-                let ends = node_edge(v).map_or([v, v], |e| e);
+                let ends = support_of(v).unwrap_or([v, v, v]);
                 for e in ends {
                     let i = parent.iter().position(|&p| p == e)?;
                     support[i] = true;

@@ -89,6 +89,8 @@ pub struct Surgery {
     pub(crate) star_slot: Vec<u32>,
     /// Scratch of the manifold guard: per tet, all `false` between uses.
     pub(crate) tet_seen: Vec<bool>,
+    /// How the cuts so far ended on the surface (see [`Surgery::tip_counts`]).
+    pub(crate) tip_counts: crate::TipCounts,
 }
 
 /// The face of tet `t` opposite local node `j`, wound outward.
@@ -194,6 +196,7 @@ impl Surgery {
             plan_entry: Vec::new(),
             star_slot: Vec::new(),
             tet_seen: Vec::new(),
+            tip_counts: crate::TipCounts::default(),
         };
         s.count_components(body);
         Ok(s)
@@ -215,6 +218,12 @@ impl Surgery {
             });
         }
         Ok(())
+    }
+
+    /// How the cuts so far ended on the surface: tips split into 4 and into 5, and four-way
+    /// candidates refused (`docs/surgery.md`, "Tip split").
+    pub fn tip_counts(&self) -> crate::TipCounts {
+        self.tip_counts
     }
 
     /// The settings.

@@ -1,27 +1,60 @@
-//! The cut's ends on the surface: a second, "tip" split of the surface triangle in which the
-//! swept polygon's boundary crosses the surface.
+//! The cut's ends on the surface: the surface triangle in which the swept polygon's boundary
+//! (the blade's front, or where the cut started) crosses the surface is split at the **tip**,
+//! the point where that boundary crosses it, and the opening on the surface ends there.
 //!
-//! After the first split (module `split`), a crossed boundary triangle `A B C` holds an edge
-//! `E–E2` on the blade's plane (both its crossing points split). When `E` lies in the swept
-//! polygon and `E2` outside it (the polygon's boundary — the blade's front, or where the cut
-//! started — crosses the surface between them), that edge is split again at the **tip** `P`
-//! where it leaves the polygon (found by bisection on [`crate::split`]'s `CutPlane::contains`;
-//! both ends lie on the plane, so `P` does too), and every tet around it is bisected once more
-//! (the same ordered bisection, a second pass after the first split is applied). The triangle
-//! `A B C` is then in 5 boundary pieces: the triangle and the quad piece on the two sides of
-//! `E–E2` each halved at `P` (4 pieces around `P`), and the quad's other piece. The tets around
-//! `P–E2` (beyond the tip) join the cut's front for this sweep: their faces stay glued, so `P`
-//! keeps one node while `E` is duplicated, and the surface opening ends exactly at `P`. A later
-//! sweep that covers `P–E2` opens them as any other faces on the plane (`P` becomes an ordinary
-//! wall node).
+//! **Four-way tips** ([`Surgery::plan_four_way_tips`], in the first split's plan, before
+//! anything is applied). A crossed boundary triangle `A B C` of a tet `A B C D` to be split,
+//! `A` alone on its side of the plane, both `A B` and `A C` planned for a split, the crossing
+//! point `E` of `A B` in the polygon and `E2` of `A C` outside it (within `FRONT_SNAP`):
+//! the edge `A C` is dropped from the split edges (globally: every tet around it is bisected
+//! without it, which keeps the ordered bisection conforming) and marked outside the polygon,
+//! so the tets around it after the split — the pieces holding both `A` and `C`, which are the
+//! only pieces with nodes of both sides — are the cut's front and stay glued this sweep. `A B
+//! C D`'s pieces then include one `(A, E, C, Y)` with its face `A E C` on the boundary
+//! triangle and `Y` a new node on the plane (the crossing point of `A D`, `B D` or `C D`, or
+//! `D` itself on the plane); for some orders with `D` on `A`'s side one more piece holds `A`
+//! and `C` (unit test). The tip `P`, where the polygon's boundary crosses the segment `E–E2`
+//! (bisection on `CutPlane::contains`, `E2` a point only), is inserted into `A E C` by a 1→3
+//! face split ([`split_face`]): `(A, E, P, Y)`, `(P, E, C, Y)`, `(A, P, C, Y)`. `A B C` is then
+//! in exactly 4 boundary pieces `A E P`, `E C P`, `C A P`, `E B C` (one `SplitTriangle`). The
+//! wall `E P Y` lies on the plane and is queued to open with the sweep's faces
+//! ([`Surgery::open_tip_wall`]: the centroid rule alone can miss it, the polygon's boundary
+//! passing through `P`); `(A, P, C, Y)` is in the front, so `P` keeps one node while `E` is
+//! duplicated. A later sweep that continues the cut splits `A C` (and the piece) normally; `P`
+//! then lies on the crack between `E` and `E2` and becomes an ordinary wall node. `P` is a new
+//! node interpolated (current, previous, rest position, velocity) as the weighted sum of `A`,
+//! `B`, `C`; masses and constraints are rebuilt by the same `apply_split` as edge nodes.
 //!
-//! Rules: the edge must have tets on both sides of the plane (an edge of an opening already
-//! made has only one side: it is not split again), exactly two nodes of the boundary triangle
-//! on the plane (a wall lying in the plane is not a crossed triangle), and `P` at least
-//! [`TIP_MARGIN`] of the edge from either end; the pieces must meet the same quality bound as
-//! the first split's ([`crate::MIN_RATIO`], [`crate::MIN_PIECE_FRACTION`],
-//! [`crate::MAX_SPLIT_DEPTH`], pieces tiling the parent in rest space). Otherwise the tip is not
-//! inserted and the cut ends there as without it (at a tet boundary).
+//! A candidate is refused — `A C` stays split and the triangle goes to the fallback below —
+//! when: `P` is within [`FACE_TIP_MARGIN`] (barycentric) of a side of `A E C`; another
+//! boundary triangle at `A C` would want a tip (a node on the plane, or its other crossing
+//! point split and in the polygon); a face on the plane that the tets around `A C` have with
+//! it split but not without it (other than those at `E–E2`, which `E P Y` replaces) would open
+//! under the rules of the face separation (its two pieces not at the front and their centroid
+//! segment crossing the polygon: the cut runs there, e.g. under a blade whose front leans
+//! forward); or a tet around `A C`, bisected without it (with the face split in
+//! `A B C D`), would have a piece below the split's bound ([`crate::MIN_RATIO`],
+//! [`crate::MIN_PIECE_FRACTION`], tiling the parent in rest space) or no piece on `A E C` with
+//! `Y` on the plane. [`Surgery::tip_counts`] counts each way.
+//!
+//! **Fallback: tips on the crack line** ([`Surgery::split_tips`], after the first split is
+//! applied). A crossed boundary triangle `A B C` holding an edge `E–E2` on the plane (both
+//! crossing points split, or a node on the plane and a crossing point) with `E` in the polygon
+//! and `E2` outside: that edge is split again at the tip `P` where it leaves the polygon, and
+//! every tet around it is bisected once more (the same ordered bisection, a second pass). The
+//! triangle is then in 5 boundary pieces (4 where the plane enters it through a node): the
+//! triangle and the quad piece on the two sides of `E–E2` each halved at `P`, and the quad's
+//! other piece. The tets around `P–E2` (beyond the tip) join the cut's front for this sweep:
+//! their faces stay glued, so `P` keeps one node while `E` is duplicated.
+//!
+//! Rules of the fallback: the edge must have tets on both sides of the plane (an edge of an
+//! opening already made has only one side: it is not split again), exactly two nodes of the
+//! boundary triangle on the plane (a wall lying in the plane is not a crossed triangle), not a
+//! four-way tip's, and `P` at least [`TIP_MARGIN`] of the edge from either end; the pieces must
+//! meet the same quality bound as the first split's ([`crate::MIN_RATIO`],
+//! [`crate::MIN_PIECE_FRACTION`], [`crate::MAX_SPLIT_DEPTH`], pieces tiling the parent in rest
+//! space). Otherwise no tip is inserted and the cut ends there as without it (at a tet
+//! boundary).
 
 use glam::DVec3;
 use tissue_mesh::NO_TET;
@@ -29,9 +62,72 @@ use tissue_pbd::SoftBody;
 
 use crate::geometry::FxMap as HashMap;
 use crate::split::MAX_SPLIT_DEPTH;
-use crate::split::{bisect, sorted2, split_edges_of, CutPlane, EdgeCut, SplitOutcome};
+use crate::split::{bisect, sorted2, split_edges_of, CutPlane, EdgeCut, FacePoint, SplitOutcome};
 use crate::state::face_nodes;
 use crate::{SplitTriangle, Surgery, SurgeryError};
+
+/// A four-way tip is inserted only where each of its barycentric coordinates in the triangle
+/// `A E C` (module docs) is at least this: the tip lies clearly inside that triangle, so the
+/// three tets it splits the piece on `A E C` into are each at least this fraction of it and
+/// none is flat. Otherwise the tip falls back to the five-way split.
+pub const FACE_TIP_MARGIN: f64 = 0.05;
+
+/// How the cuts of a [`Surgery`] ended on the surface, counted per tip since it was made
+/// ([`Surgery::tip_counts`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct TipCounts {
+    /// Boundary triangles split into 4 at a tip inside them.
+    pub four_way: u64,
+    /// Tips inserted by the second pass on a crossed triangle's edge on the plane (the tip on
+    /// the crack line: the triangle in 5 pieces, or in 4 where the plane enters it through a
+    /// node on it): the fallback, and every tip with [`crate::SurgerySettings::four_way_tips`]
+    /// off.
+    pub fallback: u64,
+    /// Candidates for a four-way tip refused (each falls back to the five-way split or to no
+    /// tip), by reason: the tip too close to the triangle `A E C`'s sides ([`FACE_TIP_MARGIN`]),
+    pub refused_margin: u64,
+    /// another boundary triangle at `A C` would want a tip of its own,
+    pub refused_neighbour: u64,
+    /// the tet under the triangle has no piece on `A E C` whose fourth node is on the plane (it
+    /// keeps another crossing edge whole: given up by the split's quality rounds, or at a node
+    /// near the plane that could not be snapped),
+    pub refused_unsplit: u64,
+    /// an on-plane face at the crossing point `E2` would open (the edge `A C` is needed),
+    pub refused_needed: u64,
+    /// or the pieces would fall below the quality bound.
+    pub refused_quality: u64,
+}
+
+/// A planned four-way tip (module docs): the tet `A B C D` under the boundary triangle `A B C`,
+/// its edge `A B` split (its node `E` in the polygon), `A C` not split, and the tip `P` as a
+/// weighted sum of `A`, `B`, `C`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct FourWayTip {
+    pub tet: u32,
+    pub a: u32,
+    pub c: u32,
+    pub ab: [u32; 2],
+    pub point: FacePoint,
+}
+
+/// Splits the piece of `pieces` holding the face `a e c` (a boundary face) at a point `p`
+/// strictly inside that face: the piece `(a, e, c, y)` (in its own order) becomes three, each
+/// the piece with one of `a`, `e`, `c` replaced by `p` (so each keeps its orientation, its
+/// volume being the piece's times `p`'s barycentric coordinate there). The first replaces the
+/// piece in place, the others are appended. Returns `y`, or `None` when no piece holds the
+/// face (nothing changed).
+pub(crate) fn split_face(pieces: &mut Vec<[u32; 4]>, face: [u32; 3], p: u32) -> Option<u32> {
+    let i = pieces
+        .iter()
+        .position(|t| face.iter().all(|v| t.contains(v)))?;
+    let piece = pieces[i];
+    let y = *piece.iter().find(|v| !face.contains(v))?;
+    let with_p = |v: u32| piece.map(|u| if u == v { p } else { u });
+    pieces[i] = with_p(face[2]);
+    pieces.push(with_p(face[0]));
+    pieces.push(with_p(face[1]));
+    Some(y)
+}
 
 /// A tip closer to either end of its edge than this fraction of the edge's length is not
 /// inserted (the cut ends at that end, or as without a tip split).
@@ -75,7 +171,8 @@ impl Surgery {
                 }
                 let f = face_nodes(&tets[t as usize], j);
                 let p: Vec<u32> = f.iter().copied().filter(|&v| on_plane(v)).collect();
-                if p.len() == 2 {
+                // A four-way tip's triangles are done.
+                if p.len() == 2 && !p.iter().any(|v| out.four_way.contains(v)) {
                     on.push(sorted2(p[0], p[1]));
                 }
             }
@@ -202,7 +299,17 @@ impl Surgery {
         }
         tracing::debug!(tips = order.len(), tets = plan.len(), "tips split");
         let mut second = SplitOutcome::default();
-        self.apply_split(body, &edges, &order, &new_rest, &plan, &pieces, &mut second)?;
+        self.apply_split(
+            body,
+            &edges,
+            &order,
+            &new_rest,
+            &[],
+            &plan,
+            &pieces,
+            &mut second,
+        )?;
+        self.tip_counts.fallback += order.len() as u64;
         // Merge into the first split's outcome: nodes and tets were appended right after its.
         out.end_node = second.end_node;
         out.end_tet = second.end_tet;
@@ -240,5 +347,579 @@ fn merge_surface(first: &mut Vec<SplitTriangle>, second: Vec<SplitTriangle>) {
             }
             None => first.push(s),
         }
+    }
+}
+
+impl Surgery {
+    /// The four-way tips of one sweep (module docs), planned on the first split's plan before
+    /// it is applied: `edges` holds the split edges after the quality rounds, the new nodes as
+    /// placeholders (`u32::MAX − i` for `candidate_edges[i]`, rest positions in
+    /// `placeholder_rest`), and `affected` the tets to split. For each accepted tip the edge
+    /// `A C` is dropped from `edges` (not valid, and not inside: the tets around it join the
+    /// cut's front), and tets left with no split edge are removed from `affected`. A candidate
+    /// refused keeps `A C` (the tip pass may then split the triangle into 5).
+    pub(crate) fn plan_four_way_tips(
+        &mut self,
+        body: &SoftBody,
+        plane: &CutPlane<'_>,
+        affected: &mut Vec<u32>,
+        edges: &mut HashMap<[u32; 2], EdgeCut>,
+        candidate_edges: &[[u32; 2]],
+        placeholder_rest: &[DVec3],
+    ) -> Vec<FourWayTip> {
+        let mut tips: Vec<FourWayTip> = Vec::new();
+        if !self.settings.four_way_tips || affected.is_empty() {
+            return tips;
+        }
+        let mut counts = self.tip_counts;
+        let n_rest = self.rest.len();
+        let dist = &self.side;
+        let sign = |v: u32| -> i8 {
+            match dist.get(v as usize) {
+                Some(&d) if d > 0.0 => 1,
+                Some(&d) if d < 0.0 => -1,
+                _ => 0,
+            }
+        };
+        let pos = |v: u32| body.positions()[v as usize].as_dvec3();
+        // Current positions of the placeholders (the crossing points).
+        let placeholder_pos: Vec<DVec3> = candidate_edges
+            .iter()
+            .map(|e| {
+                let s = edges.get(e).map_or(0.0, |c| c.s);
+                pos(e[0]) + (pos(e[1]) - pos(e[0])) * s
+            })
+            .collect();
+        let point_of = |v: u32| -> DVec3 {
+            if (v as usize) < n_rest {
+                pos(v)
+            } else {
+                placeholder_pos
+                    .get((u32::MAX - v) as usize)
+                    .copied()
+                    .unwrap_or(DVec3::NAN)
+            }
+        };
+        // Boundary triangles A B C of tets to split, A alone on its side, A B and A C split,
+        // exactly one of the two crossing points in the polygon (A B's, after renaming):
+        // (A C, tet, A, B, C).
+        let mut found: Vec<([u32; 2], u32, u32, u32, u32)> = Vec::new();
+        for &t in affected.iter() {
+            let nb = self.neighbours[t as usize];
+            if !nb.contains(&NO_TET) {
+                continue;
+            }
+            let tet = body.tets()[t as usize];
+            for j in (0..4).filter(|&j| nb[j] == NO_TET) {
+                let f = face_nodes(&tet, j);
+                let sf = f.map(sign);
+                if sf.contains(&0) {
+                    continue;
+                }
+                let Some(i) =
+                    (0..3).find(|&i| sf[i] != sf[(i + 1) % 3] && sf[i] != sf[(i + 2) % 3])
+                else {
+                    continue;
+                };
+                let (a, u, w) = (f[i], f[(i + 1) % 3], f[(i + 2) % 3]);
+                let node = |x: u32| {
+                    edges
+                        .get(&sorted2(a, x))
+                        .filter(|c| c.valid)
+                        .map(|c| c.node)
+                };
+                let (Some(nu), Some(nw)) = (node(u), node(w)) else {
+                    continue;
+                };
+                let (iu, iw) = (plane.contains(point_of(nu)), plane.contains(point_of(nw)));
+                if iu == iw {
+                    continue;
+                }
+                let (b, c) = if iu { (u, w) } else { (w, u) };
+                found.push((sorted2(a, c), t, a, b, c));
+            }
+        }
+        if found.is_empty() {
+            return tips;
+        }
+        found.sort_unstable();
+        let mut local: Vec<([u32; 2], u32)> = Vec::new();
+        let mut scratch: Vec<[u32; 4]> = Vec::new();
+        for group in found.chunk_by(|x, y| x.0 == y.0) {
+            let ac = group[0].0;
+            let triangles = group.len() as u64;
+            let ring: Vec<u32> = self.tets_around(&ac).collect();
+            // Any other boundary triangle `A C X` at A C (dropping A C leaves it unsplit along
+            // it) must not want a tip: `X` off the plane, and its other crossing point, if
+            // split, outside the polygon (so both are: the triangle is beyond the tip).
+            let beyond = |f: [u32; 3]| {
+                let Some(&x) = f.iter().find(|v| !ac.contains(v)) else {
+                    return false;
+                };
+                if sign(x) == 0 {
+                    return false;
+                }
+                let other = if sign(x) == sign(ac[0]) { ac[1] } else { ac[0] };
+                edges
+                    .get(&sorted2(x, other))
+                    .filter(|c| c.valid)
+                    .is_none_or(|c| !plane.contains(point_of(c.node)))
+            };
+            let only_candidates = ring.iter().all(|&u| {
+                let tet = body.tets()[u as usize];
+                (0..4).all(|j| {
+                    let f = face_nodes(&tet, j);
+                    self.neighbours[u as usize][j] != NO_TET
+                        || !(f.contains(&ac[0]) && f.contains(&ac[1]))
+                        || group.iter().any(|g| g.1 == u && f.contains(&g.3))
+                        || beyond(f)
+                })
+            });
+            if !only_candidates {
+                counts.refused_neighbour += triangles;
+                continue;
+            }
+            // The tips: where the polygon's boundary crosses E–E2.
+            let mut planned: Vec<FourWayTip> = Vec::new();
+            let mut e_nodes: Vec<u32> = Vec::new();
+            let mut e2_node = u32::MAX;
+            for &(_, t, a, b, c) in group {
+                let ab = sorted2(a, b);
+                let (Some(ce), Some(ce2)) = (edges.get(&ab), edges.get(&ac)) else {
+                    break;
+                };
+                // Parameters from A along A B and A C.
+                let from_a = |e: [u32; 2], s: f64| if e[0] == a { s } else { 1.0 - s };
+                let (sb, sc) = (from_a(ab, ce.s), from_a(ac, ce2.s));
+                let (x_e, x_e2) = (point_of(ce.node), point_of(ce2.node));
+                let (mut lo, mut hi) = (0.0f64, 1.0f64);
+                for _ in 0..40 {
+                    let mid = 0.5 * (lo + hi);
+                    if plane.contains(x_e + (x_e2 - x_e) * mid) {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                let s = 0.5 * (lo + hi);
+                // Barycentric coordinates of P in A E C.
+                let bary = [s * (1.0 - sc), 1.0 - s, s * sc];
+                if bary.iter().any(|&w| w.is_nan() || w < FACE_TIP_MARGIN) {
+                    break;
+                }
+                e_nodes.push(ce.node);
+                e2_node = ce2.node;
+                planned.push(FourWayTip {
+                    tet: t,
+                    a,
+                    c,
+                    ab,
+                    point: FacePoint {
+                        nodes: [a, b, c],
+                        weights: [
+                            (1.0 - s) * (1.0 - sb) + s * (1.0 - sc),
+                            (1.0 - s) * sb,
+                            s * sc,
+                        ],
+                    },
+                });
+            }
+            if planned.len() != group.len() {
+                counts.refused_margin += triangles;
+                continue;
+            }
+            if self.crossing_needed(body, plane, &ring, ac, e2_node, &e_nodes, edges, &point_of) {
+                counts.refused_needed += triangles;
+                continue;
+            }
+            // Dropped tentatively; the tets around A C judged again with the tips.
+            let base = tips.len();
+            tips.extend(planned);
+            if let Some(c) = edges.get_mut(&ac) {
+                c.valid = false;
+            }
+            // `Some(true)`: a piece below the bound; `Some(false)`: no piece on `A E C` ending
+            // on the plane.
+            let mut failure: Option<bool> = None;
+            for &u in &ring {
+                if !self.four_way_pieces(
+                    body,
+                    u,
+                    edges,
+                    &tips,
+                    candidate_edges.len(),
+                    &mut local,
+                    &mut scratch,
+                ) {
+                    failure = Some(false);
+                    break;
+                }
+                let tet = body.tets()[u as usize];
+                let rest_of = |v: u32| -> DVec3 { self.rest_with_tips(v, placeholder_rest, &tips) };
+                if !self.pieces_meet_bound(tet, &scratch, rest_of) {
+                    failure = Some(true);
+                    break;
+                }
+            }
+            let good = failure.is_none();
+            if let Some(c) = edges.get_mut(&ac) {
+                c.valid = !good;
+                c.inside = !good;
+            }
+            match failure {
+                None => counts.four_way += triangles,
+                Some(quality) => {
+                    tips.truncate(base);
+                    if quality {
+                        counts.refused_quality += triangles;
+                    } else {
+                        counts.refused_unsplit += triangles;
+                    }
+                }
+            }
+        }
+        if !tips.is_empty() {
+            affected.retain(|&t| {
+                split_edges_of(body.tets()[t as usize], edges, &mut local);
+                !local.is_empty()
+            });
+        }
+        self.tip_counts = counts;
+        tips
+    }
+
+    /// Queues the wall face `E P Y` of an applied four-way tip (node `p`, `E` node `e`) to
+    /// open with this sweep's faces (as a face glued earlier is retried, see `cut`): it lies
+    /// on the plane between the piece on `A`'s side and the piece on `C`'s, both inside the
+    /// cut (their crossing points are split), but the segment between their centroids crosses
+    /// the plane at `(E + P + Y + E2) / 4`, which can lie beyond the polygon's boundary (that
+    /// passes through `P`), so the centroid rule alone may leave it glued.
+    pub(crate) fn open_tip_wall(&mut self, body: &SoftBody, tip: &FourWayTip, e: u32, p: u32) {
+        let tets = body.tets();
+        let Some(star) = self.node_tets.get(p as usize) else {
+            return;
+        };
+        let side = |end: u32| {
+            star.iter().copied().find_map(|t| {
+                let tet = tets[t as usize];
+                let j = tet.iter().position(|&v| v == end)?;
+                tet.contains(&e).then_some((t, j))
+            })
+        };
+        if let (Some((t, j)), Some((u, k))) = (side(tip.a), side(tip.c)) {
+            if self.neighbours[t as usize][j] == u && self.neighbours[u as usize][k] == t {
+                self.pending.push([t, j as u32, u, k as u32]);
+            }
+        }
+    }
+
+    /// Rest position of node `v`, a placeholder of the split plan (`u32::MAX − i`: a split
+    /// edge's node for `i` below `placeholder_rest.len()`, then the tips' points in order) or
+    /// a node of the body.
+    fn rest_with_tips(&self, v: u32, placeholder_rest: &[DVec3], tips: &[FourWayTip]) -> DVec3 {
+        if (v as usize) < self.rest.len() {
+            return self.rest[v as usize];
+        }
+        let i = (u32::MAX - v) as usize;
+        if let Some(&r) = placeholder_rest.get(i) {
+            return r;
+        }
+        tips.get(i - placeholder_rest.len())
+            .map_or(DVec3::NAN, |tip| {
+                let p = tip.point;
+                (0..3)
+                    .map(|k| self.rest[p.nodes[k] as usize] * p.weights[k])
+                    .sum()
+            })
+    }
+
+    /// The pieces of tet `u` (into `scratch`) under the valid `edges` and the planned `tips`
+    /// (tip `k`'s point is placeholder `u32::MAX − (n_edges + k)`); `false` when a tip's face
+    /// is in no piece or its piece's fourth node is off the plane.
+    #[allow(clippy::too_many_arguments)]
+    fn four_way_pieces(
+        &self,
+        body: &SoftBody,
+        u: u32,
+        edges: &HashMap<[u32; 2], EdgeCut>,
+        tips: &[FourWayTip],
+        n_edges: usize,
+        local: &mut Vec<([u32; 2], u32)>,
+        scratch: &mut Vec<[u32; 4]>,
+    ) -> bool {
+        let tet = body.tets()[u as usize];
+        split_edges_of(tet, edges, local);
+        scratch.clear();
+        bisect(tet, local, scratch);
+        for (k, tip) in tips.iter().enumerate().filter(|(_, tip)| tip.tet == u) {
+            let Some(e) = edges.get(&tip.ab).filter(|c| c.valid).map(|c| c.node) else {
+                return false;
+            };
+            let p = u32::MAX - (n_edges + k) as u32;
+            let Some(y) = split_face(scratch, [tip.a, e, tip.c], p) else {
+                return false;
+            };
+            let on_plane = (y as usize) >= self.rest.len()
+                || self.side.get(y as usize).is_some_and(|&d| d == 0.0);
+            if !on_plane {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Whether the tets `ring` around `A C` need it split: a face on the plane between two of a
+    /// ring tet's pieces with `A C` split that is not one without it (lost with `E2`: the
+    /// pieces holding both `A` and `C` straddle it), other than the faces at `E–E2` (`e2`
+    /// and one of `e_nodes`, which the tip replaces by `E P Y`), would open — neither of its
+    /// two pieces at the cut's front (holding both ends of a crossing edge outside the
+    /// polygon), and the segment between their centroids crossing the polygon. Such a face is
+    /// part of the cut inside the polygon: `A C` is then not dropped.
+    #[allow(clippy::too_many_arguments)]
+    fn crossing_needed(
+        &self,
+        body: &SoftBody,
+        plane: &CutPlane<'_>,
+        ring: &[u32],
+        ac: [u32; 2],
+        e2: u32,
+        e_nodes: &[u32],
+        edges: &HashMap<[u32; 2], EdgeCut>,
+        point_of: &dyn Fn(u32) -> DVec3,
+    ) -> bool {
+        let n_rest = self.rest.len();
+        let on_plane =
+            |v: u32| (v as usize) >= n_rest || self.side.get(v as usize).is_some_and(|&d| d == 0.0);
+        let front = |p: &[u32; 4]| {
+            (0..4).any(|i| {
+                (i + 1..4).any(|k| edges.get(&sorted2(p[i], p[k])).is_some_and(|c| !c.inside))
+            })
+        };
+        let centroid = |p: &[u32; 4]| p.iter().map(|&v| point_of(v)).sum::<DVec3>() * 0.25;
+        let (o, n) = (plane.origin, plane.normal);
+        // The faces on the plane between two of `pieces` (sorted nodes, the two pieces).
+        let on_plane_faces = |pieces: &[[u32; 4]], out: &mut Vec<([u32; 3], usize, usize)>| {
+            out.clear();
+            for (i, p) in pieces.iter().enumerate() {
+                for (k, q) in pieces.iter().enumerate().skip(i + 1) {
+                    let mut shared = [0u32; 3];
+                    let mut m = 0;
+                    for v in p.iter().copied().filter(|v| q.contains(v)) {
+                        if m < 3 {
+                            shared[m] = v;
+                        }
+                        m += 1;
+                    }
+                    if m == 3 && shared.iter().all(|&v| on_plane(v)) {
+                        shared.sort_unstable();
+                        out.push((shared, i, k));
+                    }
+                }
+            }
+        };
+        let mut local: Vec<([u32; 2], u32)> = Vec::new();
+        let mut pieces: Vec<[u32; 4]> = Vec::new();
+        let mut without: Vec<[u32; 4]> = Vec::new();
+        let (mut faces, mut kept) = (Vec::new(), Vec::new());
+        for &u in ring {
+            let tet = body.tets()[u as usize];
+            split_edges_of(tet, edges, &mut local);
+            pieces.clear();
+            bisect(tet, &local, &mut pieces);
+            on_plane_faces(&pieces, &mut faces);
+            if faces.is_empty() {
+                continue;
+            }
+            local.retain(|l| l.0 != ac);
+            without.clear();
+            bisect(tet, &local, &mut without);
+            on_plane_faces(&without, &mut kept);
+            for &(f, i, k) in &faces {
+                let at_tip = f.contains(&e2) && f.iter().any(|v| e_nodes.contains(v));
+                if at_tip || kept.iter().any(|g| g.0 == f) {
+                    continue;
+                }
+                let (p, q) = (&pieces[i], &pieces[k]);
+                if front(p) || front(q) {
+                    continue;
+                }
+                let (cp, cq) = (centroid(p), centroid(q));
+                let (dp, dq) = (n.dot(cp - o), n.dot(cq - o));
+                if (dp > 0.0) == (dq > 0.0) || dp == dq {
+                    continue;
+                }
+                if plane.contains(cp + (cq - cp) * (dp / (dp - dq))) {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::split::six_volume;
+
+    /// The face-point split on a single tet `A B C D` over every sign pattern with the
+    /// boundary face `A B C` crossed (A alone on its side, D on either side or on the plane),
+    /// both sides of the plane, every assignment of node numbers (so every global order of the
+    /// bisection): with every crossing edge but `A C` split and the tip `P` at the middle of
+    /// `E–E2`, the pieces tile the tet (volumes sum to its own), none is flat or inverted,
+    /// the face `A B C` is in exactly 4 triangles tiling it (`P` joined to `A`, `E`, `C`),
+    /// `E`, `P` and `Y` lie on the plane with `E P Y` a face of two pieces, and only pieces
+    /// holding both `A` and `C` hold nodes of both sides (`(A, P, C, Y)`, and for some orders a
+    /// second one).
+    #[test]
+    fn the_face_point_split_tiles_the_tet_and_puts_the_tip_wall_on_the_plane() {
+        let base = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+        let mut checked = 0;
+        for perm in 0..24usize {
+            // Node k sits at base position `at[k]`.
+            let mut at = [0usize; 4];
+            let mut free: Vec<usize> = (0..4).collect();
+            let mut code = perm;
+            for (k, slot) in at.iter_mut().enumerate() {
+                let r = 4 - k;
+                *slot = free.remove(code % r);
+                code /= r;
+            }
+            // The tet in positive order: the nodes at positions 0, 1, 2, 3.
+            let tet: [u32; 4] =
+                [0, 1, 2, 3].map(|p| at.iter().position(|&q| q == p).unwrap() as u32);
+            let d = tet[3];
+            for lone in 0..3 {
+                for swap in [false, true] {
+                    for d_value in [0.7, -0.6, 0.0] {
+                        for flip in [1.0, -1.0] {
+                            let a = tet[lone];
+                            let (mut b, mut c) = (tet[(lone + 1) % 3], tet[(lone + 2) % 3]);
+                            if swap {
+                                std::mem::swap(&mut b, &mut c);
+                            }
+                            let mut f = [0.0f64; 4];
+                            f[a as usize] = flip;
+                            f[b as usize] = -0.8 * flip;
+                            f[c as usize] = -1.3 * flip;
+                            f[d as usize] = d_value * flip;
+                            check_face_split(&base, &at, tet, [a, b, c, d], f);
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(checked, 24 * 3 * 2 * 3 * 2);
+    }
+
+    fn check_face_split(
+        base: &[DVec3; 4],
+        at: &[usize; 4],
+        tet: [u32; 4],
+        [a, b, c, _d]: [u32; 4],
+        f: [f64; 4],
+    ) {
+        let mut x: Vec<DVec3> = (0..4).map(|k| base[at[k]]).collect();
+        // The plane: where the affine function with values `f` at the nodes vanishes.
+        let value = |p: DVec3| {
+            let l = [1.0 - p.x - p.y - p.z, p.x, p.y, p.z];
+            (0..4).map(|k| l[at[k]] * f[k]).sum::<f64>()
+        };
+        let crossing = |x: &[DVec3], e: [u32; 2]| {
+            let (f0, f1) = (f[e[0] as usize], f[e[1] as usize]);
+            x[e[0] as usize] + (x[e[1] as usize] - x[e[0] as usize]) * (f0 / (f0 - f1))
+        };
+        let ac = sorted2(a, c);
+        let mut split: Vec<([u32; 2], u32)> = Vec::new();
+        for i in 0..4u32 {
+            for j in i + 1..4 {
+                if f[i as usize] * f[j as usize] < 0.0 && [i, j] != ac {
+                    let p = crossing(&x, [i, j]);
+                    split.push(([i, j], x.len() as u32));
+                    x.push(p);
+                }
+            }
+        }
+        let ab = sorted2(a, b);
+        let e = split.iter().find(|s| s.0 == ab).map(|s| s.1).unwrap();
+        let tip = (x[e as usize] + crossing(&x, ac)) * 0.5;
+        let p = x.len() as u32;
+        x.push(tip);
+        let mut pieces = Vec::new();
+        bisect(tet, &split, &mut pieces);
+        let y = split_face(&mut pieces, [a, e, c], p).expect("a piece holds A E C");
+        let ctx = format!("tet {tet:?} f {f:?}: {pieces:?}");
+        // Tiling, orientation.
+        let volume: f64 = pieces
+            .iter()
+            .map(|t| six_volume(t.map(|i| x[i as usize])))
+            .sum();
+        assert!((volume - 1.0).abs() < 1e-12, "{ctx}: volume {volume}");
+        for t in &pieces {
+            assert!(six_volume(t.map(|i| x[i as usize])) > 1e-6, "{ctx}: {t:?}");
+        }
+        // E, P, Y on the plane, and the wall E P Y a face of two pieces.
+        for v in [e, p, y] {
+            assert!(
+                value(x[v as usize]).abs() < 1e-12,
+                "{ctx}: node {v} off the plane"
+            );
+        }
+        let wall = pieces
+            .iter()
+            .filter(|t| [e, p, y].iter().all(|v| t.contains(v)))
+            .count();
+        assert_eq!(wall, 2, "{ctx}");
+        // The face A B C (opposite D, base position 3: z = 0) in 4 triangles tiling it.
+        let on_face = |v: u32| x[v as usize].z.abs() < 1e-12;
+        let mut triangles: Vec<[u32; 3]> = Vec::new();
+        for t in &pieces {
+            for j in 0..4 {
+                let tri = face_nodes(t, j);
+                if tri.iter().all(|&v| on_face(v)) {
+                    triangles.push(tri);
+                }
+            }
+        }
+        assert_eq!(triangles.len(), 4, "{ctx}: {triangles:?}");
+        let area: f64 = triangles
+            .iter()
+            .map(|t| {
+                let [q, r, s] = t.map(|v| x[v as usize]);
+                0.5 * (r - q).cross(s - q).length()
+            })
+            .sum();
+        assert!((area - 0.5).abs() < 1e-12, "{ctx}: area {area}");
+        let mut joined: Vec<u32> = triangles
+            .iter()
+            .filter(|t| t.contains(&p))
+            .flatten()
+            .copied()
+            .filter(|&v| v != p)
+            .collect();
+        joined.sort_unstable();
+        joined.dedup();
+        let mut want = vec![a, e, c];
+        want.sort_unstable();
+        assert_eq!(joined, want, "{ctx}");
+        // Only pieces on the unsplit edge A C straddle (the front, `tets_around(A C)`): (A, P,
+        // C, Y) and, for some orders where D is on A's side, a second one (A, F, C, G).
+        let mut straddling = 0;
+        for t in &pieces {
+            let sides: Vec<f64> = t
+                .iter()
+                .filter(|&&v| v < 4)
+                .map(|&v| f[v as usize])
+                .collect();
+            let both = sides.iter().any(|&s| s > 0.0) && sides.iter().any(|&s| s < 0.0);
+            assert_eq!(both, t.contains(&a) && t.contains(&c), "{ctx}: {t:?}");
+            straddling += usize::from(both);
+        }
+        assert!(straddling <= 2, "{ctx}");
+        let apcy = pieces
+            .iter()
+            .filter(|t| [a, p, c, y].iter().all(|v| t.contains(v)));
+        assert_eq!(apcy.count(), 1, "{ctx}");
     }
 }

@@ -123,6 +123,16 @@ fn partial_incision(geometric: bool) {
     // drawn along x from −1.5 to 1.5 in ten steps.
     let blade = common::incision_blade();
     let at = common::incision_pose;
+    // The top triangles the plane z = 0.15 crosses well inside the path (rest positions).
+    let rest = |body: &SoftBody, v: u32| body.rest_positions()[v as usize].as_dvec3();
+    let crossed: Vec<[glam::DVec3; 3]> = surgery
+        .boundary_faces(&body)
+        .into_iter()
+        .map(|f| f.map(|v| rest(&body, v)))
+        .filter(|p| p.iter().all(|q| (q.y - 1.5).abs() < 1e-6))
+        .filter(|p| p.iter().any(|q| q.z < 0.15) && p.iter().any(|q| q.z > 0.15))
+        .filter(|p| p.iter().all(|q| q.x.abs() <= 1.0 + 1e-6))
+        .collect();
     let mut opened = 0;
     for k in 0..10 {
         let (x0, x1) = (-1.5 + 0.3 * k as f32, -1.5 + 0.3 * (k + 1) as f32);
@@ -142,6 +152,33 @@ fn partial_incision(geometric: bool) {
     }
     assert_eq!(surgery.component_count(), 1);
     assert!(opened > 0);
+    if geometric {
+        // Into how many boundary pieces each crossed top triangle was split (by the pieces'
+        // rest centroids), and how the sweeps' ends were split.
+        let top: Vec<glam::DVec3> = surgery
+            .boundary_faces(&body)
+            .into_iter()
+            .map(|f| f.map(|v| rest(&body, v)))
+            .filter(|p| p.iter().all(|q| (q.y - 1.5).abs() < 1e-6))
+            .map(|p| (p[0] + p[1] + p[2]) / 3.0)
+            .collect();
+        let inside = |t: &[glam::DVec3; 3], c: glam::DVec3| {
+            let s = |a: glam::DVec3, b: glam::DVec3| {
+                (b.x - a.x) * (c.z - a.z) - (b.z - a.z) * (c.x - a.x)
+            };
+            let (u, v, w) = (s(t[0], t[1]), s(t[1], t[2]), s(t[2], t[0]));
+            (u >= 0.0 && v >= 0.0 && w >= 0.0) || (u <= 0.0 && v <= 0.0 && w <= 0.0)
+        };
+        let counts: Vec<usize> = crossed
+            .iter()
+            .map(|t| top.iter().filter(|&&c| inside(t, c)).count())
+            .collect();
+        eprintln!(
+            "partial incision: crossed top triangles in {counts:?} pieces; tips {:?}",
+            surgery.tip_counts()
+        );
+        assert!(counts.iter().all(|&n| (2..=5).contains(&n)), "{counts:?}");
+    }
     // The opening on the top: the top nodes that were split, and their copies.
     let x = body.positions();
     let split: Vec<f32> = (0..body.node_count())

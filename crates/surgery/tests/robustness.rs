@@ -11,7 +11,7 @@ use std::time::Instant;
 use glam::{Quat, Vec3};
 use tissue_mesh::TetMesh;
 use tissue_pbd::{Floor, Material, Pose, SoftBody, StepSettings, ToolShape};
-use tissue_surgery::{BladeSweep, Surgery, SurgerySettings};
+use tissue_surgery::{BladeSweep, Surgery, SurgerySettings, TipCounts};
 
 const BUNNY: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -56,6 +56,18 @@ struct Stats {
     worst_volume_ratio: f64,
     most_tets: usize,
     split_cuts: usize,
+    /// The tips of all bodies (four-way, five-way fallback, four-way candidates refused).
+    tips: TipCounts,
+}
+
+fn add_tips(sum: &mut TipCounts, t: TipCounts) {
+    sum.four_way += t.four_way;
+    sum.fallback += t.fallback;
+    sum.refused_margin += t.refused_margin;
+    sum.refused_neighbour += t.refused_neighbour;
+    sum.refused_unsplit += t.refused_unsplit;
+    sum.refused_needed += t.refused_needed;
+    sum.refused_quality += t.refused_quality;
 }
 
 /// `sessions` cuts of `per_session` continued sweeps each; `steps` steps after every cut; a
@@ -101,6 +113,7 @@ fn hammer(
         worst_volume_ratio: f64::INFINITY,
         most_tets: 0,
         split_cuts: 0,
+        tips: TipCounts::default(),
     };
     let (mut body, mut surgery) = (fresh.clone(), fresh_surgery.clone());
     // Parallel stepping (bit-identical to serial, tests/parallel.rs in tissue-pbd), for time.
@@ -114,6 +127,7 @@ fn hammer(
     body.set_floor(Some(Floor::y(lo.y - 0.5))).unwrap();
     for session in 0..sessions {
         if session % if split { 2 } else { 5 } == 0 {
+            add_tips(&mut stats.tips, surgery.tip_counts());
             (body, surgery) = (fresh.clone(), fresh_surgery.clone());
             body.set_settings(settings).unwrap();
             body.set_floor(Some(Floor::y(lo.y - 0.5))).unwrap();
@@ -188,6 +202,7 @@ fn hammer(
             }
         }
     }
+    add_tips(&mut stats.tips, surgery.tip_counts());
     stats
 }
 
@@ -199,6 +214,11 @@ fn report(name: &str, s: &Stats, seconds: f64) {
     eprintln!(
         "  {name}: {} cuts ({} changed the body, {} split tets, {} pieces detached), at most {} tets, {} steps, worst current/rest tet volume {:.3}, {seconds:.1} s (cut {:.2} s, validate {:.2} s, steps {:.2} s)",
         s.cuts, s.cuts_opening, s.split_cuts, s.detached, s.most_tets, s.steps, s.worst_volume_ratio, s.seconds[0], s.seconds[1], s.seconds[2]
+    );
+    let t = s.tips;
+    eprintln!(
+        "  {name}: tips split into 4: {}, on the crack line (fallback): {}; four-way candidates refused: {} margin, {} neighbour, {} unsplit, {} needed, {} quality",
+        t.four_way, t.fallback, t.refused_margin, t.refused_neighbour, t.refused_unsplit, t.refused_needed, t.refused_quality
     );
 }
 
@@ -233,6 +253,8 @@ fn bunny(split: bool) {
     );
     assert_eq!(s.cuts, 4 * sessions);
     assert_eq!(s.steps, 10 * s.cuts);
+    // Both ways of ending a cut on the surface are taken.
+    assert!(!split || (s.tips.four_way > 0 && s.tips.fallback > 0));
     assert!(
         s.cuts_opening > s.cuts * 6 / 10,
         "too few sweeps opened anything: {}",
@@ -271,6 +293,7 @@ fn liver(split: bool) {
         start.elapsed().as_secs_f64(),
     );
     assert_eq!(s.cuts, 4 * sessions);
+    assert!(!split || (s.tips.four_way > 0 && s.tips.fallback > 0));
     assert!(
         s.cuts_opening > s.cuts / 2,
         "too few sweeps opened anything: {}",

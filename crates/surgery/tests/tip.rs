@@ -7,7 +7,9 @@ mod common;
 
 use glam::DVec3;
 use tissue_pbd::{SoftBody, StepSettings};
-use tissue_surgery::{BladeSweep, SplitTriangle, Surgery, SurgeryEvent, MIN_RATIO};
+use tissue_surgery::{
+    BladeSweep, SplitTriangle, Surgery, SurgeryEvent, SurgerySettings, MIN_RATIO,
+};
 
 fn rest(body: &SoftBody, v: u32) -> DVec3 {
     body.rest_positions()[v as usize].as_dvec3()
@@ -59,15 +61,21 @@ fn pieces_in(body: &SoftBody, surgery: &Surgery, t: [DVec3; 3]) -> Vec<[u32; 3]>
 }
 
 /// Checks the tip split of the top triangle `corners` (rest positions) where the polygon's
-/// boundary crosses the top at `x_tip` (on z = 0.15): 5 boundary pieces tiling it, reported as
-/// one split triangle; the tip node there, not duplicated, on the opened walls; the opening on
-/// the top reaching it from `inner` (the side of the path).
+/// boundary crosses the top at `x_tip` (on z = 0.15), the crossing point `x_e` on the
+/// triangle's edge inside the polygon. Four-way (`pieces` 4): 4 boundary pieces tiling it
+/// (areas within 1e-6), reported as one split triangle with those 4 pieces; the tip node there
+/// (within 1e-4 cm of where the blade's edge crosses the top), inside the triangle, joined by
+/// the pieces to exactly the crossing node `E` and the two corners of the edges it lies
+/// between; `E` duplicated. The five-way fallback (`pieces` 5): 5 pieces, reported once, the
+/// tip on the crack line. Both: the tip not duplicated, on the opened walls.
 fn check_tip(
     body: &SoftBody,
     surgery: &Surgery,
     reported: &[SplitTriangle],
     corners: [DVec3; 3],
     x_tip: f64,
+    x_e: f64,
+    expected: usize,
 ) {
     let pieces = pieces_in(body, surgery, corners);
     let sum: f64 = pieces.iter().map(|f| area(f.map(|v| rest(body, v)))).sum();
@@ -76,22 +84,30 @@ fn check_tip(
         pieces.len(),
         area(corners)
     );
-    assert_eq!(pieces.len(), 5, "pieces of the tip triangle");
+    assert_eq!(pieces.len(), expected, "pieces of the tip triangle");
     assert!((sum - area(corners)).abs() < 1e-6);
-    // Reported as one triangle split into its 5 pieces.
+    // Reported as one triangle split into exactly these 4 pieces.
     let original = corners.map(|p| node_at(body, p).unwrap());
-    let mut key = original;
-    key.sort_unstable();
+    let key = |f: &[u32; 3]| {
+        let mut k = *f;
+        k.sort_unstable();
+        k
+    };
     let entry = reported
         .iter()
-        .find(|s| {
-            let mut k = s.original;
-            k.sort_unstable();
-            k == key
-        })
+        .find(|s| key(&s.original) == key(&original))
         .expect("the tip triangle is reported");
-    assert_eq!(entry.pieces.len(), 5);
-    // The tip: a node at the crossing, on the plane, not duplicated, on the opened walls.
+    let mut got: Vec<[u32; 3]> = entry.pieces.iter().map(key).collect();
+    // (The pieces as reported: before the opening duplicated E.)
+    let origins = surgery.origins();
+    let mut want: Vec<[u32; 3]> = pieces
+        .iter()
+        .map(|f| key(&f.map(|v| origins[v as usize])))
+        .collect();
+    got.sort_unstable();
+    want.sort_unstable();
+    assert_eq!(got, want, "the reported pieces");
+    // The tip: a node at the crossing, not duplicated, on the opened walls.
     let tip = node_at(body, DVec3::new(x_tip, 1.5, 0.15));
     let tip = tip.unwrap_or_else(|| panic!("no node at the tip x = {x_tip}"));
     assert!(!duplicated(surgery, tip), "the tip is duplicated");
@@ -100,6 +116,27 @@ fn check_tip(
         (0..4).any(|k| k != j as usize && tet[k] == tip)
     });
     assert!(on_wall, "the opening does not reach the tip");
+    if expected != 4 {
+        return;
+    }
+    // Inside the triangle: in 3 of its pieces, joined to E and the two corners beside E–E2.
+    let mut joined: Vec<DVec3> = pieces
+        .iter()
+        .filter(|f| f.contains(&tip))
+        .flat_map(|f| f.iter().filter(|&&v| v != tip).map(|&v| rest(body, v)))
+        .collect();
+    joined.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.z.total_cmp(&b.z)));
+    joined.dedup_by(|a, b| a.distance(*b) < 1e-6);
+    assert_eq!(joined.len(), 3, "the tip's neighbours {joined:?}");
+    let e = DVec3::new(x_e, 1.5, 0.15);
+    assert!(joined.iter().any(|p| p.distance(e) < 1e-6), "{joined:?}");
+    let at_corners = joined
+        .iter()
+        .filter(|p| corners.iter().any(|c| c.distance(**p) < 1e-6));
+    assert_eq!(at_corners.count(), 2, "{joined:?}");
+    // E opened: one of its copies is on the top.
+    let e_node = node_at(body, e).unwrap();
+    assert!(duplicated(surgery, e_node), "E is not duplicated");
 }
 
 /// One sweep of `blade` from `from` to `to` (incision poses): the body stays valid and in one
@@ -133,14 +170,41 @@ fn sweep_once(
 /// row of triangles z ∈ [0, 0.5] is at x = x1 + 0.2; a first sweep from −1.5 to −0.375 puts
 /// the front at −0.175, halfway along the crossing segment [−0.35, 0] of the top triangle
 /// (−0.5, 0) (0, 0) (0, 0.5) (x, z), and the start at −1.7, along [−1.85, −1.5] of the
-/// triangle (−2, 0) (−1.5, 0) (−1.5, 0.5).
+/// triangle (−2, 0) (−1.5, 0) (−1.5, 0.5). Both triangles are split into 4 at their tips (the
+/// four-way split, counted as such); the continued cut's later fronts are four-way or
+/// five-way, as the rules allow.
 #[test]
 fn an_incision_ending_inside_a_top_triangle_splits_it_at_the_tip_and_opens_up_to_it() {
+    incision_ending_inside_a_top_triangle(true);
+}
+
+/// The same with [`SurgerySettings::four_way_tips`] off: the fallback, both triangles in 5
+/// pieces with the tip on their crack line (what a refused four-way candidate gets).
+#[test]
+fn with_four_way_tips_off_the_tip_triangles_are_split_into_five() {
+    incision_ending_inside_a_top_triangle(false);
+}
+
+fn incision_ending_inside_a_top_triangle(four_way: bool) {
     let (mut body, mut surgery) = common::block(true);
+    if !four_way {
+        let settings = SurgerySettings {
+            four_way_tips: false,
+            ..SurgerySettings::default()
+        };
+        surgery = Surgery::new(&body, settings).unwrap();
+    }
     let total = body.rest_volume();
     let blade = common::incision_blade();
     let at = common::incision_pose;
     let reported = sweep_once(&mut body, &mut surgery, &blade, -1.5, -0.375);
+    let counts = surgery.tip_counts();
+    eprintln!("first sweep: {counts:?}");
+    let expected = if four_way { 4 } else { 5 };
+    assert_eq!(
+        (counts.four_way, counts.fallback),
+        if four_way { (2, 0) } else { (0, 2) }
+    );
     let top = |x: f64, z: f64| DVec3::new(x, 1.5, z);
     // The front end and the start.
     check_tip(
@@ -149,6 +213,8 @@ fn an_incision_ending_inside_a_top_triangle_splits_it_at_the_tip_and_opens_up_to
         &reported,
         [top(-0.5, 0.0), top(0.0, 0.0), top(0.0, 0.5)],
         -0.175,
+        -0.35,
+        expected,
     );
     check_tip(
         &body,
@@ -156,6 +222,8 @@ fn an_incision_ending_inside_a_top_triangle_splits_it_at_the_tip_and_opens_up_to
         &reported,
         [top(-2.0, 0.0), top(-1.5, 0.0), top(-1.5, 0.5)],
         -1.7,
+        -1.5,
+        expected,
     );
     // The opening on the top: from the first node past the start's tip to the last before the
     // front's; nothing beyond the tips.
@@ -188,7 +256,18 @@ fn an_incision_ending_inside_a_top_triangle_splits_it_at_the_tip_and_opens_up_to
     }
     let open = opening_on_top(&body, &surgery);
     let (lo, hi) = (open[0], open[open.len() - 1]);
-    eprintln!("continued over {k} sweeps: opening on top from x = {lo} to {hi}");
+    eprintln!(
+        "continued over {k} sweeps: opening on top from x = {lo} to {hi}; {:?}",
+        surgery.tip_counts()
+    );
+    // The old front triangle: once the cut went past, its far edge A C is split too and the
+    // old tip lies on the crack between E and the crossing point E2 (5 pieces either way).
+    let old_front = pieces_in(
+        &body,
+        &surgery,
+        [top(-0.5, 0.0), top(0.0, 0.0), top(0.0, 0.5)],
+    );
+    eprintln!("the old front triangle is in {} pieces", old_front.len());
     assert!(hi > 1.0, "the opening did not extend: {hi}");
     assert!((lo + 1.5).abs() < 1e-6);
     // The old tip is now an ordinary wall node (duplicated).
@@ -228,8 +307,12 @@ fn check_quality(body: &SoftBody, surgery: &Surgery) {
 
 /// A blade whose front edge leans forward (1 cm ahead per 1 cm down): under the tip the cut
 /// runs ahead of it, so the faces on the plane just beyond the tip have their centroid segments
-/// inside the swept polygon; they stay glued all the same (the tets beyond the tip are the
-/// cut's front), so the opening on the top still ends at the tip, which keeps one node.
+/// inside the swept polygon. A four-way tip would keep the tets around the triangle's far edge
+/// `A C` whole and glued, and with them faces at its crossing point that this cut opens: the
+/// four-way candidate is refused (counted as "needed") and the triangle falls back to the
+/// five-way split. The faces just beyond the tip stay glued all the same (the tets beyond the
+/// tip are the cut's front), so the opening on the top still ends at the tip, which keeps one
+/// node.
 #[test]
 fn under_a_forward_leaning_blade_the_surface_opening_still_ends_at_the_tip() {
     let (mut body, mut surgery) = common::block(true);
@@ -244,6 +327,12 @@ fn under_a_forward_leaning_blade_the_surface_opening_still_ends_at_the_tip() {
     // One sweep from x = −3.5 (its rear out of the block) to −2.175: the front at the top is at
     // x = −0.175, halfway along the crossing segment [−0.35, 0].
     let reported = sweep_once(&mut body, &mut surgery, &blade, -3.5, -2.175);
+    let counts = surgery.tip_counts();
+    eprintln!("leaning blade: {counts:?}");
+    assert!(
+        counts.refused_needed >= 1 && counts.fallback >= 1,
+        "{counts:?}"
+    );
     let top = |x: f64, z: f64| DVec3::new(x, 1.5, z);
     check_tip(
         &body,
@@ -251,6 +340,8 @@ fn under_a_forward_leaning_blade_the_surface_opening_still_ends_at_the_tip() {
         &reported,
         [top(-0.5, 0.0), top(0.0, 0.0), top(0.0, 0.5)],
         -0.175,
+        -0.35,
+        5,
     );
     let open = opening_on_top(&body, &surgery);
     eprintln!("leaning blade: opening on top (duplicated nodes): {open:?}");
