@@ -366,44 +366,68 @@ impl Surgery {
     /// until they meet (a pair one earlier search found together is skipped). `false` as soon as
     /// one search runs out first: a piece may have come apart. Costs about the way around the
     /// cut's front, so an incision stays cheap.
-    fn still_connected(&self, body: &SoftBody, pairs: &[(u32, u32)]) -> bool {
+    fn still_connected(&mut self, body: &SoftBody, pairs: &[(u32, u32)]) -> bool {
         let tets = body.tets();
-        // Tet → the search that found it.
-        let mut found: HashMap<u32, usize> = HashMap::default();
+        // Per tet, in scratch arrays stamped per call: the search that found it (`found`:
+        // `call + search`), and the side of the current search that reached it (`mark`:
+        // `base + side`, `base` fresh and even per search; older values are stale).
+        let mut found = std::mem::take(&mut self.found_by);
+        let mut mark = std::mem::take(&mut self.search_side);
+        found.resize(tets.len(), 0);
+        mark.resize(tets.len(), 0);
+        if self.search_stamp > u32::MAX - 4 * (pairs.len() as u32 + 1) {
+            self.search_stamp = 0;
+            found.fill(0);
+            mark.fill(0);
+        }
+        let call = self.search_stamp + 1;
+        self.search_stamp += pairs.len() as u32 + 1;
+        let mut connected = true;
         for (search, &(a, b)) in pairs.iter().enumerate() {
-            if found.get(&a).is_some_and(|s| found.get(&b) == Some(s)) {
+            let id = call + search as u32;
+            let found_by = |t: u32| {
+                let f = found[t as usize];
+                (f >= call).then_some(f)
+            };
+            if found_by(a).is_some_and(|s| found_by(b) == Some(s)) {
                 continue;
             }
+            self.search_stamp += 2;
+            let base = self.search_stamp & !1;
             let mut side: [Vec<u32>; 2] = [vec![a], vec![b]];
             let mut head = [0usize; 2];
-            let mut local: HashMap<u32, u8> = HashMap::default();
-            local.insert(a, 0);
-            local.insert(b, 1);
-            'search: loop {
+            mark[a as usize] = base;
+            mark[b as usize] = base + 1;
+            let met = 'search: loop {
                 for s in 0..2 {
                     let Some(&t) = side[s].get(head[s]) else {
-                        return false;
+                        break 'search false;
                     };
                     head[s] += 1;
                     for &v in &tets[t as usize] {
                         for &u in &self.node_tets[v as usize] {
-                            match local.get(&u) {
-                                None => {
-                                    local.insert(u, s as u8);
-                                    side[s].push(u);
-                                }
-                                Some(&m) if m as usize != s => break 'search,
-                                _ => {}
+                            let m = mark[u as usize];
+                            if m < base {
+                                mark[u as usize] = base + s as u32;
+                                side[s].push(u);
+                            } else if m != base + s as u32 {
+                                break 'search true;
                             }
                         }
                     }
                 }
+            };
+            if !met {
+                connected = false;
+                break;
             }
             for &t in side.iter().flatten() {
-                found.insert(t, search);
+                found[t as usize] = id;
             }
         }
-        true
+        self.found_by = found;
+        self.search_side = mark;
+        connected
     }
 
     /// The tets face-connected to `t` when they are a crumb: fewer than [`MIN_PIECE`] tets, or

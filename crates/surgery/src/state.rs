@@ -89,6 +89,11 @@ pub struct Surgery {
     pub(crate) star_slot: Vec<u32>,
     /// Scratch of the manifold guard: per tet, all `false` between uses.
     pub(crate) tet_seen: Vec<bool>,
+    /// Scratch of the connectivity proof after a cut (`Surgery::still_connected`): per tet,
+    /// the search that found it and the side that reached it, stamped from `search_stamp`.
+    pub(crate) found_by: Vec<u32>,
+    pub(crate) search_side: Vec<u32>,
+    pub(crate) search_stamp: u32,
     /// How the cuts so far ended on the surface (see [`Surgery::tip_counts`]).
     pub(crate) tip_counts: crate::TipCounts,
 }
@@ -196,6 +201,9 @@ impl Surgery {
             plan_entry: Vec::new(),
             star_slot: Vec::new(),
             tet_seen: Vec::new(),
+            found_by: Vec::new(),
+            search_side: Vec::new(),
+            search_stamp: 0,
             tip_counts: crate::TipCounts::default(),
         };
         s.count_components(body);
