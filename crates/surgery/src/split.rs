@@ -497,7 +497,7 @@ impl Surgery {
         };
         let mut affected: Vec<u32> = candidate_edges
             .iter()
-            .flat_map(|e| self.tets_around(e))
+            .flat_map(|e| self.tets_around(body.tets(), e))
             .collect();
         affected.sort_unstable();
         affected.dedup();
@@ -520,7 +520,10 @@ impl Surgery {
                 }
             }
             // Judged again: the tets around the edges given up that still split an edge.
-            to_judge = failed.iter().flat_map(|e| self.tets_around(e)).collect();
+            to_judge = failed
+                .iter()
+                .flat_map(|e| self.tets_around(body.tets(), e))
+                .collect();
             to_judge.sort_unstable();
             to_judge.dedup();
             let mut has_valid = |t: u32| {
@@ -612,7 +615,7 @@ impl Surgery {
         let beyond = self.split_tips(body, plane, candidates, &mut out)?;
         // The front: tets (after the split) on a crossing edge outside the polygon.
         for e in outside.iter().chain(&beyond) {
-            out.front.extend(self.tets_around(e));
+            out.front.extend(self.tets_around(body.tets(), e));
         }
         out.front.sort_unstable();
         out.front.dedup();
@@ -648,12 +651,17 @@ impl Surgery {
         }) && (sum - parent).abs() <= 1e-9 * parent.abs()
     }
 
-    /// The tets around an edge.
-    pub(crate) fn tets_around<'a>(&'a self, e: &'a [u32; 2]) -> impl Iterator<Item = u32> + 'a {
+    /// The tets around an edge (`tets` the body's: a tet of the first end's list holds the
+    /// other end).
+    pub(crate) fn tets_around<'a>(
+        &'a self,
+        tets: &'a [[u32; 4]],
+        e: &'a [u32; 2],
+    ) -> impl Iterator<Item = u32> + 'a {
         self.node_tets[e[0] as usize]
             .iter()
             .copied()
-            .filter(move |t| self.node_tets[e[1] as usize].contains(t))
+            .filter(move |&t| tets[t as usize].contains(&e[1]))
     }
 
     /// Masses of the nodes of `tets` from their tets' rest volumes (eq. (1)).

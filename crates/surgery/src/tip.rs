@@ -215,7 +215,7 @@ impl Surgery {
                 continue;
             }
             let (mut plus, mut minus) = (false, false);
-            for u in self.tets_around(&e) {
+            for u in self.tets_around(body.tets(), &e) {
                 let d = side_of(body, u);
                 plus |= d > 0.0;
                 minus |= d < 0.0;
@@ -261,7 +261,10 @@ impl Surgery {
                     new_rest.push(r0 + (r1 - r0) * c.s);
                 }
             }
-            let mut affected: Vec<u32> = order.iter().flat_map(|e| self.tets_around(e)).collect();
+            let mut affected: Vec<u32> = order
+                .iter()
+                .flat_map(|e| self.tets_around(body.tets(), e))
+                .collect();
             affected.sort_unstable();
             affected.dedup();
             let rest_of = |v: u32| -> DVec3 {
@@ -448,7 +451,7 @@ impl Surgery {
         for group in found.chunk_by(|x, y| x.0 == y.0) {
             let ac = group[0].0;
             let triangles = group.len() as u64;
-            let ring: Vec<u32> = self.tets_around(&ac).collect();
+            let ring: Vec<u32> = self.tets_around(body.tets(), &ac).collect();
             // Any other boundary triangle `A C X` at A C (dropping A C leaves it unsplit along
             // it) must not want a tip: `X` off the plane, and its other crossing point, if
             // split, outside the polygon (so both are: the triangle is beyond the tip).
