@@ -29,6 +29,19 @@ fn rest(body: &SoftBody, t: [u32; 4]) -> [DVec3; 4] {
     t.map(|i| Vec3::from(body.rest_positions()[i as usize]).as_dvec3())
 }
 
+/// The farthest any node moves over `steps` steps (cm).
+fn drift(body: &mut SoftBody, steps: usize) -> f32 {
+    let start = body.positions().to_vec();
+    for _ in 0..steps {
+        body.step().unwrap();
+    }
+    body.positions()
+        .iter()
+        .zip(&start)
+        .map(|(p, q)| p.distance(*q))
+        .fold(0.0f32, f32::max)
+}
+
 /// Splits every tet around the edge `a b` at its midpoint `m` (each tet into two: `b` replaced
 /// by `m`, `a` replaced by `m`), the edge's constraint moved onto `a m` with half the rest
 /// length, new edges given constraints with their rest lengths. Returns the new node.
@@ -157,16 +170,7 @@ fn a_body_split_in_rest_space_stays_at_rest_and_keeps_its_volume() {
         body.reset_distance_constraint(c, d.nodes, d.rest_length)
             .unwrap();
         assert_eq!(body.dynamic_batch_counts(), batches, "{kind:?}");
-        let start: Vec<_> = body.positions().to_vec();
-        for _ in 0..20 {
-            body.step().unwrap();
-        }
-        let moved = body
-            .positions()
-            .iter()
-            .zip(&start)
-            .map(|(p, q)| p.distance(*q))
-            .fold(0.0f32, f32::max);
+        let moved = drift(&mut body, 20);
         assert!(
             moved < 1e-5,
             "{kind:?} full {full}: a body at rest moved {moved} cm"
@@ -391,16 +395,7 @@ fn a_changed_tree_constraint_keeps_its_lane_unless_its_batch_has_its_new_nodes()
         .unwrap();
         body.set_distance_nodes(c1, [a, b]).unwrap();
         body.set_distance_nodes(c1, [copy, b]).unwrap();
-        let start = body.positions().to_vec();
-        for _ in 0..10 {
-            body.step().unwrap();
-        }
-        let moved = body
-            .positions()
-            .iter()
-            .zip(&start)
-            .map(|(p, q)| p.distance(*q))
-            .fold(0.0f32, f32::max);
+        let moved = drift(&mut body, 10);
         // (An unedited body of this size drifts 3e-5 cm in 10 steps: float rounding.)
         assert!(moved < 1e-4, "root {root}: {moved}");
         // And they act on the right nodes: the copy pulled away drags `b`, the tet's copy the

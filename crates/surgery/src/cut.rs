@@ -773,11 +773,14 @@ impl Surgery {
         // Each once, in the order found (marked in `seen`, cleared after).
         let mut local: Vec<u32> = Vec::new();
         seen.resize(tets.len(), false);
-        let stars: Box<dyn Iterator<Item = &u32>> = match &vertices {
-            None => Box::new(plan.iter().flat_map(|p| p.1.iter())),
-            Some(w) => Box::new(w.iter().flat_map(|&v| self.node_tets[v as usize].iter())),
+        let stars: Vec<&[u32]> = match &vertices {
+            None => plan.iter().map(|p| p.1.as_slice()).collect(),
+            Some(w) => w
+                .iter()
+                .map(|&v| self.node_tets[v as usize].as_slice())
+                .collect(),
         };
-        for &t in stars {
+        for &t in stars.into_iter().flatten() {
             if !std::mem::replace(&mut seen[t as usize], true) {
                 local.push(t);
             }

@@ -495,12 +495,7 @@ impl Surgery {
                     || (self.depth[t as usize] < MAX_SPLIT_DEPTH
                         && blocked.binary_search(&t).is_err()))
         };
-        let mut affected: Vec<u32> = candidate_edges
-            .iter()
-            .flat_map(|e| self.tets_around(body.tets(), e))
-            .collect();
-        affected.sort_unstable();
-        affected.dedup();
+        let mut affected = self.tets_around_edges(body.tets(), &candidate_edges);
         let mut to_judge = affected.clone();
         loop {
             let mut failed: Vec<[u32; 2]> = Vec::new();
@@ -520,12 +515,7 @@ impl Surgery {
                 }
             }
             // Judged again: the tets around the edges given up that still split an edge.
-            to_judge = failed
-                .iter()
-                .flat_map(|e| self.tets_around(body.tets(), e))
-                .collect();
-            to_judge.sort_unstable();
-            to_judge.dedup();
+            to_judge = self.tets_around_edges(body.tets(), &failed);
             let mut has_valid = |t: u32| {
                 split_edges_of(body.tets()[t as usize], &edges, &mut local);
                 !local.is_empty()
@@ -614,13 +604,10 @@ impl Surgery {
         // The tips on the surface (module `tip`): the edges beyond them join the front.
         let beyond = self.split_tips(body, plane, candidates, &mut out)?;
         // The front: tets (after the split) on a crossing edge outside the polygon.
-        for e in outside.iter().chain(&beyond) {
-            out.front.extend(self.tets_around(body.tets(), e));
-        }
-        out.front.sort_unstable();
-        out.front.dedup();
+        out.front = self.tets_around_edges(body.tets(), &[outside, beyond].concat());
         Ok(out)
     }
+
     /// Smallest rest volume a cut may create (cm³): [`MIN_VOLUME_FRACTION`] of the input's.
     pub(crate) fn volume_floor(&self) -> f64 {
         MIN_VOLUME_FRACTION * self.min_rest_volume as f64
@@ -662,6 +649,17 @@ impl Surgery {
             .iter()
             .copied()
             .filter(move |&t| tets[t as usize].contains(&e[1]))
+    }
+
+    /// The tets around any of `edges`, sorted, each once.
+    pub(crate) fn tets_around_edges(&self, tets: &[[u32; 4]], edges: &[[u32; 2]]) -> Vec<u32> {
+        let mut around: Vec<u32> = edges
+            .iter()
+            .flat_map(|e| self.tets_around(tets, e))
+            .collect();
+        around.sort_unstable();
+        around.dedup();
+        around
     }
 
     /// Masses of the nodes of `tets` from their tets' rest volumes (eq. (1)).

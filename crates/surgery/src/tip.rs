@@ -261,12 +261,7 @@ impl Surgery {
                     new_rest.push(r0 + (r1 - r0) * c.s);
                 }
             }
-            let mut affected: Vec<u32> = order
-                .iter()
-                .flat_map(|e| self.tets_around(body.tets(), e))
-                .collect();
-            affected.sort_unstable();
-            affected.dedup();
+            let affected = self.tets_around_edges(body.tets(), &order);
             let rest_of = |v: u32| -> DVec3 {
                 if v >= first {
                     new_rest[(v - first) as usize]

@@ -5,9 +5,11 @@
 
 mod common;
 
+use common::{check_quality, rest};
+
 use glam::{DVec3, Vec3};
 use tissue_pbd::{Pose, SoftBody, ToolShape};
-use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, MIN_RATIO};
+use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent};
 
 /// A big blade in the plane x = `x`, drawn down through the whole block in four steps.
 fn full_cut(body: &mut SoftBody, surgery: &mut Surgery, x: f32) -> Vec<SurgeryEvent> {
@@ -46,33 +48,6 @@ fn wall_nodes(body: &SoftBody, surgery: &Surgery) -> Vec<u32> {
     v.sort_unstable();
     v.dedup();
     v
-}
-
-fn rest(body: &SoftBody, v: u32) -> DVec3 {
-    body.rest_positions()[v as usize].as_dvec3()
-}
-
-fn radius_ratio([a, b, c, d]: [DVec3; 4]) -> f64 {
-    let (u, v, w) = (b - a, c - a, d - a);
-    let six_v = u.cross(v).dot(w);
-    let area = |p: DVec3, q: DVec3, r: DVec3| 0.5 * (q - p).cross(r - p).length();
-    let s = area(a, b, c) + area(a, b, d) + area(a, c, d) + area(b, c, d);
-    let o = (u.length_squared() * v.cross(w)
-        + v.length_squared() * w.cross(u)
-        + w.length_squared() * u.cross(v))
-        / (2.0 * six_v);
-    3.0 * (0.5 * six_v / s) / o.length()
-}
-
-/// The quality bound holds for every tet in rest space.
-fn check_quality(body: &SoftBody, surgery: &Surgery) {
-    let (volume, ratio) = surgery.quality_bound();
-    let mut worst = f64::INFINITY;
-    for (t, tet) in body.tets().iter().enumerate() {
-        assert!(body.tet_rest_volumes()[t] >= volume, "tet {t}");
-        worst = worst.min(radius_ratio(tet.map(|v| rest(body, v))));
-    }
-    assert!(worst >= ratio.min(MIN_RATIO) * 0.999, "worst ratio {worst}");
 }
 
 #[test]

@@ -5,15 +5,11 @@
 
 mod common;
 
+use common::{check_quality, rest};
+
 use glam::DVec3;
 use tissue_pbd::{SoftBody, StepSettings};
-use tissue_surgery::{
-    BladeSweep, SplitTriangle, Surgery, SurgeryEvent, SurgerySettings, MIN_RATIO,
-};
-
-fn rest(body: &SoftBody, v: u32) -> DVec3 {
-    body.rest_positions()[v as usize].as_dvec3()
-}
+use tissue_surgery::{BladeSweep, SplitTriangle, Surgery, SurgeryEvent, SurgerySettings};
 
 /// The node at rest position `p` (within 1e-4 cm).
 fn node_at(body: &SoftBody, p: DVec3) -> Option<u32> {
@@ -139,6 +135,26 @@ fn check_tip(
     assert!(duplicated(surgery, e_node), "E is not duplicated");
 }
 
+/// [`check_tip`] for the top triangle holding the front of the one-sweep incisions (x =
+/// −0.175, halfway along its crossing segment [−0.35, 0]).
+fn check_front_tip(
+    body: &SoftBody,
+    surgery: &Surgery,
+    reported: &[SplitTriangle],
+    expected: usize,
+) {
+    let top = |x: f64, z: f64| DVec3::new(x, 1.5, z);
+    check_tip(
+        body,
+        surgery,
+        reported,
+        [top(-0.5, 0.0), top(0.0, 0.0), top(0.0, 0.5)],
+        -0.175,
+        -0.35,
+        expected,
+    );
+}
+
 /// One sweep of `blade` from `from` to `to` (incision poses): the body stays valid and in one
 /// piece; returns the split boundary triangles the events reported.
 fn sweep_once(
@@ -207,15 +223,7 @@ fn incision_ending_inside_a_top_triangle(four_way: bool) {
     );
     let top = |x: f64, z: f64| DVec3::new(x, 1.5, z);
     // The front end and the start.
-    check_tip(
-        &body,
-        &surgery,
-        &reported,
-        [top(-0.5, 0.0), top(0.0, 0.0), top(0.0, 0.5)],
-        -0.175,
-        -0.35,
-        expected,
-    );
+    check_front_tip(&body, &surgery, &reported, expected);
     check_tip(
         &body,
         &surgery,
@@ -282,29 +290,6 @@ fn incision_ending_inside_a_top_triangle(four_way: bool) {
     }
 }
 
-fn radius_ratio([a, b, c, d]: [DVec3; 4]) -> f64 {
-    let (u, v, w) = (b - a, c - a, d - a);
-    let six_v = u.cross(v).dot(w);
-    let area = |p: DVec3, q: DVec3, r: DVec3| 0.5 * (q - p).cross(r - p).length();
-    let s = area(a, b, c) + area(a, b, d) + area(a, c, d) + area(b, c, d);
-    let o = (u.length_squared() * v.cross(w)
-        + v.length_squared() * w.cross(u)
-        + w.length_squared() * u.cross(v))
-        / (2.0 * six_v);
-    3.0 * (0.5 * six_v / s) / o.length()
-}
-
-/// The quality bound holds for every tet in rest space.
-fn check_quality(body: &SoftBody, surgery: &Surgery) {
-    let (volume, ratio) = surgery.quality_bound();
-    let mut worst = f64::INFINITY;
-    for (t, tet) in body.tets().iter().enumerate() {
-        assert!(body.tet_rest_volumes()[t] >= volume, "tet {t}");
-        worst = worst.min(radius_ratio(tet.map(|v| rest(body, v))));
-    }
-    assert!(worst >= ratio.min(MIN_RATIO) * 0.999, "worst ratio {worst}");
-}
-
 /// A blade whose front edge leans forward (1 cm ahead per 1 cm down): under the tip the cut
 /// runs ahead of it, so the faces on the plane just beyond the tip have their centroid segments
 /// inside the swept polygon. A four-way tip would keep the tets around the triangle's far edge
@@ -333,16 +318,7 @@ fn under_a_forward_leaning_blade_the_surface_opening_still_ends_at_the_tip() {
         counts.refused_needed >= 1 && counts.fallback >= 1,
         "{counts:?}"
     );
-    let top = |x: f64, z: f64| DVec3::new(x, 1.5, z);
-    check_tip(
-        &body,
-        &surgery,
-        &reported,
-        [top(-0.5, 0.0), top(0.0, 0.0), top(0.0, 0.5)],
-        -0.175,
-        -0.35,
-        5,
-    );
+    check_front_tip(&body, &surgery, &reported, 5);
     let open = opening_on_top(&body, &surgery);
     eprintln!("leaning blade: opening on top (duplicated nodes): {open:?}");
     assert!((open[open.len() - 1] + 0.35).abs() < 1e-6, "{open:?}");
