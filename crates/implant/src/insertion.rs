@@ -27,6 +27,7 @@ use tissue_mss::{
 
 use crate::contact_run::{ContactRun, RunParams, StepSummary};
 use crate::outcome::{replace_region, vertex_displacements, vertex_stretch};
+use crate::walk::{walk_on_surface, WalkEnd};
 use crate::{
     Implant, ImplantError, ImplantFrame, ImplantSpec, Layer, LayerParams, RegionSelection,
     TissueLayers,
@@ -177,15 +178,21 @@ fn flat_start(implant: &Implant) -> Vec<Vec3A> {
 }
 
 /// Builds `spec` on layer 2's rest surface under `layers` (a fifth of an edge below it, so that
-/// the two start apart), centred under the region point
-/// `centre` (on layer 1), its base following the surface: the frame's normal is the region's
-/// normal at the centre (the mean of the vertex normals within the implant's footprint would
-/// serve as well on a body patch), the tangent `tangent`'s part across it.
+/// the two start apart), centred under the region point `centre` (on layer 1) and wrapped onto
+/// layer 2 ([`ImplantSpec::build_wrapped`]): the base's plan point `(x, y)` goes where a walk
+/// of length `√(x² + y²)` along layer 2 in the direction `x·t + y·b` ends ([`walk_on_surface`],
+/// the surface's exponential map), and the dome stands on it along layer 2's interpolated
+/// vertex normal there. The frame's normal is `normal` (the region's at the centre), its
+/// tangent `t` the part of `tangent` across it; the walk starts where a ray from `centre` down
+/// that normal meets layer 2.
+///
+/// On a plane this is the flat expander; on a limb the base wraps around the limb without
+/// stretching, round and rectangular alike, as far as the region reaches.
 ///
 /// # Errors
-/// [`ImplantError::FootprintOutsideRegion`] when a base point is not over layer 2 (the region is
-/// too small for the implant), and the errors of [`ImplantSpec::build_on`] and
-/// [`ImplantFrame::new`].
+/// [`ImplantError::FootprintOutsideRegion`] when a walk leaves layer 2 through its boundary
+/// (the region is too small for the implant) or the ray from the centre misses layer 2, and
+/// the errors of [`ImplantSpec::build_wrapped`] and [`ImplantFrame::new`].
 pub fn place_implant(
     layers: &TissueLayers,
     spec: &ImplantSpec,
@@ -197,43 +204,59 @@ pub fn place_implant(
     let frame = ImplantFrame::new(centre, normal, tangent)?;
     let inner = layers.rest(Layer::Inner);
     let positions: Vec<Vec3A> = inner.positions().iter().map(|&p| p.into()).collect();
-    let triangles = Triangles::new(&positions, inner.triangles()).map_err(|e| {
-        ImplantError::InvalidParameter {
-            name: "region",
-            value: 0.0,
-            expected: format!("a region whose inner layer can be searched: {e}"),
-        }
-    })?;
-    let bvh = Bvh::build(&triangles, &BuildOptions::default()).map_err(|e| {
-        ImplantError::InvalidParameter {
-            name: "region",
-            value: 0.0,
-            expected: format!("a region whose inner layer can be searched: {e}"),
-        }
-    })?;
+    let searchable = |e: tissue_bvh::BvhError| ImplantError::InvalidParameter {
+        name: "region",
+        value: 0.0,
+        expected: format!("a region whose inner layer can be searched: {e}"),
+    };
+    let triangles = Triangles::new(&positions, inner.triangles()).map_err(searchable)?;
+    let bvh = Bvh::build(&triangles, &BuildOptions::default()).map_err(searchable)?;
     let reach = (inner.bounding_box().size().length() + 1.0) * 2.0;
-    let gap = 0.2 * crate::contact_run::mean_edge_length(inner);
-    let ws = std::cell::RefCell::new(BvhWorkspace::default());
-    let missed = std::cell::Cell::new(None);
+    let gap = f64::from(0.2 * crate::contact_run::mean_edge_length(inner));
     let down = Vec3A::from(-frame.normal());
-    let implant = spec.build_on(&frame, |x, y| {
-        let above = frame.to_world(glam::DVec3::new(f64::from(x), f64::from(y), 0.0));
-        let origin = Vec3A::from(above.as_vec3()) - down * reach;
-        let ray = Ray::new(origin, down);
-        match bvh.cast_ray(&triangles, &ray, 2.0 * reach, &mut ws.borrow_mut()) {
-            Some(hit) => reach - hit.t - gap,
-            None => {
-                if missed.get().is_none() {
-                    missed.set(Some((x, y)));
-                }
-                0.0
+    let ray = Ray::new(Vec3A::from(centre) - down * reach, down);
+    let mut ws = BvhWorkspace::default();
+    let Some(hit) = bvh.cast_ray(&triangles, &ray, 2.0 * reach, &mut ws) else {
+        return Err(ImplantError::FootprintOutsideRegion { x: 0.0, y: 0.0 });
+    };
+    let start_triangle = hit.primitive;
+    let start = (Vec3A::from(centre) + down * (hit.t - reach)).as_dvec3();
+    // The frame's axes laid into the start triangle's plane.
+    let corners = inner.corners(start_triangle as usize).map(|p| p.as_dvec3());
+    let n0 = (corners[1] - corners[0])
+        .cross(corners[2] - corners[0])
+        .normalize_or_zero();
+    let t0 = frame.tangent().as_dvec3();
+    let t0 = (t0 - n0 * t0.dot(n0)).normalize_or_zero();
+    let b0 = n0.cross(t0);
+    let vertex_normals = inner.vertex_normals();
+    let inner_triangles = inner.triangles();
+    spec.build_wrapped_with_gap(gap, |x, y| {
+        let (x64, y64) = (f64::from(x), f64::from(y));
+        let length = x64.hypot(y64);
+        let direction = if length > 0.0 {
+            t0 * x64 + b0 * y64
+        } else {
+            t0
+        };
+        match walk_on_surface(inner, start_triangle, start, direction, length) {
+            WalkEnd::Reached {
+                triangle,
+                barycentric,
+                position,
+                ..
+            } => {
+                let tri = inner_triangles[triangle as usize];
+                let up = (0..3)
+                    .map(|i| vertex_normals[tri[i] as usize].as_dvec3() * barycentric[i])
+                    .sum::<glam::DVec3>()
+                    .normalize_or_zero();
+                let up = if up == glam::DVec3::ZERO { n0 } else { up };
+                Ok((position.as_vec3(), up.as_vec3()))
             }
+            WalkEnd::Boundary { .. } => Err(ImplantError::FootprintOutsideRegion { x, y }),
         }
-    })?;
-    if let Some((x, y)) = missed.get() {
-        return Err(ImplantError::FootprintOutsideRegion { x, y });
-    }
-    Ok(implant)
+    })
 }
 
 /// Detaches layer 2 over the expander's pocket: every region vertex whose layer-2 rest position

@@ -51,7 +51,9 @@ mod outcome;
 mod plane_press;
 mod planning;
 mod region;
+
 mod shape;
+mod walk;
 
 pub use contact_run::{ContactRun, RunParams, StepSummary};
 pub use error::ImplantError;
@@ -69,3 +71,4 @@ pub use region::{
     DEFAULT_RADIUS_FACTOR, DEFAULT_SNAP_FRACTION, NOT_IN_REGION,
 };
 pub use shape::{Implant, ImplantFrame, ImplantShape, ImplantSpec};
+pub use walk::{walk_on_surface, WalkEnd};

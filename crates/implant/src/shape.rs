@@ -470,11 +470,91 @@ impl ImplantSpec {
                 if !z.is_finite() {
                     return Err(ImplantError::SurfaceHeight { x, y, value: z });
                 }
-                ground.push(f64::from(z));
+                ground.push(Footing {
+                    origin: frame.to_world(DVec3::new(f64::from(x), f64::from(y), 0.0)),
+                    up: frame.normal().as_dvec3(),
+                    height: f64::from(z),
+                });
             }
             ground
         };
-        plan.solve_height(self.volume_cm3, frame, &ground)
+        plan.solve_height(self.volume_cm3, &ground)
+    }
+
+    /// Builds the implant wrapped onto a curved surface: every vertex at local plan point
+    /// `(x, y)` stands on the surface point `place(x, y)` returns, raised along the unit
+    /// outward normal returned with it by its dome thickness `cap(H, R, ũ)`; `H` is solved
+    /// so that the volume hits the target.
+    ///
+    /// `place` is meant to be the surface's exponential map at the implant's centre (a
+    /// geodesic walk of length `√(x² + y²)` in the direction `x·t + y·b`), so that the base is
+    /// laid onto the body without stretching: on a limb a base wraps around it, where
+    /// [`ImplantSpec::build_on`] (a projection along one normal) would reach past its sides. On
+    /// a plane the two agree.
+    ///
+    /// ```
+    /// use glam::Vec3;
+    /// use tissue_implant::{ImplantShape, ImplantSpec};
+    ///
+    /// // Wrapped around a cylinder of radius 3 cm (axis y, top at z = 0): plan x is arc length.
+    /// let r = 3.0f32;
+    /// let spec = ImplantSpec::new(ImplantShape::Rectangular { length: 6.0, width: 3.0, corner_radius: 0.5 }, 10.0);
+    /// let implant = spec.build_wrapped(|x, y| {
+    ///     let a = x / r;
+    ///     let normal = Vec3::new(a.sin(), 0.0, a.cos());
+    ///     Ok((normal * r + Vec3::new(0.0, y, -r), normal))
+    /// })?;
+    /// assert!((implant.volume() - 10.0).abs() < 0.05);
+    /// for v in implant.base() {
+    ///     let p = implant.mesh().positions()[v as usize];
+    ///     assert!((Vec3::new(p.x, 0.0, p.z + r).length() - r).abs() < 1e-4);
+    /// }
+    /// # Ok::<(), tissue_implant::ImplantError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`ImplantSpec::build`]; the first error `place` returns; and
+    /// [`ImplantError::SurfaceHeight`] when it returns a non-finite point or normal.
+    pub fn build_wrapped(
+        &self,
+        place: impl Fn(f32, f32) -> Result<(Vec3, Vec3), ImplantError>,
+    ) -> Result<Implant, ImplantError> {
+        self.build_wrapped_with_gap(0.0, place)
+    }
+
+    /// [`ImplantSpec::build_wrapped`] with the base `gap` below the points `place` gives, along
+    /// their normals.
+    pub(crate) fn build_wrapped_with_gap(
+        &self,
+        gap: f64,
+        place: impl Fn(f32, f32) -> Result<(Vec3, Vec3), ImplantError>,
+    ) -> Result<Implant, ImplantError> {
+        let _span =
+            tracing::debug_span!("implant_build_wrapped", volume = self.volume_cm3).entered();
+        let plan = self.plan()?;
+        let ground = {
+            let _span = tracing::debug_span!("implant_wrap").entered();
+            let mut ground = Vec::with_capacity(plan.grid.xy.len());
+            for &[x, y] in &plan.grid.xy {
+                let (x, y) = (x as f32, y as f32);
+                let (origin, up) = place(x, y)?;
+                let up = up.as_dvec3().normalize_or_zero();
+                if !origin.is_finite() || up == DVec3::ZERO || !up.is_finite() {
+                    return Err(ImplantError::SurfaceHeight {
+                        x,
+                        y,
+                        value: f32::NAN,
+                    });
+                }
+                ground.push(Footing {
+                    origin: origin.as_dvec3(),
+                    up,
+                    height: -gap,
+                });
+            }
+            ground
+        };
+        plan.solve_height(self.volume_cm3, &ground)
     }
 
     /// Validates the spec, meshes the base and the dome in plan and computes the membrane.
@@ -529,6 +609,18 @@ impl ImplantSpec {
     }
 }
 
+/// Where a vertex of the implant stands: its point on the body and the outward direction its
+/// dome thickness is measured along.
+#[derive(Debug, Clone, Copy)]
+struct Footing {
+    /// The point the height is measured from.
+    origin: DVec3,
+    /// The unit direction heights are measured along.
+    up: DVec3,
+    /// The base's height above `origin`.
+    height: f64,
+}
+
 /// A spec meshed in plan, waiting for its height.
 struct Plan {
     grid: Grid,
@@ -538,27 +630,19 @@ struct Plan {
 }
 
 impl Plan {
-    /// The mesh with dome height `h` on the surface heights `ground`, and its signed volume.
-    fn mesh(
-        &self,
-        h: f64,
-        frame: &ImplantFrame,
-        ground: &[f64],
-    ) -> Result<(TriMesh, f64), ImplantError> {
+    /// The mesh with dome height `h` standing on `ground`, and its signed volume.
+    fn mesh(&self, h: f64, ground: &[Footing]) -> Result<(TriMesh, f64), ImplantError> {
         let half_width = 0.5 * self.smaller_dimension;
         let dome_start = self.grid.dome_start as usize;
-        let positions = self
-            .grid
-            .xy
-            .iter()
-            .enumerate()
-            .map(|(v, &[x, y])| {
+        let positions = (0..self.grid.xy.len())
+            .map(|v| {
                 let lift = if v >= dome_start {
                     dome::cap_height(h, half_width, self.membrane[v])
                 } else {
                     0.0
                 };
-                frame.to_world(DVec3::new(x, y, ground[v] + lift)).as_vec3()
+                let Footing { origin, up, height } = ground[v];
+                (origin + up * (height + lift)).as_vec3()
             })
             .collect();
         let mesh = TriMesh::new(positions, self.grid.triangles.clone())?;
@@ -568,12 +652,7 @@ impl Plan {
 
     /// Solves for the dome height whose mesh holds `target` cm³ (Illinois regula falsi between
     /// the height limits; the volume increases strictly with the height).
-    fn solve_height(
-        &self,
-        target: f64,
-        frame: &ImplantFrame,
-        ground: &[f64],
-    ) -> Result<Implant, ImplantError> {
+    fn solve_height(&self, target: f64, ground: &[Footing]) -> Result<Implant, ImplantError> {
         const SOLVE_TOLERANCE: f64 = 1e-5;
         const MAX_ITERATIONS: usize = 60;
         let _span = tracing::debug_span!("implant_solve_height", target).entered();
@@ -581,10 +660,7 @@ impl Plan {
             ImplantSpec::MIN_HEIGHT_RATIO * self.smaller_dimension,
             ImplantSpec::MAX_HEIGHT_RATIO * self.smaller_dimension,
         );
-        let (mut v_lo, mut v_hi) = (
-            self.mesh(lo, frame, ground)?.1,
-            self.mesh(hi, frame, ground)?.1,
-        );
+        let (mut v_lo, mut v_hi) = (self.mesh(lo, ground)?.1, self.mesh(hi, ground)?.1);
         if !(v_lo <= target && target <= v_hi) {
             return Err(ImplantError::VolumeOutOfRange {
                 volume: target,
@@ -599,7 +675,7 @@ impl Plan {
             if !(h > lo && h < hi) {
                 h = 0.5 * (lo + hi);
             }
-            let (mesh, volume) = self.mesh(h, frame, ground)?;
+            let (mesh, volume) = self.mesh(h, ground)?;
             let error = (volume - target).abs() / target;
             if best
                 .as_ref()
