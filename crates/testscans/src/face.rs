@@ -63,17 +63,19 @@ const FACE_POINTS: [(&str, &str, [f32; 2], f32); 5] = [
 /// A realistic photogrammetric face scan in millimetres, deterministic in `seed`.
 ///
 /// Made from [`HEAD_FILE`] (decimetres) scaled by 100: the front of the face (`z >`
-/// [`FACE_CUT_Z_MM`], one connected disc of about 196 cm² from the chin to the forehead, both
-/// eyes, nose, mouth and the inner cheeks), refined by two Loop subdivisions and one midpoint
-/// subdivision to about 0.5 mm edges (about 150k triangles; the mouth's opening, which lies behind the cut, is capped first), moved along the normals by Gaussian
-/// noise of σ = [`FACE_NOISE_SIGMA_MM`], then holed (each hole removes the triangles whose centroid is within half its diameter of its
-/// centre and that connect to it through such triangles): one hole of [`FACE_BIG_HOLE_MM`] at the spot
-/// farthest from the border and from the placement points (`big_hole`, the same for every seed),
-/// 10–20 seeded holes of 2–15 mm (`holes`; centres at least [`FACE_HOLE_BORDER_MM`] and half a
-/// diameter plus 5 mm inside the border, 4 mm apart edge to edge, and half a diameter plus 6 mm
-/// from every placement point), and 3–5 notches of 2–5 mm cut into the outer border. The surface
-/// is one component whose boundary loops are the outer border and one per hole; normals point
-/// out of the head.
+/// [`FACE_CUT_Z_MM`]; the mouth's opening, which lies behind that plane, is capped), one
+/// connected disc of about 196 cm² from the chin to the forehead with both eyes, the nose, the
+/// mouth and the inner cheeks. It is refined by two Loop subdivisions and one midpoint
+/// subdivision to about 0.5 mm edges (about 150k triangles), moved along the normals by
+/// Gaussian noise of σ = [`FACE_NOISE_SIGMA_MM`], then holed. Each hole removes the triangles
+/// whose centroid is within half its diameter of its centre and that connect to it through such
+/// triangles. There is one hole of [`FACE_BIG_HOLE_MM`] at the spot farthest from the border and
+/// from the placement points (`big_hole`, the same for every seed), and 10–20 seeded holes of
+/// 2–15 mm (`holes`; centres at least [`FACE_HOLE_BORDER_MM`] and half a diameter plus 5 mm
+/// inside the border, 4 mm apart edge to edge, and half a diameter plus 15 mm from every
+/// placement point); 3–5 notches of 2–5 mm are cut into the outer border. The surface is one
+/// component whose boundary loops are the outer border and one per hole; normals point out of
+/// the head.
 ///
 /// `truth` is the refined surface before noise and holes, and `truth_vertex` maps each scan
 /// vertex to it. Points: `forehead`, `cheek_left`, `cheek_right`, `chin`, `nose_bridge` (see

@@ -99,13 +99,16 @@ pub fn shared_meshes_dir() -> PathBuf {
     ))
 }
 
-/// Reads a shared mesh by file name; [`ScanError::Absent`] when it is not there.
+/// Reads a shared mesh by file name (through `tissue-meshio`, the crate that touches files);
+/// [`ScanError::Absent`] when it is not there.
 pub(crate) fn read_shared(name: &str) -> Result<TriMesh, ScanError> {
     let path = shared_meshes_dir().join(name);
-    if !path.is_file() {
-        return Err(ScanError::Absent { path });
+    match tissue_meshio::read_surface(&path) {
+        Err(MeshIoError::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
+            Err(ScanError::Absent { path })
+        }
+        other => Ok(other?),
     }
-    Ok(tissue_meshio::read_surface(&path)?)
 }
 
 /// Boundary vertex positions of a mesh.

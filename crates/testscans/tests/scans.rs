@@ -84,10 +84,10 @@ fn outward_from_axis(m: &TriMesh, axis: impl Fn(DVec3) -> DVec3) -> (f64, usize)
     let normals = m.triangle_normals();
     let mut sum = 0.0;
     let mut inward = 0;
-    for t in 0..m.triangle_count() {
+    for (t, n) in normals.iter().enumerate() {
         let c = m.corners(t).map(|p| p.as_dvec3());
         let mid = (c[0] + c[1] + c[2]) / 3.0;
-        let d = normals[t].as_dvec3().dot(mid - axis(mid));
+        let d = n.as_dvec3().dot(mid - axis(mid));
         sum += d;
         if d < 0.0 {
             inward += 1;
