@@ -163,3 +163,14 @@ pub(crate) fn orient_outward(triangles: &mut [[u32; 3]], positions: &[Vec3], ins
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_missing_shared_mesh_is_absent_not_an_io_error() {
+        let err = read_shared("no_such_mesh_here.obj").err();
+        assert!(err.is_some_and(|e| e.is_absent()));
+    }
+}
