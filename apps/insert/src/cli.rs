@@ -89,7 +89,9 @@ covering the whole surface or too small for the implant, badly shaped triangles 
 tissue values out of range, a --target-gain not inside the volume bracket
   7    the run diverged or failed
   8    an output could not be written
-  130  interrupted (Ctrl-C): the run is cancelled, nothing is written";
+  130  interrupted (Ctrl-C): the run is cancelled, nothing is written
+  141  (unix, shown by the shell) stdout closed by its reader (| head): SIGPIPE ends the program \
+at its next write to stdout, silently; outputs not yet written are not written";
 
 /// The mesh file's unit of length.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -40,6 +40,8 @@ fn run(cli: &Cli) -> Result<(), Failure> {
 const DEMO_PICTURE: &str = "insert_table2.png";
 
 fn main() -> ExitCode {
+    // A closed stdout (`| head`) ends the program by SIGPIPE, silently; see tissue-cli.
+    tissue_cli::reset_sigpipe();
     let mut cli = Cli::parse();
     // With no arguments at all the program is the demo of the README: Table 2 with a picture.
     let demo = std::env::args_os().len() <= 1;

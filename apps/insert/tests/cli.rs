@@ -564,3 +564,28 @@ fn the_readme_chest_example_runs_to_completion() {
     assert!(json["area_gain_cm2"].as_f64().unwrap() > 0.0);
     assert_eq!(json["inputs"]["unit"], "dm");
 }
+
+/// `insert … | head -0`: the reader has gone before the first write. Regression: `println!`
+/// panicked with "failed printing to stdout: Broken pipe" (exit 101); now SIGPIPE ends the
+/// program (status 141 in a shell) with nothing on stderr and no file or temporary file written,
+/// for a single run, a sweep and clap's help.
+#[cfg(unix)]
+#[test]
+fn broken_pipe_ends_insert_quietly_by_sigpipe() {
+    let dir = scratch("broken-pipe");
+    let (mesh, _) = small_plane(&dir);
+    let report = dir.join("report.json");
+    for mode in [&[][..], &["--sweep", "5,10"]] {
+        let mut run = bin();
+        run.args(["--mesh", mesh.to_str().unwrap(), "--quiet"])
+            .args(SMALL_ARGS)
+            .args(mode)
+            .args(["--report", report.to_str().unwrap()]);
+        tissue_cli::testing::close_stdout_after(run, 0).assert_killed_by_sigpipe();
+        assert_eq!(files_in(&dir), ["plane_dm.obj"], "{mode:?}");
+    }
+
+    let mut help = bin();
+    help.arg("--help");
+    tissue_cli::testing::close_stdout_after(help, 0).assert_killed_by_sigpipe();
+}

@@ -7,6 +7,8 @@
 //! meshgen disc   --radial 8 --segments 32 --radius 1 OUT.obj
 //! ```
 //! The output format follows the extension (obj, ply, stl, vtk). Exit code 2 on bad arguments.
+//! Only clap's help and version go to stdout; a closed stdout ends the program by SIGPIPE without
+//! a message (status 141 in a shell).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -63,6 +65,8 @@ enum Shape {
 }
 
 fn main() -> ExitCode {
+    // A closed stdout (`| head`) ends the program by SIGPIPE, silently; see tissue-cli.
+    tissue_cli::reset_sigpipe();
     let args = Args::parse();
     let (mesh, out): (Result<TriMesh, _>, PathBuf) = match args.shape {
         Shape::Grid { n, side, out } => (grid(n, side), out),

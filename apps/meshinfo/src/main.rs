@@ -2,7 +2,8 @@
 //!
 //! Prints counts, bounding box, area, volume (closed surfaces), boundary loops with their lengths,
 //! components, Euler characteristic and every defect found. Exit code 0 when the mesh loads
-//! (warnings allowed), 2 when it cannot be read or has hard defects.
+//! (warnings allowed), 2 when it cannot be read or has hard defects. A closed stdout
+//! (`meshinfo FILE | head`) ends it by SIGPIPE without a message (status 141 in a shell).
 
 mod report;
 
@@ -23,6 +24,8 @@ struct Args {
 }
 
 fn main() -> ExitCode {
+    // A closed stdout (`| head`) ends the program by SIGPIPE, silently; see tissue-cli.
+    tissue_cli::reset_sigpipe();
     let args = Args::parse();
     let report = match report::inspect(&args.file) {
         Ok(r) => r,

@@ -176,3 +176,46 @@ fn real_tet_mesh_reports_nodes_tets_and_closed_boundary() {
     assert_eq!(r["euler_characteristic"], 2);
     assert!(r["volume"].as_f64().unwrap() > 0.0);
 }
+
+/// `meshinfo FILE | head -0`: the reader has gone before the first write. Regression: `println!`
+/// panicked with "failed printing to stdout: Broken pipe"; now SIGPIPE ends the program (status
+/// 141 in a shell) with nothing on stderr, for the text report, the JSON and clap's help.
+#[cfg(unix)]
+#[test]
+fn broken_pipe_ends_meshinfo_quietly_by_sigpipe() {
+    let cube = fixture("cube_2cm_386.obj");
+    for args in [
+        &[cube.as_os_str()][..],
+        &[cube.as_os_str(), "--json".as_ref()],
+        &["--help".as_ref()],
+    ] {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_meshinfo"));
+        command.args(args);
+        tissue_cli::testing::close_stdout_after(command, 0).assert_killed_by_sigpipe();
+    }
+}
+
+/// `meshinfo FILE | head -1` on a report far larger than a pipe holds (a grid with 4000 unused
+/// vertices: one warning line each): the reader takes the first line and goes while meshinfo is
+/// still writing. It must end quietly (here by SIGPIPE), text and JSON alike.
+#[cfg(unix)]
+#[test]
+fn broken_pipe_after_the_first_line_ends_meshinfo_quietly() {
+    let mut obj = std::fs::read_to_string(fixture("defects/unreferenced_vertex.obj")).unwrap();
+    for i in 0..4000 {
+        obj.push_str(&format!("v {i} 5 5\n"));
+    }
+    let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join("meshinfo_many_unused_vertices.obj");
+    std::fs::write(&path, obj).unwrap();
+    for json in [false, true] {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_meshinfo"));
+        command.arg(&path);
+        if json {
+            command.arg("--json");
+        }
+        let ended = tissue_cli::testing::close_stdout_after(command, 1);
+        let first = if json { "{" } else { "file " };
+        assert!(ended.read.starts_with(first), "{}", ended.read);
+        ended.assert_quiet();
+    }
+}

@@ -41,7 +41,9 @@ EXIT CODES:
   5  the surface (--surface) cannot be tetrahedralised (open, non-manifold, inside out, ...)
   6  a parameter is out of range, or the first waypoint is not over the organ
   7  the simulation diverged
-  8  an output could not be written";
+  8  an output could not be written
+  141  (unix, shown by the shell) stdout closed by its reader (| head): SIGPIPE ends the program \
+at its next write to stdout, silently";
 
 /// Which volume constraint the organ carries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -91,6 +91,8 @@ fn main_inner(cli: &Cli) -> Result<(), Failure> {
 }
 
 fn main() -> ExitCode {
+    // A closed stdout (`| head`) ends the program by SIGPIPE, silently; see tissue-cli.
+    tissue_cli::reset_sigpipe();
     let cli = Cli::parse();
     match main_inner(&cli) {
         Ok(()) => ExitCode::SUCCESS,

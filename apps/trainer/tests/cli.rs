@@ -60,25 +60,30 @@ fn number_after(text: &str, line_start: &str, key: &str) -> f64 {
         .unwrap_or_else(|e| panic!("{num:?} after {key:?} in {line}: {e}"))
 }
 
+/// A 6 cm box of 6 × 6 × 6 cells, 20 steps (settle 6, press 6, drag 8) along two waypoints.
+const SMALL_BOX: [&str; 14] = [
+    "--box",
+    "6",
+    "--size",
+    "6",
+    "--settle-steps",
+    "6",
+    "--press-steps",
+    "6",
+    "--drag-steps",
+    "8",
+    "--waypoint",
+    "-1,0",
+    "--waypoint",
+    "1,0.5",
+];
+
 #[test]
 fn a_small_box_runs_and_writes_frames_and_a_summary() {
     let dir = scratch("box");
     let frames = dir.join("frames");
-    let out = run(&[
-        "--box",
-        "6",
-        "--size",
-        "6",
-        "--settle-steps",
-        "6",
-        "--press-steps",
-        "6",
-        "--drag-steps",
-        "8",
-        "--waypoint",
-        "-1,0",
-        "--waypoint",
-        "1,0.5",
+    let mut args = SMALL_BOX.to_vec();
+    args.extend([
         "--frames",
         frames.to_str().unwrap_or_default(),
         "--every",
@@ -87,6 +92,7 @@ fn a_small_box_runs_and_writes_frames_and_a_summary() {
         "obj",
         "--png",
     ]);
+    let out = run(&args);
     let text = stdout(&out);
     assert!(out.status.success(), "{}\n{text}", stderr(&out));
     assert!(text.contains("generated tet box of 6×6×6 cells"), "{text}");
@@ -294,4 +300,34 @@ fn the_appendix_scenario_incises_cuts_off_and_sutures() {
     assert!(out.contains("suture 0 placed"), "{out}");
     assert!(number_after(&out, "with a cut", "median") > 0.0);
     assert_eq!(files_in(&dir).len(), 4, "frames at steps 50, 100, 150, 200");
+}
+
+/// A short run on the small box: a few lines on stdout, before and after the steps.
+#[cfg(unix)]
+fn short_run() -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_trainer"));
+    command.args(SMALL_BOX);
+    command
+}
+
+/// `trainer … | head -0`: the reader has gone before the first write. Regression: `println!`
+/// panicked with "failed printing to stdout: Broken pipe"; now SIGPIPE ends the program (status
+/// 141 in a shell) with nothing on stderr, for a run and for clap's help.
+#[cfg(unix)]
+#[test]
+fn broken_pipe_ends_trainer_quietly_by_sigpipe() {
+    tissue_cli::testing::close_stdout_after(short_run(), 0).assert_killed_by_sigpipe();
+    let mut help = Command::new(env!("CARGO_BIN_EXE_trainer"));
+    help.arg("--help");
+    tissue_cli::testing::close_stdout_after(help, 0).assert_killed_by_sigpipe();
+}
+
+/// `trainer … | head -1`: the reader takes the first line and goes; the summary lines after the
+/// run meet the closed pipe. The run must end quietly (by SIGPIPE).
+#[cfg(unix)]
+#[test]
+fn broken_pipe_after_the_first_line_ends_trainer_quietly() {
+    let ended = tissue_cli::testing::close_stdout_after(short_run(), 1);
+    assert!(ended.read.starts_with("trainer: "), "{}", ended.read);
+    ended.assert_quiet();
 }
