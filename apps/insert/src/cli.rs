@@ -81,8 +81,7 @@ EXIT CODES:
   0    success
   2    usage: unknown flag, bad value syntax, missing --at/--vertex with --mesh, missing shape size
   3    input file: missing, unreadable, or not a supported mesh type (.obj .ply .stl .vtk)
-  4    mesh: malformed file, invalid surface (defects), or a closed surface where an open scan \
-patch is expected
+  4    mesh: malformed file or invalid surface (defects)
   5    placement/region: point off the surface, vertex out of range, region empty, region \
 covering the whole surface or too small for the implant, badly shaped triangles at the point
   6    implant/tissue parameters: non-positive volume or size, a volume the base cannot hold, \
@@ -272,8 +271,8 @@ fn parse_mesh_out(s: &str) -> Result<PathBuf, String> {
     allow_negative_numbers = true
 )]
 pub struct Cli {
-    /// The patient surface: an open scan patch (.obj, .ply, .stl or .vtk) with normals out of the
-    /// body. Default: the Table 2 plane (20 cm, 65 × 65 vertices, cm).
+    /// The patient surface: a scan patch or a closed (watertight) body (.obj, .ply, .stl or .vtk)
+    /// with normals out of the body. Default: the Table 2 plane (20 cm, 65 × 65 vertices, cm).
     #[arg(long, value_name = "FILE", help_heading = "Patient")]
     pub mesh: Option<PathBuf>,
 

@@ -10,7 +10,7 @@ pub mod code {
     pub const USAGE: u8 = 2;
     /// The input file is missing, unreadable or of an unsupported type.
     pub const INPUT: u8 = 3;
-    /// The mesh is malformed, invalid or closed.
+    /// The mesh is malformed or invalid.
     pub const MESH: u8 = 4;
     /// The point is off the surface, or the region is empty, too large or too small.
     pub const PLACEMENT: u8 = 5;

@@ -222,18 +222,8 @@ pub fn load_patient(cli: &Cli) -> Result<Patient, Failure> {
             generated: true,
         });
     };
+    // A closed (watertight) body is taken as it is: the region is cut out of it.
     let mesh = tissue_meshio::read_surface(path).map_err(|e| Failure::from_mesh_io(&e))?;
-    if mesh.is_closed() {
-        return Err(Failure::new(
-            code::MESH,
-            format!(
-                "{}: a closed surface ({} triangles, no boundary): the skin must be an open scan \
-                 patch that can be held at its edge; cut the region of interest out of the scan",
-                path.display(),
-                mesh.triangle_count()
-            ),
-        ));
-    }
     let scale = cli.unit().cm_per_unit();
     let cm = if scale == 1.0 {
         mesh.clone()

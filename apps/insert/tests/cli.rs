@@ -442,10 +442,11 @@ fn each_error_has_its_exit_code_and_a_message_that_says_what_to_change() {
         4,
         &["malformed", "line 2"],
     );
+    // A closed surface is taken as it is; this 2 cm cube is too small for the region.
     assert_fails(
         &["--mesh", cube.to_str().unwrap(), "--at", "0,0,1"],
-        4,
-        &["closed surface", "open scan patch"],
+        5,
+        &["covers the whole surface", "smaller --radius"],
     );
     assert_fails(&["--at", "0,0,5"], 5, &["from the surface", "--at"]);
     assert_fails(&["--vertex", "99999"], 5, &["out of range", "4225"]);
@@ -588,4 +589,48 @@ fn broken_pipe_ends_insert_quietly_by_sigpipe() {
     let mut help = bin();
     help.arg("--help");
     tissue_cli::testing::close_stdout_after(help, 0).assert_killed_by_sigpipe();
+}
+
+#[test]
+fn a_closed_body_is_taken_as_it_is_and_the_region_cut_out_of_it() {
+    // Regression (issue 17): a watertight body was refused with "the skin must be an open scan
+    // patch". The MakeHuman body (dm, closed) is third-party test data beside the repository.
+    let body = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/meshes/makehuman_body_closed.obj");
+    if !body.is_file() {
+        eprintln!(
+            "SKIPPED: {} not found (third-party test data, see ../shared/meshes/SOURCES.md)",
+            body.display()
+        );
+        return;
+    }
+    let dir = scratch("closed_body");
+    let out = dir.join("body_after.obj");
+    let o = run(&[
+        "--mesh",
+        body.to_str().unwrap(),
+        "--unit",
+        "dm",
+        "--at",
+        "0,1.5716,1.4268", // the belly, on the midline below the navel
+        "--volume",
+        "50",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("(settled)"), "{}", stdout(&o));
+    let before = tissue_meshio::read_surface(&body).unwrap();
+    let after = tissue_meshio::read_surface(&out).unwrap();
+    assert!(after.is_closed());
+    assert_eq!(after.triangles(), before.triangles());
+    // The belly rose; the back did not move.
+    let moved: Vec<usize> = (0..before.vertex_count())
+        .filter(|&v| before.positions()[v] != after.positions()[v])
+        .collect();
+    assert!(!moved.is_empty());
+    assert!(moved
+        .iter()
+        .all(|&v| before.positions()[v].z > 0.5 && (before.positions()[v].y - 1.57).abs() < 0.6));
 }
