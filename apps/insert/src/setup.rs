@@ -2,11 +2,11 @@
 //! surface normal, tangent), and fill in the library's parameters.
 
 use glam::Vec3;
-use tissue_app::{InsertionJob, Placement};
+use tissue_app::{InsertionJob, Placement, SimMesh};
 use tissue_collide::BroadPhase;
 use tissue_implant::{
     default_snap_distance, snap_to_surface, ImplantShape, ImplantSpec, InsertionParams,
-    RegionOptions, RegionRule,
+    RegionOptions, RegionRule, ScanOptions,
 };
 use tissue_mesh::TriMesh;
 
@@ -128,6 +128,15 @@ pub fn check_numbers(cli: &Cli) -> Result<(), Failure> {
             ));
         }
     }
+    if let Some(h) = cli.sim_edge {
+        positive("--sim-edge", h, "cm")?;
+    }
+    if !(cli.max_hole.is_finite() && cli.max_hole >= 0.0) {
+        return Err(Failure::new(
+            code::PARAMETERS,
+            format!("--max-hole must be a size ≥ 0 in cm, got {}", cli.max_hole),
+        ));
+    }
     if let Some(h) = cli.time_step {
         positive("--time-step", f64::from(h), "seconds")?;
     }
@@ -193,6 +202,20 @@ pub fn params(cli: &Cli) -> InsertionParams {
     params
 }
 
+/// The surface the mechanics run on: the region remeshed (a scan), or the mesh's own triangles
+/// (`--scan-triangles`, and the generated Table 2 plane unless `--sim-edge` is given).
+pub fn sim_mesh(cli: &Cli) -> SimMesh {
+    if cli.scan_triangles || (cli.mesh.is_none() && cli.sim_edge.is_none()) {
+        SimMesh::Patient
+    } else {
+        SimMesh::Remeshed(ScanOptions {
+            sim_edge: cli.sim_edge,
+            max_hole: cli.max_hole,
+            ..ScanOptions::default()
+        })
+    }
+}
+
 /// The patient as read and scaled to cm.
 #[derive(Debug, Clone)]
 pub struct Patient {
@@ -222,18 +245,8 @@ pub fn load_patient(cli: &Cli) -> Result<Patient, Failure> {
             generated: true,
         });
     };
+    // A closed (watertight) body is taken as it is: the region is cut out of it.
     let mesh = tissue_meshio::read_surface(path).map_err(|e| Failure::from_mesh_io(&e))?;
-    if mesh.is_closed() {
-        return Err(Failure::new(
-            code::MESH,
-            format!(
-                "{}: a closed surface ({} triangles, no boundary): the skin must be an open scan \
-                 patch that can be held at its edge; cut the region of interest out of the scan",
-                path.display(),
-                mesh.triangle_count()
-            ),
-        ));
-    }
     let scale = cli.unit().cm_per_unit();
     let cm = if scale == 1.0 {
         mesh.clone()
@@ -348,6 +361,7 @@ pub fn scenario(cli: &Cli) -> Result<Scenario, Failure> {
             ..RegionOptions::default()
         },
         params: params(cli),
+        sim: sim_mesh(cli),
     };
     Ok(Scenario {
         patient,

@@ -442,10 +442,11 @@ fn each_error_has_its_exit_code_and_a_message_that_says_what_to_change() {
         4,
         &["malformed", "line 2"],
     );
+    // A closed surface is taken as it is; this 2 cm cube is too small for the region.
     assert_fails(
         &["--mesh", cube.to_str().unwrap(), "--at", "0,0,1"],
-        4,
-        &["closed surface", "open scan patch"],
+        5,
+        &["covers the whole surface", "smaller --radius"],
     );
     assert_fails(&["--at", "0,0,5"], 5, &["from the surface", "--at"]);
     assert_fails(&["--vertex", "99999"], 5, &["out of range", "4225"]);
