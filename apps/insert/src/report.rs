@@ -281,7 +281,7 @@ pub struct ScanFigures {
     pub volume_measured_on: &'static str,
     /// Holes of the scan filled in or at the region.
     pub holes_filled: usize,
-    /// The largest move of a scan vertex on a triangle touching the region's boundary, cm.
+    /// The largest move of a scan vertex within one simulation edge of the region's boundary, cm.
     pub seam_max_move_cm: f32,
 }
 

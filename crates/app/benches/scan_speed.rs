@@ -43,7 +43,11 @@ fn table2(dir: &std::path::Path) -> (Duration, u64) {
     (start.elapsed(), planned.outcome.steps)
 }
 
-fn scan_case(path: &std::path::Path, point_mm: Vec3, dir: &std::path::Path) -> (Duration, u64, usize) {
+fn scan_case(
+    path: &std::path::Path,
+    point_mm: Vec3,
+    dir: &std::path::Path,
+) -> (Duration, u64, usize) {
     let start = Instant::now();
     let mm = tissue_meshio::read_surface(path).unwrap();
     let cm = mm.positions().iter().map(|&p| p * 0.1).collect();
@@ -64,7 +68,10 @@ fn scan_case(path: &std::path::Path, point_mm: Vec3, dir: &std::path::Path) -> (
     let back: Vec<Vec3> = after.mesh.positions().iter().map(|&p| p * 10.0).collect();
     let after_mm = mm.with_positions(back).unwrap();
     tissue_meshio::write_obj(dir.join("face_after.obj"), &after_mm).unwrap();
-    let sim = planned.surface.as_ref().map_or(0, |s| s.mesh().vertex_count());
+    let sim = planned
+        .surface
+        .as_ref()
+        .map_or(0, |s| s.mesh().vertex_count());
     (start.elapsed(), planned.outcome.steps, sim)
 }
 

@@ -229,6 +229,7 @@ fn scene(job: &InsertionJob, cancelled: &dyn Fn() -> bool) -> Result<Scene, Impl
                 &job.patient,
                 job.placement.point,
                 radius,
+                job.params.layers.depth,
                 &job.region,
                 options,
             )?;

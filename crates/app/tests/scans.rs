@@ -122,21 +122,37 @@ fn run_and_check(job: &InsertionJob, what: &str) -> (PlannedInsertion, PatientAf
         assert!(a.is_finite());
     }
     let scan = after.scan.as_ref().expect("scan figures");
-    // The seam: next to the region's boundary the scan moves little (continuity), while the
-    // middle rises by about the dome.
+    // The region's boundary vertices are the seam: they do not move at all.
+    let region = planned.selection.mesh();
+    for &r in planned.selection.boundary_loops().iter().flatten() {
+        let v = planned.selection.region_to_patient()[r as usize] as usize;
+        if v < job.patient.vertex_count() {
+            assert_eq!(
+                after.mesh.positions()[v],
+                job.patient.positions()[v],
+                "{what}: seam vertex {v}"
+            );
+        }
+    }
+    assert!(region.vertex_count() > 0);
+    // The seam: within a simulation edge of the region's boundary the scan moves little
+    // (continuity; the boundary itself does not move), while the middle rises by about the dome.
     let max_move = after.displacement.iter().copied().fold(0.0f32, f32::max);
     assert!(
         max_move > 0.3 * out.dome_height as f32,
         "{what}: max move {max_move}"
     );
     assert!(
-        scan.seam_max_move <= 0.25 * max_move,
+        scan.seam_max_move <= 0.5 * max_move,
         "{what}: seam moves {} of {max_move}",
         scan.seam_max_move
     );
-    // The scan's own area gain agrees with the simulation surface's.
+    // The scan's own area gain agrees with the simulation surface's where the scan is finer
+    // than the simulation mesh (a coarse scan's own triangles cannot follow the dome).
+    let scan_edge = tissue_testscans::median_edge(&job.patient);
     assert!(
-        (scan.area_gain - out.area_gain).abs() <= 0.2 * out.area_gain + 0.5,
+        scan_edge > surface.edge()
+            || (scan.area_gain - out.area_gain).abs() <= 0.2 * out.area_gain + 0.5,
         "{what}: scan gain {} vs {}",
         scan.area_gain,
         out.area_gain
@@ -213,19 +229,22 @@ fn a_noisy_holed_face_scan_in_mm_plans_at_the_default_depth() {
         return;
     };
     let patient = in_cm(&scan);
-    for (name, diameter, volume) in [("forehead", 2.5, 2.0), ("chin", 2.0, 1.5)] {
+    for (name, shape, volume) in [
+        ("forehead", ImplantShape::Round { diameter: 2.5 }, 2.0),
+        (
+            "forehead",
+            ImplantShape::Rectangular {
+                length: 3.0,
+                width: 1.5,
+                corner_radius: 0.3,
+            },
+            1.5,
+        ),
+        ("nose_bridge", ImplantShape::Round { diameter: 2.0 }, 1.0),
+    ] {
         let p = point(&scan, name);
-        let job = job(
-            &patient,
-            p.vertex,
-            ImplantShape::Round { diameter },
-            volume,
-            Vec3::X,
-        );
-        run_and_check(
-            &job,
-            &format!("face {name} round {diameter} cm {volume} cm³"),
-        );
+        let job = job(&patient, p.vertex, shape, volume, Vec3::X);
+        run_and_check(&job, &format!("face {name} {shape:?} {volume} cm³"));
     }
 }
 

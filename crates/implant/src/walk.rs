@@ -232,7 +232,6 @@ fn barycentric(c: &[DVec3; 3], p: DVec3) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec3;
 
     #[test]
     fn on_a_plane_the_walk_is_a_straight_line() {

@@ -138,10 +138,7 @@ fn ear_clip(m: &EditMesh, l: &[u32]) -> Option<Vec<[u32; 3]>> {
     }
     // The fill polygon: the loop reversed.
     let poly: Vec<u32> = l.iter().rev().copied().collect();
-    let p: Vec<DVec3> = poly
-        .iter()
-        .map(|&v| m.pos[v as usize].as_dvec3())
-        .collect();
+    let p: Vec<DVec3> = poly.iter().map(|&v| m.pos[v as usize].as_dvec3()).collect();
     let mut normal = DVec3::ZERO;
     for i in 0..n {
         let (a, b) = (p[i], p[(i + 1) % n]);
@@ -310,7 +307,9 @@ fn fair(m: &mut EditMesh, first_new: usize) {
         nbrs.truncate(k);
         offsets.push(nbrs.len());
     }
-    let degree: Vec<f64> = (0..n).map(|i| (offsets[i + 1] - offsets[i]) as f64).collect();
+    let degree: Vec<f64> = (0..n)
+        .map(|i| (offsets[i + 1] - offsets[i]) as f64)
+        .collect();
     // A x = b with A = D − (adjacency among new vertices), b = Σ fixed neighbours.
     let apply = |x: &[DVec3], out: &mut [DVec3]| {
         for i in 0..n {
@@ -337,9 +336,7 @@ fn fair(m: &mut EditMesh, first_new: usize) {
     let mut r: Vec<DVec3> = b.iter().zip(&ax).map(|(b, a)| *b - *a).collect();
     let mut d = r.clone();
     let dot = |u: &[DVec3], v: &[DVec3]| -> DVec3 {
-        u.iter()
-            .zip(v)
-            .fold(DVec3::ZERO, |s, (a, b)| s + *a * *b)
+        u.iter().zip(v).fold(DVec3::ZERO, |s, (a, b)| s + *a * *b)
     };
     let mut rr = dot(&r, &r);
     let bb = dot(&b, &b).max_element().max(1e-300);

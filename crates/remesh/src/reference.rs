@@ -2,10 +2,7 @@
 //! its boundary polylines, and optionally a moving-least-squares smoothing of it.
 
 use glam::{DVec3, Vec3, Vec3A};
-use tissue_bvh::{
-    Aabb, BuildOptions, Bvh, BvhWorkspace, ClosestPoint, Primitives,
-    Triangles,
-};
+use tissue_bvh::{Aabb, BuildOptions, Bvh, BvhWorkspace, ClosestPoint, Primitives, Triangles};
 use tissue_mesh::TriMesh;
 
 use crate::RemeshError;
@@ -195,6 +192,7 @@ impl<'a> Reference<'a> {
                 &mut self.hits,
             );
             let (mut sw, mut sx, mut sn) = (0.0f64, DVec3::ZERO, DVec3::ZERO);
+            let mut samples = 0usize;
             for &i in &self.hits {
                 let x = self.pos[i as usize];
                 let d2 = f64::from((x - c).length_squared());
@@ -202,12 +200,15 @@ impl<'a> Reference<'a> {
                     continue;
                 }
                 let w = (-inv * d2).exp();
+                samples += 1;
                 sw += w;
                 sx += w * Vec3::from(x).as_dvec3();
                 sn += w * Vec3::from(mls.normals[i as usize]).as_dvec3();
             }
             let n = sn.normalize_or_zero();
-            if sw <= 1e-12 || n == DVec3::ZERO {
+            // Too few of the input's vertices within the radius to fit a plane to (a coarse
+            // input, whose facets are larger than the smoothing): its own surface is kept.
+            if samples < MIN_MLS_SAMPLES || sw <= 1e-12 || n == DVec3::ZERO {
                 return out;
             }
             let centroid = sx / sw;
@@ -219,6 +220,10 @@ impl<'a> Reference<'a> {
         out
     }
 }
+
+/// The fewest input vertices within the smoothing radius for a plane fit; with fewer, a vertex
+/// is projected onto the input surface itself.
+const MIN_MLS_SAMPLES: usize = 4;
 
 /// `pos` with every boundary loop's vertices replaced by Gaussian averages (weights
 /// `exp(−4.5·s²/r²)` over the arc length `s ≤ r` along the loop, both ways).

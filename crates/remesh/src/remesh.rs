@@ -138,27 +138,36 @@ pub fn remesh(surface: &TriMesh, options: &RemeshOptions) -> Result<Remeshed, Re
     Ok(Remeshed { mesh, stats })
 }
 
-/// Splits every edge longer than `hi` at its midpoint, sweeping until none is left.
+/// Splits every edge longer than `hi` at its midpoint, sweeping until none is left: each sweep
+/// visits the triangles that existed when it started and splits the longest edge of each while
+/// it is longer than `hi` (longest-edge bisection, which terminates; splitting a triangle's
+/// edges in a fixed order instead can chase a long boundary edge from triangle to triangle
+/// forever, found on a tapered tube's region).
 pub(crate) fn split_long(m: &mut EditMesh, hi: f32) -> usize {
     let _span = tracing::debug_span!("split").entered();
     let hi2 = hi * hi;
     let mut count = 0;
     for _sweep in 0..64 {
         let before = count;
-        let mut t = 0;
-        while t < m.tris.len() {
-            if m.tri_alive[t] {
-                for i in 0..3 {
-                    let tri = m.tris[t];
-                    let (a, b) = (tri[i], tri[(i + 1) % 3]);
-                    let (pa, pb) = (m.pos[a as usize], m.pos[b as usize]);
-                    if (pa - pb).length_squared() > hi2 {
-                        m.split(a, b, 0.5 * (pa + pb));
-                        count += 1;
-                    }
+        let existing = m.tris.len();
+        for t in 0..existing {
+            if !m.tri_alive[t] {
+                continue;
+            }
+            let tri = m.tris[t];
+            let mut longest = (hi2, None);
+            for i in 0..3 {
+                let (a, b) = (tri[i], tri[(i + 1) % 3]);
+                let d2 = (m.pos[a as usize] - m.pos[b as usize]).length_squared();
+                if d2 > longest.0 {
+                    longest = (d2, Some((a, b)));
                 }
             }
-            t += 1;
+            if let Some((a, b)) = longest.1 {
+                let (pa, pb) = (m.pos[a as usize], m.pos[b as usize]);
+                m.split(a, b, 0.5 * (pa + pb));
+                count += 1;
+            }
         }
         if count == before {
             break;

@@ -137,7 +137,11 @@ fn slit(per_side: u32) -> TriMesh {
     let mut positions = Vec::new();
     // The hole's loop, counter-clockwise seen from +z: bottom side left to right, top right to left.
     for i in 0..=per_side {
-        positions.push(Vec3::new(-2.5 + 5.0 * i as f32 / per_side as f32, -0.05, 0.0));
+        positions.push(Vec3::new(
+            -2.5 + 5.0 * i as f32 / per_side as f32,
+            -0.05,
+            0.0,
+        ));
     }
     for i in 0..=per_side {
         positions.push(Vec3::new(2.5 - 5.0 * i as f32 / per_side as f32, 0.05, 0.0));
