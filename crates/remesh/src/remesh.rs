@@ -1,8 +1,5 @@
 //! Isotropic remeshing (Botsch & Kobbelt 2004): split, collapse, flip, relax, project.
 
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
-
 use glam::Vec3;
 use tissue_mesh::TriMesh;
 
@@ -124,11 +121,11 @@ pub fn remesh(surface: &TriMesh, options: &RemeshOptions) -> Result<Remeshed, Re
         iterations: options.iterations,
         ..RemeshStats::default()
     };
-    let mut heap = BinaryHeap::new();
+    let mut queue = EdgeQueue::new();
     let mut scratch = Vec::new();
     for _ in 0..options.iterations {
         stats.splits += split_long(&mut m, hi);
-        stats.collapses += collapse_short(&mut m, lo, hi, &mut heap);
+        stats.collapses += collapse_short(&mut m, lo, hi, &mut queue);
         stats.flips += flip_valence(&mut m);
         relax(&mut m, &mut scratch);
         project(&mut m, &mut reference);
@@ -170,26 +167,67 @@ pub(crate) fn split_long(m: &mut EditMesh, hi: f32) -> usize {
     count
 }
 
-type EdgeKey = Reverse<(u32, u32, u32)>;
+/// Edges waiting for a collapse, shortest first: a bucket queue over the squared length in
+/// `[0, lo²)` (`BUCKETS` buckets, last in first out within one), so a push and a pop cost `O(1)`.
+/// Entries carry the squared length they were queued with; an entry whose edge has changed since
+/// is stale and skipped (the edge was queued again when it changed).
+pub(crate) struct EdgeQueue {
+    buckets: Vec<Vec<(u32, u32, u32)>>,
+    scale: f32,
+    lo2: f32,
+    current: usize,
+}
 
-fn push_edge(m: &EditMesh, heap: &mut BinaryHeap<EdgeKey>, a: u32, b: u32, lo2: f32) {
-    let d2 = (m.pos[a as usize] - m.pos[b as usize]).length_squared();
-    if d2 < lo2 {
-        heap.push(Reverse((d2.to_bits(), a.min(b), a.max(b))));
+const BUCKETS: usize = 1024;
+
+impl EdgeQueue {
+    pub fn new() -> Self {
+        EdgeQueue {
+            buckets: vec![Vec::new(); BUCKETS],
+            scale: 0.0,
+            lo2: 0.0,
+            current: 0,
+        }
+    }
+
+    fn reset(&mut self, lo2: f32) {
+        for b in &mut self.buckets {
+            b.clear();
+        }
+        self.lo2 = lo2;
+        self.scale = BUCKETS as f32 / lo2;
+        self.current = 0;
+    }
+
+    /// Queues edge `ab` if it is shorter than `lo`.
+    #[inline]
+    fn push(&mut self, m: &EditMesh, a: u32, b: u32) {
+        let d2 = (m.pos[a as usize] - m.pos[b as usize]).length_squared();
+        if d2 < self.lo2 {
+            let i = ((d2 * self.scale) as usize).min(BUCKETS - 1);
+            // An edge shorter than the bucket being emptied joins that bucket.
+            let i = i.max(self.current);
+            self.buckets[i].push((d2.to_bits(), a, b));
+        }
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<(u32, u32, u32)> {
+        while self.current < BUCKETS {
+            if let Some(e) = self.buckets[self.current].pop() {
+                return Some(e);
+            }
+            self.current += 1;
+        }
+        None
     }
 }
 
-/// Collapses edges shorter than `lo`, shortest first (a priority queue with lazy deletion),
-/// unless the collapse would make an edge longer than `hi` or break the surface.
-pub(crate) fn collapse_short(
-    m: &mut EditMesh,
-    lo: f32,
-    hi: f32,
-    heap: &mut BinaryHeap<EdgeKey>,
-) -> usize {
+/// Collapses edges shorter than `lo`, about shortest first, unless the collapse would make an
+/// edge longer than `hi` or break the surface.
+pub(crate) fn collapse_short(m: &mut EditMesh, lo: f32, hi: f32, queue: &mut EdgeQueue) -> usize {
     let _span = tracing::debug_span!("collapse").entered();
-    let lo2 = lo * lo;
-    heap.clear();
+    queue.reset(lo * lo);
     for t in 0..m.tris.len() {
         if !m.tri_alive[t] {
             continue;
@@ -198,12 +236,12 @@ pub(crate) fn collapse_short(
         for i in 0..3 {
             let (a, b) = (tri[i], tri[(i + 1) % 3]);
             if a < b || m.edge_tris(a, b).1 == NONE {
-                push_edge(m, heap, a, b, lo2);
+                queue.push(m, a, b);
             }
         }
     }
     let mut count = 0;
-    while let Some(Reverse((bits, a, b))) = heap.pop() {
+    while let Some((bits, a, b)) = queue.pop() {
         if !m.v_alive[a as usize] || !m.v_alive[b as usize] {
             continue;
         }
@@ -241,9 +279,14 @@ pub(crate) fn collapse_short(
             count += 1;
             for i in 0..m.vtris[k as usize].len() {
                 let tri = m.tris[m.vtris[k as usize][i] as usize];
-                for w in tri {
-                    if w != k {
-                        push_edge(m, heap, k, w, lo2);
+                // Each neighbour once: the one after k in each triangle (plus, at the boundary,
+                // the one before k on the boundary side).
+                let j = tri.iter().position(|&x| x == k).unwrap_or(0);
+                queue.push(m, k, tri[(j + 1) % 3]);
+                if m.boundary[k as usize] {
+                    let w = tri[(j + 2) % 3];
+                    if m.edge_tris(k, w).1 == NONE {
+                        queue.push(m, k, w);
                     }
                 }
             }

@@ -13,6 +13,7 @@ fn explore() {
     println!("time {:?}", t0.elapsed());
     println!("{:#?}", out.stats);
     assert_same_topology(&patch, &out.mesh);
+    if std::env::var("FIT").is_err() { return; }
     let f = fit(&patch, &out.mesh);
     println!(
         "boundary {} interior {} dot {} agree {}",
