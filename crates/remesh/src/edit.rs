@@ -106,10 +106,6 @@ impl EditMesh {
         m
     }
 
-    pub fn vertex_count(&self) -> usize {
-        self.pos.len()
-    }
-
     /// Number of boundary sides leaving `v` and one boundary neighbour after it (`v → next` is a
     /// boundary side), or `NONE`.
     fn boundary_sides(&self, v: u32) -> (usize, u32) {
@@ -206,6 +202,27 @@ impl EditMesh {
             self.vtris[v as usize].push(t);
         }
         t
+    }
+
+    /// Removes the triangles from `tri_len` on and the vertices from `vert_len` on (which only
+    /// those triangles may use): undoes a sequence of additions and splits confined to them.
+    pub fn truncate(&mut self, tri_len: usize, vert_len: usize) {
+        for t in tri_len..self.tris.len() {
+            for v in self.tris[t] {
+                if (v as usize) < vert_len {
+                    self.vtris[v as usize].retain(|&x| (x as usize) < tri_len);
+                }
+            }
+        }
+        self.tris.truncate(tri_len);
+        self.tri_alive.truncate(tri_len);
+        for list in [&mut self.v_alive, &mut self.boundary, &mut self.locked] {
+            list.truncate(vert_len);
+        }
+        self.pos.truncate(vert_len);
+        self.vtris.truncate(vert_len);
+        self.stamp.truncate(vert_len);
+        self.stamp2.truncate(vert_len);
     }
 
     /// Splits edge `ab` at `p`; returns the new vertex. Each triangle `t` of the edge keeps `a`

@@ -62,6 +62,7 @@
 
 mod edit;
 mod error;
+mod holes;
 mod quality;
 mod reference;
 mod remesh;
@@ -70,5 +71,6 @@ mod remesh;
 pub mod scenes;
 
 pub use error::RemeshError;
+pub use holes::{fill_holes, Hole, HoleFill};
 pub use quality::MeshQuality;
 pub use remesh::{remesh, RemeshOptions, RemeshStats, Remeshed, MAX_TRIANGLES};

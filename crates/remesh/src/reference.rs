@@ -2,10 +2,7 @@
 //! its boundary polylines, and optionally a moving-least-squares smoothing of it.
 
 use glam::{DVec3, Vec3, Vec3A};
-use tissue_bvh::{
-    closest_point_on_triangle, Aabb, BuildOptions, Bvh, BvhWorkspace, ClosestPoint, Primitives,
-    Triangles,
-};
+use tissue_bvh::{Aabb, BuildOptions, Bvh, BvhWorkspace, ClosestPoint, Primitives, Triangles};
 use tissue_mesh::TriMesh;
 
 use crate::RemeshError;
@@ -60,6 +57,7 @@ pub(crate) struct Reference<'a> {
     pos: Vec<Vec3A>,
     bvh: Bvh,
     segs: Vec<[u32; 2]>,
+    seg_pos: Vec<Vec3A>,
     seg_bvh: Option<Bvh>,
     mls: Option<Mls>,
     ws: BvhWorkspace,
@@ -87,13 +85,19 @@ impl<'a> Reference<'a> {
                 segs.push([l[i], l[(i + 1) % l.len()]]);
             }
         }
+        // With smoothing, the outline is smoothed too (Gaussian along the arc length, σ = r/3),
+        // so that boundary vertices lose the scan's noise like interior ones.
+        let seg_pos = match smoothing_radius {
+            Some(r) => smoothed_outline(mesh, &pos, r),
+            None => pos.clone(),
+        };
         let seg_bvh = if segs.is_empty() {
             None
         } else {
             Some(
                 Bvh::build(
                     &Segments {
-                        pos: &pos,
+                        pos: &seg_pos,
                         segs: &segs,
                     },
                     &options,
@@ -122,6 +126,7 @@ impl<'a> Reference<'a> {
             pos,
             bvh,
             segs,
+            seg_pos,
             seg_bvh,
             mls,
             ws: BvhWorkspace::new(),
@@ -148,7 +153,7 @@ impl<'a> Reference<'a> {
             return p;
         };
         let segs = Segments {
-            pos: &self.pos,
+            pos: &self.seg_pos,
             segs: &self.segs,
         };
         bvh.closest_point(&segs, p.into(), f32::INFINITY, &mut self.ws)
@@ -212,10 +217,37 @@ impl<'a> Reference<'a> {
     }
 }
 
-/// The closest point of triangle `abc` to `p` (re-exported geometry for the tests and stats).
-#[allow(dead_code)]
-pub(crate) fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
-    closest_point_on_triangle(p.into(), a.into(), b.into(), c.into())
-        .0
-        .into()
+/// `pos` with every boundary loop's vertices replaced by Gaussian averages (weights
+/// `exp(−4.5·s²/r²)` over the arc length `s ≤ r` along the loop, both ways).
+fn smoothed_outline(mesh: &TriMesh, pos: &[Vec3A], r: f64) -> Vec<Vec3A> {
+    let mut out = pos.to_vec();
+    let inv = 4.5 / (r * r);
+    for l in mesh.topology().boundary_loops() {
+        let n = l.len();
+        let p: Vec<DVec3> = l
+            .iter()
+            .map(|&v| Vec3::from(pos[v as usize]).as_dvec3())
+            .collect();
+        let seg: Vec<f64> = (0..n).map(|i| (p[(i + 1) % n] - p[i]).length()).collect();
+        for i in 0..n {
+            let (mut sw, mut sx) = (1.0f64, p[i]);
+            for dir in [1usize, n - 1] {
+                let (mut j, mut s) = (i, 0.0f64);
+                for _ in 0..n / 2 {
+                    // Step from j to its neighbour in direction `dir`.
+                    let k = (j + dir) % n;
+                    s += if dir == 1 { seg[j] } else { seg[k] };
+                    if s > r {
+                        break;
+                    }
+                    let w = (-inv * s * s).exp();
+                    sw += w;
+                    sx += w * p[k];
+                    j = k;
+                }
+            }
+            out[l[i] as usize] = Vec3A::from((sx / sw).as_vec3());
+        }
+    }
+    out
 }
