@@ -466,29 +466,29 @@ mod tests {
     fn split_flip_collapse_keep_a_manifold() {
         let mut m = square();
         assert!(m.boundary.iter().all(|&b| b));
-        let c = m.split(0, 2, Vec3::new(0.5, 0.5, 0.0));
+        let c = m.split(0, 2, Vec3::new(0.3, 0.6, 0.0));
         m.check();
         assert!(!m.boundary[c as usize]);
         assert_eq!(m.valence(c), 4);
         let e = m.split(0, 1, Vec3::new(0.5, 0.0, 0.0));
         m.check();
         assert!(m.boundary[e as usize]);
+        // Flipping c–e would put 0–1 through e: flat, refused.
         let (t1, t2) = m.edge_tris(c, e);
         let (t1, t2) = m.oriented_pair(c, e, t1, t2);
-        // Flipping the interior edge c-e would make 0-1 an edge through the centre: flat, allowed.
-        assert!(m.flip_is_flat(c, e, t1, t2, 0.0));
-        let (x, y) = (
-            opposite(m.tris[t1 as usize], c, e),
-            opposite(m.tris[t2 as usize], c, e),
-        );
-        m.flip(c, e, t1, t2);
+        assert!(!m.flip_is_flat(c, e, t1, t2, 0.0));
+        // Flipping c–1 makes e–2, a sound flip; flipping it back restores c–1.
+        let (t1, t2) = m.edge_tris(c, 1);
+        let (t1, t2) = m.oriented_pair(c, 1, t1, t2);
+        assert!(m.flip_is_flat(c, 1, t1, t2, 0.0));
+        m.flip(c, 1, t1, t2);
         m.check();
-        assert!(m.adjacent(x, y) && !m.adjacent(c, e));
-        let (s1, s2) = m.edge_tris(x, y);
-        let (s1, s2) = m.oriented_pair(x, y, s1, s2);
-        m.flip(x, y, s1, s2);
+        assert!(m.adjacent(e, 2) && !m.adjacent(c, 1));
+        let (s1, s2) = m.edge_tris(e, 2);
+        let (s1, s2) = m.oriented_pair(e, 2, s1, s2);
+        m.flip(e, 2, s1, s2);
         m.check();
-        assert!(m.adjacent(c, e));
+        assert!(m.adjacent(c, 1));
         // Collapse the centre onto corner 2.
         assert!(m.try_collapse(c, 2, Vec3::new(1.0, 1.0, 0.0), 10.0, 0.0));
         m.check();

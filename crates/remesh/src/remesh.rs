@@ -3,7 +3,7 @@
 use glam::Vec3;
 use tissue_mesh::TriMesh;
 
-use crate::edit::{opposite, EditMesh, NONE};
+use crate::edit::{opposite, tri_cross, EditMesh, NONE};
 use crate::reference::Reference;
 use crate::{MeshQuality, RemeshError};
 
@@ -123,12 +123,16 @@ pub fn remesh(surface: &TriMesh, options: &RemeshOptions) -> Result<Remeshed, Re
     };
     let mut queue = EdgeQueue::new();
     let mut scratch = Vec::new();
+    let mut saved = Vec::new();
     for _ in 0..options.iterations {
         stats.splits += split_long(&mut m, hi);
         stats.collapses += collapse_short(&mut m, lo, hi, &mut queue);
         stats.flips += flip_valence(&mut m);
+        saved.clear();
+        saved.extend_from_slice(&m.pos);
         relax(&mut m, &mut scratch);
         project(&mut m, &mut reference);
+        keep_sound(&mut m, &saved);
     }
     let (positions, triangles) = m.compact(false);
     let mesh = TriMesh::new(positions, triangles)
@@ -145,26 +149,45 @@ pub(crate) fn split_long(m: &mut EditMesh, hi: f32) -> usize {
     let mut count = 0;
     for _sweep in 0..64 {
         let before = count;
-        let mut t = 0;
-        while t < m.tris.len() {
+        // One pass over the triangles the sweep starts with: splitting the new edges at once too
+        // would keep splitting the far sides of a fan and pile edges onto its centre.
+        let end = m.tris.len();
+        for t in 0..end {
             if m.tri_alive[t] {
                 for i in 0..3 {
                     let tri = m.tris[t];
                     let (a, b) = (tri[i], tri[(i + 1) % 3]);
                     let (pa, pb) = (m.pos[a as usize], m.pos[b as usize]);
-                    if (pa - pb).length_squared() > hi2 {
+                    if (pa - pb).length_squared() > hi2 && split_is_sound(m, a, b) {
                         m.split(a, b, 0.5 * (pa + pb));
                         count += 1;
                     }
                 }
             }
-            t += 1;
         }
         if count == before {
             break;
         }
     }
     count
+}
+
+/// Whether splitting `ab` at its midpoint leaves every new triangle's height above 1 % of its
+/// longest side (a split next to a sliver would make a flatter one).
+fn split_is_sound(m: &EditMesh, a: u32, b: u32) -> bool {
+    let (t1, t2) = m.edge_tris(a, b);
+    let (pa, pb) = (m.pos[a as usize], m.pos[b as usize]);
+    let mid = 0.5 * (pa + pb);
+    [t1, t2].iter().filter(|&&t| t != NONE).all(|&t| {
+        let x = m.pos[opposite(m.tris[t as usize], a, b) as usize];
+        [(pa, mid), (mid, pb)].iter().all(|&(p, q)| {
+            let longest = (q - p)
+                .length_squared()
+                .max((x - q).length_squared())
+                .max((p - x).length_squared());
+            tri_cross(p, q, x).length() > 1e-2 * longest
+        })
+    })
 }
 
 /// Edges waiting for a collapse, shortest first: a bucket queue over the squared length in
@@ -378,6 +401,44 @@ pub(crate) fn relax(m: &mut EditMesh, new: &mut Vec<Vec3>) {
         }
     }
     std::mem::swap(&mut m.pos, new);
+}
+
+/// Undoes the moves of relaxation and projection around triangles they flattened or flipped: near
+/// the boundary, a vertex relaxed past it projects onto the outline, flat with its neighbours. The
+/// corners of such a triangle go back to `saved` (where the triangle was sound), repeatedly, and
+/// if that does not settle, every vertex does.
+pub(crate) fn keep_sound(m: &mut EditMesh, saved: &[Vec3]) {
+    for _round in 0..8 {
+        let mut reverted = false;
+        for t in 0..m.tris.len() {
+            if !m.tri_alive[t] {
+                continue;
+            }
+            let tri = m.tris[t];
+            let [a, b, c] = tri.map(|v| m.pos[v as usize]);
+            let now = tri_cross(a, b, c);
+            let longest = (b - a)
+                .length_squared()
+                .max((c - b).length_squared())
+                .max((a - c).length_squared());
+            let [oa, ob, oc] = tri.map(|v| saved[v as usize]);
+            let before = tri_cross(oa, ob, oc);
+            if now.length() > 1e-3 * longest && now.dot(before) > 0.0 {
+                continue;
+            }
+            if tri.iter().all(|&v| m.pos[v as usize] == saved[v as usize]) {
+                continue; // already as it was: nothing to undo here
+            }
+            for v in tri {
+                m.pos[v as usize] = saved[v as usize];
+            }
+            reverted = true;
+        }
+        if !reverted {
+            return;
+        }
+    }
+    m.pos.copy_from_slice(saved);
 }
 
 /// Projects interior vertices onto the reference surface, boundary ones onto its boundary.
