@@ -327,7 +327,7 @@ impl EditMesh {
                     .length_squared()
                     .max((new[2] - new[1]).length_squared())
                     .max((new[0] - new[2]).length_squared());
-                if !(ln > 1e-4 * longest) || n_old.dot(n_new) < min_dot * lo * ln {
+                if ln.is_nan() || ln <= 1e-4 * longest || n_old.dot(n_new) < min_dot * lo * ln {
                     return false;
                 }
             }
@@ -383,7 +383,7 @@ impl EditMesh {
         for n in [tri_cross(pc, pa, pd), tri_cross(pd, pb, pc)] {
             let len = n.length();
             let longest = (pc - pd).length_squared().max((pa - pb).length_squared());
-            if !(len > 1e-4 * longest) || old.dot(n) < min_dot * len {
+            if len.is_nan() || len <= 1e-4 * longest || old.dot(n) < min_dot * len {
                 return false;
             }
         }
@@ -402,6 +402,7 @@ impl EditMesh {
 
     /// Alive vertices renumbered in order (dead ones and those with no triangle dropped, unless
     /// `keep_all_vertices`), alive triangles in order.
+    #[allow(clippy::needless_range_loop)] // v indexes four parallel arrays
     pub fn compact(&self, keep_all_vertices: bool) -> (Vec<Vec3>, Vec<[u32; 3]>) {
         let mut map = vec![NONE; self.pos.len()];
         let mut positions = Vec::new();

@@ -367,6 +367,7 @@ pub(crate) fn flip_valence(m: &mut EditMesh) -> usize {
 /// Tangential relaxation (Jacobi): an interior vertex moves towards the area-weighted centroid of
 /// its triangles, within its tangent plane; a boundary vertex towards the midpoint of its two
 /// boundary neighbours, along the boundary.
+#[allow(clippy::needless_range_loop)] // v indexes several parallel arrays
 pub(crate) fn relax(m: &mut EditMesh, new: &mut Vec<Vec3>) {
     let _span = tracing::debug_span!("relax").entered();
     new.clear();
