@@ -147,7 +147,8 @@ impl<'a> Reference<'a> {
         }
     }
 
-    /// The input boundary's point closest to `p` (`p` itself on a closed input).
+    /// The input boundary's point closest to `p` (`p` itself on a closed input); with a
+    /// smoothing radius, of the smoothed outline (cheap, so every iteration uses it).
     pub fn closest_on_boundary(&mut self, p: Vec3) -> Vec3 {
         let Some(bvh) = &self.seg_bvh else {
             return p;
@@ -160,11 +161,11 @@ impl<'a> Reference<'a> {
             .map_or(p, |h| h.point.into())
     }
 
-    /// Where an interior vertex at `p` goes: the closest point of the input, or with smoothing
-    /// the projection of `p` onto the MLS plane fitted around it.
-    pub fn project_interior(&mut self, p: Vec3) -> Vec3 {
+    /// Where an interior vertex at `p` goes: the closest point of the input, or with `smooth`
+    /// (and a smoothing radius) the projection of `p` onto the MLS plane fitted around it.
+    pub fn project_interior(&mut self, p: Vec3, smooth: bool) -> Vec3 {
         let (q, _) = self.closest_on_surface(p);
-        match self.mls.is_some() {
+        match smooth && self.mls.is_some() {
             false => q,
             true => self.mls_project(p, q),
         }

@@ -124,14 +124,17 @@ pub fn remesh(surface: &TriMesh, options: &RemeshOptions) -> Result<Remeshed, Re
     let mut queue = EdgeQueue::new();
     let mut scratch = Vec::new();
     let mut saved = Vec::new();
-    for _ in 0..options.iterations {
+    for it in 0..options.iterations {
         stats.splits += split_long(&mut m, hi);
         stats.collapses += collapse_short(&mut m, lo, hi, &mut queue);
         stats.flips += flip_valence(&mut m);
         saved.clear();
         saved.extend_from_slice(&m.pos);
         relax(&mut m, &mut scratch);
-        project(&mut m, &mut reference);
+        // The MLS fit costs a neighbourhood query per vertex: only the last two projections,
+        // the ones the result keeps, use it; earlier ones take the closest point.
+        let smooth = it + 2 >= options.iterations;
+        project(&mut m, &mut reference, smooth);
         keep_sound(&mut m, &saved);
     }
     let (positions, triangles) = m.compact(false);
@@ -442,8 +445,9 @@ pub(crate) fn keep_sound(m: &mut EditMesh, saved: &[Vec3]) {
     m.pos.copy_from_slice(saved);
 }
 
-/// Projects interior vertices onto the reference surface, boundary ones onto its boundary.
-pub(crate) fn project(m: &mut EditMesh, reference: &mut Reference<'_>) {
+/// Projects interior vertices onto the reference surface, boundary ones onto its boundary
+/// (with `smooth`, interior ones onto the MLS fit if the reference has one).
+pub(crate) fn project(m: &mut EditMesh, reference: &mut Reference<'_>, smooth: bool) {
     let _span = tracing::debug_span!("project").entered();
     for v in 0..m.pos.len() {
         if !m.v_alive[v] || m.locked[v] || m.vtris[v].is_empty() {
@@ -452,7 +456,7 @@ pub(crate) fn project(m: &mut EditMesh, reference: &mut Reference<'_>) {
         m.pos[v] = if m.boundary[v] {
             reference.closest_on_boundary(m.pos[v])
         } else {
-            reference.project_interior(m.pos[v])
+            reference.project_interior(m.pos[v], smooth)
         };
     }
 }
