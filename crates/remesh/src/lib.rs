@@ -51,8 +51,9 @@
 //!
 //! Measured (tests, release): 0.05 cm noisy patches remeshed to `L = 0.3` have 99–100 % of their
 //! edges in `[0.7L, 1.45L]` (98–99 % in `[0.8L, 4/3L]`) and smallest angles of 17–35°; the
-//! MakeHuman head region 99 % and 10°. An 80k-triangle patch takes about 0.2 s on one core
-//! (`benches/remesh.rs`). MLS smoothing with `r = L = 0.3` cuts 0.02 cm noise to 0.0043 cm RMS.
+//! MakeHuman head region 99 % and 10°. An 80k-triangle patch takes about 0.13 s on one core
+//! (0.17 s with smoothing; `benches/remesh.rs`). MLS smoothing with `r = L = 0.3` cuts 0.02 cm
+//! noise to 0.0043 cm RMS.
 //!
 //! ## Hole filling
 //! [`fill_holes`] triangulates each loop up to a diameter by ear clipping (smallest interior angle
