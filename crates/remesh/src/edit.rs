@@ -204,6 +204,27 @@ impl EditMesh {
         t
     }
 
+    /// Removes the triangles from `tri_len` on and the vertices from `vert_len` on (which only
+    /// those triangles may use): undoes a sequence of additions and splits confined to them.
+    pub fn truncate(&mut self, tri_len: usize, vert_len: usize) {
+        for t in tri_len..self.tris.len() {
+            for v in self.tris[t] {
+                if (v as usize) < vert_len {
+                    self.vtris[v as usize].retain(|&x| (x as usize) < tri_len);
+                }
+            }
+        }
+        self.tris.truncate(tri_len);
+        self.tri_alive.truncate(tri_len);
+        for list in [&mut self.v_alive, &mut self.boundary, &mut self.locked] {
+            list.truncate(vert_len);
+        }
+        self.pos.truncate(vert_len);
+        self.vtris.truncate(vert_len);
+        self.stamp.truncate(vert_len);
+        self.stamp2.truncate(vert_len);
+    }
+
     /// Splits edge `ab` at `p`; returns the new vertex. Each triangle `t` of the edge keeps `a`
     /// (its `b` becomes the new vertex) and a new triangle, appended, takes the `b` side.
     pub fn split(&mut self, a: u32, b: u32, p: Vec3) -> u32 {
@@ -306,7 +327,7 @@ impl EditMesh {
                     .length_squared()
                     .max((new[2] - new[1]).length_squared())
                     .max((new[0] - new[2]).length_squared());
-                if !(ln > 1e-4 * longest) || n_old.dot(n_new) < min_dot * lo * ln {
+                if ln.is_nan() || ln <= 1e-4 * longest || n_old.dot(n_new) < min_dot * lo * ln {
                     return false;
                 }
             }
@@ -362,7 +383,7 @@ impl EditMesh {
         for n in [tri_cross(pc, pa, pd), tri_cross(pd, pb, pc)] {
             let len = n.length();
             let longest = (pc - pd).length_squared().max((pa - pb).length_squared());
-            if !(len > 1e-4 * longest) || old.dot(n) < min_dot * len {
+            if len.is_nan() || len <= 1e-4 * longest || old.dot(n) < min_dot * len {
                 return false;
             }
         }
@@ -381,6 +402,7 @@ impl EditMesh {
 
     /// Alive vertices renumbered in order (dead ones and those with no triangle dropped, unless
     /// `keep_all_vertices`), alive triangles in order.
+    #[allow(clippy::needless_range_loop)] // v indexes four parallel arrays
     pub fn compact(&self, keep_all_vertices: bool) -> (Vec<Vec3>, Vec<[u32; 3]>) {
         let mut map = vec![NONE; self.pos.len()];
         let mut positions = Vec::new();
@@ -445,29 +467,29 @@ mod tests {
     fn split_flip_collapse_keep_a_manifold() {
         let mut m = square();
         assert!(m.boundary.iter().all(|&b| b));
-        let c = m.split(0, 2, Vec3::new(0.5, 0.5, 0.0));
+        let c = m.split(0, 2, Vec3::new(0.3, 0.6, 0.0));
         m.check();
         assert!(!m.boundary[c as usize]);
         assert_eq!(m.valence(c), 4);
         let e = m.split(0, 1, Vec3::new(0.5, 0.0, 0.0));
         m.check();
         assert!(m.boundary[e as usize]);
+        // Flipping c–e would put 0–1 through e: flat, refused.
         let (t1, t2) = m.edge_tris(c, e);
         let (t1, t2) = m.oriented_pair(c, e, t1, t2);
-        // Flipping the interior edge c-e would make 0-1 an edge through the centre: flat, allowed.
-        assert!(m.flip_is_flat(c, e, t1, t2, 0.0));
-        let (x, y) = (
-            opposite(m.tris[t1 as usize], c, e),
-            opposite(m.tris[t2 as usize], c, e),
-        );
-        m.flip(c, e, t1, t2);
+        assert!(!m.flip_is_flat(c, e, t1, t2, 0.0));
+        // Flipping c–1 makes e–2, a sound flip; flipping it back restores c–1.
+        let (t1, t2) = m.edge_tris(c, 1);
+        let (t1, t2) = m.oriented_pair(c, 1, t1, t2);
+        assert!(m.flip_is_flat(c, 1, t1, t2, 0.0));
+        m.flip(c, 1, t1, t2);
         m.check();
-        assert!(m.adjacent(x, y) && !m.adjacent(c, e));
-        let (s1, s2) = m.edge_tris(x, y);
-        let (s1, s2) = m.oriented_pair(x, y, s1, s2);
-        m.flip(x, y, s1, s2);
+        assert!(m.adjacent(e, 2) && !m.adjacent(c, 1));
+        let (s1, s2) = m.edge_tris(e, 2);
+        let (s1, s2) = m.oriented_pair(e, 2, s1, s2);
+        m.flip(e, 2, s1, s2);
         m.check();
-        assert!(m.adjacent(c, e));
+        assert!(m.adjacent(c, 1));
         // Collapse the centre onto corner 2.
         assert!(m.try_collapse(c, 2, Vec3::new(1.0, 1.0, 0.0), 10.0, 0.0));
         m.check();

@@ -4,7 +4,7 @@
 use glam::{DVec3, Vec3};
 use tissue_mesh::TriMesh;
 
-use crate::edit::{opposite, EditMesh, NONE};
+use crate::edit::{opposite, tri_cross, EditMesh, NONE};
 use crate::RemeshError;
 
 /// One boundary loop of a surface.
@@ -80,41 +80,45 @@ pub fn fill_holes(surface: &TriMesh, max_diameter: f64) -> Result<HoleFill, Reme
     }
     let _span = tracing::info_span!("fill_holes", triangles = surface.triangle_count()).entered();
     let first_fill = surface.triangle_count();
-    let input_vertices = surface.vertex_count();
     let mut m = EditMesh::new(surface.positions(), surface.triangles());
     let mut filled = Vec::new();
     let mut open = Vec::new();
-    // For each fill triangle (index − first_fill), the target edge of its hole.
-    let mut target: Vec<f32> = Vec::new();
     for l in surface.topology().boundary_loops() {
         let hole = Hole::measure(surface.positions(), l);
         if hole.diameter > max_diameter || l.len() < 3 {
             open.push(hole);
             continue;
         }
-        match ear_clip(&m, l) {
-            Some(tris) => {
-                let tau = (hole.perimeter / l.len() as f64) as f32;
-                for tri in tris {
-                    m.add_triangle(tri);
-                    target.push(tau);
-                }
-                filled.push(hole);
-            }
-            None => {
-                tracing::warn!(
-                    vertices = l.len(),
-                    "no valid ear clipping for a hole; left open"
-                );
-                open.push(hole);
+        let Some(tris) = ear_clip(&m, l) else {
+            tracing::warn!(
+                vertices = l.len(),
+                "no valid ear clipping for a hole; left open"
+            );
+            open.push(hole);
+            continue;
+        };
+        let (hole_tris, hole_vertices) = (m.tris.len(), m.pos.len());
+        let tau = (hole.perimeter / l.len() as f64) as f32;
+        for &tri in &tris {
+            m.add_triangle(tri);
+        }
+        refine(&mut m, hole_tris, tau);
+        fair(&mut m, hole_vertices, hole_tris);
+        delaunay_flips(&mut m, hole_tris);
+        fair(&mut m, hole_vertices, hole_tris);
+        if !sound(&m, hole_tris) {
+            // Refinement made a sliver (it can on loops with long straight runs): keep the plain
+            // ear clipping instead, which is sound by construction.
+            tracing::warn!(
+                vertices = l.len(),
+                "refined hole fill unsound; ear clipping kept"
+            );
+            m.truncate(hole_tris, hole_vertices);
+            for &tri in &tris {
+                m.add_triangle(tri);
             }
         }
-    }
-    if !filled.is_empty() {
-        refine(&mut m, first_fill, &mut target);
-        fair(&mut m, input_vertices);
-        delaunay_flips(&mut m, first_fill);
-        fair(&mut m, input_vertices);
+        filled.push(hole);
     }
     let (positions, triangles) = m.compact(true);
     let mesh = TriMesh::new(positions, triangles)
@@ -202,15 +206,24 @@ fn ear_clip(m: &EditMesh, l: &[u32]) -> Option<Vec<[u32; 3]>> {
     Some(out)
 }
 
+/// A fill edge is not split when a new triangle's smallest angle would be below this (radians, 10°).
+const MIN_SPLIT_ANGLE: f32 = 0.1745;
+
+/// Whether `ab` is a loop edge (one of its triangles is the input's).
+fn on_loop(m: &EditMesh, a: u32, b: u32, first_fill: usize) -> bool {
+    let (t1, t2) = m.edge_tris(a, b);
+    (t1 != NONE && (t1 as usize) < first_fill) || (t2 != NONE && (t2 as usize) < first_fill)
+}
+
 /// Whether edge `ab` lies inside the fill (both its triangles are fill triangles); returns them.
 fn fill_edge(m: &EditMesh, a: u32, b: u32, first_fill: usize) -> Option<(u32, u32)> {
     let (t1, t2) = m.edge_tris(a, b);
     (t2 != NONE && t1 as usize >= first_fill && t2 as usize >= first_fill).then_some((t1, t2))
 }
 
-/// Splits fill edges longer than 1.5 × their hole's mean loop edge, with Delaunay flips after
+/// Splits fill edges longer than `1.5·tau` (`tau`: the hole's mean loop edge), with Delaunay flips after
 /// each sweep, until none is left.
-fn refine(m: &mut EditMesh, first_fill: usize, target: &mut Vec<f32>) {
+fn refine(m: &mut EditMesh, first_fill: usize, tau: f32) {
     for _round in 0..200 {
         let mut splits = 0;
         // One sweep over the triangles the round starts with, then flips: splitting the new
@@ -220,11 +233,24 @@ fn refine(m: &mut EditMesh, first_fill: usize, target: &mut Vec<f32>) {
             for i in 0..3 {
                 let tri = m.tris[t];
                 let (a, b) = (tri[i], tri[(i + 1) % 3]);
-                let tau = target[t - first_fill];
                 let (pa, pb) = (m.pos[a as usize], m.pos[b as usize]);
                 if (pa - pb).length() > 1.5 * tau && fill_edge(m, a, b, first_fill).is_some() {
-                    m.split(a, b, 0.5 * (pa + pb));
-                    target.resize(m.tris.len() - first_fill, tau);
+                    // Refuse a split that would make a triangle on a loop edge a worse sliver:
+                    // no flip can mend it there, and repeated splits would flatten it to nothing.
+                    let mid = 0.5 * (pa + pb);
+                    let (t1, t2) = m.edge_tris(a, b);
+                    let sliver = [t1, t2].iter().any(|&tt| {
+                        let xv = opposite(m.tris[tt as usize], a, b);
+                        let x = m.pos[xv as usize];
+                        let old = min_angle(pa, pb, x);
+                        let worse = |new: f32| new < MIN_SPLIT_ANGLE && new < old;
+                        (on_loop(m, a, xv, first_fill) && worse(min_angle(pa, mid, x)))
+                            || (on_loop(m, b, xv, first_fill) && worse(min_angle(mid, pb, x)))
+                    });
+                    if sliver {
+                        continue;
+                    }
+                    m.split(a, b, mid);
                     splits += 1;
                 }
             }
@@ -236,7 +262,7 @@ fn refine(m: &mut EditMesh, first_fill: usize, target: &mut Vec<f32>) {
     }
 }
 
-/// Flips fill edges whose two opposite angles sum to more than π (Lawson: a stack of edges to
+/// Flips fill edges where that raises the pair's smallest angle (Lawson: a stack of edges to
 /// check, the four around each flip pushed again), with a cap on the flips so that non-planar
 /// fills, where the criterion can cycle, still stop.
 fn delaunay_flips(m: &mut EditMesh, first_fill: usize) {
@@ -259,12 +285,11 @@ fn delaunay_flips(m: &mut EditMesh, first_fill: usize) {
         let c = opposite(m.tris[t1 as usize], a, b);
         let d = opposite(m.tris[t2 as usize], a, b);
         let [pa, pb, pc, pd] = [a, b, c, d].map(|v| m.pos[v as usize]);
-        let alpha = (pa - pc).angle_between(pb - pc);
-        let beta = (pa - pd).angle_between(pb - pd);
-        if alpha + beta > std::f32::consts::PI + 1e-4
-            && c != d
-            && !m.adjacent(c, d)
-            && m.flip_is_flat(a, b, t1, t2, 0.0)
+        // Max–min angle: the plane's Delaunay criterion, and one that cannot cycle in 3D since
+        // every flip raises the smaller of the pair's smallest angles.
+        let before = min_angle(pa, pb, pc).min(min_angle(pb, pa, pd));
+        let after = min_angle(pc, pa, pd).min(min_angle(pd, pb, pc));
+        if after > before + 1e-3 && c != d && !m.adjacent(c, d) && m.flip_is_flat(a, b, t1, t2, 0.5)
         {
             m.flip(a, b, t1, t2);
             stack.extend([(a, c), (c, b), (b, d), (d, a)]);
@@ -276,9 +301,32 @@ fn delaunay_flips(m: &mut EditMesh, first_fill: usize) {
     }
 }
 
+/// Whether every fill triangle is clearly non-degenerate (height above 1e-4 of its longest edge).
+fn sound(m: &EditMesh, first_fill: usize) -> bool {
+    (first_fill..m.tris.len()).all(|t| {
+        let [a, b, c] = m.tris[t].map(|v| m.pos[v as usize]);
+        let longest = (b - a)
+            .length_squared()
+            .max((c - b).length_squared())
+            .max((a - c).length_squared());
+        tri_cross(a, b, c).length() > 1e-4 * longest
+    })
+}
+
+/// The smallest interior angle of a triangle, radians.
+fn min_angle(a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    let angle = |p: Vec3, q: Vec3, r: Vec3| (q - p).angle_between(r - p);
+    let x = angle(a, b, c).min(angle(b, c, a)).min(angle(c, a, b));
+    if x.is_finite() {
+        x
+    } else {
+        0.0
+    }
+}
+
 /// Places the vertices from `first_new` on by solving the uniform Laplace equation (each the mean
 /// of its neighbours) with the others fixed: conjugate gradients in `f64`, per coordinate.
-fn fair(m: &mut EditMesh, first_new: usize) {
+fn fair(m: &mut EditMesh, first_new: usize, first_fill: usize) {
     let n = m.pos.len() - first_new;
     if n == 0 {
         return;
@@ -359,9 +407,39 @@ fn fair(m: &mut EditMesh, first_new: usize) {
         }
         rr = rr_new;
     }
-    for i in 0..n {
-        if x[i].is_finite() {
-            m.pos[first_new + i] = x[i].as_vec3();
+    // Harmonic positions can fold or flatten a triangle when a new vertex's neighbours are (nearly)
+    // collinear loop vertices: move only as far towards them as keeps every fill triangle sound.
+    let old: Vec<Vec3> = m.pos[first_new..].to_vec();
+    let before: Vec<Vec3> = (first_fill..m.tris.len())
+        .map(|t| {
+            let [a, b, c] = m.tris[t].map(|v| m.pos[v as usize]);
+            tri_cross(a, b, c)
+        })
+        .collect();
+    let mut lambda = 1.0f64;
+    for _ in 0..8 {
+        for i in 0..n {
+            let target = if x[i].is_finite() {
+                x[i]
+            } else {
+                old[i].as_dvec3()
+            };
+            let o = old[i].as_dvec3();
+            m.pos[first_new + i] = (o + lambda * (target - o)).as_vec3();
         }
+        let sound = (first_fill..m.tris.len()).all(|t| {
+            let [a, b, c] = m.tris[t].map(|v| m.pos[v as usize]);
+            let now = tri_cross(a, b, c);
+            let longest = (b - a)
+                .length_squared()
+                .max((c - b).length_squared())
+                .max((a - c).length_squared());
+            now.length() > 1e-3 * longest && now.dot(before[t - first_fill]) > 0.0
+        });
+        if sound {
+            return;
+        }
+        lambda *= 0.5;
     }
+    m.pos[first_new..].copy_from_slice(&old);
 }

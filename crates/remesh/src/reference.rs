@@ -147,7 +147,8 @@ impl<'a> Reference<'a> {
         }
     }
 
-    /// The input boundary's point closest to `p` (`p` itself on a closed input).
+    /// The input boundary's point closest to `p` (`p` itself on a closed input); with a
+    /// smoothing radius, of the smoothed outline (cheap, so every iteration uses it).
     pub fn closest_on_boundary(&mut self, p: Vec3) -> Vec3 {
         let Some(bvh) = &self.seg_bvh else {
             return p;
@@ -160,11 +161,11 @@ impl<'a> Reference<'a> {
             .map_or(p, |h| h.point.into())
     }
 
-    /// Where an interior vertex at `p` goes: the closest point of the input, or with smoothing
-    /// the projection of `p` onto the MLS plane fitted around it.
-    pub fn project_interior(&mut self, p: Vec3) -> Vec3 {
+    /// Where an interior vertex at `p` goes: the closest point of the input, or with `smooth`
+    /// (and a smoothing radius) the projection of `p` onto the MLS plane fitted around it.
+    pub fn project_interior(&mut self, p: Vec3, smooth: bool) -> Vec3 {
         let (q, _) = self.closest_on_surface(p);
-        match self.mls.is_some() {
+        match smooth && self.mls.is_some() {
             false => q,
             true => self.mls_project(p, q),
         }
@@ -192,7 +193,6 @@ impl<'a> Reference<'a> {
                 &mut self.hits,
             );
             let (mut sw, mut sx, mut sn) = (0.0f64, DVec3::ZERO, DVec3::ZERO);
-            let mut samples = 0usize;
             for &i in &self.hits {
                 let x = self.pos[i as usize];
                 let d2 = f64::from((x - c).length_squared());
@@ -200,15 +200,12 @@ impl<'a> Reference<'a> {
                     continue;
                 }
                 let w = (-inv * d2).exp();
-                samples += 1;
                 sw += w;
                 sx += w * Vec3::from(x).as_dvec3();
                 sn += w * Vec3::from(mls.normals[i as usize]).as_dvec3();
             }
             let n = sn.normalize_or_zero();
-            // Too few of the input's vertices within the radius to fit a plane to (a coarse
-            // input, whose facets are larger than the smoothing): its own surface is kept.
-            if samples < MIN_MLS_SAMPLES || sw <= 1e-12 || n == DVec3::ZERO {
+            if sw <= 1e-12 || n == DVec3::ZERO {
                 return out;
             }
             let centroid = sx / sw;
@@ -220,10 +217,6 @@ impl<'a> Reference<'a> {
         out
     }
 }
-
-/// The fewest input vertices within the smoothing radius for a plane fit; with fewer, a vertex
-/// is projected onto the input surface itself.
-const MIN_MLS_SAMPLES: usize = 4;
 
 /// `pos` with every boundary loop's vertices replaced by Gaussian averages (weights
 /// `exp(−4.5·s²/r²)` over the arc length `s ≤ r` along the loop, both ways).

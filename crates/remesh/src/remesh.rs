@@ -3,7 +3,7 @@
 use glam::Vec3;
 use tissue_mesh::TriMesh;
 
-use crate::edit::{opposite, EditMesh, NONE};
+use crate::edit::{opposite, tri_cross, EditMesh, NONE};
 use crate::reference::Reference;
 use crate::{MeshQuality, RemeshError};
 
@@ -123,12 +123,19 @@ pub fn remesh(surface: &TriMesh, options: &RemeshOptions) -> Result<Remeshed, Re
     };
     let mut queue = EdgeQueue::new();
     let mut scratch = Vec::new();
-    for _ in 0..options.iterations {
+    let mut saved = Vec::new();
+    for it in 0..options.iterations {
         stats.splits += split_long(&mut m, hi);
         stats.collapses += collapse_short(&mut m, lo, hi, &mut queue);
         stats.flips += flip_valence(&mut m);
+        saved.clear();
+        saved.extend_from_slice(&m.pos);
         relax(&mut m, &mut scratch);
-        project(&mut m, &mut reference);
+        // The MLS fit costs a neighbourhood query per vertex: only the last two projections,
+        // the ones the result keeps, use it; earlier ones take the closest point.
+        let smooth = it + 2 >= options.iterations;
+        project(&mut m, &mut reference, smooth);
+        keep_sound(&mut m, &saved);
     }
     let (positions, triangles) = m.compact(false);
     let mesh = TriMesh::new(positions, triangles)
@@ -138,35 +145,27 @@ pub fn remesh(surface: &TriMesh, options: &RemeshOptions) -> Result<Remeshed, Re
     Ok(Remeshed { mesh, stats })
 }
 
-/// Splits every edge longer than `hi` at its midpoint, sweeping until none is left: each sweep
-/// visits the triangles that existed when it started and splits the longest edge of each while
-/// it is longer than `hi` (longest-edge bisection, which terminates; splitting a triangle's
-/// edges in a fixed order instead can chase a long boundary edge from triangle to triangle
-/// forever, found on a tapered tube's region).
+/// Splits every edge longer than `hi` at its midpoint, sweeping until none is left.
 pub(crate) fn split_long(m: &mut EditMesh, hi: f32) -> usize {
     let _span = tracing::debug_span!("split").entered();
     let hi2 = hi * hi;
     let mut count = 0;
     for _sweep in 0..64 {
         let before = count;
-        let existing = m.tris.len();
-        for t in 0..existing {
-            if !m.tri_alive[t] {
-                continue;
-            }
-            let tri = m.tris[t];
-            let mut longest = (hi2, None);
-            for i in 0..3 {
-                let (a, b) = (tri[i], tri[(i + 1) % 3]);
-                let d2 = (m.pos[a as usize] - m.pos[b as usize]).length_squared();
-                if d2 > longest.0 {
-                    longest = (d2, Some((a, b)));
+        // One pass over the triangles the sweep starts with: splitting the new edges at once too
+        // would keep splitting the far sides of a fan and pile edges onto its centre.
+        let end = m.tris.len();
+        for t in 0..end {
+            if m.tri_alive[t] {
+                for i in 0..3 {
+                    let tri = m.tris[t];
+                    let (a, b) = (tri[i], tri[(i + 1) % 3]);
+                    let (pa, pb) = (m.pos[a as usize], m.pos[b as usize]);
+                    if (pa - pb).length_squared() > hi2 && split_is_sound(m, a, b) {
+                        m.split(a, b, 0.5 * (pa + pb));
+                        count += 1;
+                    }
                 }
-            }
-            if let Some((a, b)) = longest.1 {
-                let (pa, pb) = (m.pos[a as usize], m.pos[b as usize]);
-                m.split(a, b, 0.5 * (pa + pb));
-                count += 1;
             }
         }
         if count == before {
@@ -174,6 +173,24 @@ pub(crate) fn split_long(m: &mut EditMesh, hi: f32) -> usize {
         }
     }
     count
+}
+
+/// Whether splitting `ab` at its midpoint leaves every new triangle's height above 1 % of its
+/// longest side (a split next to a sliver would make a flatter one).
+fn split_is_sound(m: &EditMesh, a: u32, b: u32) -> bool {
+    let (t1, t2) = m.edge_tris(a, b);
+    let (pa, pb) = (m.pos[a as usize], m.pos[b as usize]);
+    let mid = 0.5 * (pa + pb);
+    [t1, t2].iter().filter(|&&t| t != NONE).all(|&t| {
+        let x = m.pos[opposite(m.tris[t as usize], a, b) as usize];
+        [(pa, mid), (mid, pb)].iter().all(|&(p, q)| {
+            let longest = (q - p)
+                .length_squared()
+                .max((x - q).length_squared())
+                .max((p - x).length_squared());
+            tri_cross(p, q, x).length() > 1e-2 * longest
+        })
+    })
 }
 
 /// Edges waiting for a collapse, shortest first: a bucket queue over the squared length in
@@ -353,6 +370,7 @@ pub(crate) fn flip_valence(m: &mut EditMesh) -> usize {
 /// Tangential relaxation (Jacobi): an interior vertex moves towards the area-weighted centroid of
 /// its triangles, within its tangent plane; a boundary vertex towards the midpoint of its two
 /// boundary neighbours, along the boundary.
+#[allow(clippy::needless_range_loop)] // v indexes several parallel arrays
 pub(crate) fn relax(m: &mut EditMesh, new: &mut Vec<Vec3>) {
     let _span = tracing::debug_span!("relax").entered();
     new.clear();
@@ -389,8 +407,47 @@ pub(crate) fn relax(m: &mut EditMesh, new: &mut Vec<Vec3>) {
     std::mem::swap(&mut m.pos, new);
 }
 
-/// Projects interior vertices onto the reference surface, boundary ones onto its boundary.
-pub(crate) fn project(m: &mut EditMesh, reference: &mut Reference<'_>) {
+/// Undoes the moves of relaxation and projection around triangles they flattened or flipped: near
+/// the boundary, a vertex relaxed past it projects onto the outline, flat with its neighbours. The
+/// corners of such a triangle go back to `saved` (where the triangle was sound), repeatedly, and
+/// if that does not settle, every vertex does.
+pub(crate) fn keep_sound(m: &mut EditMesh, saved: &[Vec3]) {
+    for _round in 0..8 {
+        let mut reverted = false;
+        for t in 0..m.tris.len() {
+            if !m.tri_alive[t] {
+                continue;
+            }
+            let tri = m.tris[t];
+            let [a, b, c] = tri.map(|v| m.pos[v as usize]);
+            let now = tri_cross(a, b, c);
+            let longest = (b - a)
+                .length_squared()
+                .max((c - b).length_squared())
+                .max((a - c).length_squared());
+            let [oa, ob, oc] = tri.map(|v| saved[v as usize]);
+            let before = tri_cross(oa, ob, oc);
+            if now.length() > 1e-3 * longest && now.dot(before) > 0.0 {
+                continue;
+            }
+            if tri.iter().all(|&v| m.pos[v as usize] == saved[v as usize]) {
+                continue; // already as it was: nothing to undo here
+            }
+            for v in tri {
+                m.pos[v as usize] = saved[v as usize];
+            }
+            reverted = true;
+        }
+        if !reverted {
+            return;
+        }
+    }
+    m.pos.copy_from_slice(saved);
+}
+
+/// Projects interior vertices onto the reference surface, boundary ones onto its boundary
+/// (with `smooth`, interior ones onto the MLS fit if the reference has one).
+pub(crate) fn project(m: &mut EditMesh, reference: &mut Reference<'_>, smooth: bool) {
     let _span = tracing::debug_span!("project").entered();
     for v in 0..m.pos.len() {
         if !m.v_alive[v] || m.locked[v] || m.vtris[v].is_empty() {
@@ -399,7 +456,7 @@ pub(crate) fn project(m: &mut EditMesh, reference: &mut Reference<'_>) {
         m.pos[v] = if m.boundary[v] {
             reference.closest_on_boundary(m.pos[v])
         } else {
-            reference.project_interior(m.pos[v])
+            reference.project_interior(m.pos[v], smooth)
         };
     }
 }

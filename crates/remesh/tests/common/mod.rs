@@ -23,6 +23,7 @@ pub fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
     a + d * t
 }
 
+#[allow(clippy::needless_range_loop)] // t indexes the corners and the normals
 pub fn fit(input: &TriMesh, out: &TriMesh) -> Fit {
     let pos: Vec<Vec3A> = input.positions().iter().map(|&p| p.into()).collect();
     let tris = Triangles::from_mesh(input, &pos).unwrap();
