@@ -253,7 +253,7 @@ pub fn prepare_scan(
             },
         )?
     };
-    let mesh = remeshed.mesh;
+    let mesh = taubin(&remeshed.mesh, TAUBIN_ITERATIONS)?;
     let binding = {
         let _span = tracing::info_span!("bind").entered();
         bind(selection.mesh(), &mesh)?
@@ -276,6 +276,41 @@ pub fn prepare_scan(
             stats: remeshed.stats,
         },
     ))
+}
+
+/// Taubin λ|μ passes over the simulation surface (boundary held): what is left of a kink at the
+/// scale of one edge (a triangle the remesher could not make well) is smoothed out before the
+/// layers are offset from it, at no cost in volume (the μ pass undoes the λ pass's shrinking).
+const TAUBIN_ITERATIONS: usize = 4;
+
+/// `iterations` Taubin passes (λ = 0.5, μ = −0.53, umbrella weights), boundary vertices fixed.
+fn taubin(mesh: &TriMesh, iterations: usize) -> Result<TriMesh, ImplantError> {
+    let n = mesh.vertex_count();
+    let fixed = mesh.topology().boundary_vertex_mask(n);
+    let edges = mesh.topology().edges();
+    let mut p: Vec<glam::DVec3> = mesh.positions().iter().map(|x| x.as_dvec3()).collect();
+    let mut sum = vec![glam::DVec3::ZERO; n];
+    let mut count = vec![0u32; n];
+    for &[a, b] in edges {
+        count[a as usize] += 1;
+        count[b as usize] += 1;
+    }
+    for _ in 0..iterations {
+        for factor in [0.5, -0.53] {
+            sum.iter_mut().for_each(|s| *s = glam::DVec3::ZERO);
+            for &[a, b] in edges {
+                let (a, b) = (a as usize, b as usize);
+                sum[a] += p[b] - p[a];
+                sum[b] += p[a] - p[b];
+            }
+            for v in 0..n {
+                if !fixed[v] && count[v] > 0 {
+                    p[v] += sum[v] * (factor / f64::from(count[v]));
+                }
+            }
+        }
+    }
+    Ok(mesh.with_positions(p.iter().map(|x| x.as_vec3()).collect())?)
 }
 
 /// The median edge length of `mesh`.
