@@ -357,6 +357,29 @@ pub struct Cli {
     #[arg(long, value_enum, default_value_t = Rule::TouchesVertex, help_heading = "Tissue")]
     pub region_rule: Rule,
 
+    /// The simulation mesh's edge (cm): the region is remeshed to it, smoothed below it, its
+    /// holes filled, and the result mapped back onto every vertex of the scan [default: 0.06 ×
+    /// the region radius, about Table 2's particle count: 0.315 cm for a 7 cm round base].
+    /// Given without --mesh, the Table 2 plane is remeshed too.
+    #[arg(
+        long,
+        value_name = "CM",
+        conflicts_with = "scan_triangles",
+        help_heading = "Simulation mesh"
+    )]
+    pub sim_edge: Option<f64>,
+
+    /// Run the mechanics on the mesh's own triangles instead (the thesis's planes; the default
+    /// for the generated Table 2 plane). For clean, even meshes only.
+    #[arg(long, help_heading = "Simulation mesh")]
+    pub scan_triangles: bool,
+
+    /// Holes of the scan up to this size across are filled for the simulation (cm); a region
+    /// that reaches a larger one, or the scan's border, is refused.
+    #[arg(long, value_name = "CM", default_value_t = tissue_implant::DEFAULT_MAX_HOLE,
+          help_heading = "Simulation mesh")]
+    pub max_hole: f64,
+
     /// Young's modulus of the skin, in kPa (1 kPa = 1000 Pa).
     #[arg(long, value_name = "KPA", default_value_t = default_young_kpa(),
           help_heading = "Tissue")]

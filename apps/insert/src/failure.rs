@@ -97,6 +97,14 @@ impl Failure {
                 "; use a larger --radius or a smaller implant, away from the scan's edge",
             ),
             E::ClosedRegion { .. } => (code::PLACEMENT, ""),
+            E::RegionReachesBorder { .. } => (
+                code::PLACEMENT,
+                " (coordinates in cm; --at takes the mesh's unit; --max-hole sets the holes filled)",
+            ),
+            E::Remesh(_) => (
+                code::MESH,
+                "; check the scan with meshinfo, or give another --sim-edge",
+            ),
             E::InvalidParameter { name, .. } => match *name {
                 "point" | "radius" | "region_radius" | "max_distance" | "region" => {
                     (code::PLACEMENT, "")
@@ -107,6 +115,8 @@ impl Failure {
                 "skin_thickness" => (code::PARAMETERS, " (--thickness)"),
                 "density" => (code::PARAMETERS, " (--density)"),
                 "time_step" => (code::PARAMETERS, " (--time-step)"),
+                "sim_edge" => (code::PARAMETERS, " (--sim-edge)"),
+                "max_hole" => (code::PARAMETERS, " (--max-hole)"),
                 _ => (code::PARAMETERS, ""),
             },
             E::ShapeNotMeshable { .. }

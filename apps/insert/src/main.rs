@@ -26,7 +26,11 @@ fn run(cli: &Cli) -> Result<(), Failure> {
     output::check_targets(cli)?;
     let scenario = setup::scenario(cli)?;
     interrupt.check()?;
-    let inputs = report::Inputs::new(cli, &scenario, scenario.region_radius()?);
+    let sim_edge = scenario
+        .job
+        .sim_edge()
+        .map_err(|e| failure::Failure::from_implant(&e))?;
+    let inputs = report::Inputs::new(cli, &scenario, scenario.region_radius()?, sim_edge);
     if let Some(volumes) = &cli.sweep {
         modes::sweep(cli, &scenario, &inputs, volumes, &interrupt)
     } else if let Some(target) = cli.target_gain {

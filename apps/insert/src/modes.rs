@@ -67,13 +67,22 @@ pub fn single(
              automatic, or lower it",
         ));
     }
-    let result = RunResult::of(&planned, max_steps);
+    // On a remeshed run the result is mapped onto the scan for the report's scan figures too.
+    let patient = if !cli.out.is_empty() || cli.png.is_some() || planned.surface.is_some() {
+        Some(PatientResult::new(scenario, &planned)?)
+    } else {
+        None
+    };
+    let result = RunResult::of(
+        &planned,
+        patient.as_ref().and_then(|p| p.scan.as_ref()),
+        max_steps,
+    );
     print!("{}", report::summary(inputs, &result));
     warn_step_limit(&result, "the run");
 
     let mut staged = Staged::default();
-    if !cli.out.is_empty() || cli.png.is_some() {
-        let patient = PatientResult::new(scenario, &planned)?;
+    if let Some(patient) = &patient {
         for out in &cli.out {
             staged.mesh(out, &patient.after, &patient.fields())?;
         }
@@ -113,7 +122,12 @@ pub fn sweep(
     for run in &result.runs {
         match &run.result {
             Ok(outcome) if outcome.is_finite() => {
-                let r = RunResult::new(outcome, &result.selection, max_steps);
+                let r = RunResult::new(
+                    outcome,
+                    &result.selection,
+                    result.surface.as_ref(),
+                    max_steps,
+                );
                 println!("{}", report::sweep_row(run.volume, &r));
                 warn_step_limit(&r, &format!("the {} cm³ run", run.volume));
                 rows.push(SweepRow {

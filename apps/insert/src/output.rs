@@ -164,53 +164,56 @@ pub struct PatientResult {
     pub stretch: Vec<f32>,
     /// 1 for a region vertex, 0 outside.
     pub in_region: Vec<f32>,
+    /// The areas and volume on the scan's own triangles (a remeshed run).
+    pub scan: Option<tissue_implant::ScanResult>,
 }
 
 impl PatientResult {
     /// The patient after `planned` in the mesh's unit, and its fields.
     pub fn new(scenario: &Scenario, planned: &PlannedInsertion) -> Result<Self, Failure> {
-        let after_cm = planned
-            .patient_after(&scenario.patient)
+        let on_patient = planned
+            .on_patient(&scenario.patient)
             .map_err(|e| Failure::from_implant(&e))?;
         let scale = scenario.cm_per_unit();
-        let to_unit = |cm: &[Vec3], file: &[Vec3], moved_only: bool| -> Vec<Vec3> {
-            cm.iter()
-                .zip(file)
-                .zip(scenario.patient.positions())
-                .map(|((&c, &f), &rest)| {
-                    if moved_only && c == rest {
-                        f
-                    } else if scale == 1.0 {
-                        c
-                    } else {
-                        c / scale
-                    }
-                })
-                .collect()
-        };
-        let file_positions = scenario.patient_file.positions();
+        // Vertices that did not move keep the file's positions bit for bit.
+        let after_positions: Vec<Vec3> = on_patient
+            .mesh
+            .positions()
+            .iter()
+            .zip(scenario.patient_file.positions())
+            .zip(scenario.patient.positions())
+            .map(|((&c, &f), &rest)| {
+                if c == rest {
+                    f
+                } else if scale == 1.0 {
+                    c
+                } else {
+                    c / scale
+                }
+            })
+            .collect();
         let before = scenario.patient_file.clone();
         let after = before
-            .with_positions(to_unit(after_cm.positions(), file_positions, true))
+            .with_positions(after_positions)
             .map_err(|e| Failure::new(code::RUN, format!("the result is not a valid mesh: {e}")))?;
-        let n = before.vertex_count();
-        let (mut displacement, mut stretch, mut in_region) =
-            (vec![0.0f32; n], vec![0.0f32; n], vec![0.0f32; n]);
-        let outcome = &planned.outcome;
-        for (r, &p) in planned.selection.region_to_patient().iter().enumerate() {
-            let p = p as usize;
-            if p < n {
-                displacement[p] = outcome.displacement.get(r).copied().unwrap_or(0.0) / scale;
-                stretch[p] = outcome.stretch.get(r).copied().unwrap_or(0.0);
-                in_region[p] = 1.0;
-            }
-        }
+        let in_region: Vec<f32> = on_patient
+            .in_region
+            .iter()
+            .map(|&inside| if inside { 1.0 } else { 0.0 })
+            .collect();
+        let stretch = on_patient
+            .stretch
+            .iter()
+            .zip(&on_patient.in_region)
+            .map(|(&s, &inside)| if inside { s } else { 0.0 })
+            .collect();
         Ok(PatientResult {
             before,
             after,
-            displacement,
+            displacement: on_patient.displacement.iter().map(|d| d / scale).collect(),
             stretch,
             in_region,
+            scan: on_patient.scan,
         })
     }
 

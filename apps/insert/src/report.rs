@@ -20,8 +20,8 @@
 use std::fmt::Write as _;
 
 use serde::Serialize;
-use tissue_app::{PlannedInsertion, SweepResult};
-use tissue_implant::{ImplantShape, InsertionOutcome, InverseSearch, RegionSelection};
+use tissue_app::{PlannedInsertion, SimMesh, SweepResult};
+use tissue_implant::{ImplantShape, InsertionOutcome, InverseSearch, ScanResult, SimSurface};
 use tissue_mss::StopReason;
 
 use crate::cli::{Cli, Detect, Rule, KPA};
@@ -64,6 +64,14 @@ pub struct Inputs {
     pub depth_cm: f64,
     /// The region radius used, cm (given or default).
     pub region_radius_cm: f64,
+    /// What the mechanics ran on: `remeshed` (the region remeshed, the result mapped back onto
+    /// the scan) or `patient_triangles` (the mesh's own triangles).
+    pub sim_mesh: &'static str,
+    /// The simulation mesh's edge used, cm (`--sim-edge` or its default); null on the mesh's own
+    /// triangles.
+    pub sim_edge_cm: Option<f64>,
+    /// Holes filled up to this size across, cm; null on the mesh's own triangles.
+    pub max_hole_cm: Option<f64>,
     /// `touches-vertex` or `centroid`.
     pub region_rule: &'static str,
     /// Skin Young's modulus, kPa.
@@ -124,8 +132,14 @@ pub enum ShapeInputs {
 
 impl Inputs {
     /// The inputs of `scenario` as the command line `cli` gave them.
-    pub fn new(cli: &Cli, scenario: &Scenario, region_radius_cm: f64) -> Self {
+    pub fn new(
+        cli: &Cli,
+        scenario: &Scenario,
+        region_radius_cm: f64,
+        sim_edge_cm: Option<f64>,
+    ) -> Self {
         let job = &scenario.job;
+        let remeshed = matches!(job.sim, SimMesh::Remeshed(_));
         let shape = match job.implant.shape {
             ImplantShape::Round { diameter } => ShapeInputs::Round {
                 diameter_cm: diameter,
@@ -169,6 +183,13 @@ impl Inputs {
             implant_vertices: job.implant.vertex_budget,
             depth_cm: job.params.layers.depth,
             region_radius_cm,
+            sim_mesh: if remeshed {
+                "remeshed"
+            } else {
+                "patient_triangles"
+            },
+            sim_edge_cm,
+            max_hole_cm: remeshed.then_some(cli.max_hole),
             region_rule: match cli.region_rule {
                 Rule::TouchesVertex => "touches-vertex",
                 Rule::Centroid => "centroid",
@@ -232,11 +253,63 @@ pub struct RunResult {
     pub time_step_s: f32,
     /// Wall time of the stepping, s.
     pub wall_time_s: f64,
+    /// The surface the area and volume figures above were measured on: `simulation_surface`
+    /// (the remeshed region) or `patient_region` (the mesh's own triangles).
+    pub measured_on: &'static str,
+    /// Vertices of the patient's region (on a remeshed run, with its small holes filled).
+    pub scan_region_vertices: usize,
+    /// On a remeshed single run: the same figures measured on the scan (see [`ScanFigures`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scan: Option<ScanFigures>,
+}
+
+/// A remeshed run's results on the scan itself, after mapping.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ScanFigures {
+    /// Where the areas were measured: `scan_region_triangles` (the scan's own triangles of the
+    /// region, its holes not counted).
+    pub measured_on: &'static str,
+    /// cm².
+    pub area_before_cm2: f64,
+    /// cm².
+    pub area_after_cm2: f64,
+    /// cm².
+    pub area_gain_cm2: f64,
+    /// Volume between the scan's region before and after, cm³.
+    pub volume_difference_cm3: f64,
+    /// Where the volume was measured: `scan_region_holes_filled`.
+    pub volume_measured_on: &'static str,
+    /// Holes of the scan filled in or at the region.
+    pub holes_filled: usize,
+    /// The largest move of a scan vertex within one simulation edge of the region's boundary, cm.
+    pub seam_max_move_cm: f32,
+}
+
+impl ScanFigures {
+    /// The figures of `scan`, mapped from `surface`.
+    pub fn new(scan: &ScanResult, surface: &SimSurface) -> Self {
+        ScanFigures {
+            measured_on: "scan_region_triangles",
+            area_before_cm2: scan.area_before,
+            area_after_cm2: scan.area_after,
+            area_gain_cm2: scan.area_gain,
+            volume_difference_cm3: scan.volume_difference,
+            volume_measured_on: "scan_region_holes_filled",
+            holes_filled: surface.holes_filled().len(),
+            seam_max_move_cm: scan.seam_max_move,
+        }
+    }
 }
 
 impl RunResult {
     /// The results of `outcome` on `selection`.
-    pub fn new(outcome: &InsertionOutcome, selection: &RegionSelection, max_steps: u64) -> Self {
+    pub fn new(
+        outcome: &InsertionOutcome,
+        selection: &tissue_implant::RegionSelection,
+        surface: Option<&SimSurface>,
+        max_steps: u64,
+    ) -> Self {
+        let simulated = surface.map_or(selection.mesh(), SimSurface::mesh);
         RunResult {
             area_before_cm2: outcome.area_before,
             area_after_cm2: outcome.area_after,
@@ -249,8 +322,8 @@ impl RunResult {
             max_displacement_cm: outcome.max_displacement,
             max_penetration_cm: outcome.max_penetration,
             boundary_unchanged: outcome.boundary_unchanged,
-            region_vertices: selection.mesh().vertex_count(),
-            region_triangles: selection.mesh().triangle_count(),
+            region_vertices: simulated.vertex_count(),
+            region_triangles: simulated.triangle_count(),
             region_radius_cm: selection.radius(),
             steps: outcome.steps,
             max_steps,
@@ -260,12 +333,28 @@ impl RunResult {
             },
             time_step_s: outcome.time_step,
             wall_time_s: outcome.wall_time.as_secs_f64(),
+            measured_on: if surface.is_some() {
+                "simulation_surface"
+            } else {
+                "patient_region"
+            },
+            scan_region_vertices: selection.mesh().vertex_count(),
+            scan: None,
         }
     }
 
-    /// The results of a planned insertion.
-    pub fn of(planned: &PlannedInsertion, max_steps: u64) -> Self {
-        RunResult::new(&planned.outcome, &planned.selection, max_steps)
+    /// The results of a planned insertion, with its figures on the scan when it was remeshed.
+    pub fn of(planned: &PlannedInsertion, scan: Option<&ScanResult>, max_steps: u64) -> Self {
+        let mut r = RunResult::new(
+            &planned.outcome,
+            &planned.selection,
+            planned.surface.as_ref(),
+            max_steps,
+        );
+        if let (Some(scan), Some(surface)) = (scan, &planned.surface) {
+            r.scan = Some(ScanFigures::new(scan, surface));
+        }
+        r
     }
 }
 
@@ -462,6 +551,28 @@ pub fn summary(inputs: &Inputs, r: &RunResult) -> String {
     ];
     for (name, value) in rows {
         let _ = writeln!(s, "  {name:<20} {value}");
+    }
+    if let Some(edge) = inputs.sim_edge_cm {
+        let _ = writeln!(
+            s,
+            "  {:<20} remeshed to {edge:.4} cm edges ({} scan vertices in the region); areas \
+             and volume above are on it",
+            "simulation mesh", r.scan_region_vertices
+        );
+    }
+    if let Some(scan) = &r.scan {
+        let _ = writeln!(
+            s,
+            "  {:<20} area {:.4} → {:.4} cm² (gain {:.4}), volume difference {:.4} cm³, \
+             {} holes filled, seam moves ≤ {:.4} cm",
+            "on the scan",
+            scan.area_before_cm2,
+            scan.area_after_cm2,
+            scan.area_gain_cm2,
+            scan.volume_difference_cm3,
+            scan.holes_filled,
+            scan.seam_max_move_cm
+        );
     }
     s
 }

@@ -2,11 +2,11 @@
 //! surface normal, tangent), and fill in the library's parameters.
 
 use glam::Vec3;
-use tissue_app::{InsertionJob, Placement};
+use tissue_app::{InsertionJob, Placement, SimMesh};
 use tissue_collide::BroadPhase;
 use tissue_implant::{
     default_snap_distance, snap_to_surface, ImplantShape, ImplantSpec, InsertionParams,
-    RegionOptions, RegionRule,
+    RegionOptions, RegionRule, ScanOptions,
 };
 use tissue_mesh::TriMesh;
 
@@ -128,6 +128,15 @@ pub fn check_numbers(cli: &Cli) -> Result<(), Failure> {
             ));
         }
     }
+    if let Some(h) = cli.sim_edge {
+        positive("--sim-edge", h, "cm")?;
+    }
+    if !(cli.max_hole.is_finite() && cli.max_hole >= 0.0) {
+        return Err(Failure::new(
+            code::PARAMETERS,
+            format!("--max-hole must be a size ≥ 0 in cm, got {}", cli.max_hole),
+        ));
+    }
     if let Some(h) = cli.time_step {
         positive("--time-step", f64::from(h), "seconds")?;
     }
@@ -191,6 +200,20 @@ pub fn params(cli: &Cli) -> InsertionParams {
         params.run.time_step = cli.time_step;
     }
     params
+}
+
+/// The surface the mechanics run on: the region remeshed (a scan), or the mesh's own triangles
+/// (`--scan-triangles`, and the generated Table 2 plane unless `--sim-edge` is given).
+pub fn sim_mesh(cli: &Cli) -> SimMesh {
+    if cli.scan_triangles || (cli.mesh.is_none() && cli.sim_edge.is_none()) {
+        SimMesh::Patient
+    } else {
+        SimMesh::Remeshed(ScanOptions {
+            sim_edge: cli.sim_edge,
+            max_hole: cli.max_hole,
+            ..ScanOptions::default()
+        })
+    }
 }
 
 /// The patient as read and scaled to cm.
@@ -338,6 +361,7 @@ pub fn scenario(cli: &Cli) -> Result<Scenario, Failure> {
             ..RegionOptions::default()
         },
         params: params(cli),
+        sim: sim_mesh(cli),
     };
     Ok(Scenario {
         patient,

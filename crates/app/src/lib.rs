@@ -98,8 +98,9 @@ mod worker;
 
 pub use error::AppError;
 pub use plan::{
-    footprint_radius, plan, plan_inverse, plan_sweep, prepare, InsertionJob, InverseJob, Placement,
-    PlanePressJob, PlannedInsertion, PreparedInsertion, SweepJob, SweepResult, SweepRun,
+    footprint_radius, plan, plan_inverse, plan_sweep, prepare, InsertionJob, InverseJob,
+    PatientAfter, Placement, PlanePressJob, PlannedInsertion, PreparedInsertion, SimMesh, SweepJob,
+    SweepResult, SweepRun,
 };
 pub use worker::{
     CustomJob, Event, Events, Handle, HandleOptions, Job, Outcome, ProgressEvent, ProgressSink,

@@ -10,9 +10,10 @@ use std::time::Duration;
 
 use glam::Vec3;
 use tissue_implant::{
-    default_radius, place_implant, select_region_with, sweep, volume_for_gain, Implant,
-    ImplantError, ImplantShape, ImplantSpec, InsertionOutcome, InsertionParams, InverseOptions,
-    InverseSearch, Progress, RegionOptions, RegionSelection, TissueLayers,
+    default_radius, place_implant, prepare_scan, select_region_with, sweep, volume_for_gain,
+    Implant, ImplantError, ImplantShape, ImplantSpec, InsertionOutcome, InsertionParams,
+    InverseOptions, InverseSearch, Progress, RegionOptions, RegionSelection, ScanOptions,
+    ScanResult, SimSurface, TissueLayers,
 };
 use tissue_mesh::TriMesh;
 
@@ -43,6 +44,26 @@ impl Placement {
     }
 }
 
+/// Which surface the mechanics run on.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SimMesh {
+    /// The region's own triangles of the patient surface, as the thesis ran its planes (Tables
+    /// 1 and 2, whose figures are for those grids). For clean, even meshes only: a scan's
+    /// triangles set the time step by their size and fold the layers by their noise.
+    Patient,
+    /// The region filled, remeshed and smoothed into a simulation surface of its own, the
+    /// result mapped back onto the patient's vertices ([`tissue_implant::prepare_scan`]): what
+    /// a real scan needs. The default.
+    Remeshed(ScanOptions),
+}
+
+impl Default for SimMesh {
+    /// [`SimMesh::Remeshed`] with the default [`ScanOptions`] (edge from the region's size).
+    fn default() -> Self {
+        SimMesh::Remeshed(ScanOptions::default())
+    }
+}
+
 /// The inputs of one insertion run.
 #[derive(Debug, Clone)]
 pub struct InsertionJob {
@@ -59,11 +80,13 @@ pub struct InsertionJob {
     pub region: RegionOptions,
     /// Tissue, implant and run parameters.
     pub params: InsertionParams,
+    /// The surface the mechanics run on (default: the region remeshed, [`SimMesh::Remeshed`]).
+    pub sim: SimMesh,
 }
 
 impl InsertionJob {
-    /// A job with the default region radius, [`RegionOptions::default`] and
-    /// [`InsertionParams::default`].
+    /// A job with the default region radius, [`RegionOptions::default`],
+    /// [`InsertionParams::default`] and the region remeshed ([`SimMesh::default`]).
     pub fn new(patient: TriMesh, placement: Placement, implant: ImplantSpec) -> Self {
         InsertionJob {
             patient,
@@ -72,6 +95,23 @@ impl InsertionJob {
             region_radius: None,
             region: RegionOptions::default(),
             params: InsertionParams::default(),
+            sim: SimMesh::default(),
+        }
+    }
+
+    /// The simulation edge the job uses (cm): the one asked for, or the default of the region's
+    /// radius ([`tissue_implant::default_sim_edge`]); `None` when the mechanics run on the
+    /// patient's own triangles.
+    ///
+    /// # Errors
+    /// Those of [`InsertionJob::radius`].
+    pub fn sim_edge(&self) -> Result<Option<f64>, ImplantError> {
+        match &self.sim {
+            SimMesh::Patient => Ok(None),
+            SimMesh::Remeshed(options) => match options.sim_edge {
+                Some(h) => Ok(Some(h)),
+                None => Ok(Some(tissue_implant::default_sim_edge(self.radius()?)?)),
+            },
         }
     }
 
@@ -148,10 +188,24 @@ pub fn footprint_radius(shape: &ImplantShape) -> Result<f64, ImplantError> {
     }
 }
 
-/// The region and its tissue layers, shared by every run of a job.
+/// The region, the surface the mechanics run on and its tissue layers, shared by every run of a
+/// job.
 struct Scene {
     selection: RegionSelection,
+    surface: Option<SimSurface>,
     layers: TissueLayers,
+    /// The implant frame's normal: the placement's, or the simulation surface's at the centre.
+    normal: Vec3,
+}
+
+impl Scene {
+    /// The mesh the mechanics run on (layer 1 at rest).
+    fn sim_mesh(&self) -> &TriMesh {
+        match &self.surface {
+            Some(surface) => surface.mesh(),
+            None => self.selection.mesh(),
+        }
+    }
 }
 
 fn cancelled_check(cancelled: &dyn Fn() -> bool) -> Result<(), ImplantError> {
@@ -165,11 +219,48 @@ fn cancelled_check(cancelled: &dyn Fn() -> bool) -> Result<(), ImplantError> {
 fn scene(job: &InsertionJob, cancelled: &dyn Fn() -> bool) -> Result<Scene, ImplantError> {
     let _span = tracing::info_span!("app_region").entered();
     let radius = job.radius()?;
-    let selection = select_region_with(&job.patient, job.placement.point, radius, &job.region)?;
+    let (selection, surface) = match &job.sim {
+        SimMesh::Patient => (
+            select_region_with(&job.patient, job.placement.point, radius, &job.region)?,
+            None,
+        ),
+        SimMesh::Remeshed(options) => {
+            let (selection, surface) = prepare_scan(
+                &job.patient,
+                job.placement.point,
+                radius,
+                job.params.layers.depth,
+                &job.region,
+                options,
+            )?;
+            (selection, Some(surface))
+        }
+    };
     cancelled_check(cancelled)?;
-    let layers = TissueLayers::new(selection.mesh(), &job.params.layers)?;
+    let normal = match &surface {
+        // The scan's own normal is as noisy as the scan: the smooth surface's is the frame's.
+        Some(surface) => {
+            let n = surface.normal_near(selection.centre().position());
+            if n.dot(job.placement.normal) < 0.0 {
+                -n
+            } else {
+                n
+            }
+        }
+        None => job.placement.normal,
+    };
+    let sim = match &surface {
+        Some(surface) => surface.mesh(),
+        None => selection.mesh(),
+    };
+    let layers = TissueLayers::new(sim, &job.params.layers)?;
     cancelled_check(cancelled)?;
-    Ok(Scene { selection, layers })
+    Ok(Scene {
+        selection,
+        surface,
+        layers,
+        normal,
+    })
 }
 
 fn build(
@@ -183,11 +274,11 @@ fn build(
         &scene.layers,
         spec,
         scene.selection.centre().position(),
-        job.placement.normal,
+        scene.normal,
         job.placement.tangent,
     )?;
     cancelled_check(cancelled)?;
-    let insertion = tissue_implant::Insertion::new(scene.selection.mesh(), &implant, &job.params)?;
+    let insertion = tissue_implant::Insertion::new(scene.sim_mesh(), &implant, &job.params)?;
     cancelled_check(cancelled)?;
     Ok((implant, insertion))
 }
@@ -196,6 +287,7 @@ fn build(
 #[derive(Debug, Clone)]
 pub struct PreparedInsertion {
     selection: RegionSelection,
+    surface: Option<SimSurface>,
     implant: Implant,
     insertion: tissue_implant::Insertion,
     settle_floor: f64,
@@ -205,6 +297,11 @@ impl PreparedInsertion {
     /// The region of the patient surface.
     pub fn selection(&self) -> &RegionSelection {
         &self.selection
+    }
+
+    /// The simulation surface, when the region was remeshed ([`SimMesh::Remeshed`]).
+    pub fn surface(&self) -> Option<&SimSurface> {
+        self.surface.as_ref()
     }
 
     /// The implant as built on layer 2.
@@ -234,31 +331,102 @@ impl PreparedInsertion {
     ) -> Result<PlannedInsertion, ImplantError> {
         let PreparedInsertion {
             selection,
+            surface,
             mut insertion,
             ..
         } = self;
         let _span = tracing::info_span!("app_run").entered();
         let outcome = insertion.run(progress)?;
-        Ok(PlannedInsertion { selection, outcome })
+        Ok(PlannedInsertion {
+            selection,
+            surface,
+            outcome,
+        })
     }
 }
 
-/// The result of one insertion: the region and the run's outcome.
+/// The result of one insertion: the region, the simulation surface and the run's outcome.
 #[derive(Debug, Clone)]
 pub struct PlannedInsertion {
-    /// The region of the patient surface that was simulated.
+    /// The region of the patient surface (on a remeshed run: selected on the patient with its
+    /// small holes filled, whose vertices come after the patient's).
     pub selection: RegionSelection,
-    /// Areas, volumes, fields and meshes after the run.
+    /// The simulation surface the run used, when the region was remeshed
+    /// ([`SimMesh::Remeshed`]); `None` when it ran on the patient's own triangles.
+    pub surface: Option<SimSurface>,
+    /// Areas, volumes, fields and meshes after the run, measured on the surface the mechanics
+    /// ran on (the simulation surface, or the patient's region).
     pub outcome: InsertionOutcome,
+}
+
+/// The patient after a run, with per-vertex fields ([`PlannedInsertion::on_patient`]).
+#[derive(Debug, Clone)]
+pub struct PatientAfter {
+    /// The patient surface after the run: its own vertices and triangles, the region moved.
+    pub mesh: TriMesh,
+    /// Per patient vertex: how far it moved, cm (0 outside the region).
+    pub displacement: Vec<f32>,
+    /// Per patient vertex: area after / before of the skin around it (1 outside the region).
+    pub stretch: Vec<f32>,
+    /// Per patient vertex: whether it is in the region.
+    pub in_region: Vec<bool>,
+    /// The areas and volume measured on the patient's own triangles when the region was
+    /// remeshed (`None` on a run on the patient's triangles, where they are the outcome's).
+    pub scan: Option<ScanResult>,
 }
 
 impl PlannedInsertion {
     /// The patient surface with the region replaced by the result.
     ///
     /// # Errors
-    /// As [`InsertionOutcome::patient_after`] (a `patient` that is not the job's).
+    /// As [`PlannedInsertion::on_patient`].
     pub fn patient_after(&self, patient: &TriMesh) -> Result<TriMesh, ImplantError> {
-        self.outcome.patient_after(patient, &self.selection)
+        Ok(self.on_patient(patient)?.mesh)
+    }
+
+    /// The result on every vertex of `patient` (the job's): on a remeshed run each region
+    /// vertex follows the deformed simulation surface ([`SimSurface::map_to_scan`]); otherwise
+    /// the region's vertices are the simulated ones. Vertices outside the region keep their
+    /// positions bit for bit.
+    ///
+    /// # Errors
+    /// [`ImplantError::InvalidParameter`] when `patient` is not the job's, and mesh errors if the
+    /// result is not a valid mesh.
+    pub fn on_patient(&self, patient: &TriMesh) -> Result<PatientAfter, ImplantError> {
+        match &self.surface {
+            Some(surface) => {
+                let scan =
+                    surface.map_to_scan(&self.selection, patient, &self.outcome.region_after)?;
+                Ok(PatientAfter {
+                    mesh: scan.patient_after.clone(),
+                    displacement: scan.displacement.clone(),
+                    stretch: scan.stretch.clone(),
+                    in_region: scan.in_region.clone(),
+                    scan: Some(scan),
+                })
+            }
+            None => {
+                let mesh = self.outcome.patient_after(patient, &self.selection)?;
+                let n = patient.vertex_count();
+                let (mut displacement, mut stretch, mut in_region) =
+                    (vec![0.0f32; n], vec![1.0f32; n], vec![false; n]);
+                for (r, &p) in self.selection.region_to_patient().iter().enumerate() {
+                    let p = p as usize;
+                    if p < n {
+                        displacement[p] = self.outcome.displacement[r];
+                        stretch[p] = self.outcome.stretch[r];
+                        in_region[p] = true;
+                    }
+                }
+                Ok(PatientAfter {
+                    mesh,
+                    displacement,
+                    stretch,
+                    in_region,
+                    scan: None,
+                })
+            }
+        }
     }
 }
 
@@ -288,6 +456,7 @@ pub(crate) fn prepare_with(
     let settle_floor = insertion_floor(&insertion, &implant, &job.params.run);
     Ok(PreparedInsertion {
         selection: scene.selection,
+        surface: scene.surface,
         implant,
         insertion,
         settle_floor,
@@ -321,6 +490,8 @@ pub struct SweepRun {
 pub struct SweepResult {
     /// The region of the patient surface.
     pub selection: RegionSelection,
+    /// The simulation surface every run used, when the region was remeshed.
+    pub surface: Option<SimSurface>,
     /// One entry per volume, in input order.
     pub runs: Vec<SweepRun>,
 }
@@ -379,6 +550,7 @@ where
         .collect();
     Ok(SweepResult {
         selection: scene.selection,
+        surface: scene.surface,
         runs,
     })
 }

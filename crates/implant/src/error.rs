@@ -136,4 +136,27 @@ pub enum ImplantError {
         /// Local y (cm).
         y: f32,
     },
+    /// The region reaches the scan's outer border or a hole too large to fill: no skin around
+    /// it there to hold its boundary.
+    #[error("the region of radius {radius:.2} cm around {centre:?} cm reaches {what} {distance:.2} cm from its centre: shrink the region to a radius of at most {fit_radius:.2} cm (--radius), or the expander by {shrink_percent:.0} % (the default region is 1.5 × its footprint radius); or move it: {elsewhere}")]
+    RegionReachesBorder {
+        /// The region radius asked for (cm).
+        radius: f64,
+        /// The region's centre (cm).
+        centre: [f32; 3],
+        /// What it reaches: the outer border, or a hole with its size and place.
+        what: String,
+        /// Geodesic distance from the centre to the nearest point reached (cm).
+        distance: f64,
+        /// The largest region radius that stays off it (cm).
+        fit_radius: f64,
+        /// How much smaller (percent) the region, or the expander with the default region,
+        /// must be.
+        shrink_percent: f64,
+        /// Where a region of the radius asked would fit, or the largest that fits anywhere.
+        elsewhere: String,
+    },
+    /// Filling the scan's holes or remeshing the region failed.
+    #[error("simulation surface: {0}")]
+    Remesh(#[from] tissue_remesh::RemeshError),
 }

@@ -51,6 +51,7 @@ mod outcome;
 mod plane_press;
 mod planning;
 mod region;
+mod scan;
 
 mod shape;
 mod walk;
@@ -69,6 +70,10 @@ pub use region::{
     default_radius, default_snap_distance, geodesic_distances, select_region, select_region_with,
     snap_to_surface, RegionOptions, RegionRule, RegionSelection, SurfacePoint,
     DEFAULT_RADIUS_FACTOR, DEFAULT_SNAP_FRACTION, NOT_IN_REGION,
+};
+pub use scan::{
+    default_sim_edge, prepare_scan, ScanOptions, ScanResult, SimSurface, DEFAULT_MAX_HOLE,
+    TABLE2_REGION_VERTICES,
 };
 pub use shape::{Implant, ImplantFrame, ImplantShape, ImplantSpec};
 pub use walk::{walk_on_surface, WalkEnd};

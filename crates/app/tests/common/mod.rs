@@ -4,7 +4,7 @@
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
-use tissue_app::{Event, Handle, InsertionJob, Placement, ProgressEvent};
+use tissue_app::{Event, Handle, InsertionJob, Placement, ProgressEvent, SimMesh};
 use tissue_implant::{ImplantShape, ImplantSpec, RegionOptions, RegionRule};
 
 /// The thesis's region rule.
@@ -28,6 +28,8 @@ pub fn small_job(volume: f64) -> InsertionJob {
         implant,
     );
     job.region = touches_vertex();
+    // The plane's own grid, as the thesis ran it.
+    job.sim = SimMesh::Patient;
     job
 }
 
@@ -42,6 +44,8 @@ pub fn table2_job(volume: f64) -> InsertionJob {
         implant,
     );
     job.region = touches_vertex();
+    // The plane's own grid, as the thesis ran it.
+    job.sim = SimMesh::Patient;
     job
 }
 
