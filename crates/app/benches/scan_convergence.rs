@@ -15,6 +15,9 @@ use tissue_implant::{ImplantShape, ImplantSpec, ScanOptions};
 use tissue_mesh::TriMesh;
 use tissue_testscans::Scan;
 
+/// The step limit (the default is 20 000): a run still moving then is marked `*`.
+const MAX_STEPS: u64 = 8000;
+
 fn in_cm(scan: &Scan) -> TriMesh {
     let s = scan.cm_per_unit;
     scan.mesh
@@ -97,6 +100,7 @@ fn main() {
                 ),
                 implant,
             );
+            job.params.run.stop.max_steps = MAX_STEPS;
             let h = job.sim_edge().unwrap().unwrap();
             let coarse = plan(&job, |_| ControlFlow::Continue(()));
             job.sim = SimMesh::Remeshed(ScanOptions {
@@ -118,15 +122,24 @@ fn main() {
                     let n = |x: &tissue_app::PlannedInsertion| {
                         x.surface.as_ref().map_or(0, |s| s.mesh().vertex_count())
                     };
+                    let star = |x: &tissue_app::PlannedInsertion| {
+                        if x.outcome.stop_reason == tissue_mss::StopReason::Settled {
+                            ""
+                        } else {
+                            "*"
+                        }
+                    };
                     println!(
-                        "| {name} | {point} | {what} | {h:.3} | {}, {} | {:.3} | {:.3} | {:+.2} % | {}, {} |",
+                        "| {name} | {point} | {what} | {h:.3} | {}, {} | {:.3} | {:.3} | {:+.2} % | {}{}, {}{} |",
                         n(&c),
                         n(&f),
                         c.outcome.area_gain,
                         f.outcome.area_gain,
                         100.0 * change,
                         c.outcome.steps,
-                        f.outcome.steps
+                        star(&c),
+                        f.outcome.steps,
+                        star(&f)
                     );
                 }
                 (c, f) => println!(
