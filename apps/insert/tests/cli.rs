@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use serde_json::Value;
-use tissue_app::{InsertionJob, Placement, PlannedInsertion};
+use tissue_app::{InsertionJob, Placement, PlannedInsertion, SimMesh};
 use tissue_implant::{ImplantShape, ImplantSpec, RegionOptions, RegionRule};
 use tissue_mesh::TriMesh;
 
@@ -137,10 +137,37 @@ fn assert_report_matches(report: &Value, planned: &PlannedInsertion) {
     ] {
         assert_eq!(f(name) as f32, value, "{name}");
     }
+    // The simulated region: the simulation surface on a remeshed run, else the patient's.
+    let simulated = planned
+        .surface
+        .as_ref()
+        .map_or(planned.selection.mesh(), |s| s.mesh());
     assert_eq!(
         report["region_vertices"].as_u64(),
+        Some(simulated.vertex_count() as u64)
+    );
+    assert_eq!(
+        report["scan_region_vertices"].as_u64(),
         Some(planned.selection.mesh().vertex_count() as u64)
     );
+    match &planned.surface {
+        Some(surface) => {
+            assert_eq!(report["measured_on"], "simulation_surface");
+            assert_eq!(report["inputs"]["sim_mesh"], "remeshed");
+            assert_eq!(
+                report["inputs"]["sim_edge_cm"].as_f64(),
+                Some(surface.edge())
+            );
+            assert_eq!(report["scan"]["measured_on"], "scan_region_triangles");
+            assert!(report["scan"]["area_gain_cm2"].as_f64().unwrap() > 0.0);
+        }
+        None => {
+            assert_eq!(report["measured_on"], "patient_region");
+            assert_eq!(report["inputs"]["sim_mesh"], "patient_triangles");
+            assert!(report["inputs"]["sim_edge_cm"].is_null());
+            assert!(report.get("scan").is_none());
+        }
+    }
     assert!(report["stop_reason"].is_string());
     assert!(f("wall_time_s") >= 0.0);
     assert!(report["inputs"].is_object());
@@ -167,6 +194,8 @@ fn the_default_run_is_table_2_and_matches_the_library() {
         rule: RegionRule::TouchesVertex,
         ..RegionOptions::default()
     };
+    // The generated plane runs on its own grid, as the thesis's Table 2 did.
+    job.sim = SimMesh::Patient;
     let planned = plan(&job);
     let o_lib = &planned.outcome;
 
@@ -306,8 +335,11 @@ fn every_output_format_round_trips_and_the_picture_is_drawn() {
     let (displacement, stretch) = (field("displacement"), field("stretch"));
     assert_eq!(displacement.len(), expected.len());
     assert_eq!(stretch.len(), expected.len());
+    // The fields are on the scan's own vertices (mapped from the simulation surface).
+    let on_patient = planned.on_patient(&job.patient).unwrap();
     let max = displacement.iter().copied().fold(0.0, f32::max);
-    assert!((max - planned.outcome.max_displacement / 10.0).abs() < 1e-6);
+    let lib_max = on_patient.displacement.iter().copied().fold(0.0, f32::max);
+    assert!((max - lib_max / 10.0).abs() < 1e-6, "{max} vs {lib_max} cm");
     let in_region = field("in_region");
     for v in 0..expected.len() {
         if in_region[v] == 0.0 {

@@ -79,7 +79,8 @@ pub struct ScanOptions {
     /// radius.
     pub sim_edge: Option<f64>,
     /// Holes of the scan up to this size across (cm, the largest distance between two of their
-    /// boundary vertices) are filled for the simulation (default [`DEFAULT_MAX_HOLE`]).
+    /// boundary vertices) are filled for the simulation (default [`DEFAULT_MAX_HOLE`]); never
+    /// a loop wider than half the scan's bounding-box diagonal (its border).
     pub max_hole: f64,
     /// The radius of the smoothing (the moving-least-squares fit the remeshed vertices are
     /// projected onto), in simulation edges (default 2: at 1, a face scan's 0.2 mm noise left
@@ -220,9 +221,13 @@ pub fn prepare_scan(
         Some(h) => h,
         None => default_sim_edge(radius)?,
     };
+    // A loop as wide as half the scan is its border, not a drop-out, however small the scan.
+    let max_hole = options
+        .max_hole
+        .min(0.5 * f64::from(patient.bounding_box().size().length()));
     let fill = {
         let _span = tracing::info_span!("fill_holes").entered();
-        fill_holes(patient, options.max_hole)?
+        fill_holes(patient, max_hole)?
     };
     let filled = &fill.mesh;
     let selection = select_region_with(filled, point, radius, region)?;
