@@ -10,7 +10,10 @@
 //!   `implant_volume_cm3`, `implant_volume_end_cm3`, `implant_compression` (a fraction),
 //!   `dome_height_cm`, `max_displacement_cm`, `max_penetration_cm`, `boundary_unchanged`,
 //!   `region_vertices`, `region_triangles`, `region_radius_cm`, `steps`, `max_steps`,
-//!   `stop_reason` (`"settled"` or `"step_limit"`), `time_step_s`, `wall_time_s`.
+//!   `stop_reason` (`"settled"` or `"step_limit"`), `time_step_s`, `wall_time_s`,
+//!   `measured_on` (`"simulation_surface"` or `"patient_region"`), `scan_region_vertices`, and
+//!   on a remeshed run `scan` ([`ScanFigures`]: the areas and volume on the scan itself).
+//!   `inputs` carries `sim_mesh`, `sim_edge_cm` and `max_hole_cm`.
 //! - `mode: "sweep"` ([`SweepReport`]): `runs`, one [`RunResult`] per volume with its
 //!   `volume_cm3`, in the order given.
 //! - `mode: "target-gain"` ([`InverseReport`]): `target_gain_cm2`, `bracket_cm3`, `volume_cm3`

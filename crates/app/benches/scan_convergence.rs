@@ -16,7 +16,7 @@ use tissue_mesh::TriMesh;
 use tissue_testscans::Scan;
 
 /// The step limit (the default is 20 000): a run still moving then is marked `*`.
-const MAX_STEPS: u64 = 8000;
+const MAX_STEPS: u64 = 5000;
 
 fn in_cm(scan: &Scan) -> TriMesh {
     let s = scan.cm_per_unit;
@@ -39,40 +39,47 @@ fn main() {
     };
     let arm_axis = Vec3::new(1.0, -1.0, 0.8).normalize();
     type Case = (&'static str, ImplantShape, f64, Vec3);
+    // The quicker cases first (the round expanders on the tube take the most steps).
     let sets: Vec<(&str, Result<Scan, tissue_testscans::ScanError>, Vec<Case>)> = vec![
         (
             "tube",
             tissue_testscans::tapered_tube(7),
             vec![
-                ("y8_front", round(4.0), 10.0, Vec3::Y),
-                ("y12_side", round(4.0), 10.0, Vec3::Y),
-                ("y16_oblique", round(4.0), 10.0, Vec3::Y),
                 ("y12_other_side", rect(6.0, 3.0), 15.0, Vec3::Y),
-                ("y16_front", rect(6.0, 3.0), 15.0, Vec3::X),
                 ("y8_back", crescent, 8.0, Vec3::Y),
-            ],
-        ),
-        (
-            "face (mm)",
-            tissue_testscans::noisy_face_scan(1),
-            vec![
-                ("forehead", round(2.5), 2.0, Vec3::X),
-                ("forehead", rect(3.0, 1.5), 1.5, Vec3::X),
-                ("nose_bridge", round(2.0), 1.0, Vec3::X),
             ],
         ),
         (
             "forearm (dm)",
             tissue_testscans::forearm_from_body(),
             vec![
-                ("forearm_front", round(4.0), 10.0, arm_axis),
                 ("forearm_outer", rect(6.0, 3.0), 15.0, arm_axis),
+                ("forearm_front", round(4.0), 10.0, arm_axis),
+            ],
+        ),
+        (
+            "face (mm)",
+            tissue_testscans::noisy_face_scan(1),
+            vec![
+                ("forehead", rect(3.0, 1.5), 1.5, Vec3::X),
+                ("forehead", round(2.5), 2.0, Vec3::X),
             ],
         ),
         (
             "closed body (dm)",
             tissue_testscans::closed_body(),
             vec![("belly", round(7.0), 50.0, Vec3::X)],
+        ),
+        (
+            "tube",
+            tissue_testscans::tapered_tube(7),
+            vec![
+                ("y16_oblique", round(4.0), 10.0, Vec3::Y),
+                ("y8_front", round(4.0), 10.0, Vec3::Y),
+                ("y12_side", round(4.0), 10.0, Vec3::Y),
+                // Slowest at h/2 (over 10 minutes on the shared machine): last.
+                ("y16_front", rect(6.0, 3.0), 15.0, Vec3::X),
+            ],
         ),
     ];
     println!("| scan | point | expander | h cm | vertices at h, h/2 | gain at h cm² | gain at h/2 cm² | change | steps at h, h/2 |");

@@ -13,6 +13,10 @@
 //!   then one of [`Event::Finished`] ([`Outcome`]), [`Event::Cancelled`], [`Event::Failed`]
 //!   ([`AppError`]). Poll with [`Handle::try_event`] from a UI loop, block with
 //!   [`Handle::recv`] / [`Handle::events`], or just [`Handle::wait`] for the result.
+//! - The mechanics run on a simulation surface of their own by default ([`SimMesh::Remeshed`]:
+//!   the region of a real scan filled, remeshed and smoothed, the result mapped back onto the
+//!   patient's vertices by [`PlannedInsertion::on_patient`]), or on the patient's own triangles
+//!   ([`SimMesh::Patient`], the thesis's planes).
 //! - The set-up ("region + layers + implant, then run") is in one place, [`prepare`] /
 //!   [`plan`] (and [`plan_sweep`], [`plan_inverse`]), callable without threads: the worker runs
 //!   the same code, so its results equal theirs bit for bit.

@@ -19,6 +19,13 @@
 //!   per-vertex displacement and stretch, the patient with the region replaced.
 //! - [`sweep`] and [`volume_for_gain`]: series of runs in parallel and the inverse question
 //!   "which volume gives this area gain".
+//! - [`prepare_scan`] and [`SimSurface`]: planning on a real scan (issue 17) — its small holes
+//!   filled, the region refused where it reaches an open border
+//!   ([`ImplantError::RegionReachesBorder`]), remeshed into a simulation surface of its own
+//!   (edge [`default_sim_edge`], smoothed below it), every scan vertex of the region bound to
+//!   it and moved with it afterwards ([`SimSurface::map_to_scan`], [`ScanResult`]).
+//! - [`walk_on_surface`]: straightest geodesics, the exponential map that wraps an expander's
+//!   base onto the body ([`ImplantSpec::build_wrapped`], [`place_implant`]).
 //!
 //! Pure scenario logic on top of `tissue-mesh`, `tissue-mss`, `tissue-bvh` and `tissue-collide`:
 //! no threads of its own (a sweep uses rayon's pool), no terminal, no file I/O. Units: cm, g, s.
