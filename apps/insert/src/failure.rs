@@ -133,6 +133,7 @@ impl Failure {
                  larger implant, or remesh the scan",
             ),
             E::Diverged { .. } => (code::RUN, " (leave --time-step automatic, or lower it)"),
+            E::RanAway { .. } => (code::RUN, ""),
             _ => (
                 code::RUN,
                 "; check the scan (meshinfo) and the parameters, or report this",

@@ -159,4 +159,16 @@ pub enum ImplantError {
     /// Filling the scan's holes or remeshing the region failed.
     #[error("simulation surface: {0}")]
     Remesh(#[from] tissue_remesh::RemeshError),
+    /// The run stayed finite but ran away: the skin moved far beyond the expander's height.
+    #[error("the run ran away after {steps} steps: region vertex {vertex} moved {displacement:.2} cm, more than the {limit:.2} cm an expander of this height can lift it; use a larger simulation edge (--sim-edge) or a smaller time step")]
+    RanAway {
+        /// Steps taken.
+        steps: u64,
+        /// The simulated region's vertex that moved most.
+        vertex: u32,
+        /// How far it moved (cm).
+        displacement: f64,
+        /// The most accepted (cm): `RUNAWAY_FACTOR` × the dome height + 1 cm.
+        limit: f64,
+    },
 }

@@ -334,6 +334,10 @@ pub fn implant_system(
     Ok(system)
 }
 
+/// A run whose skin moved more than this many times the expander's dome height (plus 1 cm) ran
+/// away: [`Insertion::run`] reports it as [`ImplantError::RanAway`].
+pub const RUNAWAY_FACTOR: f64 = 4.0;
+
 /// What the caller sees between steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Progress {
@@ -409,7 +413,8 @@ impl Insertion {
     /// after every step; [`ControlFlow::Break`] cancels the run ([`ImplantError::Cancelled`]).
     ///
     /// # Errors
-    /// [`ImplantError::Cancelled`], [`ImplantError::Diverged`], collision errors.
+    /// [`ImplantError::Cancelled`], [`ImplantError::Diverged`], [`ImplantError::RanAway`],
+    /// collision errors.
     pub fn run(
         &mut self,
         mut progress: impl FnMut(&Progress) -> ControlFlow<()>,
@@ -431,7 +436,26 @@ impl Insertion {
             }
         }
         let wall_time = start.elapsed();
-        self.outcome(wall_time)
+        let outcome = self.outcome(wall_time)?;
+        // A run that ran away while staying finite: the skin cannot rise much beyond the
+        // expander that lifts it (found at a 0.09 cm simulation edge on a tube, where the "gain"
+        // reached 479 cm² over a 10 cm³ expander).
+        let limit = RUNAWAY_FACTOR * self.dome_height + 1.0;
+        if f64::from(outcome.max_displacement) > limit {
+            let vertex = outcome
+                .displacement
+                .iter()
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(b.1))
+                .map_or(0, |(r, _)| r as u32);
+            return Err(ImplantError::RanAway {
+                steps: self.run.steps(),
+                vertex,
+                displacement: f64::from(outcome.max_displacement),
+                limit,
+            });
+        }
+        Ok(outcome)
     }
 
     /// The results at the current state.

@@ -67,7 +67,7 @@ pub use contact_run::{ContactRun, RunParams, StepSummary};
 pub use error::ImplantError;
 pub use insertion::{
     dissect_pocket, implant_system, place_implant, ImplantParams, Insertion, InsertionOutcome,
-    InsertionParams, Progress,
+    InsertionParams, Progress, RUNAWAY_FACTOR,
 };
 pub use layers::{Layer, LayerParams, TissueLayers};
 pub use outcome::{replace_region, vertex_displacements, vertex_stretch, FieldRange};
