@@ -41,6 +41,7 @@ use tissue_mss::{
     SheetMaterial, Spring,
 };
 
+use crate::adjacency::VertexNeighbours;
 use crate::ImplantError;
 
 /// Triangles of a lower [`shape_quality`] are slivers, whose turning over in the inward offset
@@ -79,34 +80,8 @@ fn offset_normals(region: &TriMesh, depth: f64) -> Vec<Vec3> {
             raw[v as usize] += area_normal;
         }
     }
-    let topology = region.topology();
-    let mut offsets = vec![0usize; n + 1];
-    for &[a, b] in topology.edges() {
-        offsets[a as usize + 1] += 1;
-        offsets[b as usize + 1] += 1;
-    }
-    for v in 0..n {
-        offsets[v + 1] += offsets[v];
-    }
-    let mut fill = offsets.clone();
-    let mut neighbours = vec![0u32; offsets[n]];
-    for &[a, b] in topology.edges() {
-        neighbours[fill[a as usize]] = b;
-        fill[a as usize] += 1;
-        neighbours[fill[b as usize]] = a;
-        fill[b as usize] += 1;
-    }
-    let p64 = |v: u32| p[v as usize].as_dvec3();
-    let mean_edge = if topology.edges().is_empty() {
-        0.0
-    } else {
-        topology
-            .edges()
-            .iter()
-            .map(|&[a, b]| p64(a).distance(p64(b)))
-            .sum::<f64>()
-            / topology.edges().len() as f64
-    };
+    let adjacency = VertexNeighbours::of(region);
+    let mean_edge = f64::from(crate::contact_run::mean_edge_length(region));
     let reach = depth.min(0.5 * mean_edge);
     let reach2 = (reach * reach) as f32;
     let mut stamp = vec![u32::MAX; n];
@@ -118,7 +93,7 @@ fn offset_normals(region: &TriMesh, depth: f64) -> Vec<Vec3> {
             stack.clear();
             stack.push(v as u32);
             while let Some(w) = stack.pop() {
-                for &x in &neighbours[offsets[w as usize]..offsets[w as usize + 1]] {
+                for &x in adjacency.of_vertex(w) {
                     if stamp[x as usize] != v as u32
                         && p[x as usize].distance_squared(p[v]) <= reach2
                     {

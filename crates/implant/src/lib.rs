@@ -49,6 +49,7 @@
     clippy::print_stderr
 )]
 
+mod adjacency;
 mod contact_run;
 mod error;
 mod geodesic;

@@ -41,6 +41,7 @@ use tissue_bvh::{BuildOptions, Bvh, BvhWorkspace, Triangles};
 use tissue_mesh::{volume_between, TriMesh};
 use tissue_remesh::{fill_holes, remesh, Hole, RemeshOptions, RemeshStats};
 
+use crate::adjacency::VertexNeighbours;
 use crate::{select_region_with, vertex_stretch, ImplantError, RegionOptions, RegionSelection};
 
 /// Region vertices per layer in Table 2's run (SPEC A.5: 2016 for both layers).
@@ -663,24 +664,7 @@ fn border_distances(mesh: &TriMesh, border: &[bool]) -> Vec<f64> {
         }
     }
     let n = mesh.vertex_count();
-    let topology = mesh.topology();
-    // Vertex neighbours, compressed rows.
-    let mut offsets = vec![0usize; n + 1];
-    for &[a, b] in topology.edges() {
-        offsets[a as usize + 1] += 1;
-        offsets[b as usize + 1] += 1;
-    }
-    for v in 0..n {
-        offsets[v + 1] += offsets[v];
-    }
-    let mut fill = offsets.clone();
-    let mut neighbours = vec![0u32; offsets[n]];
-    for &[a, b] in topology.edges() {
-        neighbours[fill[a as usize]] = b;
-        fill[a as usize] += 1;
-        neighbours[fill[b as usize]] = a;
-        fill[b as usize] += 1;
-    }
+    let adjacency = VertexNeighbours::of(mesh);
     let p = mesh.positions();
     let mut dist = vec![f64::INFINITY; n];
     let mut heap = BinaryHeap::new();
@@ -694,7 +678,7 @@ fn border_distances(mesh: &TriMesh, border: &[bool]) -> Vec<f64> {
         if d > dist[v as usize] {
             continue;
         }
-        for &w in &neighbours[offsets[v as usize]..offsets[v as usize + 1]] {
+        for &w in adjacency.of_vertex(v) {
             let nd = d + f64::from(p[v as usize].distance(p[w as usize]));
             if nd < dist[w as usize] {
                 dist[w as usize] = nd;
