@@ -68,7 +68,8 @@ fn main() {
         (
             "closed body (dm)",
             tissue_testscans::closed_body(),
-            vec![("belly", round(7.0), 50.0, Vec3::X)],
+            // Not the belly: see tests/scans.rs.
+            vec![("back", round(7.0), 50.0, Vec3::X)],
         ),
         (
             "tube",

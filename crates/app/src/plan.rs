@@ -196,6 +196,8 @@ struct Scene {
     layers: TissueLayers,
     /// The implant frame's normal: the placement's, or the simulation surface's at the centre.
     normal: Vec3,
+    /// The job's parameters, with layer 2's offset reach of the simulation surface if any.
+    params: InsertionParams,
 }
 
 impl Scene {
@@ -253,13 +255,18 @@ fn scene(job: &InsertionJob, cancelled: &dyn Fn() -> bool) -> Result<Scene, Impl
         Some(surface) => surface.mesh(),
         None => selection.mesh(),
     };
-    let layers = TissueLayers::new(sim, &job.params.layers)?;
+    let mut params = job.params.clone();
+    if let Some(surface) = &surface {
+        params.layers.offset_reach = Some(surface.offset_reach());
+    }
+    let layers = TissueLayers::new(sim, &params.layers)?;
     cancelled_check(cancelled)?;
     Ok(Scene {
         selection,
         surface,
         layers,
         normal,
+        params,
     })
 }
 
@@ -278,7 +285,7 @@ fn build(
         job.placement.tangent,
     )?;
     cancelled_check(cancelled)?;
-    let insertion = tissue_implant::Insertion::new(scene.sim_mesh(), &implant, &job.params)?;
+    let insertion = tissue_implant::Insertion::new(scene.sim_mesh(), &implant, &scene.params)?;
     cancelled_check(cancelled)?;
     Ok((implant, insertion))
 }

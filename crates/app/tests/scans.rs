@@ -297,7 +297,10 @@ fn on_a_closed_body_the_region_is_cut_out_of_it() {
     };
     let patient = in_cm(&scan);
     assert!(patient.is_closed());
-    let p = point(&scan, "belly");
+    // The back, not the belly: from just below the navel a 7 cm expander's lower rim reaches
+    // the groin's crease, where the region's border comes within 3.4 cm of the centre and a
+    // run at half the simulation edge diverged (docs/validation.md).
+    let p = point(&scan, "back");
     let job = job(
         &patient,
         p.vertex,
@@ -305,7 +308,7 @@ fn on_a_closed_body_the_region_is_cut_out_of_it() {
         50.0,
         Vec3::X,
     );
-    run_and_check(&job, "closed body, belly, round 7 cm 50 cm³");
+    run_and_check(&job, "closed body, back, round 7 cm 50 cm³");
 }
 
 #[test]

@@ -374,6 +374,11 @@ impl ContactRun {
         self.settled
     }
 
+    /// The stop criterion's window (steps).
+    pub fn stop_window(&self) -> usize {
+        self.params.stop.window
+    }
+
     /// The step limit.
     pub fn max_steps(&self) -> u64 {
         self.params.stop.max_steps

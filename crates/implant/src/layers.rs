@@ -68,7 +68,7 @@ fn shape_quality(c: [Vec3; 3]) -> f64 {
 /// surface's real curvature, seen over whole edges, is kept (a cap of radius 1 cm still refuses
 /// a 1.5 cm depth). Where no vertex is that close (Table 2's grid, the MakeHuman meshes) this is
 /// the vertex normal itself.
-fn offset_normals(region: &TriMesh, depth: f64) -> Vec<Vec3> {
+fn offset_normals(region: &TriMesh, depth: f64, reach: Option<f64>) -> Vec<Vec3> {
     let n = region.vertex_count();
     let p = region.positions();
     // Unnormalised area-weighted normals.
@@ -82,7 +82,7 @@ fn offset_normals(region: &TriMesh, depth: f64) -> Vec<Vec3> {
     }
     let adjacency = VertexNeighbours::of(region);
     let mean_edge = f64::from(crate::contact_run::mean_edge_length(region));
-    let reach = depth.min(0.5 * mean_edge);
+    let reach = depth.min(reach.unwrap_or(0.5 * mean_edge));
     let reach2 = (reach * reach) as f32;
     let mut stamp = vec![u32::MAX; n];
     let mut stack = Vec::new();
@@ -106,6 +106,71 @@ fn offset_normals(region: &TriMesh, depth: f64) -> Vec<Vec3> {
             sum.normalize_or_zero().as_vec3()
         })
         .collect()
+}
+
+/// The triangles of `region` (slivers aside) that turn over when offset inward by `depth`
+/// along `directions`, into `out`.
+fn folded_triangles(region: &TriMesh, directions: &[Vec3], depth: f32, out: &mut Vec<usize>) {
+    out.clear();
+    let p = region.positions();
+    for (t, tri) in region.triangles().iter().enumerate() {
+        let c = tri.map(|v| p[v as usize]);
+        let q = tri.map(|v| p[v as usize] - directions[v as usize] * depth);
+        let before = (c[1] - c[0]).cross(c[2] - c[0]);
+        let after = (q[1] - q[0]).cross(q[2] - q[0]);
+        if before.dot(after) <= 0.0 && shape_quality(c) >= SLIVER_QUALITY {
+            out.push(t);
+        }
+    }
+}
+
+/// Smooths the offset directions where they fold layer 2, no farther than the depth: while
+/// triangles turn over, each vertex of one and its neighbours take the mean direction of their
+/// one-ring, for at most `depth / mean edge` rounds (at least one). A ripple shorter than the
+/// depth (what a noisy scan's border or a coarse body's facet crease leaves on a fine
+/// simulation surface) is smoothed out of layer 2 this way, while a surface that curves more
+/// tightly than the depth over a longer stretch still folds and is refused by the caller
+/// (a cap of radius 1 cm and a 1.5 cm depth). Returns the rounds used.
+fn untangle(region: &TriMesh, directions: &mut [Vec3], depth: f64) -> usize {
+    let mean_edge = f64::from(crate::contact_run::mean_edge_length(region));
+    let max_rounds = if mean_edge > 0.0 {
+        ((depth / mean_edge).floor() as usize).clamp(1, 64)
+    } else {
+        1
+    };
+    let adjacency = VertexNeighbours::of(region);
+    let n = region.vertex_count();
+    let mut folded = Vec::new();
+    let mut marked = vec![false; n];
+    let mut next = directions.to_vec();
+    for round in 0..max_rounds {
+        folded_triangles(region, directions, depth as f32, &mut folded);
+        if folded.is_empty() {
+            return round;
+        }
+        marked.iter_mut().for_each(|m| *m = false);
+        for &t in &folded {
+            for v in region.triangles()[t] {
+                marked[v as usize] = true;
+                for &w in adjacency.of_vertex(v) {
+                    marked[w as usize] = true;
+                }
+            }
+        }
+        for v in 0..n {
+            next[v] = if marked[v] {
+                let sum = adjacency
+                    .of_vertex(v as u32)
+                    .iter()
+                    .fold(directions[v], |s, &w| s + directions[w as usize]);
+                sum.try_normalize().unwrap_or(directions[v])
+            } else {
+                directions[v]
+            };
+        }
+        directions.copy_from_slice(&next);
+    }
+    max_rounds
 }
 
 /// Which layer of the model.
@@ -137,6 +202,18 @@ pub struct LayerParams {
     pub min_thickness: f64,
     /// Young's modulus of the loose subcutaneous tissue that anchors layer 2, g/(cm·s²).
     pub anchor_young: f64,
+    /// How far (cm) the vertex normals are averaged into layer 2's offset directions (see
+    /// [`TissueLayers::new`]); capped at `depth`. `None`: half the region's mean edge. A
+    /// simulation surface of its own passes a length of the model, not of the mesh
+    /// ([`crate::SimSurface::offset_reach`]), so that refining the mesh does not change the
+    /// shape of layer 2.
+    pub offset_reach: Option<f64>,
+    /// Whether layer 1 resists bending as a plate of the skin's modulus and thickness,
+    /// `D = E t³ / (12 (1 − ν²))` ([`crate::bending`]). On by default: without it the
+    /// mass–spring skin, a membrane, folds into pleats one simulation edge wide where it is
+    /// compressed. The thesis's model has none; the plane press (Table 1) turns it off to
+    /// reproduce it.
+    pub skin_bending: bool,
 }
 
 impl Default for LayerParams {
@@ -167,6 +244,8 @@ impl Default for LayerParams {
             anchor_young: 2.0e6,
             slab_young: 2.0e7,
             min_thickness: 0.25,
+            offset_reach: None,
+            skin_bending: true,
         }
     }
 }
@@ -209,6 +288,15 @@ impl LayerParams {
                 expected: "in [0, 0.5)".into(),
             });
         }
+        if let Some(reach) = self.offset_reach {
+            if !(reach.is_finite() && reach >= 0.0) {
+                return Err(ImplantError::InvalidParameter {
+                    name: "offset_reach",
+                    value: reach,
+                    expected: "finite and ≥ 0 (cm), or None for half the mean edge".into(),
+                });
+            }
+        }
         Ok(())
     }
 }
@@ -222,6 +310,8 @@ pub struct TissueLayers {
     normals: Vec<Vec3>,
     /// The slab's shear stiffness `G·Aᵢ/depth` per region vertex.
     shear: Vec<f32>,
+    /// Layer 1's bending hinges ([`crate::bending`]).
+    hinges: Vec<crate::bending::Hinge>,
     /// Layer 2's current vertex normals (unnormalised), scratch of `add_slab_shear` and
     /// `hold_thickness`.
     inner_normals: Vec<Vec3A>,
@@ -248,7 +338,9 @@ impl TissueLayers {
             });
         }
         let n = region.vertex_count();
-        let normals = offset_normals(region, params.depth);
+        let mut normals = offset_normals(region, params.depth, params.offset_reach);
+        let rounds = untangle(region, &mut normals, params.depth);
+        tracing::debug!(rounds, "offset untangled");
         let depth = params.depth as f32;
         let inner_positions: Vec<Vec3> = region
             .positions()
@@ -261,22 +353,24 @@ impl TissueLayers {
         // slivers aside (shape quality below SLIVER_QUALITY: a triangle a few degrees from flat,
         // such as the remesher can leave at a seam, turns over in any offset whose directions
         // differ by its own small height; that says nothing of the surface's curvature).
-        for (t, (a, b)) in region
-            .triangle_normals()
-            .iter()
-            .zip(inner.triangle_normals())
-            .enumerate()
-        {
-            if a.dot(b) <= 0.0 && shape_quality(region.corners(t)) >= SLIVER_QUALITY {
-                return Err(ImplantError::InvalidParameter {
-                    name: "depth",
-                    value: params.depth,
-                    expected: format!(
-                        "smaller: offsetting the region inward by it folds triangle {t} over \
-                         (the surface curves more tightly than the depth there)"
-                    ),
-                });
-            }
+        let mut folded = Vec::new();
+        folded_triangles(region, &normals, depth, &mut folded);
+        if let Some(&t) = folded.first() {
+            let [a, b, c] = region.corners(t);
+            let at = (a + b + c) / 3.0;
+            return Err(ImplantError::InvalidParameter {
+                name: "depth",
+                value: params.depth,
+                expected: format!(
+                    "smaller: offsetting the region inward by it folds {} triangle(s) over, the \
+                     first ({t}) at ({:.2}, {:.2}, {:.2}) (the surface curves more tightly than \
+                     the depth there)",
+                    folded.len(),
+                    at.x,
+                    at.y,
+                    at.z
+                ),
+            });
         }
 
         let skin_mass = region.area() * params.skin_thickness * params.density;
@@ -384,12 +478,27 @@ impl TissueLayers {
             })
             .collect();
         system.add_anchors(&anchors)?;
+        let plate = params.young * params.skin_thickness.powi(3)
+            / (12.0 * (1.0 - params.poisson * params.poisson));
+        let hinges = if params.skin_bending {
+            crate::bending::hinges(
+                region.positions(),
+                region.triangles(),
+                topo.edges(),
+                topo.edge_triangles(),
+                plate,
+                |v| Self::particle(Layer::Outer, v),
+            )
+        } else {
+            Vec::new()
+        };
         Ok(TissueLayers {
             system,
             outer: region.clone(),
             inner,
             normals,
             shear,
+            hinges,
             inner_normals: vec![Vec3A::ZERO; n],
             floored,
             boundary,
@@ -403,6 +512,13 @@ impl TissueLayers {
     pub fn compute_forces(&mut self) {
         self.system.compute_forces();
         self.add_slab_shear();
+        let (position, force) = self.system.particles_mut().positions_and_forces_mut();
+        crate::bending::add_forces(&self.hinges, position, force);
+    }
+
+    /// The skin's bending energy at the current positions (g·cm²/s², [`crate::bending`]).
+    pub fn bending_energy(&self) -> f64 {
+        crate::bending::energy(&self.hinges, self.system.particles().positions())
     }
 
     /// Adds the slab's resistance to shear: for every region vertex, the part of the slab
@@ -446,6 +562,11 @@ impl TissueLayers {
                 [(outer, f64::from(k)), (outer + 1, f64::from(k))]
             })
             .collect();
+        let mut extra = extra;
+        extra.extend(crate::bending::row_stiffness(
+            &self.hinges,
+            self.system.particles().positions(),
+        ));
         self.system.stable_time_step_with(&extra)
     }
 
@@ -501,6 +622,20 @@ impl TissueLayers {
             }
         }
         moved
+    }
+
+    /// The current area of layer 1 (cm²), from the particles' positions (no allocation).
+    pub fn outer_area(&self) -> f64 {
+        let position = self.system.particles().positions();
+        let at = |v: u32| position[Self::particle(Layer::Outer, v) as usize];
+        self.outer
+            .triangles()
+            .iter()
+            .map(|&[a, b, c]| {
+                let (a, b, c) = (at(a), at(b), at(c));
+                0.5 * f64::from((b - a).cross(c - a).length())
+            })
+            .sum()
     }
 
     /// Detaches layer 2 from the deeper tissue at the region vertices `pocket` accepts (their

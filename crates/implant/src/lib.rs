@@ -50,6 +50,7 @@
 )]
 
 mod adjacency;
+mod bending;
 mod contact_run;
 mod error;
 mod geodesic;
@@ -68,7 +69,7 @@ pub use contact_run::{ContactRun, RunParams, StepSummary};
 pub use error::ImplantError;
 pub use insertion::{
     dissect_pocket, implant_system, place_implant, ImplantParams, Insertion, InsertionOutcome,
-    InsertionParams, Progress, RUNAWAY_FACTOR,
+    InsertionParams, Progress, PLATEAU_HALF, PLATEAU_TOLERANCE, RUNAWAY_FACTOR,
 };
 pub use layers::{Layer, LayerParams, TissueLayers};
 pub use outcome::{replace_region, vertex_displacements, vertex_stretch, FieldRange};

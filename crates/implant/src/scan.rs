@@ -14,8 +14,10 @@
 //!    this size would fit);
 //! 3. **remeshes the region** to a near-uniform edge `h` ([`ScanOptions::sim_edge`], by default
 //!    [`default_sim_edge`]): isotropic remeshing with every vertex projected onto a
-//!    moving-least-squares plane fit of the scan within `h` ([`ScanOptions::smoothing`] × `h`),
-//!    so noise below the simulation's own scale is smoothed out of the mechanics;
+//!    moving-least-squares plane fit of the scan ([`ScanOptions::smoothing`]: 2 × the larger of
+//!    `h` and the default edge, at least 1.5 × the depth and 1.6 scan edges), so noise below
+//!    the simulation's own scale, and a coarse scan's facets, are smoothed out of the
+//!    mechanics, and a finer `h` samples the same surface;
 //! 4. **binds every vertex of the scan region to the simulation surface**
 //!    ([`SimSurface::map_to_scan`]): its closest point on the rest surface (triangle,
 //!    barycentric coordinates `bᵢ`) and its offset `o` along the interpolated normal
@@ -85,7 +87,10 @@ pub struct ScanOptions {
     pub max_hole: f64,
     /// The radius of the smoothing (the moving-least-squares fit the remeshed vertices are
     /// projected onto), in simulation edges (default 2: at 1, a face scan's 0.2 mm noise left
-    /// enough ripple on 1.1 mm edges to fold the layers' 2.5 mm inward offset).
+    /// enough ripple on 1.1 mm edges to fold the layers' 2.5 mm inward offset). The edge is
+    /// the larger of the asked one and [`default_sim_edge`], so that refining the simulation
+    /// mesh does not change the surface it samples; the radius is also at least 1.5 × the
+    /// depth and 1.6 × the scan region's median edge. 0 turns the smoothing off.
     pub smoothing: f64,
     /// Remeshing iterations (default 8).
     pub iterations: u32,
@@ -156,6 +161,7 @@ const PINNED: u32 = u32::MAX;
 pub struct SimSurface {
     mesh: TriMesh,
     edge: f64,
+    offset_reach: f64,
     binding: Vec<Binding>,
     scan_vertices: usize,
     scan_triangles: usize,
@@ -243,11 +249,15 @@ pub fn prepare_scan(
         })
         .cloned()
         .collect();
-    // A scan whose own edges are long next to the smoothing radius has too few vertices in it
-    // for a plane fit: its facets are kept as they are (a coarse mesh is not noisy at that scale).
-    let smoothing = (options.smoothing * edge).max(depth_smoothing(depth));
-    let smoothing = (options.smoothing > 0.0 && smoothing >= 1.5 * median_edge(selection.mesh()))
-        .then_some(smoothing);
+    // The smoothing is a length of the model, not of the mesh: the larger of the asked edge and
+    // the default one, so a finer simulation surface is the same surface more finely sampled;
+    // at least 1.5 × the depth; and at least COARSE_SMOOTHING scan edges, so a coarse scan's
+    // facets are rounded into the surface they sample instead of followed crease by crease (a
+    // coarse body's 0.65 cm facets, followed at h/2 = 0.16 cm, crossed the expander's base).
+    let smoothing = (options.smoothing * edge.max(default_sim_edge(radius)?))
+        .max(depth_smoothing(depth))
+        .max(COARSE_SMOOTHING * median_edge(selection.mesh()));
+    let smoothing = (options.smoothing > 0.0).then_some(smoothing);
     let remeshed = {
         let _span = tracing::info_span!("remesh", edge).entered();
         remesh(
@@ -275,6 +285,7 @@ pub fn prepare_scan(
         SimSurface {
             mesh,
             edge,
+            offset_reach: 0.5 * edge.max(default_sim_edge(radius)?),
             binding,
             scan_vertices: patient.vertex_count(),
             scan_triangles: fill.first_fill_triangle,
@@ -283,6 +294,10 @@ pub fn prepare_scan(
         },
     ))
 }
+
+/// The smoothing radius in the scan region's own median edges, at least: enough of its vertices
+/// (about 8) for the plane fit.
+const COARSE_SMOOTHING: f64 = 1.6;
 
 /// Taubin λ|μ passes over the simulation surface (boundary held): what is left of a kink at the
 /// scale of one edge (a triangle the remesher could not make well) is smoothed out before the
@@ -409,7 +424,19 @@ impl SimSurface {
         &self.mesh
     }
 
-    /// The target edge it was remeshed to, cm.
+    /// How far the offset of layer 2 averages the normals ([`LayerParams::offset_reach`],
+    /// cm): half the default edge for the region's radius ([`default_sim_edge`]), or half the
+    /// edge asked for if that is longer. A length of the model, not of the mesh: a finer
+    /// simulation surface follows creases a coarser one cuts across (a noisy scan's border, a
+    /// coarse body's facets), and offset along its own finer normals those folded layer 2 at
+    /// `h/2` on the face and the body.
+    ///
+    /// [`LayerParams::offset_reach`]: crate::LayerParams::offset_reach
+    pub fn offset_reach(&self) -> f64 {
+        self.offset_reach
+    }
+
+    /// The target edge length of the simulation surface, cm.
     pub fn edge(&self) -> f64 {
         self.edge
     }

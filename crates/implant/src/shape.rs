@@ -705,8 +705,13 @@ impl Plan {
                 if (volume - target).abs() <= ImplantSpec::VOLUME_TOLERANCE * target =>
             {
                 tracing::debug!(height = h, volume, "implant height solved");
+                let flat = ground
+                    .iter()
+                    .map(|g| (g.origin + g.up * g.height).as_vec3())
+                    .collect();
                 Ok(Implant {
                     mesh,
+                    flat,
                     dome_height: h,
                     volume,
                     rim_end: self.grid.segments,
@@ -731,6 +736,8 @@ impl Plan {
 #[derive(Debug, Clone)]
 pub struct Implant {
     mesh: TriMesh,
+    /// Every vertex at its footing (the dome collapsed onto the base's surface).
+    flat: Vec<Vec3>,
     dome_height: f64,
     volume: f64,
     rim_end: u32,
@@ -741,6 +748,15 @@ impl Implant {
     /// The closed, outward-oriented surface.
     pub fn mesh(&self) -> &TriMesh {
         &self.mesh
+    }
+
+    /// The implant emptied: every vertex where the base's surface is under it (the dome's
+    /// vertices moved back along the direction they stand on it by, the base's unchanged). A
+    /// fill starts from here. On a curved base (a limb) this follows the curve, so the empty
+    /// implant lies under layer 2 everywhere, where a flat disc through the rim would stand
+    /// out of the surface beside a wrapped rim.
+    pub fn flat_positions(&self) -> &[Vec3] {
+        &self.flat
     }
 
     /// Gives the mesh back.

@@ -155,3 +155,78 @@ fn an_implant_wider_than_its_region_is_refused() {
     );
     let _ = Layer::Inner;
 }
+
+/// A fine region (0.09 cm edges) on a tight limb (a cylinder of radius 2.75 cm along `y`, its
+/// top at the origin): the tube case whose run blew up at half its default simulation edge.
+fn limb_region() -> RegionSelection {
+    const R: f32 = 2.75;
+    let flat = tissue_mesh::grid(89, 8.0).unwrap();
+    let wrapped: Vec<Vec3> = flat
+        .positions()
+        .iter()
+        .map(|p| {
+            let a = p.x / R;
+            Vec3::new(R * a.sin(), p.y, R * a.cos() - R)
+        })
+        .collect();
+    let limb = flat.with_positions(wrapped).unwrap();
+    select_region_with(&limb, Vec3::ZERO, 3.0, &RegionOptions::default()).unwrap()
+}
+
+/// Signed distance of `x` from the plane of the nearest (by centroid) triangle of `surface`,
+/// positive on its normal's side.
+fn signed_distance(surface: &TriMesh, x: Vec3) -> f32 {
+    let normals = surface.triangle_normals();
+    let (t, _) = (0..surface.triangle_count())
+        .map(|t| {
+            let [a, b, c] = surface.corners(t);
+            (t, ((a + b + c) / 3.0).distance_squared(x))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap();
+    (x - surface.corners(t)[0]).dot(normals[t])
+}
+
+#[test]
+fn an_expander_wrapped_round_a_limb_starts_under_layer_2_and_does_not_blow_up() {
+    let selection = limb_region();
+    let params = InsertionParams::default();
+    let layers = TissueLayers::new(selection.mesh(), &params.layers).unwrap();
+    let spec =
+        ImplantSpec::new(ImplantShape::Round { diameter: 4.0 }, 10.0).with_vertex_budget(300);
+    let implant = place_implant(&layers, &spec, Vec3::ZERO, Vec3::Z, Vec3::Y).unwrap();
+    // The emptied expander the fill starts from lies under layer 2 everywhere, beside its
+    // wrapped rim too (a flat disc through the lowest base vertex stood out of it there).
+    let inner = layers.rest(Layer::Inner);
+    let highest = implant
+        .flat_positions()
+        .iter()
+        .map(|&x| signed_distance(inner, x))
+        .fold(f32::NEG_INFINITY, f32::max);
+    assert!(
+        highest < 0.0,
+        "the empty expander stands {highest} cm out of layer 2"
+    );
+    let mut insertion = Insertion::new(selection.mesh(), &implant, &params).unwrap();
+    let first = insertion.step().unwrap();
+    assert_eq!(first.remaining_crossings, 0);
+    assert_eq!(first.thinned, 0);
+    // Through the fill and after it the skin stays near the dome: it blew up to a 479 cm²
+    // "gain" with the flat start.
+    for _ in 0..400 {
+        insertion.step().unwrap();
+    }
+    let out = insertion.outcome(std::time::Duration::ZERO).unwrap();
+    assert!(out.is_finite() && out.boundary_unchanged);
+    assert!(
+        f64::from(out.max_displacement) < out.dome_height + 0.25,
+        "the skin moved {} cm over a {} cm dome",
+        out.max_displacement,
+        out.dome_height
+    );
+    assert!(
+        out.area_gain > 0.0 && out.area_gain < 20.0,
+        "{}",
+        out.area_gain
+    );
+}

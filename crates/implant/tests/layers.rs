@@ -299,3 +299,70 @@ fn the_thickness_guard_stops_the_approach_and_keeps_momentum() {
     // The tangential velocity is left alone.
     assert_eq!(v[outer].x, 0.3);
 }
+
+/// Triangles of `region` that turn over when its vertices move by `-depth` along `directions`.
+fn turned_over(region: &TriMesh, directions: &[Vec3], depth: f32) -> usize {
+    let moved: Vec<Vec3> = region
+        .positions()
+        .iter()
+        .zip(directions)
+        .map(|(p, d)| *p - *d * depth)
+        .collect();
+    let moved = region.with_positions(moved).unwrap();
+    region
+        .triangle_normals()
+        .iter()
+        .zip(moved.triangle_normals())
+        .filter(|(a, b)| a.dot(*b) <= 0.0)
+        .count()
+}
+
+#[test]
+fn a_ripple_shorter_than_the_depth_is_smoothed_out_of_layer_2_not_refused() {
+    // A 4 cm plane of 0.1 cm edges with seeded spikes of 0.12–0.18 cm at a few vertices (a
+    // scan's outliers, narrower than the 0.25 cm depth): along the bare vertex normals the
+    // offset turns triangles over around every spike; the layers smooth the directions there.
+    let flat = tissue_mesh::grid(41, 4.0).unwrap();
+    let mut positions = flat.positions().to_vec();
+    let mut state = 12345u64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 33) as f32 / (1u64 << 31) as f32
+    };
+    for _ in 0..12 {
+        let (i, j) = (5 + (next() * 31.0) as usize, 5 + (next() * 31.0) as usize);
+        positions[i * 41 + j].z += 0.12 + 0.06 * next();
+    }
+    let region = flat.with_positions(positions).unwrap();
+    let depth = 0.25;
+    assert!(turned_over(&region, &region.vertex_normals(), depth) > 0);
+    let layers = TissueLayers::new(
+        &region,
+        &LayerParams {
+            depth: f64::from(depth),
+            ..params()
+        },
+    )
+    .unwrap();
+    let inner = layers.rest(Layer::Inner);
+    let folded = region
+        .triangle_normals()
+        .iter()
+        .zip(inner.triangle_normals())
+        .filter(|(a, b)| a.dot(*b) <= 0.0)
+        .count();
+    assert_eq!(folded, 0);
+    // Every layer-2 vertex is still the depth below its layer-1 vertex, and the directions
+    // changed only near the spikes: far from them layer 2 is the plane 0.25 cm down.
+    for (a, b) in region.positions().iter().zip(inner.positions()) {
+        assert!((a.distance(*b) - depth).abs() < 1e-5);
+    }
+    let level = inner
+        .positions()
+        .iter()
+        .filter(|p| (p.z + depth).abs() < 1e-6)
+        .count();
+    assert!(level > inner.vertex_count() / 2, "{level}");
+}
