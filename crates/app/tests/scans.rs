@@ -89,8 +89,14 @@ fn run_and_check(job: &InsertionJob, what: &str) -> (PlannedInsertion, PatientAf
     );
     assert!(out.is_finite(), "{what}: not finite");
     assert!(out.boundary_unchanged, "{what}: boundary moved");
-    // Settling is reported, not required: on some of these small regions the stop criterion's
-    // ratio hovers above its threshold while nothing visible moves (docs/validation.md).
+    // Every case settles well within the limit (the tube's round expanders, whose ratio test
+    // hovers above its threshold, by the area plateau).
+    assert_eq!(
+        out.stop_reason,
+        tissue_mss::StopReason::Settled,
+        "{what}: {} steps",
+        out.steps
+    );
     assert!(
         out.max_penetration <= 0.2 * surface.edge() as f32,
         "{what}: penetration {}",

@@ -22,6 +22,11 @@
 //!   fascia and muscle (`anchor_young`); lifting layer 2 by `u` costs `E_a·u/depth` per unit
 //!   area. An insertion removes them over the expander's pocket ([`TissueLayers::detach`]).
 //!
+//! - Layer 1 resists bending as a plate of the skin's modulus and thickness,
+//!   `D = E t³ / (12 (1 − ν²))`, by discrete-shell hinges on its interior edges
+//!   ([`LayerParams::skin_bending`], `crate::bending`): forces, like the slab's shear, added in
+//!   [`TissueLayers::compute_forces`] and counted in [`TissueLayers::stable_time_step`].
+//!
 //! ## Masses and fixed particles
 //! The region's mass is the tissue column between the surface and the expander: the skin,
 //! area × skin thickness × density (SPEC A.5 step 1), and the slab between the layers, area ×
