@@ -58,18 +58,11 @@ fn angle_and_gradient_floored(x: [Vec3A; 4], floor: [f32; 2]) -> Option<(f32, [V
     Some((theta, [g0, g1, g2, g3]))
 }
 
-/// Triangles of a lower shape quality `4√3·A / Σ ℓ²` (1 equilateral) carry no hinge.
+/// Triangles of a lower shape quality (`4√3·A / Σ ℓ²`, 1 equilateral) carry no hinge.
 const MIN_QUALITY: f64 = 0.2;
 
-/// `4√3·area / Σ edge²` of triangle `t`.
 fn quality(positions: &[glam::Vec3], t: [u32; 3]) -> f64 {
-    let [a, b, c] = t.map(|i| positions[i as usize].as_dvec3());
-    let squares = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
-    if squares > 0.0 {
-        4.0 * 3f64.sqrt() * 0.5 * (b - a).cross(c - a).length() / squares
-    } else {
-        0.0
-    }
+    crate::layers::shape_quality(t.map(|i| positions[i as usize]))
 }
 
 /// The hinges of `triangles` over `positions` (its interior edges, each with its two triangles

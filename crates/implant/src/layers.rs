@@ -54,7 +54,7 @@ use crate::ImplantError;
 const SLIVER_QUALITY: f64 = 0.2;
 
 /// `4√3·area / Σ edge²`: 1 for an equilateral triangle, towards 0 for a sliver.
-fn shape_quality(c: [Vec3; 3]) -> f64 {
+pub(crate) fn shape_quality(c: [Vec3; 3]) -> f64 {
     let [a, b, c] = c.map(|p| p.as_dvec3());
     let area = 0.5 * (b - a).cross(c - a).length();
     let squares = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
