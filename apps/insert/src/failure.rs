@@ -97,6 +97,7 @@ impl Failure {
                 "; use a larger --radius or a smaller implant, away from the scan's edge",
             ),
             E::ClosedRegion { .. } => (code::PLACEMENT, ""),
+            E::RimAtBorder { .. } => (code::PLACEMENT, " (--radius; --at, --vertex)"),
             E::RegionReachesBorder { .. } => (
                 code::PLACEMENT,
                 " (coordinates in cm; --at takes the mesh's unit; --max-hole sets the holes filled)",

@@ -10,10 +10,10 @@ use std::time::Duration;
 
 use glam::Vec3;
 use tissue_implant::{
-    default_radius, place_implant, prepare_scan, select_region_with, sweep, volume_for_gain,
-    Implant, ImplantError, ImplantShape, ImplantSpec, InsertionOutcome, InsertionParams,
-    InverseOptions, InverseSearch, Progress, RegionOptions, RegionSelection, ScanOptions,
-    ScanResult, SimSurface, TissueLayers,
+    default_radius, place_implant, prepare_scan, rim_border_clearance, select_region_with, sweep,
+    volume_for_gain, Implant, ImplantError, ImplantShape, ImplantSpec, InsertionOutcome,
+    InsertionParams, InverseOptions, InverseSearch, Progress, RegionOptions, RegionSelection,
+    ScanOptions, ScanResult, SimSurface, TissueLayers,
 };
 use tissue_mesh::TriMesh;
 
@@ -284,6 +284,15 @@ fn build(
         scene.normal,
         job.placement.tangent,
     )?;
+    if let Some(surface) = &scene.surface {
+        // Tissue must be left between the expander and the fixed border: a scan's region can
+        // run into a crease (docs/validation.md, the closed body's belly).
+        let clearance = rim_border_clearance(&scene.layers, &implant);
+        let needed = surface.model_edge();
+        if clearance < needed {
+            return Err(ImplantError::RimAtBorder { clearance, needed });
+        }
+    }
     cancelled_check(cancelled)?;
     let insertion = tissue_implant::Insertion::new(scene.sim_mesh(), &implant, &scene.params)?;
     cancelled_check(cancelled)?;
@@ -445,6 +454,8 @@ impl PlannedInsertion {
 /// - [`ImplantError::PointOffSurface`], [`ImplantError::EmptyRegion`],
 ///   [`ImplantError::RegionCoversSurface`] from the region selection;
 /// - [`ImplantError::FootprintOutsideRegion`] when the implant does not fit under the region;
+/// - [`ImplantError::RimAtBorder`] when, on a simulation surface of its own, the expander's rim
+///   comes within [`SimSurface::model_edge`] of the region's border;
 /// - [`ImplantError::InvalidParameter`] for a non-positive volume or another parameter out of
 ///   range, and the other errors of the library's set-up.
 pub fn prepare(job: &InsertionJob) -> Result<PreparedInsertion, ImplantError> {

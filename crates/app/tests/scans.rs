@@ -307,14 +307,37 @@ fn on_a_closed_body_the_region_is_cut_out_of_it() {
     // the groin's crease, where the region's border comes within 3.4 cm of the centre and a
     // run at half the simulation edge diverged (docs/validation.md).
     let p = point(&scan, "back");
-    let job = job(
+    let back = job(
         &patient,
         p.vertex,
         ImplantShape::Round { diameter: 7.0 },
         50.0,
         Vec3::X,
     );
-    run_and_check(&job, "closed body, back, round 7 cm 50 cm³");
+    run_and_check(&back, "closed body, back, round 7 cm 50 cm³");
+
+    // Just below the navel the default region runs into the groin's crease and leaves less than
+    // one simulation edge of tissue between the rim and the fixed border: refused, saying so.
+    // The larger region the message asks for runs.
+    let p = point(&scan, "belly");
+    let mut belly = job(
+        &patient,
+        p.vertex,
+        ImplantShape::Round { diameter: 7.0 },
+        50.0,
+        Vec3::X,
+    );
+    match plan(&belly, |_| ControlFlow::Continue(())) {
+        Err(ImplantError::RimAtBorder { clearance, needed }) => {
+            assert!(clearance < needed, "{clearance} {needed}");
+        }
+        other => panic!("expected RimAtBorder, got {:?}", other.map(|_| ())),
+    }
+    belly.region_radius = Some(6.5);
+    run_and_check(
+        &belly,
+        "closed body, belly, round 7 cm 50 cm³, region 6.5 cm",
+    );
 }
 
 #[test]

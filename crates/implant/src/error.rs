@@ -136,6 +136,15 @@ pub enum ImplantError {
         /// Local y (cm).
         y: f32,
     },
+    /// The expander's rim comes closer to the region's fixed border than the tissue between them
+    /// can take: the region is too tight where it runs into a crease or a fold of the body.
+    #[error("the expander's rim comes within {clearance:.2} cm of the region's fixed border (at least {needed:.2} cm, one simulation edge, must stay between them): use a larger region radius, or move the expander away from creases")]
+    RimAtBorder {
+        /// The smallest distance from the rim to the border (cm).
+        clearance: f64,
+        /// The least allowed (cm).
+        needed: f64,
+    },
     /// The region reaches the scan's outer border or a hole too large to fill: no skin around
     /// it there to hold its boundary.
     #[error("the region of radius {radius:.2} cm around {centre:?} cm reaches {what} {distance:.2} cm from its centre: shrink the region to a radius of at most {fit_radius:.2} cm (--radius), or the expander by {shrink_percent:.0} % (the default region is 1.5 × its footprint radius); or move it: {elsewhere}")]

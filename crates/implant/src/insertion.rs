@@ -256,6 +256,26 @@ pub fn place_implant(
     }
 }
 
+/// The smallest distance (cm) from `implant`'s rim to the fixed border of `layers`' layer 2
+/// at rest: how much tissue is left between the expander and what holds the region. On a
+/// generous region it is about the region radius less the footprint's; where the region runs
+/// into a crease (the groin, from a 7 cm expander just below the navel) it can fall to less than
+/// one edge, and that run diverged at half its simulation edge.
+pub fn rim_border_clearance(layers: &TissueLayers, implant: &Implant) -> f64 {
+    let inner = layers.rest(Layer::Inner);
+    let border: Vec<Vec3> = layers
+        .boundary()
+        .iter()
+        .map(|&v| inner.positions()[v as usize])
+        .collect();
+    let p = implant.mesh().positions();
+    implant
+        .rim()
+        .flat_map(|v| border.iter().map(move |b| b.distance(p[v as usize])))
+        .fold(f32::INFINITY, f32::min)
+        .into()
+}
+
 /// How much further the emptied `implant`'s base must go down so that every vertex of `inner`
 /// (layer 2 at rest) over it is at least `clearance` above it (cm, 0 when all are). A vertex
 /// counts as over the base when its closest point on the base's triangles is its foot along

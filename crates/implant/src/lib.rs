@@ -68,8 +68,8 @@ mod walk;
 pub use contact_run::{ContactRun, RunParams, StepSummary};
 pub use error::ImplantError;
 pub use insertion::{
-    dissect_pocket, implant_system, place_implant, ImplantParams, Insertion, InsertionOutcome,
-    InsertionParams, Progress, PLATEAU_HALF, PLATEAU_TOLERANCE, RUNAWAY_FACTOR,
+    dissect_pocket, implant_system, place_implant, rim_border_clearance, ImplantParams, Insertion,
+    InsertionOutcome, InsertionParams, Progress, PLATEAU_HALF, PLATEAU_TOLERANCE, RUNAWAY_FACTOR,
 };
 pub use layers::{Layer, LayerParams, TissueLayers};
 pub use outcome::{replace_region, vertex_displacements, vertex_stretch, FieldRange};

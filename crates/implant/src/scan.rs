@@ -436,6 +436,14 @@ impl SimSurface {
         self.offset_reach
     }
 
+    /// The larger of the asked edge and the default edge for the region's radius (cm): the
+    /// length the model's smoothing and offset are set by, the same at `h` and `h/2`. The
+    /// expander's rim must stay at least this far inside the region's border
+    /// ([`crate::rim_border_clearance`]).
+    pub fn model_edge(&self) -> f64 {
+        2.0 * self.offset_reach
+    }
+
     /// The target edge length of the simulation surface, cm.
     pub fn edge(&self) -> f64 {
         self.edge
