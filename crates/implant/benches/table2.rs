@@ -3,6 +3,9 @@
 //! implant of 50, 100 and 150 cm³ under the 20 cm plane of 4225 vertices with the default
 //! parameters (or the volumes given after `REPEATS`), `REPEATS` times each (default 5), and prints per volume the median wall time,
 //! the steps, the stop reason and the results (area gain, volume difference, compression).
+//! `--membrane` adds, alternating with each default run, the same run without the skin's bending
+//! (`LayerParams::skin_bending`, the thesis's membrane) and prints the ratio of the medians: what
+//! the bending costs, measured in one run.
 #![allow(missing_docs)]
 
 use std::ops::ControlFlow;
@@ -14,7 +17,7 @@ use tissue_implant::{
     InsertionOutcome, InsertionParams, RegionOptions, RegionRule, TissueLayers,
 };
 
-fn table2_run(volume: f64) -> Result<InsertionOutcome, Box<dyn std::error::Error>> {
+fn table2_run(volume: f64, bending: bool) -> Result<InsertionOutcome, Box<dyn std::error::Error>> {
     let patient = tissue_mesh::grid(65, 20.0)?;
     let selection = select_region_with(
         &patient,
@@ -25,7 +28,8 @@ fn table2_run(volume: f64) -> Result<InsertionOutcome, Box<dyn std::error::Error
             ..RegionOptions::default()
         },
     )?;
-    let params = InsertionParams::default();
+    let mut params = InsertionParams::default();
+    params.layers.skin_bending = bending;
     let layers = TissueLayers::new(selection.mesh(), &params.layers)?;
     let spec = ImplantSpec::new(ImplantShape::Round { diameter: 7.0 }, volume);
     let implant = place_implant(&layers, &spec, Vec3::ZERO, Vec3::Z, Vec3::X)?;
@@ -40,6 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .filter_map(|a| a.parse().ok())
         .collect();
     let repeats = numbers.first().map_or(5, |&n| n.max(1.0) as usize);
+    let membrane = std::env::args().any(|a| a == "--membrane");
     let volumes = if numbers.len() > 1 {
         numbers[1..].to_vec()
     } else {
@@ -49,23 +54,36 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("volume  wall(median)  steps  stop        gain cm²  vol.diff cm³  compression");
     for &volume in &volumes {
         let mut times: Vec<Duration> = Vec::new();
+        let mut membrane_times: Vec<Duration> = Vec::new();
         let mut last = None;
         for _ in 0..repeats {
-            let out = table2_run(volume)?;
+            let out = table2_run(volume, true)?;
             times.push(out.wall_time);
             last = Some(out);
+            if membrane {
+                membrane_times.push(table2_run(volume, false)?.wall_time);
+            }
         }
         times.sort();
+        membrane_times.sort();
         if let Some(out) = last {
+            let median = times[times.len() / 2].as_secs_f64();
             println!(
                 "{volume:>6}  {:>10.3} s  {:>5}  {:<10}  {:>8.2}  {:>12.2}  {:>10.3} %",
-                times[times.len() / 2].as_secs_f64(),
+                median,
                 out.steps,
                 format!("{:?}", out.stop_reason),
                 out.area_gain,
                 out.volume_difference,
                 100.0 * out.implant_compression
             );
+            if let Some(m) = membrane_times.get(membrane_times.len() / 2) {
+                println!(
+                    "        without bending {:.3} s: bending costs × {:.3}",
+                    m.as_secs_f64(),
+                    median / m.as_secs_f64()
+                );
+            }
         }
     }
     Ok(())

@@ -17,6 +17,40 @@
 
 use glam::Vec3A;
 
+/// `atan2(y, x)` to within 2·10⁻⁶ rad: a minimax polynomial for `atan` on [0, 1] (11th order)
+/// with the octant reductions. `f32::atan2` cost four fifths of the hinges' time (Table 2's
+/// run: +13.5 % with it, +3.6 % without). The rest angle goes through the same function, so a
+/// hinge at rest has no force.
+fn atan2(y: f32, x: f32) -> f32 {
+    const C: [f32; 6] = [
+        0.999_977_26,
+        -0.332_623_47,
+        0.193_543_46,
+        -0.116_432_87,
+        0.052_653_32,
+        -0.011_721_20,
+    ];
+    let (ax, ay) = (x.abs(), y.abs());
+    let (small, large) = if ax < ay { (ax, ay) } else { (ay, ax) };
+    if large == 0.0 || !large.is_finite() {
+        return y.atan2(x);
+    }
+    let a = small / large;
+    let s = a * a;
+    let mut r = a * (C[0] + s * (C[1] + s * (C[2] + s * (C[3] + s * (C[4] + s * C[5])))));
+    if ay > ax {
+        r = std::f32::consts::FRAC_PI_2 - r;
+    }
+    if x < 0.0 {
+        r = std::f32::consts::PI - r;
+    }
+    if y < 0.0 {
+        -r
+    } else {
+        r
+    }
+}
+
 /// One hinge: particles `[x₀, x₁, x₂, x₃]` (the edge, then the two opposite vertices), its rest
 /// angle (rad) and stiffness `k_e` (g·cm²/s²).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -50,11 +84,15 @@ fn angle_and_gradient_floored(x: [Vec3A; 4], floor: [f32; 2]) -> Option<(f32, [V
         return None;
     }
     let le = le2.sqrt();
-    let theta = (n1.cross(n2).dot(e) / le).atan2(n1.dot(n2));
-    let g2 = n1 * (-le / a1);
-    let g3 = n2 * (-le / a2);
-    let g0 = n1 * (e.dot(x[1] - x[2]) / (le * a1)) + n2 * (e.dot(x[1] - x[3]) / (le * a2));
-    let g1 = n1 * (e.dot(x[2] - x[0]) / (le * a1)) + n2 * (e.dot(x[3] - x[0]) / (le * a2));
+    let inv_le = 1.0 / le;
+    let theta = atan2(n1.cross(n2).dot(e) * inv_le, n1.dot(n2));
+    // n₁/|n₁|² and n₂/|n₂|², then the edge vertices' weights along them.
+    let m1 = n1 * (1.0 / a1);
+    let m2 = n2 * (1.0 / a2);
+    let g2 = m1 * -le;
+    let g3 = m2 * -le;
+    let g0 = m1 * (e.dot(x[1] - x[2]) * inv_le) + m2 * (e.dot(x[1] - x[3]) * inv_le);
+    let g1 = m1 * (e.dot(x[2] - x[0]) * inv_le) + m2 * (e.dot(x[3] - x[0]) * inv_le);
     Some((theta, [g0, g1, g2, g3]))
 }
 
@@ -187,6 +225,21 @@ pub(crate) fn row_stiffness(hinges: &[Hinge], position: &[Vec3A]) -> Vec<(u32, f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_fast_atan2_is_within_two_microradians_everywhere() {
+        let mut worst = 0.0f64;
+        for k in 0..20_000 {
+            let phi = -std::f64::consts::PI + std::f64::consts::TAU * f64::from(k) / 20_000.0;
+            for r in [1e-3f64, 1.0, 250.0] {
+                let (y, x) = ((r * phi.sin()) as f32, (r * phi.cos()) as f32);
+                let exact = f64::from(y).atan2(f64::from(x));
+                worst = worst.max((f64::from(atan2(y, x)) - exact).abs());
+            }
+        }
+        assert!(worst < 2e-6, "{worst}");
+        assert_eq!(atan2(0.0, 0.0), 0.0);
+    }
 
     #[test]
     fn the_gradient_matches_finite_differences() {
