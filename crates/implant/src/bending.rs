@@ -28,7 +28,7 @@ fn atan2(y: f32, x: f32) -> f32 {
         0.193_543_46,
         -0.116_432_87,
         0.052_653_32,
-        -0.011_721_20,
+        -0.011_721_2,
     ];
     let (ax, ay) = (x.abs(), y.abs());
     let (small, large) = if ax < ay { (ax, ay) } else { (ay, ax) };
