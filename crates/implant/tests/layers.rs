@@ -366,3 +366,43 @@ fn a_ripple_shorter_than_the_depth_is_smoothed_out_of_layer_2_not_refused() {
         .count();
     assert!(level > inner.vertex_count() / 2, "{level}");
 }
+
+#[test]
+fn layer_1_resists_bending_as_a_plate_and_the_force_is_the_energys_gradient() {
+    // A flat 4 cm patch of 0.1 cm edges; one interior layer-1 particle lifted by 0.02 cm.
+    let region = tissue_mesh::grid(41, 4.0).unwrap();
+    let centre = 20 * 41 + 20;
+    let particle = TissueLayers::particle(Layer::Outer, centre) as usize;
+    let lifted = |bending: bool| {
+        let mut layers = TissueLayers::new(
+            &region,
+            &LayerParams {
+                depth: 0.25,
+                skin_bending: bending,
+                ..LayerParams::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(layers.bending_energy(), 0.0);
+        layers.system_mut().particles_mut().positions_mut()[particle].z += 0.02;
+        layers.compute_forces();
+        let f = layers.system().particles().forces()[particle];
+        (layers, f)
+    };
+    let (mut bent, with) = lifted(true);
+    let (_, without) = lifted(false);
+    let energy = bent.bending_energy();
+    assert!(energy > 0.0);
+    // The bending's share of the force pulls the particle back down, and it is the energy's
+    // gradient: moving the particle by a small dz along it changes the energy by −F·dz.
+    let bending_force = with.z - without.z;
+    assert!(bending_force < 0.0, "{bending_force}");
+    let dz = 1e-4;
+    bent.system_mut().particles_mut().positions_mut()[particle].z += dz;
+    let change = bent.bending_energy() - energy;
+    let predicted = -f64::from(bending_force) * f64::from(dz);
+    assert!(
+        (change - predicted).abs() < 0.05 * predicted.abs(),
+        "energy change {change} against −F·dz {predicted}"
+    );
+}
