@@ -207,7 +207,9 @@ impl Inputs {
             },
             max_steps: job.params.run.stop.max_steps,
             time_step_s: job.params.run.time_step,
-            fill_time_s: job.params.fill_time,
+            fill_time_s: job
+                .run_params()
+                .map_or(job.params.fill_time, |p| p.fill_time),
             sweep_volumes_cm3: None,
             target_gain_cm2: None,
             bracket_cm3: None,
