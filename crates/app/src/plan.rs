@@ -673,3 +673,58 @@ pub(crate) fn inverse_with(
 pub(crate) fn saturating_elapsed(start: std::time::Instant) -> Duration {
     std::time::Instant::now().saturating_duration_since(start)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tissue_implant::ImplantShape;
+
+    fn job(diameter: f32, sim: SimMesh) -> InsertionJob {
+        let mut job = InsertionJob::new(
+            tissue_mesh::grid(9, 20.0).unwrap(),
+            Placement::new(Vec3::ZERO, Vec3::Z, Vec3::X),
+            ImplantSpec::new(ImplantShape::Round { diameter }, 10.0),
+        );
+        job.sim = sim;
+        job
+    }
+
+    #[test]
+    fn the_runs_times_scale_with_the_model_edge_and_only_on_a_remeshed_run() {
+        let default = InsertionParams::default();
+        // Table 2's 7 cm expander: its own times.
+        let table2 = job(7.0, SimMesh::default());
+        assert!((table2.time_scale().unwrap() - 1.0).abs() < 1e-12);
+        // A 2.5 cm one: its edge (0.06 × 1.875 cm) over Table 2's (0.06 × 5.25 cm).
+        let small = job(2.5, SimMesh::default());
+        let scale = small.time_scale().unwrap();
+        assert!((scale - 1.875 / 5.25).abs() < 1e-9, "{scale}");
+        let p = small.run_params().unwrap();
+        assert!((f64::from(p.fill_time) - scale * f64::from(default.fill_time)).abs() < 1e-9);
+        assert!(
+            (f64::from(p.run.damping_time) - scale * f64::from(default.run.damping_time)).abs()
+                < 1e-9
+        );
+        // Halving the edge keeps the model edge, so the times too; a coarser edge lengthens them.
+        let half = job(
+            2.5,
+            SimMesh::Remeshed(ScanOptions {
+                sim_edge: Some(0.5 * 0.06 * 1.875),
+                ..ScanOptions::default()
+            }),
+        );
+        assert!((half.time_scale().unwrap() - scale).abs() < 1e-12);
+        let coarse = job(
+            2.5,
+            SimMesh::Remeshed(ScanOptions {
+                sim_edge: Some(tissue_implant::default_sim_edge(5.25).unwrap()),
+                ..ScanOptions::default()
+            }),
+        );
+        assert!((coarse.time_scale().unwrap() - 1.0).abs() < 1e-9);
+        // The patient's own triangles (the thesis's planes) keep the set times.
+        let own = job(2.5, SimMesh::Patient);
+        assert_eq!(own.time_scale().unwrap(), 1.0);
+        assert_eq!(own.run_params().unwrap(), own.params);
+    }
+}
