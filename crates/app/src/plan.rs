@@ -135,8 +135,7 @@ impl InsertionJob {
         match &self.sim {
             SimMesh::Patient => Ok(1.0),
             SimMesh::Remeshed(options) => {
-                let default = tissue_implant::default_sim_edge(self.radius()?)?;
-                let model = options.sim_edge.map_or(default, |h| h.max(default));
+                let model = tissue_implant::model_edge(self.radius()?, options.sim_edge)?;
                 let table2 =
                     tissue_implant::default_sim_edge(default_radius(TABLE2_FOOTPRINT_RADIUS)?)?;
                 Ok(model / table2)

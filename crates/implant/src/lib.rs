@@ -81,8 +81,8 @@ pub use region::{
     DEFAULT_RADIUS_FACTOR, DEFAULT_SNAP_FRACTION, NOT_IN_REGION,
 };
 pub use scan::{
-    default_sim_edge, prepare_scan, ScanOptions, ScanResult, SimSurface, DEFAULT_MAX_HOLE,
-    TABLE2_REGION_VERTICES,
+    default_sim_edge, model_edge, prepare_scan, ScanOptions, ScanResult, SimSurface,
+    DEFAULT_MAX_HOLE, TABLE2_REGION_VERTICES,
 };
 pub use shape::{Implant, ImplantFrame, ImplantShape, ImplantSpec};
 pub use walk::{walk_on_surface, WalkEnd};

@@ -161,7 +161,8 @@ const PINNED: u32 = u32::MAX;
 pub struct SimSurface {
     mesh: TriMesh,
     edge: f64,
-    offset_reach: f64,
+    /// The larger of `edge` and the default edge for the region's radius (cm).
+    model_edge: f64,
     binding: Vec<Binding>,
     scan_vertices: usize,
     scan_triangles: usize,
@@ -193,6 +194,18 @@ pub struct ScanResult {
     /// (by geodesic distance from the centre, `d ≥ R − h`), cm: how smoothly the result meets
     /// the unchanged scan (0 at the boundary itself).
     pub seam_max_move: f32,
+}
+
+/// The length the simulation surface's model is set by (cm): the larger of the asked edge and
+/// [`default_sim_edge`] of the region's radius. The smoothing, layer 2's offset, the rim's
+/// clearance from the border and the run's times follow it, so that halving the edge samples the
+/// same model more finely.
+///
+/// # Errors
+/// Those of [`default_sim_edge`].
+pub fn model_edge(region_radius: f64, sim_edge: Option<f64>) -> Result<f64, ImplantError> {
+    let default = default_sim_edge(region_radius)?;
+    Ok(sim_edge.map_or(default, |h| h.max(default)))
 }
 
 /// Fills the scan's small holes, selects the region around `point` and remeshes it into the
@@ -228,6 +241,7 @@ pub fn prepare_scan(
         Some(h) => h,
         None => default_sim_edge(radius)?,
     };
+    let model_edge = model_edge(radius, options.sim_edge)?;
     // A loop as wide as half the scan is its border, not a drop-out, however small the scan.
     let max_hole = options
         .max_hole
@@ -254,7 +268,7 @@ pub fn prepare_scan(
     // at least 1.5 × the depth; and at least COARSE_SMOOTHING scan edges, so a coarse scan's
     // facets are rounded into the surface they sample instead of followed crease by crease (a
     // coarse body's 0.65 cm facets, followed at h/2 = 0.16 cm, crossed the expander's base).
-    let smoothing = (options.smoothing * edge.max(default_sim_edge(radius)?))
+    let smoothing = (options.smoothing * model_edge)
         .max(depth_smoothing(depth))
         .max(COARSE_SMOOTHING * median_edge(selection.mesh()));
     let smoothing = (options.smoothing > 0.0).then_some(smoothing);
@@ -285,7 +299,7 @@ pub fn prepare_scan(
         SimSurface {
             mesh,
             edge,
-            offset_reach: 0.5 * edge.max(default_sim_edge(radius)?),
+            model_edge,
             binding,
             scan_vertices: patient.vertex_count(),
             scan_triangles: fill.first_fill_triangle,
@@ -433,7 +447,7 @@ impl SimSurface {
     ///
     /// [`LayerParams::offset_reach`]: crate::LayerParams::offset_reach
     pub fn offset_reach(&self) -> f64 {
-        self.offset_reach
+        0.5 * self.model_edge
     }
 
     /// The larger of the asked edge and the default edge for the region's radius (cm): the
@@ -441,7 +455,7 @@ impl SimSurface {
     /// expander's rim must stay at least this far inside the region's border
     /// ([`crate::rim_border_clearance`]).
     pub fn model_edge(&self) -> f64 {
-        2.0 * self.offset_reach
+        self.model_edge
     }
 
     /// The target edge length of the simulation surface, cm.

@@ -324,16 +324,13 @@ fn a_ripple_shorter_than_the_depth_is_smoothed_out_of_layer_2_not_refused() {
     // offset turns triangles over around every spike; the layers smooth the directions there.
     let flat = tissue_mesh::grid(41, 4.0).unwrap();
     let mut positions = flat.positions().to_vec();
-    let mut state = 12345u64;
-    let mut next = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 33) as f32 / (1u64 << 31) as f32
-    };
+    let mut rng = tissue_bvh::scenes::Rng::new(12345);
     for _ in 0..12 {
-        let (i, j) = (5 + (next() * 31.0) as usize, 5 + (next() * 31.0) as usize);
-        positions[i * 41 + j].z += 0.12 + 0.06 * next();
+        let (i, j) = (
+            5 + (rng.unit() * 31.0) as usize,
+            5 + (rng.unit() * 31.0) as usize,
+        );
+        positions[i * 41 + j].z += rng.range(0.12, 0.18);
     }
     let region = flat.with_positions(positions).unwrap();
     let depth = 0.25;

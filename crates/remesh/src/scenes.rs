@@ -2,38 +2,15 @@
 //! supported API): noisy planes, discs, cylinder patches and spheres with holes punched in them.
 
 use glam::Vec3;
+use tissue_bvh::scenes::Rng;
 use tissue_mesh::{grid, subdivided_cube, MeshError, TriMesh};
 
-/// SplitMix64: a tiny seeded generator, so tests need no `rand` dependency.
-#[derive(Debug, Clone)]
-pub struct Rng(u64);
-
-impl Rng {
-    /// A generator from a seed.
-    pub fn new(seed: u64) -> Rng {
-        Rng(seed)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[0, 1)`.
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Standard normal (Box–Muller).
-    pub fn normal(&mut self) -> f64 {
-        let u1 = self.unit().max(1e-300);
-        let u2 = self.unit();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
+/// A standard normal sample from `rng` (Box–Muller on two 53-bit uniforms).
+fn standard_normal(rng: &mut Rng) -> f64 {
+    let mut unit = || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+    let u1 = unit().max(1e-300);
+    let u2 = unit();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
 }
 
 /// Keeps the triangles `keep(t)` and drops the vertices no kept triangle uses (kept ones in order).
@@ -76,7 +53,7 @@ pub fn add_noise(
     let positions = mesh
         .positions()
         .iter()
-        .map(|&p| p + normal(p) * (sigma * rng.normal()) as f32)
+        .map(|&p| p + normal(p) * (sigma * standard_normal(&mut rng)) as f32)
         .collect();
     TriMesh::new(positions, mesh.triangles().to_vec())
 }
