@@ -3,11 +3,13 @@
 
 use std::path::PathBuf;
 
-use clap::{Parser, ValueEnum};
-use tissue_implant::{ImplantSpec, InsertionParams, InverseOptions, LayerParams};
+use clap::Parser;
+use tissue_planner::{ColorBy, Detect, PlanRequest, Rule, Shape, Unit};
 
-/// One kPa in the libraries' unit of stress, g/(cm·s²) (1 Pa = 10 g/(cm·s²)).
-pub const KPA: f64 = 1.0e4;
+/// The library's defaults, read from an empty request.
+fn defaults() -> PlanRequest {
+    PlanRequest::default()
+}
 
 const ABOUT: &str = "Plan a tissue-expander insertion: an incompressible implant is inserted \
 under a patch of skin on a patient's surface scan; a mass-spring simulation gives the stretched \
@@ -58,8 +60,8 @@ outside the region displacement is 0 and stretch 1.
   stdout          a summary table (single run), one row per run (--sweep), or the runs and the \
 answer (--target-gain).
 
-REPORT JSON (a contract: fields are only ever added). Single run:
-  tool, version, mode (\"single\"), inputs {...}, and
+REPORT JSON (a contract, the same for every front end of tissue-planner: fields are only ever added; a change that is not an addition raises schema_version). Single run:
+  schema_version, tool (\"insert\"), version, mode (\"single\"), inputs {...}, and
   area_before_cm2, area_after_cm2, area_gain_cm2   skin region area before/after, gain
   volume_difference_cm3                            volume between the skin before and after
   implant_volume_cm3, implant_volume_end_cm3       implant volume as built, at the end
@@ -68,7 +70,7 @@ REPORT JSON (a contract: fields are only ever added). Single run:
   region_vertices, region_triangles, region_radius_cm
   steps, max_steps, stop_reason (\"settled\" | \"step_limit\"), time_step_s, wall_time_s
   inputs: mesh, mesh_generated, unit, cm_per_unit, mesh_vertices, mesh_triangles, at, vertex, \
-point_cm, surface_point_cm, normal, tangent, shape {kind, diameter_cm | length_cm, width_cm, \
+point_cm, surface_point_cm, normal, tangent, rotation_deg, shape {kind, diameter_cm | length_cm, width_cm, \
 corner_radius_cm | length_cm, width_cm, bend_radius_cm}, volume_cm3, implant_vertices, depth_cm, \
 region_radius_cm, region_rule, young_kpa, poisson, thickness_cm, density_g_cm3, detect, \
 max_steps, time_step_s (null: automatic), fill_time_s.
@@ -92,101 +94,28 @@ tissue values out of range, a --target-gain not inside the volume bracket
   141  (unix, shown by the shell) stdout closed by its reader (| head): SIGPIPE ends the program \
 at its next write to stdout, silently; outputs not yet written are not written";
 
-/// The mesh file's unit of length.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Unit {
-    /// Millimetres.
-    Mm,
-    /// Centimetres.
-    Cm,
-    /// Decimetres (the MakeHuman meshes).
-    Dm,
-    /// Metres.
-    M,
-}
-
-impl Unit {
-    /// Centimetres per unit.
-    pub fn cm_per_unit(self) -> f32 {
-        match self {
-            Unit::Mm => 0.1,
-            Unit::Cm => 1.0,
-            Unit::Dm => 10.0,
-            Unit::M => 100.0,
-        }
-    }
-
-    /// The unit's symbol.
-    pub fn symbol(self) -> &'static str {
-        match self {
-            Unit::Mm => "mm",
-            Unit::Cm => "cm",
-            Unit::Dm => "dm",
-            Unit::M => "m",
-        }
-    }
-}
-
-/// The implant's base outline.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Shape {
-    /// Circular base: --diameter.
-    Round,
-    /// Rectangular base: --length × --width, corners rounded to --corner-radius.
-    Rectangular,
-    /// Crescent (kidney) base: --length (tip to tip), --width, --bend-radius.
-    Crescent,
-}
-
-/// Which triangles within the region radius form the region.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Rule {
-    /// Every triangle with a corner within the radius (the thesis's rule, Table 2).
-    TouchesVertex,
-    /// Triangles whose mean corner distance is within the radius (area ≈ πr²).
-    Centroid,
-}
-
-/// The collision broad phase.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Detect {
-    /// A bounding-volume hierarchy over both surfaces.
-    Bvh,
-    /// A hierarchy over the tissue, a voxel grid over the implant.
-    Voxels,
-}
-
-/// The field that colours the "after" picture.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ColorBy {
-    /// How far each vertex moved (mesh unit).
-    Displacement,
-    /// Area after / area before of the skin around each vertex.
-    Stretch,
-}
-
 fn default_young_kpa() -> f64 {
-    LayerParams::default().young / KPA
+    defaults().young_kpa
 }
 
 fn default_poisson() -> f64 {
-    LayerParams::default().poisson
+    defaults().poisson
 }
 
 fn default_thickness() -> f64 {
-    LayerParams::default().skin_thickness
+    defaults().thickness_cm
 }
 
 fn default_density() -> f64 {
-    LayerParams::default().density
+    defaults().density_g_cm3
 }
 
 fn default_depth() -> f64 {
-    LayerParams::default().depth
+    defaults().depth_cm
 }
 
 fn default_max_steps() -> u64 {
-    InsertionParams::default().run.stop.max_steps
+    defaults().max_steps
 }
 
 /// Parses `X,Y,Z`.
@@ -251,9 +180,9 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 /// Parses an output mesh path: its extension must name a format.
 fn parse_mesh_out(s: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(s);
-    match tissue_meshio::SurfaceFormat::from_path(&path) {
-        Some(_) => Ok(path),
-        None => Err(format!(
+    match tissue_planner::is_mesh_path(&path) {
+        true => Ok(path),
+        false => Err(format!(
             "{s:?}: the extension must be .obj, .ply, .stl or .vtk (it picks the format)"
         )),
     }
@@ -295,6 +224,16 @@ pub struct Cli {
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true,
           help_heading = "Placement")]
     pub tangent: Option<[f32; 3]>,
+
+    /// Turns the tangent about the normal by this many degrees (counter-clockwise seen from
+    /// outside the body).
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        help_heading = "Placement"
+    )]
+    pub rotation: f32,
 
     /// The implant's base outline.
     #[arg(long, value_enum, default_value_t = Shape::Round, help_heading = "Implant")]
@@ -340,7 +279,7 @@ pub struct Cli {
     pub volume: f64,
 
     /// Implant mesh size: wanted vertex count (50 to 100000).
-    #[arg(long, value_name = "N", default_value_t = ImplantSpec::DEFAULT_VERTEX_BUDGET,
+    #[arg(long, value_name = "N", default_value_t = defaults().implant_vertices,
           help_heading = "Implant")]
     pub implant_vertices: u32,
 
@@ -376,7 +315,7 @@ pub struct Cli {
 
     /// Holes of the scan up to this size across are filled for the simulation (cm); a region
     /// that reaches a larger one, or the scan's border, is refused.
-    #[arg(long, value_name = "CM", default_value_t = tissue_implant::DEFAULT_MAX_HOLE,
+    #[arg(long, value_name = "CM", default_value_t = defaults().max_hole_cm,
           help_heading = "Simulation mesh")]
     pub max_hole: f64,
 
@@ -428,7 +367,7 @@ pub struct Cli {
     pub bracket: Option<(f64, f64)>,
 
     /// --target-gain: stop when a run's gain is within this of the target (cm²).
-    #[arg(long, value_name = "CM2", default_value_t = InverseOptions::default().gain_tolerance,
+    #[arg(long, value_name = "CM2", default_value_t = tissue_planner::default_gain_tolerance(),
           requires = "target_gain", help_heading = "Run")]
     pub gain_tolerance: f64,
 
@@ -463,6 +402,76 @@ impl Cli {
     pub fn unit(&self) -> Unit {
         self.unit.unwrap_or(Unit::Cm)
     }
+
+    /// The planning request the flags make.
+    pub fn request(&self) -> PlanRequest {
+        PlanRequest {
+            at: self.at,
+            vertex: self.vertex,
+            tangent: self.tangent,
+            rotation_deg: self.rotation,
+            shape: self.shape,
+            diameter_cm: self.diameter,
+            length_cm: self.length,
+            width_cm: self.width,
+            corner_radius_cm: self.corner_radius,
+            bend_radius_cm: self.bend_radius,
+            volume_cm3: self.volume,
+            implant_vertices: self.implant_vertices,
+            depth_cm: self.depth,
+            region_radius_cm: self.radius,
+            region_rule: self.region_rule,
+            sim_edge_cm: self.sim_edge,
+            scan_triangles: self.scan_triangles,
+            max_hole_cm: self.max_hole,
+            young_kpa: self.young,
+            poisson: self.poisson,
+            thickness_cm: self.thickness,
+            density_g_cm3: self.density,
+            detect: self.detect,
+            max_steps: self.max_steps,
+            time_step_s: self.time_step,
+        }
+    }
+}
+
+/// The flag that sets a request field (the planner's messages name fields).
+pub fn flag_of(field: &str) -> Option<&'static str> {
+    Some(match field {
+        "mesh" => "--mesh",
+        "unit" => "--unit",
+        "at" => "--at",
+        "vertex" => "--vertex",
+        "tangent" => "--tangent",
+        "rotation_deg" => "--rotation",
+        "shape" => "--shape",
+        "diameter_cm" => "--diameter",
+        "length_cm" => "--length",
+        "width_cm" => "--width",
+        "corner_radius_cm" => "--corner-radius",
+        "bend_radius_cm" => "--bend-radius",
+        "volume_cm3" => "--volume",
+        "volumes_cm3" => "--sweep",
+        "implant_vertices" => "--implant-vertices",
+        "depth_cm" => "--depth",
+        "region_radius_cm" => "--radius",
+        "region_rule" => "--region-rule",
+        "sim_edge_cm" => "--sim-edge",
+        "scan_triangles" => "--scan-triangles",
+        "max_hole_cm" => "--max-hole",
+        "young_kpa" => "--young",
+        "poisson" => "--poisson",
+        "thickness_cm" => "--thickness",
+        "density_g_cm3" => "--density",
+        "detect" => "--detect",
+        "max_steps" => "--max-steps",
+        "time_step_s" => "--time-step",
+        "target_gain_cm2" => "--target-gain",
+        "bracket_cm3" => "--bracket",
+        "gain_tolerance_cm2" => "--gain-tolerance",
+        "out" => "--out",
+        _ => return None,
+    })
 }
 
 #[cfg(test)]
@@ -473,6 +482,14 @@ mod tests {
     #[test]
     fn the_command_is_well_formed() {
         Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn every_request_field_has_its_flag() {
+        let json = serde_json::to_value(PlanRequest::default()).unwrap();
+        for field in json.as_object().unwrap().keys() {
+            assert!(flag_of(field).is_some(), "no flag for {field}");
+        }
     }
 
     #[test]

@@ -1,8 +1,10 @@
 //! Why the program stops: a one-line message that says what to change, and its exit code.
+//! The planner's error kinds map to the documented codes; its messages name request fields,
+//! shown here as the flags that set them.
 
-use tissue_app::AppError;
-use tissue_implant::ImplantError;
-use tissue_meshio::MeshIoError;
+use tissue_planner::{ErrorKind, PlanError};
+
+use crate::cli::flag_of;
 
 /// The documented exit codes (see `insert --help`).
 pub mod code {
@@ -50,23 +52,19 @@ impl Failure {
             .join(" ")
     }
 
-    /// Reading the mesh file failed.
-    pub fn from_mesh_io(e: &MeshIoError) -> Self {
-        match e {
-            MeshIoError::Io { .. } => Failure::new(
-                code::INPUT,
-                format!("cannot read the mesh: {e}; check the --mesh path"),
-            ),
-            MeshIoError::UnsupportedFormat { .. } => Failure::new(code::INPUT, e.to_string()),
-            MeshIoError::Invalid { .. } => Failure::new(
-                code::MESH,
-                format!("{e}; repair the scan (meshinfo lists every defect)"),
-            ),
-            _ => Failure::new(
-                code::MESH,
-                format!("malformed mesh file: {e}; export the scan again as .obj, .ply or .stl"),
-            ),
-        }
+    /// The planner's error, its fields named by their flags.
+    pub fn from_plan(e: &PlanError) -> Self {
+        let code = match e.kind {
+            ErrorKind::Usage => code::USAGE,
+            ErrorKind::Input => code::INPUT,
+            ErrorKind::Mesh => code::MESH,
+            ErrorKind::Placement => code::PLACEMENT,
+            ErrorKind::Parameters => code::PARAMETERS,
+            ErrorKind::Run => code::RUN,
+            ErrorKind::Output => code::OUTPUT,
+            ErrorKind::Cancelled => code::INTERRUPTED,
+        };
+        Failure::new(code, e.message_with(flag_of))
     }
 
     /// Writing an output failed.
@@ -75,88 +73,6 @@ impl Failure {
             code::OUTPUT,
             format!("cannot write the {what}: {e}; check the folder exists and is writable"),
         )
-    }
-
-    /// The simulation library refused the inputs or failed.
-    pub fn from_implant(e: &ImplantError) -> Self {
-        use ImplantError as E;
-        let (code, hint) = match e {
-            E::Cancelled { .. } => (code::INTERRUPTED, ""),
-            E::PointOffSurface { .. } => (
-                code::PLACEMENT,
-                " (distances in cm); give an --at on the skin (in the mesh's unit) or a --vertex",
-            ),
-            E::EmptyRegion { .. } => (code::PLACEMENT, " (set with --radius)"),
-            E::RegionCoversSurface { .. } => (
-                code::PLACEMENT,
-                " (set with --radius, default 1.5 × the implant's footprint radius); the mesh is \
-                 too small for this region: use a smaller --radius or implant, or a larger scan",
-            ),
-            E::FootprintOutsideRegion { .. } => (
-                code::PLACEMENT,
-                "; use a larger --radius or a smaller implant, away from the scan's edge",
-            ),
-            E::ClosedRegion { .. } => (code::PLACEMENT, ""),
-            E::RimAtBorder { .. } => (code::PLACEMENT, " (--radius; --at, --vertex)"),
-            E::RegionReachesBorder { .. } => (
-                code::PLACEMENT,
-                " (coordinates in cm; --at takes the mesh's unit; --max-hole sets the holes filled)",
-            ),
-            E::Remesh(_) => (
-                code::MESH,
-                "; check the scan with meshinfo, or give another --sim-edge",
-            ),
-            E::InvalidParameter { name, .. } => match *name {
-                "point" | "radius" | "region_radius" | "max_distance" | "region" => {
-                    (code::PLACEMENT, "")
-                }
-                "depth" => (code::PARAMETERS, " (--depth)"),
-                "young" => (code::PARAMETERS, " (--young, here in g/(cm·s²) = 0.1 Pa)"),
-                "poisson" => (code::PARAMETERS, " (--poisson)"),
-                "skin_thickness" => (code::PARAMETERS, " (--thickness)"),
-                "density" => (code::PARAMETERS, " (--density)"),
-                "time_step" => (code::PARAMETERS, " (--time-step)"),
-                "sim_edge" => (code::PARAMETERS, " (--sim-edge)"),
-                "max_hole" => (code::PARAMETERS, " (--max-hole)"),
-                _ => (code::PARAMETERS, ""),
-            },
-            E::ShapeNotMeshable { .. }
-            | E::VolumeOutOfRange { .. }
-            | E::VolumeNotReached { .. }
-            | E::SurfaceHeight { .. } => {
-                (code::PARAMETERS, "; change --volume or the implant's size")
-            }
-            E::TargetNotBracketed { .. } => (code::PARAMETERS, " (--bracket LOW,HIGH)"),
-            E::Model(tissue_mss::MssError::InvalidSpring { .. }) => (
-                code::PLACEMENT,
-                "; the skin or the implant's base bent onto it has badly shaped (obtuse) \
-                 triangles at this point: pick another point (--at, --vertex), a smaller or \
-                 larger implant, or remesh the scan",
-            ),
-            E::Diverged { .. } => (code::RUN, " (leave --time-step automatic, or lower it)"),
-            E::RanAway { .. } => (code::RUN, ""),
-            _ => (
-                code::RUN,
-                "; check the scan (meshinfo) and the parameters, or report this",
-            ),
-        };
-        let message = match code {
-            code::RUN => format!("the run failed: {e}{hint}"),
-            _ => format!("{e}{hint}"),
-        };
-        Failure::new(code, message)
-    }
-
-    /// The worker did not give a result.
-    pub fn from_app(e: &AppError) -> Self {
-        match e {
-            AppError::Implant(inner) => Failure::from_implant(inner),
-            AppError::Cancelled { steps } => Failure::interrupted(*steps),
-            _ => Failure::new(
-                code::RUN,
-                format!("the run failed: {e}; check the scan and the parameters, or report this"),
-            ),
-        }
     }
 
     /// Ctrl-C.
@@ -173,27 +89,17 @@ mod tests {
     use super::*;
 
     #[test]
-    fn messages_are_one_line_and_codes_follow_the_table() {
-        let e = ImplantError::RegionCoversSurface {
-            radius: 9.0,
-            triangles: 10,
-            farthest: 3.0,
-        };
-        let f = Failure::from_implant(&e);
+    fn kinds_map_to_the_exit_code_table_and_fields_to_flags() {
+        let e = PlanError::field(
+            ErrorKind::Placement,
+            "region_radius_cm",
+            "use a smaller `region_radius_cm` or implant",
+        );
+        let f = Failure::from_plan(&e);
         assert_eq!(f.code, code::PLACEMENT);
-        assert!(!f.line().contains('\n'));
-        assert!(f.line().contains("--radius"));
-        let d = ImplantError::Diverged {
-            step: 3,
-            particle: 1,
-            what: "position",
-        };
-        assert_eq!(Failure::from_implant(&d).code, code::RUN);
-        let v = ImplantError::InvalidParameter {
-            name: "volume_cm3",
-            value: -1.0,
-            expected: "positive".into(),
-        };
-        assert_eq!(Failure::from_implant(&v).code, code::PARAMETERS);
+        assert_eq!(f.line(), "use a smaller --radius or implant");
+        let v = PlanError::field(ErrorKind::Parameters, "volume_cm3", "`volume_cm3` < 0");
+        assert_eq!(Failure::from_plan(&v).code, code::PARAMETERS);
+        assert_eq!(Failure::from_plan(&v).message, "--volume < 0");
     }
 }

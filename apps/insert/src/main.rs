@@ -1,8 +1,9 @@
 //! `insert`: plan a tissue-expander insertion on a patient's surface scan from the command line.
 //!
-//! Command line ([`cli`]) → scenario and tissue-app job ([`setup`]) → the events loop with
-//! progress and Ctrl-C ([`progress`]) → stdout, the mesh, picture and JSON report ([`modes`],
-//! [`output`], [`report`]). Every failure is one line on stderr and a documented exit code
+//! A thin shell over the planning front door, tissue-planner: command line ([`cli`]) → the
+//! planner's request and scenario ([`setup`]) → the events loop with progress and Ctrl-C
+//! ([`progress`]) → stdout, the mesh, picture and JSON report ([`modes`], [`output`],
+//! [`report`]: the tables on stdout; the JSON contract is the planner's). Every failure is one line on stderr and a documented exit code
 //! ([`failure`]); see `insert --help` and `apps/insert/README.md`.
 
 mod cli;
@@ -16,6 +17,7 @@ mod setup;
 use std::process::ExitCode;
 
 use clap::Parser;
+use tissue_planner::report::Inputs;
 
 use crate::cli::Cli;
 use crate::failure::{code, Failure};
@@ -26,11 +28,7 @@ fn run(cli: &Cli) -> Result<(), Failure> {
     output::check_targets(cli)?;
     let scenario = setup::scenario(cli)?;
     interrupt.check()?;
-    let sim_edge = scenario
-        .job
-        .sim_edge()
-        .map_err(|e| failure::Failure::from_implant(&e))?;
-    let inputs = report::Inputs::new(cli, &scenario, scenario.region_radius()?, sim_edge);
+    let inputs = Inputs::new(&scenario).map_err(|e| Failure::from_plan(&e))?;
     if let Some(volumes) = &cli.sweep {
         modes::sweep(cli, &scenario, &inputs, volumes, &interrupt)
     } else if let Some(target) = cli.target_gain {

@@ -1,15 +1,17 @@
 //! The three things `insert` does — one run, a sweep of volumes, the search for a target area
 //! gain — each as: a tissue-app job, its events loop, then the outputs and stdout.
 
-use tissue_app::{InverseJob, Job, Outcome, SweepJob};
-use tissue_implant::InverseOptions;
+use tissue_planner::report::{self as contract, Inputs, RunResult};
+use tissue_planner::{Job, Outcome, PatientResult, Scenario};
 
 use crate::cli::Cli;
 use crate::failure::{code, Failure};
-use crate::output::{PatientResult, Staged};
+use crate::output::Staged;
 use crate::progress::{drive, Display, Interrupt};
-use crate::report::{self, Inputs, RunResult, SweepRow};
-use crate::setup::Scenario;
+use crate::report;
+
+/// The report's `tool`.
+const TOOL: &str = "insert";
 
 fn unexpected(outcome: &Outcome) -> Failure {
     Failure::new(
@@ -69,7 +71,7 @@ pub fn single(
     }
     // On a remeshed run the result is mapped onto the scan for the report's scan figures too.
     let patient = if !cli.out.is_empty() || cli.png.is_some() || planned.surface.is_some() {
-        Some(PatientResult::new(scenario, &planned)?)
+        Some(PatientResult::new(scenario, &planned).map_err(|e| Failure::from_plan(&e))?)
     } else {
         None
     };
@@ -84,15 +86,17 @@ pub fn single(
     let mut staged = Staged::default();
     if let Some(patient) = &patient {
         for out in &cli.out {
-            staged.mesh(out, &patient.after, &patient.fields())?;
+            staged.mesh(out, patient)?;
         }
         if let Some(png) = &cli.png {
-            let bytes = patient.picture(cli.color, cli.png_size, scenario.unit.symbol())?;
+            let bytes = patient
+                .picture(cli.color, cli.png_size, scenario.patient.unit.symbol())
+                .map_err(|e| Failure::from_plan(&e))?;
             staged.bytes(png, &bytes, "picture")?;
         }
     }
     if let Some(path) = &cli.report {
-        let bytes = json(&report::single(inputs.clone(), result))?;
+        let bytes = json(&contract::single(TOOL, inputs.clone(), result))?;
         staged.bytes(path, &bytes, "report")?;
     }
     commit(staged, interrupt)
@@ -107,10 +111,9 @@ pub fn sweep(
     interrupt: &Interrupt,
 ) -> Result<(), Failure> {
     let max_steps = scenario.job.params.run.stop.max_steps;
-    let job = SweepJob {
-        base: scenario.job.clone(),
-        volumes: volumes.to_vec(),
-    };
+    let job = scenario
+        .sweep_job(volumes)
+        .map_err(|e| Failure::from_plan(&e))?;
     let mut display = Display::new(cli.quiet, true);
     let result = match drive(Job::Sweep(job), &mut display, interrupt)? {
         Outcome::Sweep(s) => *s,
@@ -119,30 +122,16 @@ pub fn sweep(
     println!("{}", report::SWEEP_HEADER);
     let mut rows = Vec::new();
     let mut failure = None;
-    for run in &result.runs {
-        match &run.result {
-            Ok(outcome) if outcome.is_finite() => {
-                let r = RunResult::new(
-                    outcome,
-                    &result.selection,
-                    result.surface.as_ref(),
-                    max_steps,
-                );
-                println!("{}", report::sweep_row(run.volume, &r));
-                warn_step_limit(&r, &format!("the {} cm³ run", run.volume));
-                rows.push(SweepRow {
-                    volume_cm3: run.volume,
-                    result: r,
-                });
-            }
-            Ok(_) => {
-                let f = Failure::new(code::RUN, "the run diverged (positions not finite)");
-                println!("{}", report::sweep_failed_row(run.volume, &f.line()));
-                failure.get_or_insert(f);
+    for (volume, row) in contract::sweep_rows(&result, max_steps) {
+        match row {
+            Ok(row) => {
+                println!("{}", report::sweep_row(volume, &row.result));
+                warn_step_limit(&row.result, &format!("the {volume} cm³ run"));
+                rows.push(row);
             }
             Err(e) => {
-                let f = Failure::from_implant(e);
-                println!("{}", report::sweep_failed_row(run.volume, &f.line()));
+                let f = Failure::from_plan(&e);
+                println!("{}", report::sweep_failed_row(volume, &f.line()));
                 failure.get_or_insert(f);
             }
         }
@@ -158,7 +147,7 @@ pub fn sweep(
     }
     let mut staged = Staged::default();
     if let Some(path) = &cli.report {
-        let bytes = json(&report::sweep(inputs.clone(), &result, rows))?;
+        let bytes = json(&contract::sweep(TOOL, inputs.clone(), &result, rows))?;
         staged.bytes(path, &bytes, "report")?;
     }
     commit(staged, interrupt)
@@ -172,19 +161,10 @@ pub fn target_gain(
     target: f64,
     interrupt: &Interrupt,
 ) -> Result<(), Failure> {
-    let bracket = cli.bracket.unwrap_or((
-        0.25 * scenario.job.implant.volume_cm3,
-        2.0 * scenario.job.implant.volume_cm3,
-    ));
-    let job = InverseJob {
-        base: scenario.job.clone(),
-        target_gain: target,
-        bracket,
-        options: InverseOptions {
-            gain_tolerance: cli.gain_tolerance,
-            ..InverseOptions::default()
-        },
-    };
+    let job = scenario
+        .inverse_job(target, cli.bracket, cli.gain_tolerance)
+        .map_err(|e| Failure::from_plan(&e))?;
+    let bracket = job.bracket;
     let mut display = Display::new(cli.quiet, true);
     let search = match drive(Job::Inverse(job), &mut display, interrupt)? {
         Outcome::Inverse(s) => s,
@@ -207,7 +187,13 @@ pub fn target_gain(
     );
     let mut staged = Staged::default();
     if let Some(path) = &cli.report {
-        let bytes = json(&report::inverse(inputs.clone(), target, bracket, &search))?;
+        let bytes = json(&contract::inverse(
+            TOOL,
+            inputs.clone(),
+            target,
+            bracket,
+            &search,
+        ))?;
         staged.bytes(path, &bytes, "report")?;
     }
     commit(staged, interrupt)

@@ -6,16 +6,11 @@ use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
-use tissue_app::PlannedInsertion;
-use tissue_mesh::TriMesh;
-use tissue_meshio::{FieldValues, SurfaceFormat, VertexField};
-use tissue_render::{before_after, BeforeAfterOptions};
+use tissue_planner::PatientResult;
 
-use crate::cli::{Cli, ColorBy};
+use crate::cli::Cli;
 use crate::failure::{code, Failure};
 use crate::progress::Interrupt;
-use crate::setup::Scenario;
 
 /// Every output path of the command line.
 fn targets(cli: &Cli) -> Vec<&Path> {
@@ -98,30 +93,13 @@ impl Staged {
         write().map_err(|e| Failure::output(what, format!("{}: {e}", target.display())))
     }
 
-    /// Stages the mesh `mesh` for `target` in the format of its extension; VTK gets `fields`.
-    pub fn mesh(
-        &mut self,
-        target: &Path,
-        mesh: &TriMesh,
-        fields: &[VertexField<'_>],
-    ) -> Result<(), Failure> {
+    /// Stages the patient after the run for `target`, in the format of its extension (VTK
+    /// with the fields).
+    pub fn mesh(&mut self, target: &Path, patient: &PatientResult) -> Result<(), Failure> {
         let tmp = self.stage(target);
-        let written = match SurfaceFormat::from_path(target) {
-            Some(SurfaceFormat::Obj) => tissue_meshio::write_obj(&tmp, mesh),
-            Some(SurfaceFormat::Ply) => tissue_meshio::write_ply(&tmp, mesh),
-            Some(SurfaceFormat::Stl) => tissue_meshio::write_stl(&tmp, mesh),
-            Some(SurfaceFormat::Vtk) => tissue_meshio::write_vtk(&tmp, mesh, fields),
-            _ => {
-                return Err(Failure::new(
-                    code::USAGE,
-                    format!(
-                        "--out {}: the extension must be .obj, .ply, .stl or .vtk",
-                        target.display()
-                    ),
-                ))
-            }
-        };
-        written.map_err(|e| Failure::output("mesh", format!("{} ({e})", target.display())))
+        patient
+            .write_mesh(&tmp)
+            .map_err(|e| Failure::output("mesh", format!("{} ({e})", target.display())))
     }
 
     /// Renames every staged file into place, unless Ctrl-C was pressed.
@@ -148,121 +126,5 @@ impl Drop for Staged {
         for (tmp, _) in &self.files {
             let _ = std::fs::remove_file(tmp);
         }
-    }
-}
-
-/// The patient before and after, in the mesh's unit, with per-vertex fields.
-#[derive(Debug, Clone)]
-pub struct PatientResult {
-    /// The patient before (mesh unit).
-    pub before: TriMesh,
-    /// The patient after (mesh unit). Vertices that did not move keep the file's positions.
-    pub after: TriMesh,
-    /// How far each vertex moved (mesh unit); 0 outside the region.
-    pub displacement: Vec<f32>,
-    /// Area after / area before around each region vertex; 0 outside the region.
-    pub stretch: Vec<f32>,
-    /// 1 for a region vertex, 0 outside.
-    pub in_region: Vec<f32>,
-    /// The areas and volume on the scan's own triangles (a remeshed run).
-    pub scan: Option<tissue_implant::ScanResult>,
-}
-
-impl PatientResult {
-    /// The patient after `planned` in the mesh's unit, and its fields.
-    pub fn new(scenario: &Scenario, planned: &PlannedInsertion) -> Result<Self, Failure> {
-        let on_patient = planned
-            .on_patient(&scenario.patient)
-            .map_err(|e| Failure::from_implant(&e))?;
-        let scale = scenario.cm_per_unit();
-        // Vertices that did not move keep the file's positions bit for bit.
-        let after_positions: Vec<Vec3> = on_patient
-            .mesh
-            .positions()
-            .iter()
-            .zip(scenario.patient_file.positions())
-            .zip(scenario.patient.positions())
-            .map(|((&c, &f), &rest)| {
-                if c == rest {
-                    f
-                } else if scale == 1.0 {
-                    c
-                } else {
-                    c / scale
-                }
-            })
-            .collect();
-        let before = scenario.patient_file.clone();
-        let after = before
-            .with_positions(after_positions)
-            .map_err(|e| Failure::new(code::RUN, format!("the result is not a valid mesh: {e}")))?;
-        let in_region: Vec<f32> = on_patient
-            .in_region
-            .iter()
-            .map(|&inside| if inside { 1.0 } else { 0.0 })
-            .collect();
-        let stretch = on_patient
-            .stretch
-            .iter()
-            .zip(&on_patient.in_region)
-            .map(|(&s, &inside)| if inside { s } else { 0.0 })
-            .collect();
-        Ok(PatientResult {
-            before,
-            after,
-            displacement: on_patient.displacement.iter().map(|d| d / scale).collect(),
-            stretch,
-            in_region,
-            scan: on_patient.scan,
-        })
-    }
-
-    /// The VTK point fields.
-    pub fn fields(&self) -> [VertexField<'_>; 3] {
-        [
-            VertexField {
-                name: "displacement",
-                values: FieldValues::Scalars(&self.displacement),
-            },
-            VertexField {
-                name: "stretch",
-                values: FieldValues::Scalars(&self.stretch),
-            },
-            VertexField {
-                name: "in_region",
-                values: FieldValues::Scalars(&self.in_region),
-            },
-        ]
-    }
-
-    /// The before/after picture, coloured by `color` (stretch 1 outside the region).
-    pub fn picture(
-        &self,
-        color: ColorBy,
-        size: (u32, u32),
-        unit: &str,
-    ) -> Result<Vec<u8>, Failure> {
-        let (field, title) = match color {
-            ColorBy::Displacement => (self.displacement.clone(), format!("displacement, {unit}")),
-            ColorBy::Stretch => (
-                self.stretch
-                    .iter()
-                    .zip(&self.in_region)
-                    .map(|(&s, &inside)| if inside > 0.0 { s } else { 1.0 })
-                    .collect(),
-                "stretch, area after/before".to_owned(),
-            ),
-        };
-        let options = BeforeAfterOptions {
-            width: size.0,
-            height: size.1,
-            title,
-            ..BeforeAfterOptions::default()
-        };
-        let image = before_after(&self.before, &self.after, &field, &options)
-            .map_err(|e| Failure::output("picture", e))?;
-        image
-            .encode_png()
-            .map_err(|e| Failure::output("picture", e))
     }
 }

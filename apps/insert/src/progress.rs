@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use tissue_app::{Event, Handle, Job, Outcome, ProgressEvent};
+use tissue_planner::{Event, Handle, Job, Outcome, ProgressEvent};
 
 use crate::failure::{code, Failure};
 
@@ -170,7 +170,7 @@ pub fn drive(job: Job, display: &mut Display, interrupt: &Interrupt) -> Result<O
     match terminal {
         Event::Finished(outcome) => Ok(outcome),
         Event::Cancelled { steps } => Err(Failure::interrupted(steps)),
-        Event::Failed(e) => Err(Failure::from_app(&e)),
+        Event::Failed(e) => Err(Failure::from_plan(&tissue_planner::PlanError::from_app(&e))),
         Event::Progress(_) => Err(Failure::new(code::RUN, "the worker ended without a result")),
     }
 }

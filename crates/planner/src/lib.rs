@@ -1,0 +1,65 @@
+//! # tissue-planner: the planning front door
+//!
+//! Everything a front end needs to plan an implant insertion, in one place, so that `insert`,
+//! the studio and the C ABI cannot drift apart:
+//!
+//! - **Units** ([`Unit`]: the mesh file's unit; inside everything is cm, g, s) and the
+//!   request's named choices ([`Shape`], [`Rule`], [`Detect`], [`ColorBy`]).
+//! - **The patient** ([`Patient`]): read from a file or bytes in its unit and scaled to cm, or a
+//!   [`Shipped`] mesh (the Table 2 plane, the chest, the head); its [`MeshSummary`].
+//! - **The request** ([`PlanRequest`]): one flat record, JSON names with their units, every
+//!   field defaulting to the library's value (`{}` is Table 2). [`PlanRequest::check`] refuses a
+//!   value that cannot be right, naming the field.
+//! - **Placing** ([`Scenario`]): the point snapped to the surface, the normal (interpolated
+//!   vertex normals), the tangent (given or +x, turned by `rotation_deg`), the
+//!   [`tissue_app::InsertionJob`]; [`Scenario::preview`] draws the footprint and the region and
+//!   runs the set-up, so that a placement that cannot run is refused before Run.
+//! - **The result on the patient** ([`PatientResult`]): the deformed patient in the file's unit
+//!   with its fields (displacement, stretch, in-region), as mesh files and a picture.
+//! - **The report** ([`report`]): the JSON contract, with [`report::SCHEMA_VERSION`]; field
+//!   names are only ever added.
+//! - **Errors** ([`PlanError`]): a kind ([`ErrorKind`]: a front end's exit code or HTTP status),
+//!   the request field at fault, and one sentence that says what to change.
+//!
+//! No terminal, no threads of its own (jobs run on [`tissue_app`]'s worker), no HTTP.
+//!
+//! ## Example: Table 2, planned as every front end plans it
+//! ```
+//! use tissue_planner::{Patient, PlanRequest, Scenario, Shipped};
+//!
+//! let request: PlanRequest = serde_json::from_str(r#"{ "volume_cm3": 100, "max_steps": 40 }"#)?;
+//! let scenario = Scenario::new(Patient::shipped(Shipped::Table2)?, request)?;
+//! assert!(scenario.preview().ok);
+//! let planned = tissue_app::plan(&scenario.job, |_| std::ops::ControlFlow::Continue(()))?;
+//! let result = tissue_planner::report::RunResult::of(&planned, None, 40);
+//! assert_eq!(result.steps, 40); // a short run for the example: not settled
+//! assert!(result.area_gain_cm2 > 0.0);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+#![forbid(unsafe_code)]
+#![warn(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::print_stdout,
+    clippy::print_stderr
+)]
+
+mod error;
+mod patient;
+pub mod report;
+mod request;
+mod result;
+mod scenario;
+mod units;
+
+pub use error::{ErrorKind, PlanError};
+pub use patient::{
+    BoxSummary, DefectSummary, LoopSummary, MeshSummary, Patient, Shipped, TABLE2_SIDE_CM,
+    TABLE2_VERTICES_PER_SIDE,
+};
+pub use request::{check_search, check_sweep, PlanRequest};
+pub use result::{is_mesh_path, PatientResult};
+pub use scenario::{default_gain_tolerance, Preview, Scenario, FOOTPRINT_LIFT_CM};
+pub use tissue_app::{Event, Handle, Job, Outcome, ProgressEvent};
+pub use units::{ColorBy, Detect, Rule, Shape, Unit, KPA};
