@@ -1,0 +1,243 @@
+// The planner in a real browser: starts studio, drives /planner in headless Chromium (software
+// WebGL), and checks the page end to end. Plain node script; exit code 0 when every check passes.
+//
+//   npm ci && node planner.test.mjs
+//
+// Environment:
+//   STUDIO_BIN  the studio binary (default ../../../target/release/studio from this folder); may be
+//               a command with arguments, e.g. "node /tmp/mock.mjs". Started with --port 0.
+//   STUDIO_URL  use a server already running at this URL instead (nothing is started or stopped).
+//   CHROMIUM    the browser (default /usr/bin/chromium).
+
+import { spawn } from 'node:child_process';
+import fs from 'node:fs';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { chromium } from 'playwright-core';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+const shots = path.join(here, 'screenshots');
+const RUN_TIMEOUT_MS = 10 * 60 * 1000;
+const BAND = [32.5, 37.5]; // Table 2, 100 cm³: the thesis's band around the engine's ~35.0 cm²
+
+let passed = 0;
+let failed = 0;
+function ok(what) {
+  passed++;
+  console.log(`ok - ${what}`);
+}
+function check(cond, what, detail = '') {
+  if (cond) return ok(what);
+  failed++;
+  console.log(`not ok - ${what}${detail ? ` (${detail})` : ''}`);
+  throw new Error(`check failed: ${what}`);
+}
+
+function startServer() {
+  const bin = process.env.STUDIO_BIN || path.resolve(here, '../../../target/release/studio');
+  // A path to an existing file is the binary; otherwise the value is split into a command line.
+  const argv = fs.existsSync(bin) ? [bin] : bin.split(/\s+/).filter(Boolean);
+  const proc = spawn(argv[0], [...argv.slice(1), '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
+  const exited = new Promise((resolve) => proc.on('exit', (code, signal) => resolve({ code, signal })));
+  const url = new Promise((resolve, reject) => {
+    let buf = '';
+    let found = false;
+    const timer = setTimeout(() => reject(new Error('studio did not print its address within 120 s')), 120000);
+    proc.on('error', (e) => reject(new Error(`cannot start ${argv[0]}: ${e.message}`)));
+    exited.then(({ code, signal }) => {
+      if (!found) reject(new Error(`studio exited (code ${code}, signal ${signal}) before printing its address`));
+    });
+    proc.stdout.setEncoding('utf8');
+    proc.stdout.on('data', (chunk) => {
+      if (found) return; // keep draining
+      buf += chunk;
+      const m = buf.match(/^studio: (http:\/\/127\.0\.0\.1:\d+\/)\s*$/m);
+      if (m) {
+        found = true;
+        clearTimeout(timer);
+        resolve(m[1]);
+      }
+    });
+  });
+  return { proc, url, exited };
+}
+
+async function shot(page, name) {
+  const file = path.join(shots, name);
+  await page.screenshot({ path: file });
+  console.log(`# screenshot ${path.relative(process.cwd(), file)}`);
+}
+
+const planner = (page, expr) => page.evaluate(expr);
+
+let server = null;
+
+async function main() {
+  fs.mkdirSync(shots, { recursive: true });
+  let base = process.env.STUDIO_URL;
+  if (!base) {
+    server = startServer();
+    base = await server.url;
+  }
+  if (!base.endsWith('/')) base += '/';
+  console.log(`# studio at ${base}`);
+
+  const browser = await chromium.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    args: [
+      '--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+      '--disable-gpu-sandbox', '--disable-background-networking', '--disable-component-update',
+      '--disable-sync', '--no-first-run',
+    ],
+  });
+  const pageErrors = [];
+  try {
+    const page = await browser.newPage({ viewport: { width: 1400, height: 900 } });
+    page.on('pageerror', (e) => pageErrors.push(String(e)));
+    page.on('console', (m) => {
+      // Failed requests are checked where they matter (the broken upload answers 400 on purpose).
+      if (m.type() === 'error' && !/Failed to load resource/.test(m.text())) pageErrors.push(`console: ${m.text()}`);
+    });
+
+    // a. the default patient is shown
+    await page.goto(`${base}planner`);
+    await page.waitForFunction(() => window.tissueStudio?.planner?.ready === true, null, { timeout: 120000 });
+    ok('the planner shows the default patient (tissueStudio.planner.ready)');
+    const vertices = await page.textContent('#s-vertices');
+    check(/\d/.test(vertices || ''), 'the patient summary shows the vertex count', vertices);
+    await shot(page, '1-patient.png');
+
+    // b. a real click on the plane's centre places the expander
+    const centre = await planner(page, () => window.tissueStudio.planner.screenOf([0, 0, 0]));
+    check(centre && centre.visible, 'the plane centre is on screen', JSON.stringify(centre));
+    await page.mouse.click(centre.x, centre.y);
+    await page.waitForFunction(() => {
+      const p = window.tissueStudio.planner;
+      return p.placement && p.preview && p.preview.ok === true;
+    }, null, { timeout: 30000 });
+    const placement = await planner(page, () => window.tissueStudio.planner.placement);
+    const dist = Math.hypot(...placement.point);
+    check(dist < 0.5, `the click placed the expander within 0.5 cm of (0, 0, 0): ${dist.toFixed(3)} cm, vertex ${placement.vertex}`);
+    check(Number.isInteger(placement.vertex), 'the placement names a vertex');
+    const footprint = await planner(page, () => window.tissueStudio.planner.preview.footprint.length);
+    check(footprint > 2, `the preview gives a footprint (${footprint} points)`);
+    await shot(page, '2-placement.png');
+
+    // c. run; the Table 2 gain; the colour maps
+    await page.click('#tab-3');
+    const run = page.getByRole('button', { name: 'Run', exact: true });
+    const cancel = page.getByRole('button', { name: 'Cancel', exact: true });
+    const t0 = Date.now();
+    await run.click();
+    await page.waitForFunction(() => {
+      const s = window.tissueStudio.planner.job.state;
+      return s !== 'running' && s !== 'idle';
+    }, null, { timeout: RUN_TIMEOUT_MS, polling: 200 });
+    const job = await planner(page, () => ({ ...window.tissueStudio.planner.job, error: window.tissueStudio.planner.error }));
+    check(job.state === 'finished', `the run finished (${((Date.now() - t0) / 1000).toFixed(1)} s)`, `${job.state}: ${job.error}`);
+    const result = await planner(page, () => window.tissueStudio.planner.result);
+    const gain = result.area_gain_cm2;
+    check(gain >= BAND[0] && gain <= BAND[1], `area gain ${gain.toFixed(3)} cm² is in Table 2's band for 100 cm³ (${BAND[0]} to ${BAND[1]} cm²)`);
+    check(result.boundary_unchanged === true, 'the region boundary stayed in place (boundary_unchanged)');
+    const shown = await page.textContent('#report-figures');
+    check(shown.includes(gain.toFixed(2)), 'the page shows the gain', shown);
+    await page.waitForTimeout(300);
+    await shot(page, '3-result.png');
+
+    await page.selectOption('#colormap', 'stretch');
+    await page.waitForTimeout(300);
+    await shot(page, '4-stretch.png');
+    const stats = await planner(page, () => window.tissueStudio.planner.pixelStats());
+    const share = stats.nonBackground / (stats.width * stats.height);
+    check(share > 0.05 && stats.distinctColours > 50,
+      `the view draws the mesh: ${(share * 100).toFixed(1)} % of ${stats.width}×${stats.height} pixels not background, ${stats.distinctColours} colours`);
+    const cb = await page.textContent('#colorbar');
+    check(/stretch/i.test(cb) && /×/.test(cb), 'the colour bar is labelled for stretch', cb);
+    await page.mouse.move(centre.x + 3, centre.y + 3);
+    await page.mouse.move(centre.x + 4, centre.y + 4);
+    await page.waitForSelector('#readout:not([hidden])', { timeout: 5000 });
+    const readout = await page.textContent('#readout');
+    check(/stretch\s+\d/.test(readout), `the value under the cursor is shown: "${readout}"`);
+
+    // d. a second run, cancelled
+    await run.click();
+    await page.waitForFunction(() => {
+      const j = window.tissueStudio.planner.job;
+      return (j.state === 'running' && j.step > 0) || (j.state !== 'running' && j.state !== 'idle');
+    }, null, { timeout: RUN_TIMEOUT_MS, polling: 'raf' });
+    const before = await planner(page, () => ({ ...window.tissueStudio.planner.job, error: window.tissueStudio.planner.error }));
+    check(before.state === 'running', `the second run is under way (step ${before.step})`,
+      before.state === 'finished' ? 'it finished before Cancel could be clicked' : `${before.state}: ${before.error}`);
+    const c0 = Date.now();
+    await cancel.click();
+    await page.waitForFunction(() => window.tissueStudio.planner.job.state !== 'running', null, { timeout: 5000, polling: 'raf' }).catch(() => {});
+    const latency = Date.now() - c0;
+    const after = await planner(page, () => window.tissueStudio.planner.job);
+    check(after.state === 'cancelled' && latency <= 2000, `Cancel stopped the run: ${latency} ms through the driver (at step ${after.step})`, `state ${after.state}`);
+    // The issue's figure: from the button's click to the server's "cancelled", in the page.
+    check(typeof after.cancel_ms === 'number' && after.cancel_ms <= 100,
+      `Cancel click to "cancelled" in the page: ${after.cancel_ms?.toFixed(1)} ms (limit 100 ms)`, `${after.cancel_ms}`);
+    const status = await page.textContent('#job-status');
+    check(/cancelled after \d/i.test(status), `the page says so: "${status}"`);
+
+    // e. files: too large (refused in the page) and broken (the server's message)
+    await page.click('#tab-1');
+    let uploads = 0;
+    page.on('request', (r) => {
+      if (r.url().includes('/api/patients')) uploads++;
+    });
+    await page.evaluate(() => {
+      const input = document.getElementById('file-input');
+      const dt = new DataTransfer();
+      dt.items.add(new File([new Uint8Array(64 * 1024 * 1024 + 1)], 'huge.stl'));
+      input.files = dt.files;
+      input.dispatchEvent(new Event('change', { bubbles: true }));
+    });
+    await page.waitForSelector('#error:not([hidden])', { timeout: 5000 });
+    const big = await page.textContent('#error');
+    check(/64 MiB/.test(big) && uploads === 0, `a file over 64 MiB is refused in the page: "${big}"`);
+
+    await page.setInputFiles('#file-input', {
+      name: 'broken.obj', mimeType: 'text/plain', buffer: Buffer.from('v 0 0 0\nf 1 2 3\n'),
+    });
+    await page.waitForFunction(() => {
+      const e = document.getElementById('error');
+      return !e.hidden && !/64 MiB/.test(e.textContent) && e.textContent.trim() !== '';
+    }, null, { timeout: 30000 });
+    await page.waitForFunction(() => window.tissueStudio.planner.ready === true, null, { timeout: 30000 });
+    const message = (await page.textContent('#error')).trim();
+    const role = await page.getAttribute('#error', 'role');
+    check(role === 'alert' && /broken\.obj|vertex|index/i.test(message), `the broken file's error is shown: "${message}"`);
+    check(await page.isVisible('#error'), 'the error element is visible');
+    const still = await planner(page, () => ({ ready: window.tissueStudio.planner.ready, error: window.tissueStudio.planner.error }));
+    check(still.ready === true && still.error === message, 'the previous patient stays shown (ready) and tissueStudio.planner.error holds the message');
+    await shot(page, '5-broken-upload.png');
+
+    check(pageErrors.length === 0, 'no script errors in the page', pageErrors.join(' | '));
+  } finally {
+    await browser.close();
+  }
+
+  // f. the server stops on SIGINT
+  if (server) {
+    const s0 = Date.now();
+    server.proc.kill('SIGINT');
+    const res = await Promise.race([server.exited, new Promise((r) => setTimeout(() => r(null), 5000))]);
+    if (!res) server.proc.kill('SIGKILL');
+    check(res && res.code === 0, `the server exited with code 0 on SIGINT in ${Date.now() - s0} ms`, JSON.stringify(res));
+  }
+}
+
+main()
+  .catch((e) => {
+    if (!/^check failed/.test(e.message)) {
+      failed++;
+      console.log(`not ok - ${e.message}`);
+    }
+  })
+  .finally(() => {
+    // Never leave the server behind.
+    if (server && server.proc.exitCode === null && server.proc.signalCode === null) server.proc.kill('SIGKILL');
+    console.log(`${passed} passed, ${failed} failed`);
+    process.exit(failed === 0 ? 0 : 1);
+  });

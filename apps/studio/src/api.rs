@@ -1,0 +1,397 @@
+//! The routes: pages, static files, patients, the placement preview, downloads, and the job
+//! socket ([`crate::jobs`]).
+
+use std::collections::HashMap;
+
+use axum::body::Bytes;
+use axum::extract::rejection::BytesRejection;
+use axum::extract::{DefaultBodyLimit, Path, Query, State, WebSocketUpgrade};
+use axum::http::{header, StatusCode};
+use axum::response::{Html, IntoResponse, Response};
+use axum::routing::{get, post};
+use axum::{Json, Router};
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+use tissue_planner::{ErrorKind, Patient, PlanError, PlanRequest, Scenario, Shipped, Unit};
+
+use crate::assets;
+use crate::state::{Studio, UPLOAD_LIMIT};
+
+/// The studio's routes over `studio`.
+pub fn router(studio: Studio) -> Router {
+    Router::new()
+        .route("/", get(|| async { assets::serve("index.html") }))
+        .route("/planner", get(|| async { assets::serve("planner.html") }))
+        .route("/trainer", get(trainer))
+        .route("/static/{*path}", get(static_file))
+        .route("/api/meshes", get(meshes))
+        .route(
+            "/api/patients",
+            post(upload).layer(DefaultBodyLimit::max(UPLOAD_LIMIT)),
+        )
+        .route("/api/preview", post(preview))
+        .route("/api/results/{job}/{file}", get(download))
+        .route("/api/ws", get(socket))
+        .fallback(|| async { ApiError::new(StatusCode::NOT_FOUND, "not_found", "no such page") })
+        .with_state(studio)
+}
+
+/// An error as the page shows it: `{"error": {kind, field, message}}` with an HTTP status.
+#[derive(Debug)]
+pub struct ApiError {
+    status: StatusCode,
+    body: ErrorBody,
+}
+
+/// The JSON of an error.
+#[derive(Debug, Clone, Serialize)]
+pub struct ErrorBody {
+    /// `usage`, `input`, `mesh`, `placement`, `parameters`, `run`, `output`, `cancelled`,
+    /// `busy`, `too_large`, `not_found`.
+    pub kind: String,
+    /// The request field at fault.
+    pub field: Option<&'static str>,
+    /// One sentence for the user.
+    pub message: String,
+}
+
+impl ErrorBody {
+    /// The planner's error as the page shows it (request fields named as the page labels them).
+    pub fn of(e: &PlanError) -> ErrorBody {
+        let kind = serde_json::to_value(e.kind)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_owned))
+            .unwrap_or_else(|| "run".to_owned());
+        ErrorBody {
+            kind,
+            field: e.field,
+            message: e.message_with(label_of),
+        }
+    }
+}
+
+/// How the page labels a request field.
+pub fn label_of(field: &str) -> Option<&'static str> {
+    Some(match field {
+        "at" | "vertex" => "placement",
+        "tangent" | "rotation_deg" => "rotation",
+        "diameter_cm" => "diameter",
+        "length_cm" => "length",
+        "width_cm" => "width",
+        "corner_radius_cm" => "corner radius",
+        "bend_radius_cm" => "bend radius",
+        "volume_cm3" => "volume",
+        "volumes_cm3" => "sweep volumes",
+        "depth_cm" => "depth",
+        "region_radius_cm" => "region radius",
+        "sim_edge_cm" => "simulation edge",
+        "max_hole_cm" => "largest hole filled",
+        "max_steps" => "step limit",
+        "time_step_s" => "time step",
+        "target_gain_cm2" => "target gain",
+        "bracket_cm3" => "volume bracket",
+        "unit" => "unit",
+        "mesh" => "file",
+        _ => return None,
+    })
+}
+
+impl ApiError {
+    fn new(status: StatusCode, kind: &str, message: impl Into<String>) -> ApiError {
+        ApiError {
+            status,
+            body: ErrorBody {
+                kind: kind.to_owned(),
+                field: None,
+                message: message.into(),
+            },
+        }
+    }
+
+    fn plan(e: &PlanError) -> ApiError {
+        let status = match e.kind {
+            ErrorKind::Run | ErrorKind::Output => StatusCode::INTERNAL_SERVER_ERROR,
+            _ => StatusCode::BAD_REQUEST,
+        };
+        ApiError {
+            status,
+            body: ErrorBody::of(e),
+        }
+    }
+}
+
+impl IntoResponse for ApiError {
+    fn into_response(self) -> Response {
+        (self.status, Json(json!({ "error": self.body }))).into_response()
+    }
+}
+
+async fn trainer() -> Response {
+    (
+        StatusCode::NOT_FOUND,
+        Html(
+            "<!doctype html><meta charset=utf-8><title>Trainer</title>\
+             <p>The surgical trainer comes in a later release. <a href=\"/\">Back</a></p>",
+        ),
+    )
+        .into_response()
+}
+
+async fn static_file(Path(path): Path<String>) -> Response {
+    assets::serve(&path)
+}
+
+#[derive(Debug, Serialize)]
+struct MeshEntry {
+    id: &'static str,
+    label: &'static str,
+    unit: &'static str,
+    default: bool,
+}
+
+async fn meshes() -> Json<Vec<MeshEntry>> {
+    Json(
+        Shipped::ALL
+            .iter()
+            .map(|&s| MeshEntry {
+                id: s.id(),
+                label: s.label(),
+                unit: s.unit().symbol(),
+                default: s == Shipped::Table2,
+            })
+            .collect(),
+    )
+}
+
+/// Runs `f` off the async threads (loading, remeshing and the set-up take seconds on a scan).
+async fn blocking<T: Send + 'static>(
+    f: impl FnOnce() -> Result<T, ApiError> + Send + 'static,
+) -> Result<T, ApiError> {
+    tokio::task::spawn_blocking(f).await.unwrap_or_else(|e| {
+        Err(ApiError::new(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            "run",
+            format!("the server's task failed: {e}; report this"),
+        ))
+    })
+}
+
+async fn upload(
+    State(studio): State<Studio>,
+    Query(query): Query<HashMap<String, String>>,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let source = if let Some(id) = query.get("shipped") {
+        let shipped = Shipped::from_id(id).ok_or_else(|| {
+            ApiError::new(
+                StatusCode::BAD_REQUEST,
+                "input",
+                format!("no shipped mesh {id:?}: pick table2, chest or head"),
+            )
+        })?;
+        Source::Shipped(shipped)
+    } else {
+        let name = query.get("name").cloned().ok_or_else(|| {
+            ApiError::new(
+                StatusCode::BAD_REQUEST,
+                "usage",
+                "an upload needs ?name=FILE.obj (its extension picks the format) and ?unit=",
+            )
+        })?;
+        let unit_symbol = query.get("unit").map_or("cm", String::as_str);
+        let unit = Unit::from_symbol(unit_symbol).ok_or_else(|| {
+            ApiError::new(
+                StatusCode::BAD_REQUEST,
+                "usage",
+                format!("unit {unit_symbol:?} is not one of mm, cm, dm, m"),
+            )
+        })?;
+        let bytes = body.map_err(|e| {
+            if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+                ApiError::new(
+                    StatusCode::PAYLOAD_TOO_LARGE,
+                    "too_large",
+                    format!(
+                        "{name} is larger than the upload limit of {} MiB; decimate the scan or \
+                         crop it to the region of interest",
+                        UPLOAD_LIMIT / (1024 * 1024)
+                    ),
+                )
+            } else {
+                ApiError::new(StatusCode::BAD_REQUEST, "input", format!("{name}: {e}"))
+            }
+        })?;
+        if bytes.is_empty() {
+            return Err(ApiError::new(
+                StatusCode::BAD_REQUEST,
+                "input",
+                format!("{name} is empty: pick the scan file again"),
+            ));
+        }
+        Source::Upload { name, unit, bytes }
+    };
+    let (patient, suggested) = blocking(move || {
+        let _span = tracing::info_span!("studio_load").entered();
+        match source {
+            Source::Shipped(s) => {
+                let p = Patient::shipped(s).map_err(|e| ApiError::plan(&e))?;
+                let v = s.suggested_vertex(&p.cm);
+                Ok((p, Some(v)))
+            }
+            Source::Upload { name, unit, bytes } => {
+                let p = Patient::parse(&bytes, &name, unit).map_err(|e| ApiError::plan(&e))?;
+                Ok((p, None))
+            }
+        }
+    })
+    .await?;
+    let summary = patient.summary();
+    let positions: Vec<f32> = patient
+        .cm
+        .positions()
+        .iter()
+        .flat_map(|p| p.to_array())
+        .collect();
+    let triangles: Vec<u32> = patient.cm.triangles().iter().flatten().copied().collect();
+    let suggested = suggested
+        .map(|v| json!({ "vertex": v, "point": patient.cm.positions()[v as usize].to_array() }));
+    let label = patient.label.clone();
+    let unit = patient.unit;
+    let id = studio.add_patient(patient);
+    Ok(Json(json!({
+        "patient": id,
+        "label": label,
+        "unit": unit.symbol(),
+        "cm_per_unit": unit.cm_per_unit(),
+        "summary": summary,
+        "mesh": { "positions": positions, "triangles": triangles },
+        "suggested": suggested,
+    })))
+}
+
+enum Source {
+    Shipped(Shipped),
+    Upload {
+        name: String,
+        unit: Unit,
+        bytes: Bytes,
+    },
+}
+
+/// A request for a job or a preview: the patient's id and the planning request.
+#[derive(Debug, Deserialize)]
+pub struct PatientRequest {
+    /// The patient's id from `/api/patients`.
+    pub patient: String,
+    /// What to plan.
+    #[serde(default)]
+    pub request: PlanRequest,
+}
+
+/// The scenario of `patient` and `request`, or why not.
+pub fn scenario(
+    studio: &Studio,
+    patient: &str,
+    request: PlanRequest,
+) -> Result<Scenario, PlanError> {
+    let p = studio.patient(patient).ok_or_else(|| {
+        PlanError::new(
+            ErrorKind::Usage,
+            format!("no patient {patient:?} on the server (it keeps the last few): load it again"),
+        )
+    })?;
+    Scenario::new(Patient::clone(&p), request)
+}
+
+async fn preview(
+    State(studio): State<Studio>,
+    body: Result<Json<PatientRequest>, axum::extract::rejection::JsonRejection>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let Json(body) = body.map_err(|e| {
+        ApiError::new(
+            StatusCode::BAD_REQUEST,
+            "usage",
+            format!("the placement request is not valid: {}", e.body_text()),
+        )
+    })?;
+    let vertex = body.request.vertex;
+    blocking(move || {
+        let _span = tracing::info_span!("studio_preview").entered();
+        let s = match scenario(&studio, &body.patient, body.request) {
+            Ok(s) => s,
+            Err(e) => {
+                return Ok(Json(json!({
+                    "ok": false, "error": ErrorBody::of(&e), "placement": null,
+                    "footprint": [], "region_outline": [],
+                })))
+            }
+        };
+        let p = s.preview();
+        Ok(Json(json!({
+            "ok": p.ok,
+            "error": p.error.as_ref().map(ErrorBody::of),
+            "placement": {
+                "point": s.point.to_array(),
+                "vertex": vertex,
+                "surface_point": s.surface_point.to_array(),
+                "normal": s.normal.to_array(),
+                "tangent": s.tangent.to_array(),
+            },
+            "footprint": p.footprint,
+            "region_outline": p.region_outline,
+            "region_radius_cm": p.region_radius_cm,
+            "sim_edge_cm": p.sim_edge_cm,
+            "region_vertices": p.region_vertices,
+        })))
+    })
+    .await
+}
+
+/// The files a finished job offers.
+pub const DOWNLOADS: [&str; 4] = ["patient.ply", "patient.obj", "patient.vtk", "report.json"];
+
+async fn download(
+    State(studio): State<Studio>,
+    Path((job, file)): Path<(String, String)>,
+) -> Result<Response, ApiError> {
+    if !DOWNLOADS.contains(&file.as_str()) {
+        return Err(ApiError::new(
+            StatusCode::NOT_FOUND,
+            "not_found",
+            format!(
+                "no download {file:?}: a job offers {}",
+                DOWNLOADS.join(", ")
+            ),
+        ));
+    }
+    let dir = studio.finished_dir(&job).ok_or_else(|| {
+        ApiError::new(
+            StatusCode::NOT_FOUND,
+            "not_found",
+            format!("no finished job {job:?} (the server keeps the last few): run it again"),
+        )
+    })?;
+    let bytes = tokio::fs::read(dir.join(&file)).await.map_err(|_| {
+        ApiError::new(
+            StatusCode::NOT_FOUND,
+            "not_found",
+            format!("job {job} has no {file} (a sweep or a search has the report only)"),
+        )
+    })?;
+    let mime = mime_guess::from_path(&file).first_or_octet_stream();
+    Ok((
+        [
+            (header::CONTENT_TYPE, mime.as_ref().to_owned()),
+            (
+                header::CONTENT_DISPOSITION,
+                format!("attachment; filename=\"{job}-{file}\""),
+            ),
+        ],
+        bytes,
+    )
+        .into_response())
+}
+
+async fn socket(State(studio): State<Studio>, ws: WebSocketUpgrade) -> Response {
+    ws.on_upgrade(move |socket| crate::jobs::serve_socket(studio, socket))
+}

@@ -1,0 +1,321 @@
+//! The job socket: one WebSocket per tab; `run` starts a job on tissue-app's worker (one at a
+//! time on the server), `cancel` or a closed socket cancels it; progress, then one terminal
+//! message, go back on the socket.
+
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
+
+use axum::extract::ws::{Message, WebSocket};
+use serde::Deserialize;
+use serde_json::{json, Value};
+use tissue_planner::report::{self, Inputs, RunResult};
+use tissue_planner::{
+    default_gain_tolerance, ErrorKind, Event, Handle, Job, Outcome, PatientResult, PlanError,
+    PlanRequest,
+};
+use tokio::sync::mpsc;
+
+use crate::api::{scenario, ErrorBody};
+use crate::state::{Running, Studio};
+
+/// The report's `tool`.
+const TOOL: &str = "studio";
+
+/// How often the job thread looks at the cancel flag while it waits for events.
+const POLL: Duration = Duration::from_millis(10);
+
+/// The least time between two progress messages.
+const PROGRESS_EVERY: Duration = Duration::from_millis(50);
+
+/// A message from the page.
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+enum ClientMessage {
+    Run(Box<RunMessage>),
+    Cancel,
+}
+
+#[derive(Debug, Deserialize)]
+struct RunMessage {
+    patient: String,
+    #[serde(default)]
+    mode: Mode,
+    #[serde(default)]
+    request: PlanRequest,
+    #[serde(default)]
+    volumes_cm3: Vec<f64>,
+    target_gain_cm2: Option<f64>,
+    bracket_cm3: Option<(f64, f64)>,
+    gain_tolerance_cm2: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+enum Mode {
+    #[default]
+    Single,
+    Sweep,
+    TargetGain,
+}
+
+impl Mode {
+    fn name(self) -> &'static str {
+        match self {
+            Mode::Single => "single",
+            Mode::Sweep => "sweep",
+            Mode::TargetGain => "target-gain",
+        }
+    }
+}
+
+/// Serves one tab's socket until it closes or the server stops; its job is cancelled then.
+pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
+    let (tx, mut rx) = mpsc::unbounded_channel::<Value>();
+    let mut shutdown = studio.on_shutdown();
+    let mut mine: Option<Running> = None;
+    loop {
+        tokio::select! {
+            incoming = socket.recv() => {
+                let text = match incoming {
+                    Some(Ok(Message::Text(t))) => t.to_string(),
+                    Some(Ok(Message::Close(_)) | Err(_)) | None => break,
+                    Some(Ok(_)) => continue,
+                };
+                match serde_json::from_str::<ClientMessage>(&text) {
+                    Ok(ClientMessage::Cancel) => {
+                        if let Some(r) = &mine {
+                            r.cancel.store(true, Ordering::Relaxed);
+                        }
+                    }
+                    Ok(ClientMessage::Run(run)) => {
+                        match start(&studio, *run, tx.clone()) {
+                            Ok(r) => mine = Some(r),
+                            Err(body) => {
+                                let _ = tx.send(json!({ "type": "refused", "error": body }));
+                            }
+                        }
+                    }
+                    Err(e) => {
+                        let body = ErrorBody {
+                            kind: "usage".to_owned(),
+                            field: None,
+                            message: format!("the page sent a message the server does not know: {e}"),
+                        };
+                        let _ = tx.send(json!({ "type": "refused", "error": body }));
+                    }
+                }
+            }
+            Some(out) = rx.recv() => {
+                let terminal = out["type"] != "progress" && out["type"] != "accepted";
+                if socket.send(Message::Text(out.to_string().into())).await.is_err() {
+                    break;
+                }
+                if terminal && out["type"] != "refused" {
+                    mine = None;
+                }
+            }
+            _ = shutdown.changed() => break,
+        }
+    }
+    // The tab is gone (or the server stops): its job is cancelled.
+    if let Some(r) = mine {
+        r.cancel.store(true, Ordering::Relaxed);
+    }
+}
+
+/// Starts `run` on a thread of its own, unless a job runs.
+fn start(
+    studio: &Studio,
+    run: RunMessage,
+    tx: mpsc::UnboundedSender<Value>,
+) -> Result<Running, ErrorBody> {
+    let id = studio.id("j");
+    let running = studio.start_job(&id).map_err(|other| ErrorBody {
+        kind: "busy".to_owned(),
+        field: None,
+        message: format!(
+            "a job ({other}) is running on this server, from this tab or another: wait for it \
+             or cancel it; one job runs at a time because each uses every core"
+        ),
+    })?;
+    let _ = tx.send(json!({ "type": "accepted", "job": id, "mode": run.mode.name() }));
+    let owner = studio.clone();
+    let job = running.clone();
+    let spawned = std::thread::Builder::new()
+        .name(format!("studio-{id}"))
+        .spawn(move || {
+            let _span = tracing::info_span!("studio_job", job = %job.id).entered();
+            let message = match run_job(&owner, &job, run, &tx) {
+                Ok(done) => done,
+                Err(End::Cancelled(steps)) => {
+                    json!({ "type": "cancelled", "job": job.id, "steps": steps })
+                }
+                Err(End::Failed(e)) if e.kind == ErrorKind::Cancelled => {
+                    json!({ "type": "cancelled", "job": job.id, "steps": 0 })
+                }
+                Err(End::Failed(e)) => {
+                    json!({ "type": "failed", "job": job.id, "error": ErrorBody::of(&e) })
+                }
+            };
+            owner.end_job(&job.id);
+            let _ = tx.send(message);
+        });
+    if let Err(e) = spawned {
+        studio.end_job(&id);
+        return Err(ErrorBody {
+            kind: "run".to_owned(),
+            field: None,
+            message: format!("could not start the job: {e}"),
+        });
+    }
+    Ok(running)
+}
+
+/// How a job ended without a result.
+enum End {
+    /// Cancelled after this many steps.
+    Cancelled(u64),
+    /// Refused or failed.
+    Failed(PlanError),
+}
+
+impl From<PlanError> for End {
+    fn from(e: PlanError) -> End {
+        End::Failed(e)
+    }
+}
+
+/// Runs the job to its end on this thread; the terminal message, or the error.
+fn run_job(
+    studio: &Studio,
+    running: &Running,
+    run: RunMessage,
+    tx: &mpsc::UnboundedSender<Value>,
+) -> Result<Value, End> {
+    let scenario = scenario(studio, &run.patient, run.request)?;
+    let inputs = Inputs::new(&scenario)?;
+    let max_steps = scenario.job.params.run.stop.max_steps;
+    let mut search = None;
+    let (job, runs) = match run.mode {
+        Mode::Single => (Job::Insertion(scenario.job.clone()), 1),
+        Mode::Sweep => (
+            Job::Sweep(scenario.sweep_job(&run.volumes_cm3)?),
+            run.volumes_cm3.len(),
+        ),
+        Mode::TargetGain => {
+            let target = run.target_gain_cm2.ok_or_else(|| {
+                PlanError::field(
+                    ErrorKind::Usage,
+                    "target_gain_cm2",
+                    "a search needs `target_gain_cm2`",
+                )
+            })?;
+            let tolerance = run
+                .gain_tolerance_cm2
+                .unwrap_or_else(default_gain_tolerance);
+            let job = scenario.inverse_job(target, run.bracket_cm3, tolerance)?;
+            search = Some((target, job.bracket));
+            (Job::Inverse(job), 0)
+        }
+    };
+    let outcome = drive(job, running, runs, tx)?;
+    let dir = studio
+        .job_dir(&running.id)
+        .map_err(|e| PlanError::new(ErrorKind::Output, e.to_string()))?;
+    let finished = match outcome {
+        Outcome::Insertion(planned) => {
+            let patient = PatientResult::new(&scenario, &planned)?;
+            let result = RunResult::of(&planned, patient.scan.as_ref(), max_steps);
+            let report = serde_json::to_value(report::single(TOOL, inputs, result))
+                .map_err(|e| PlanError::new(ErrorKind::Output, e.to_string()))?;
+            for name in ["patient.ply", "patient.obj", "patient.vtk"] {
+                patient.write_mesh(&dir.join(name))?;
+            }
+            write_report(&dir, &report)?;
+            let scale = scenario.cm_per_unit();
+            let fields = json!({
+                "after": patient.after_cm.positions().iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>(),
+                "displacement": patient.displacement.iter().map(|d| d * scale).collect::<Vec<f32>>(),
+                "stretch": patient.stretch_or_one(),
+                "in_region": patient.in_region,
+            });
+            json!({ "type": "finished", "job": running.id, "report": report, "fields": fields })
+        }
+        Outcome::Sweep(sweep) => {
+            let mut rows = Vec::new();
+            let mut warnings = Vec::new();
+            for (volume, row) in report::sweep_rows(&sweep, max_steps) {
+                match row {
+                    Ok(row) => rows.push(row),
+                    Err(e) => warnings.push(format!(
+                        "the {volume} cm³ run failed: {}",
+                        ErrorBody::of(&e).message
+                    )),
+                }
+            }
+            let report = serde_json::to_value(report::sweep(TOOL, inputs, &sweep, rows))
+                .map_err(|e| PlanError::new(ErrorKind::Output, e.to_string()))?;
+            write_report(&dir, &report)?;
+            json!({ "type": "finished", "job": running.id, "report": report, "fields": null, "warnings": warnings })
+        }
+        Outcome::Inverse(found) => {
+            let (target, bracket) = search.unwrap_or_default();
+            let report =
+                serde_json::to_value(report::inverse(TOOL, inputs, target, bracket, &found))
+                    .map_err(|e| PlanError::new(ErrorKind::Output, e.to_string()))?;
+            write_report(&dir, &report)?;
+            json!({ "type": "finished", "job": running.id, "report": report, "fields": null })
+        }
+        other => {
+            return Err(End::Failed(PlanError::new(
+                ErrorKind::Run,
+                format!("the worker returned an unexpected result: {other:?}"),
+            )))
+        }
+    };
+    studio.add_finished(&running.id, dir);
+    Ok(finished)
+}
+
+fn write_report(dir: &std::path::Path, report: &Value) -> Result<(), PlanError> {
+    let text = serde_json::to_string_pretty(report)
+        .map_err(|e| PlanError::new(ErrorKind::Output, e.to_string()))?;
+    let tmp = dir.join(".report.json.tmp");
+    std::fs::write(&tmp, text + "\n")
+        .and_then(|()| std::fs::rename(&tmp, dir.join("report.json")))
+        .map_err(|e| PlanError::new(ErrorKind::Output, format!("cannot write the report: {e}")))
+}
+
+/// Runs `job` on tissue-app's worker, forwarding progress and watching the cancel flag.
+fn drive(
+    job: Job,
+    running: &Running,
+    runs: usize,
+    tx: &mpsc::UnboundedSender<Value>,
+) -> Result<Outcome, End> {
+    let mut handle = Handle::start(job);
+    let mut last = Instant::now() - PROGRESS_EVERY;
+    loop {
+        if running.cancel.load(Ordering::Relaxed) && !handle.is_cancelled() {
+            handle.cancel();
+        }
+        let Some(event) = handle.recv_timeout(POLL) else {
+            continue;
+        };
+        match event {
+            Event::Progress(p) => {
+                if last.elapsed() >= PROGRESS_EVERY {
+                    last = Instant::now();
+                    let _ = tx.send(json!({
+                        "type": "progress", "job": running.id, "run": p.run,
+                        "runs": runs.max(p.run + 1), "step": p.step, "max_steps": p.max_steps,
+                        "settle": p.settle, "elapsed_s": p.elapsed.as_secs_f64(),
+                    }));
+                }
+            }
+            Event::Finished(outcome) => return Ok(outcome),
+            Event::Cancelled { steps } => return Err(End::Cancelled(steps)),
+            Event::Failed(e) => return Err(End::Failed(PlanError::from_app(&e))),
+        }
+    }
+}
