@@ -3,101 +3,24 @@
 //
 //   npm ci && node planner.test.mjs
 //
-// Environment:
+// Environment (see harness.mjs):
 //   STUDIO_BIN  the studio binary (default ../../../target/release/studio from this folder); may be
 //               a command with arguments, e.g. "node /tmp/mock.mjs". Started with --port 0.
 //   STUDIO_URL  use a server already running at this URL instead (nothing is started or stopped).
 //   CHROMIUM    the browser (default /usr/bin/chromium).
 
-import { spawn } from 'node:child_process';
-import fs from 'node:fs';
-import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { ok, check, shot, serverUrl, launchBrowser, newPage, stopServer, run } from './harness.mjs';
 
-const here = path.dirname(fileURLToPath(import.meta.url));
-const shots = path.join(here, 'screenshots');
 const RUN_TIMEOUT_MS = 10 * 60 * 1000;
 const BAND = [32.5, 37.5]; // Table 2, 100 cm³: the thesis's band around the engine's ~35.0 cm²
 
-let passed = 0;
-let failed = 0;
-function ok(what) {
-  passed++;
-  console.log(`ok - ${what}`);
-}
-function check(cond, what, detail = '') {
-  if (cond) return ok(what);
-  failed++;
-  console.log(`not ok - ${what}${detail ? ` (${detail})` : ''}`);
-  throw new Error(`check failed: ${what}`);
-}
-
-function startServer() {
-  const bin = process.env.STUDIO_BIN || path.resolve(here, '../../../target/release/studio');
-  // A path to an existing file is the binary; otherwise the value is split into a command line.
-  const argv = fs.existsSync(bin) ? [bin] : bin.split(/\s+/).filter(Boolean);
-  const proc = spawn(argv[0], [...argv.slice(1), '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
-  const exited = new Promise((resolve) => proc.on('exit', (code, signal) => resolve({ code, signal })));
-  const url = new Promise((resolve, reject) => {
-    let buf = '';
-    let found = false;
-    const timer = setTimeout(() => reject(new Error('studio did not print its address within 120 s')), 120000);
-    proc.on('error', (e) => reject(new Error(`cannot start ${argv[0]}: ${e.message}`)));
-    exited.then(({ code, signal }) => {
-      if (!found) reject(new Error(`studio exited (code ${code}, signal ${signal}) before printing its address`));
-    });
-    proc.stdout.setEncoding('utf8');
-    proc.stdout.on('data', (chunk) => {
-      if (found) return; // keep draining
-      buf += chunk;
-      const m = buf.match(/^studio: (http:\/\/127\.0\.0\.1:\d+\/)\s*$/m);
-      if (m) {
-        found = true;
-        clearTimeout(timer);
-        resolve(m[1]);
-      }
-    });
-  });
-  return { proc, url, exited };
-}
-
-async function shot(page, name) {
-  const file = path.join(shots, name);
-  await page.screenshot({ path: file });
-  console.log(`# screenshot ${path.relative(process.cwd(), file)}`);
-}
-
 const planner = (page, expr) => page.evaluate(expr);
 
-let server = null;
-
 async function main() {
-  fs.mkdirSync(shots, { recursive: true });
-  let base = process.env.STUDIO_URL;
-  if (!base) {
-    server = startServer();
-    base = await server.url;
-  }
-  if (!base.endsWith('/')) base += '/';
-  console.log(`# studio at ${base}`);
-
-  const browser = await chromium.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: [
-      '--headless=new', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-      '--disable-gpu-sandbox', '--disable-background-networking', '--disable-component-update',
-      '--disable-sync', '--no-first-run',
-    ],
-  });
-  const pageErrors = [];
+  const base = await serverUrl();
+  const browser = await launchBrowser();
   try {
-    const page = await browser.newPage({ viewport: { width: 1400, height: 900 } });
-    page.on('pageerror', (e) => pageErrors.push(String(e)));
-    page.on('console', (m) => {
-      // Failed requests are checked where they matter (the broken upload answers 400 on purpose).
-      if (m.type() === 'error' && !/Failed to load resource/.test(m.text())) pageErrors.push(`console: ${m.text()}`);
-    });
+    const { page, pageErrors } = await newPage(browser);
 
     // a. the default patient is shown
     await page.goto(`${base}planner`);
@@ -219,25 +142,7 @@ async function main() {
   }
 
   // f. the server stops on SIGINT
-  if (server) {
-    const s0 = Date.now();
-    server.proc.kill('SIGINT');
-    const res = await Promise.race([server.exited, new Promise((r) => setTimeout(() => r(null), 5000))]);
-    if (!res) server.proc.kill('SIGKILL');
-    check(res && res.code === 0, `the server exited with code 0 on SIGINT in ${Date.now() - s0} ms`, JSON.stringify(res));
-  }
+  await stopServer();
 }
 
-main()
-  .catch((e) => {
-    if (!/^check failed/.test(e.message)) {
-      failed++;
-      console.log(`not ok - ${e.message}`);
-    }
-  })
-  .finally(() => {
-    // Never leave the server behind.
-    if (server && server.proc.exitCode === null && server.proc.signalCode === null) server.proc.kill('SIGKILL');
-    console.log(`${passed} passed, ${failed} failed`);
-    process.exit(failed === 0 ? 0 : 1);
-  });
+run(main);

@@ -7,12 +7,13 @@ use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
 use axum::extract::{DefaultBodyLimit, Path, Query, State, WebSocketUpgrade};
 use axum::http::{header, StatusCode};
-use axum::response::{Html, IntoResponse, Response};
+use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 use tissue_planner::{ErrorKind, Patient, PlanError, PlanRequest, Scenario, Shipped, Unit};
+use tissue_scenes::{Organ, ShippedOrgan};
 
 use crate::assets;
 use crate::state::{Studio, UPLOAD_LIMIT};
@@ -22,7 +23,14 @@ pub fn router(studio: Studio) -> Router {
     Router::new()
         .route("/", get(|| async { assets::serve("index.html") }))
         .route("/planner", get(|| async { assets::serve("planner.html") }))
-        .route("/trainer", get(trainer))
+        .route("/trainer", get(|| async { assets::serve("trainer.html") }))
+        .route(
+            "/api/organs",
+            get(organs)
+                .post(upload_organ)
+                .layer(DefaultBodyLimit::max(UPLOAD_LIMIT)),
+        )
+        .route("/api/trainer/ws", get(trainer_socket))
         .route("/static/{*path}", get(static_file))
         .route("/api/meshes", get(meshes))
         .route(
@@ -126,15 +134,68 @@ impl IntoResponse for ApiError {
     }
 }
 
-async fn trainer() -> Response {
-    (
-        StatusCode::NOT_FOUND,
-        Html(
-            "<!doctype html><meta charset=utf-8><title>Trainer</title>\
-             <p>The surgical trainer comes in a later release. <a href=\"/\">Back</a></p>",
-        ),
+async fn organs() -> Json<Vec<serde_json::Value>> {
+    Json(
+        ShippedOrgan::ALL
+            .iter()
+            .map(|&o| json!({ "id": o.id(), "label": o.label(), "default": o == ShippedOrgan::Bunny }))
+            .collect(),
     )
-        .into_response()
+}
+
+async fn upload_organ(
+    State(studio): State<Studio>,
+    Query(query): Query<HashMap<String, String>>,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Json<serde_json::Value>, ApiError> {
+    let name = query.get("name").cloned().ok_or_else(|| {
+        ApiError::new(
+            StatusCode::BAD_REQUEST,
+            "usage",
+            "an upload needs ?name=FILE (its extension picks the format) and ?unit=",
+        )
+    })?;
+    let unit_symbol = query.get("unit").map_or("cm", String::as_str);
+    let unit = Unit::from_symbol(unit_symbol).ok_or_else(|| {
+        ApiError::new(
+            StatusCode::BAD_REQUEST,
+            "usage",
+            format!("unit {unit_symbol:?} is not one of mm, cm, dm, m"),
+        )
+    })?;
+    let bytes = body.map_err(|e| too_large_or(&name, &e))?;
+    let organ = blocking(move || {
+        Organ::from_bytes(&bytes, &name, unit.cm_per_unit())
+            .map_err(|e| ApiError::new(StatusCode::BAD_REQUEST, "mesh", e.to_string()))
+    })
+    .await?;
+    let reply = json!({
+        "label": organ.label, "nodes": organ.mesh.vertex_count(), "tets": organ.mesh.tets().len(),
+    });
+    let id = studio.organs().add(organ);
+    let mut reply = reply;
+    reply["organ"] = json!(id);
+    Ok(Json(reply))
+}
+
+fn too_large_or(name: &str, e: &BytesRejection) -> ApiError {
+    if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+        ApiError::new(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            "too_large",
+            format!(
+                "{name} is larger than the upload limit of {} MiB; decimate the scan or \
+                 crop it to the region of interest",
+                UPLOAD_LIMIT / (1024 * 1024)
+            ),
+        )
+    } else {
+        ApiError::new(StatusCode::BAD_REQUEST, "input", format!("{name}: {e}"))
+    }
+}
+
+async fn trainer_socket(State(studio): State<Studio>, ws: WebSocketUpgrade) -> Response {
+    ws.on_upgrade(move |socket| crate::trainer::serve_socket(studio, socket))
 }
 
 async fn static_file(Path(path): Path<String>) -> Response {
@@ -206,21 +267,7 @@ async fn upload(
                 format!("unit {unit_symbol:?} is not one of mm, cm, dm, m"),
             )
         })?;
-        let bytes = body.map_err(|e| {
-            if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-                ApiError::new(
-                    StatusCode::PAYLOAD_TOO_LARGE,
-                    "too_large",
-                    format!(
-                        "{name} is larger than the upload limit of {} MiB; decimate the scan or \
-                         crop it to the region of interest",
-                        UPLOAD_LIMIT / (1024 * 1024)
-                    ),
-                )
-            } else {
-                ApiError::new(StatusCode::BAD_REQUEST, "input", format!("{name}: {e}"))
-            }
-        })?;
+        let bytes = body.map_err(|e| too_large_or(&name, &e))?;
         if bytes.is_empty() {
             return Err(ApiError::new(
                 StatusCode::BAD_REQUEST,

@@ -7,6 +7,10 @@
 //!
 //! The HTTP API, the WebSocket messages and the JSON are in `apps/studio/API.md`.
 //!
+//! The trainer (`/trainer`): a session of tissue-scenes on a native thread at 60 steps per
+//! second, its newest surface frame sent as a binary WebSocket message ([`trainer`]); one
+//! session at a time.
+//!
 //! ## Policies
 //! - **One job at a time.** The simulation uses every core; a second run, from the same tab or
 //!   another, is refused (`refused`, kind `busy`) with a message that says a job is running and
@@ -50,6 +54,7 @@ mod api;
 pub mod assets;
 mod jobs;
 mod state;
+pub mod trainer;
 
 pub use api::router;
 pub use state::{Studio, KEPT, UPLOAD_LIMIT};

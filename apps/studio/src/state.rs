@@ -43,6 +43,7 @@ struct Inner {
 /// The server's state, shared by every request (cheap to clone).
 #[derive(Debug, Clone)]
 pub struct Studio {
+    organs: Arc<crate::trainer::Organs>,
     inner: Arc<Mutex<Inner>>,
     next: Arc<AtomicU64>,
     temp: Arc<PathBuf>,
@@ -63,6 +64,7 @@ impl Studio {
         std::fs::create_dir_all(&temp)?;
         let (shutdown, _) = watch::channel(false);
         Ok(Studio {
+            organs: Arc::default(),
             inner: Arc::default(),
             next: Arc::new(AtomicU64::new(1)),
             temp: Arc::new(temp),
@@ -74,6 +76,11 @@ impl Studio {
         // A panic while holding the lock cannot leave the lists inconsistent (each change is
         // one push or pop), so a poisoned lock is taken as it is.
         self.inner.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// The trainer's organs (uploads) and its one-session flag.
+    pub fn organs(&self) -> Arc<crate::trainer::Organs> {
+        Arc::clone(&self.organs)
     }
 
     /// A new id with `prefix` (`p1`, `j2`, …).

@@ -1,0 +1,203 @@
+// The surgical trainer in a real browser: starts studio, drives /trainer in headless Chromium
+// (software WebGL) with real mouse and keyboard input, and checks the page end to end.
+// Plain node script; exit code 0 when every check passes.
+//
+//   npm ci && node trainer.test.mjs
+//
+// Environment: STUDIO_BIN, STUDIO_URL, CHROMIUM (see harness.mjs).
+
+import { ok, check, shot, serverUrl, launchBrowser, newPage, stopServer, run } from './harness.mjs';
+
+const trainer = (page, fn, arg) => page.evaluate(fn, arg);
+const hookOf = (page) => trainer(page, () => {
+  const t = window.tissueStudio.trainer;
+  return {
+    ready: t.ready, steps: t.steps, stepMs: t.stepMs, volumeDrift: t.volumeDrift, tool: t.tool,
+    force: t.force, triangles: t.triangles, framesDrawn: t.framesDrawn, error: t.error,
+    events: t.events.length, paused: t.paused, stats: t.stats, fps: t.fps,
+  };
+});
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+const fmt = (x, d = 2) => (Number.isFinite(x) ? x.toFixed(d) : String(x));
+
+/** Waits until an event of `kind` arrives after the first `since` events; returns it or null. */
+async function waitEvent(page, kind, since, timeout) {
+  try {
+    const handle = await page.waitForFunction(([k, n]) => {
+      const evs = window.tissueStudio.trainer.events;
+      return evs.slice(n).find((e) => e.kind === k) || false;
+    }, [kind, since], { timeout, polling: 50 });
+    return await handle.jsonValue();
+  } catch {
+    return null;
+  }
+}
+
+/** The screen rectangle of the organ's bounding box (its 8 corners projected). */
+async function projectedBox(page) {
+  return trainer(page, () => {
+    const t = window.tissueStudio.trainer;
+    const b = t.organBox();
+    let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+    for (const x of [b.min[0], b.max[0]]) {
+      for (const y of [b.min[1], b.max[1]]) {
+        for (const z of [b.min[2], b.max[2]]) {
+          const s = t.screenOf([x, y, z]);
+          x0 = Math.min(x0, s.x); x1 = Math.max(x1, s.x);
+          y0 = Math.min(y0, s.y); y1 = Math.max(y1, s.y);
+        }
+      }
+    }
+    const c = t.screenOf(b.min.map((v, i) => (v + b.max[i]) / 2));
+    return { x0, y0, x1, y1, cx: c.x, cy: c.y, box: b };
+  });
+}
+
+async function main() {
+  const base = await serverUrl();
+  const browser = await launchBrowser();
+  const figures = {};
+  try {
+    const { page, pageErrors } = await newPage(browser);
+
+    // a. the default organ is shown and simulated
+    await page.goto(`${base}trainer`);
+    await page.waitForFunction(() => window.tissueStudio?.trainer?.ready === true, null, { timeout: 120000 });
+    const organ = await trainer(page, () => window.tissueStudio.trainer.organ);
+    ok(`the trainer draws the default organ (tissueStudio.trainer.ready, organ "${organ}")`);
+    check(organ === 'bunny', 'the default organ is the bunny', organ);
+    await page.waitForFunction(() => window.tissueStudio.trainer.stats !== null, null, { timeout: 10000 });
+    const h0 = await hookOf(page);
+    await sleep(1000);
+    const h1 = await hookOf(page);
+    check(h1.steps > h0.steps, `the simulation advances: ${h1.steps - h0.steps} steps in 1 s (step ${h0.steps} → ${h1.steps})`);
+    figures.stepsPerSecond = h1.stats.steps_per_s;
+    figures.framesDrawnPerSecond = h1.framesDrawn - h0.framesDrawn;
+    figures.framesReceivedPerSecond = h1.fps.received;
+    figures.stepMs = h1.stepMs;
+    check(h1.triangles > 0, `the surface has ${h1.triangles} triangles`);
+    check(Number.isFinite(h1.volumeDrift) && Number.isFinite(h1.stepMs.median) && Number.isFinite(h1.stepMs.p99),
+      `stats arrive: step ${fmt(h1.stepMs.median)} ms median, ${fmt(h1.stepMs.p99)} ms p99, volume drift ${fmt(h1.volumeDrift * 100, 3)} %`);
+    await shot(page, 't1-organ.png');
+
+    // b. probe: a real drag from the organ's top
+    await page.keyboard.press('1');
+    check((await hookOf(page)).tool === 'probe', 'key 1 selects the probe');
+    const start = await trainer(page, () => {
+      const t = window.tissueStudio.trainer;
+      const b = t.organBox();
+      const top = t.screenOf([(b.min[0] + b.max[0]) / 2, b.max[1], (b.min[2] + b.max[2]) / 2]);
+      // From the top centre's screen point downwards to the first pixel on the surface.
+      for (let dy = 0; dy < 300; dy += 3) {
+        const p = t.surfacePointAt(top.x, top.y + dy);
+        if (p) return { x: top.x, y: top.y + dy + 6, point: t.surfacePointAt(top.x, top.y + dy + 6) };
+      }
+      return null;
+    });
+    check(start && start.point, `a point near the top of the organ is on the surface: (${start?.point?.map((v) => fmt(v)).join(', ')}) cm at ${fmt(start?.x, 0)}, ${fmt(start?.y, 0)} px`);
+    await page.mouse.move(start.x, start.y);
+    await page.mouse.down();
+    for (let i = 1; i <= 10; i++) await page.mouse.move(start.x + 4 * i, start.y - 7 * i); // ~80 px up and right
+    let force = null;
+    try {
+      const handle = await page.waitForFunction(() => {
+        const f = window.tissueStudio.trainer.force;
+        const m = Math.hypot(f[0], f[1], f[2]);
+        return m > 0 ? f : false;
+      }, null, { timeout: 5000, polling: 50 });
+      force = await handle.jsonValue();
+    } catch {
+      force = null;
+    }
+    check(force, `while held, the tissue pulls on the probe: |F| = ${force ? fmt(Math.hypot(...force), 4) : 0} N (${force?.map((v) => fmt(v, 3)).join(', ')})`);
+    await page.mouse.up();
+    await sleep(300);
+    await shot(page, 't2-probe.png');
+
+    // c. scalpel: a drag across the organ's middle
+    await page.keyboard.press('2');
+    check((await hookOf(page)).tool === 'scalpel', 'key 2 selects the scalpel');
+    const beforeCut = await hookOf(page);
+    const pb = await projectedBox(page);
+    const N = 20;
+    const line = [];
+    for (let i = 0; i <= N; i++) line.push({ x: pb.x0 + ((pb.x1 - pb.x0) * i) / N, y: pb.cy });
+    const onSurface = await trainer(page, (pts) => pts.map((p) => !!window.tissueStudio.trainer.surfacePointAt(p.x, p.y)), line);
+    // Press one sample inside the silhouette (the surface moves a little), end past the far side.
+    const first = onSurface.indexOf(true) + 1;
+    const last = onSurface.lastIndexOf(true);
+    check(first >= 1 && onSurface[first] && last - first >= 5, `the line across the organ's middle crosses the surface (${onSurface.filter(Boolean).length} of ${N + 1} points on it)`);
+    await page.mouse.move(line[first].x, line[first].y);
+    await page.mouse.down();
+    for (let i = first + 1; i <= N; i++) await page.mouse.move(line[i].x, line[i].y, { steps: 1 });
+    await page.mouse.up();
+    const cut = await waitEvent(page, 'cut_advanced', beforeCut.events, 5000);
+    check(cut, `a cut_advanced event arrives within 5 s${cut ? ` (${JSON.stringify(cut)})` : ''}`);
+    await page.waitForFunction((n) => window.tissueStudio.trainer.triangles > n, beforeCut.triangles, { timeout: 5000 }).catch(() => {});
+    const afterCut = await hookOf(page);
+    check(afterCut.triangles > beforeCut.triangles, `the cut added triangles: ${beforeCut.triangles} → ${afterCut.triangles}`);
+    await sleep(300);
+    await shot(page, 't3-cut.png');
+
+    // d. needle: a suture across the wound
+    await page.keyboard.press('3');
+    check((await hookOf(page)).tool === 'needle', 'key 3 selects the needle');
+    const beforeSuture = await hookOf(page);
+    const sides = await trainer(page, () => {
+      const t = window.tissueStudio.trainer;
+      const w = t.woundSides();
+      return w && w.map((p) => ({ point: p, screen: t.screenOf(p) }));
+    });
+    check(sides && sides.every((s) => s.screen.visible),
+      `woundSides() gives two points on the surface across the cut: ${sides ? sides.map((s) => `(${s.point.map((v) => fmt(v)).join(', ')})`).join(' and ') : 'null'}`);
+    await page.mouse.click(sides[0].screen.x, sides[0].screen.y);
+    await sleep(150);
+    await page.mouse.click(sides[1].screen.x, sides[1].screen.y);
+    const suture = await waitEvent(page, 'suture_placed', beforeSuture.events, 5000);
+    check(suture, `a suture_placed event arrives within 5 s${suture ? ` (${JSON.stringify(suture)})` : ''}`);
+    await sleep(300);
+    await shot(page, 't4-suture.png');
+
+    // e. pause, one step, resume
+    await page.getByRole('button', { name: 'Pause', exact: true }).click();
+    await page.waitForFunction(() => window.tissueStudio.trainer.stats?.paused === true, null, { timeout: 5000 });
+    await sleep(300);
+    const p0 = (await hookOf(page)).steps;
+    await sleep(1000);
+    const p1 = (await hookOf(page)).steps;
+    check(p1 === p0, `paused: the steps stop (${p0} → ${p1} over 1 s)`);
+    const stepButton = page.getByRole('button', { name: 'Step', exact: true });
+    check(await stepButton.isEnabled(), 'Step is enabled while paused');
+    await stepButton.click();
+    await page.waitForFunction((n) => window.tissueStudio.trainer.steps !== n, p0, { timeout: 5000 }).catch(() => {});
+    await sleep(500);
+    const p2 = (await hookOf(page)).steps;
+    check(p2 === p0 + 1, `Step advances by exactly 1 (${p0} → ${p2})`);
+    await page.getByRole('button', { name: 'Resume', exact: true }).click();
+    await page.waitForFunction((n) => window.tissueStudio.trainer.steps > n + 5, p2, { timeout: 5000 }).catch(() => {});
+    const p3 = (await hookOf(page)).steps;
+    check(p3 > p2 + 5, `Resume: the steps run again (${p2} → ${p3})`);
+    check(!(await stepButton.isEnabled()), 'Step is disabled while running');
+
+    // The figures, measured again over 2 s of running (the page has settled its resolution).
+    const r0 = await hookOf(page);
+    await sleep(2000);
+    const r1 = await hookOf(page);
+    figures.stepsPerSecond = r1.stats.steps_per_s;
+    figures.framesDrawnPerSecond = (r1.framesDrawn - r0.framesDrawn) / 2;
+    figures.framesReceivedPerSecond = r1.fps.received;
+    figures.stepMs = r1.stepMs;
+
+    // f. no script errors
+    check(pageErrors.length === 0, 'no script errors in the page', pageErrors.join(' | '));
+  } finally {
+    await browser.close();
+  }
+  console.log(`# figures: simulation ${fmt(figures.stepsPerSecond, 1)} steps/s (stats), `
+    + `${fmt(figures.framesDrawnPerSecond, 1)} frames drawn/s and ${figures.framesReceivedPerSecond} received/s (page), `
+    + `step ${fmt(figures.stepMs?.median)} ms median, ${fmt(figures.stepMs?.p99)} ms p99`);
+
+  await stopServer();
+}
+
+run(main);

@@ -1,0 +1,488 @@
+//! The trainer's server side: shipped organs and uploads, and one live session at a time — a
+//! native simulation thread stepping at a fixed rate, publishing only its newest surface frame,
+//! which the socket task sends as a binary WebSocket frame (see `API.md`).
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use axum::extract::ws::{Message, WebSocket};
+use glam::Vec3;
+use serde::Deserialize;
+use serde_json::{json, Value};
+use tissue_scenes::{Organ, Session, SessionOptions, ShippedOrgan, TrainerEvent};
+use tokio::sync::{mpsc, watch};
+
+use crate::state::Studio;
+
+/// Steps per second of the simulation thread.
+pub const STEPS_PER_SECOND: f64 = 60.0;
+
+/// How often stats go to the page.
+const STATS_EVERY: Duration = Duration::from_millis(250);
+
+/// The frame's magic number, "TSF1" little-endian.
+pub const FRAME_MAGIC: u32 = 0x3146_5354;
+
+/// One published surface frame: the newest wins.
+#[derive(Debug, Clone)]
+pub struct Frame {
+    /// Counts frames published.
+    pub number: u32,
+    /// The session's step.
+    pub step: u32,
+    /// Node positions, cm, flat.
+    pub positions: Vec<f32>,
+    /// The tissue's force on the probe, N.
+    pub force: [f32; 3],
+    /// The probe's tip, cm (NaN when none).
+    pub tip: [f32; 3],
+    /// The surface's version and its triangles.
+    pub surface: Arc<(u64, Vec<u32>)>,
+}
+
+impl Frame {
+    /// The binary frame of `API.md`; the index buffer only when `with_indices`.
+    pub fn encode(&self, with_indices: bool) -> Vec<u8> {
+        let triangles = self.surface.1.len() / 3;
+        let vertices = self.positions.len() / 3;
+        let mut out = Vec::with_capacity(48 + 4 * self.positions.len() + 12 * triangles);
+        let mut word = |w: u32| out.extend_from_slice(&w.to_le_bytes());
+        word(FRAME_MAGIC);
+        word(u32::from(with_indices));
+        word(self.number);
+        word(self.step);
+        word(vertices as u32);
+        word(triangles as u32);
+        for v in self.force.iter().chain(&self.tip) {
+            word(v.to_bits());
+        }
+        for v in &self.positions {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        if with_indices {
+            for i in &self.surface.1 {
+                out.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+        out
+    }
+}
+
+/// What the simulation thread reports besides frames.
+#[derive(Debug, Clone, Default)]
+pub struct Stats {
+    /// Steps taken.
+    pub steps: u64,
+    /// Median and p99 step time, ms.
+    pub step_ms: (f64, f64),
+    /// Steps per second, measured over the last second.
+    pub steps_per_s: f64,
+    /// `V/V₀ − 1`.
+    pub volume_drift: f64,
+    /// Nodes, tets.
+    pub nodes: usize,
+    /// Tets.
+    pub tets: usize,
+    /// Paused.
+    pub paused: bool,
+    /// |force| on the probe, N.
+    pub force_n: f64,
+}
+
+/// A command from the page to the simulation thread.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum Command {
+    /// Start (or restart) with an organ.
+    Load {
+        /// A shipped organ's id or an upload's.
+        organ: String,
+    },
+    /// The active tool (for the record; the actions say what they are).
+    Tool {
+        /// `probe`, `scalpel`, `needle`.
+        tool: String,
+    },
+    /// Probe down on a surface point.
+    Grab {
+        /// cm.
+        point: [f32; 3],
+        /// Index into the current surface's triangles.
+        triangle: usize,
+    },
+    /// Probe moves.
+    Drag {
+        /// cm.
+        target: [f32; 3],
+    },
+    /// Probe up.
+    Release,
+    /// Scalpel: a path of surface points and the view direction.
+    Cut {
+        /// cm.
+        path: Vec<[f32; 3]>,
+        /// The camera's viewing direction.
+        view_dir: [f32; 3],
+    },
+    /// Needle: the two sides of a wound.
+    Suture {
+        /// cm.
+        a: [f32; 3],
+        /// cm.
+        b: [f32; 3],
+    },
+    /// Back to the organ as loaded.
+    Reset,
+    /// Pause or resume.
+    Pause {
+        /// Paused?
+        paused: bool,
+    },
+    /// One step while paused.
+    Step,
+}
+
+/// Uploaded organs, kept by id (the last few).
+#[derive(Debug, Default)]
+pub struct Organs {
+    uploads: Mutex<Vec<(String, Arc<Organ>)>>,
+    busy: AtomicBool,
+    next: AtomicU64,
+}
+
+impl Organs {
+    /// Keeps an upload; its id.
+    pub fn add(&self, organ: Organ) -> String {
+        let id = format!("u{}", self.next.fetch_add(1, Ordering::Relaxed) + 1);
+        let mut list = self.uploads.lock().unwrap_or_else(|p| p.into_inner());
+        list.push((id.clone(), Arc::new(organ)));
+        if list.len() > crate::state::KEPT {
+            list.remove(0);
+        }
+        id
+    }
+
+    /// The organ of `id`: a shipped one or an upload.
+    pub fn get(&self, id: &str) -> Result<Arc<Organ>, String> {
+        if let Some(s) = ShippedOrgan::from_id(id) {
+            return Organ::shipped(s).map(Arc::new).map_err(|e| e.to_string());
+        }
+        self.uploads
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .iter()
+            .find(|(i, _)| i == id)
+            .map(|(_, o)| Arc::clone(o))
+            .ok_or_else(|| format!("no organ {id:?}: pick a shipped one or upload it again"))
+    }
+}
+
+fn error_json(kind: &str, message: impl Into<String>) -> Value {
+    json!({ "kind": kind, "field": null, "message": message.into() })
+}
+
+/// Serves one tab's trainer socket: one session at a time on the server.
+pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
+    let organs = studio.organs();
+    if organs.busy.swap(true, Ordering::AcqRel) {
+        let refused = json!({ "type": "refused", "error": error_json(
+            "busy",
+            "a trainer session runs in another tab on this server: close it first (one session \
+             runs at a time, so that it keeps its 60 steps per second)") });
+        let _ = socket.send(Message::Text(refused.to_string().into())).await;
+        return;
+    }
+    let (commands, command_rx) = std::sync::mpsc::channel::<Command>();
+    let (frames_tx, mut frames) = watch::channel::<Option<Arc<Frame>>>(None);
+    let (stats_tx, stats) = watch::channel(Stats::default());
+    let (texts_tx, mut texts) = mpsc::unbounded_channel::<Value>();
+    let stop = Arc::new(AtomicBool::new(false));
+    let thread = {
+        let stop = Arc::clone(&stop);
+        let organs = Arc::clone(&organs);
+        std::thread::Builder::new()
+            .name("studio-trainer".to_owned())
+            .spawn(move || {
+                simulate(
+                    &organs,
+                    &command_rx,
+                    &frames_tx,
+                    &stats_tx,
+                    &texts_tx,
+                    &stop,
+                )
+            })
+    };
+    let mut shutdown = studio.on_shutdown();
+    let mut sent_version = 0u64;
+    let mut frames_sent = 0u64;
+    let mut window = (Instant::now(), 0u64);
+    let mut frames_per_s = 0.0;
+    let mut ticker = tokio::time::interval(STATS_EVERY);
+    if thread.is_ok() {
+        loop {
+            tokio::select! {
+                incoming = socket.recv() => {
+                    let text = match incoming {
+                        Some(Ok(Message::Text(t))) => t.to_string(),
+                        Some(Ok(Message::Close(_)) | Err(_)) | None => break,
+                        Some(Ok(_)) => continue,
+                    };
+                    match serde_json::from_str::<Command>(&text) {
+                        Ok(c) => {
+                            if commands.send(c).is_err() {
+                                break;
+                            }
+                        }
+                        Err(e) => {
+                            let m = json!({ "type": "refused", "error": error_json(
+                                "usage", format!("the page sent a message the server does not know: {e}")) });
+                            if socket.send(Message::Text(m.to_string().into())).await.is_err() {
+                                break;
+                            }
+                        }
+                    }
+                }
+                changed = frames.changed() => {
+                    if changed.is_err() {
+                        break;
+                    }
+                    let frame = frames.borrow_and_update().clone();
+                    if let Some(frame) = frame {
+                        let with_indices = frame.surface.0 != sent_version;
+                        let bytes = frame.encode(with_indices);
+                        if socket.send(Message::Binary(bytes.into())).await.is_err() {
+                            break;
+                        }
+                        sent_version = frame.surface.0;
+                        frames_sent += 1;
+                    }
+                }
+                Some(text) = texts.recv() => {
+                    if text["type"] == "scene" {
+                        // A new organ: its first frame carries the index buffer.
+                        sent_version = 0;
+                    }
+                    if socket.send(Message::Text(text.to_string().into())).await.is_err() {
+                        break;
+                    }
+                }
+                _ = ticker.tick() => {
+                    let elapsed = window.0.elapsed().as_secs_f64();
+                    if elapsed >= 1.0 {
+                        frames_per_s = (frames_sent - window.1) as f64 / elapsed;
+                        window = (Instant::now(), frames_sent);
+                    }
+                    let s = stats.borrow().clone();
+                    let m = json!({
+                        "type": "stats", "steps": s.steps,
+                        "step_ms": { "median": s.step_ms.0, "p99": s.step_ms.1 },
+                        "steps_per_s": s.steps_per_s, "frames_per_s": frames_per_s,
+                        "volume_drift": s.volume_drift, "nodes": s.nodes, "tets": s.tets,
+                        "paused": s.paused, "force_n": s.force_n,
+                    });
+                    if socket.send(Message::Text(m.to_string().into())).await.is_err() {
+                        break;
+                    }
+                }
+                _ = shutdown.changed() => break,
+            }
+        }
+    }
+    stop.store(true, Ordering::Relaxed);
+    drop(commands);
+    if let Ok(handle) = thread {
+        let _ = tokio::task::spawn_blocking(move || handle.join()).await;
+    }
+    organs.busy.store(false, Ordering::Release);
+}
+
+/// The simulation thread: applies commands, steps at [`STEPS_PER_SECOND`], publishes frames.
+fn simulate(
+    organs: &Organs,
+    commands: &std::sync::mpsc::Receiver<Command>,
+    frames: &watch::Sender<Option<Arc<Frame>>>,
+    stats: &watch::Sender<Stats>,
+    texts: &mpsc::UnboundedSender<Value>,
+    stop: &AtomicBool,
+) {
+    let _span = tracing::info_span!("studio_trainer").entered();
+    let period = Duration::from_secs_f64(1.0 / STEPS_PER_SECOND);
+    let mut live: Option<Live> = None;
+    let mut paused = false;
+    let mut number = 0u32;
+    let mut next = Instant::now();
+    let mut rate = (Instant::now(), 0u64, 0.0f64);
+    let event = |e: &TrainerEvent| {
+        let _ = texts.send(json!({ "type": "event", "event": {
+            "kind": e.kind, "step": e.step, "text": e.text } }));
+    };
+    let fail = |kind: &str, message: String| {
+        let _ = texts.send(json!({ "type": "failed", "error": error_json(kind, message) }));
+    };
+    while !stop.load(Ordering::Relaxed) {
+        let mut single = false;
+        loop {
+            let command = match commands.try_recv() {
+                Ok(c) => c,
+                Err(std::sync::mpsc::TryRecvError::Empty) => break,
+                Err(std::sync::mpsc::TryRecvError::Disconnected) => return,
+            };
+            let result = match command {
+                Command::Load { organ } => match organs.get(&organ).and_then(|o| Live::new(o)) {
+                    Ok(l) => {
+                        let (vertices, triangles) = l.session.capacity();
+                        let _ = texts.send(json!({
+                            "type": "scene", "organ": organ, "label": l.session.label(),
+                            "nodes": l.session.body().node_count(),
+                            "tets": l.session.body().tets().len(),
+                            "capacity": { "vertices": vertices, "triangles": triangles },
+                            "tray": { "size": [l.session.tray_side(), l.session.tray_side()], "top": 0.0 },
+                        }));
+                        live = Some(l);
+                        next = Instant::now();
+                        Ok(())
+                    }
+                    Err(e) => Err(e),
+                },
+                Command::Reset => match &live {
+                    Some(l) => match Live::new(Arc::clone(&l.organ)) {
+                        Ok(fresh) => {
+                            let (vertices, triangles) = fresh.session.capacity();
+                            let _ = texts.send(json!({
+                                "type": "scene", "organ": fresh.session.label(),
+                                "label": fresh.session.label(),
+                                "nodes": fresh.session.body().node_count(),
+                                "tets": fresh.session.body().tets().len(),
+                                "capacity": { "vertices": vertices, "triangles": triangles },
+                                "tray": { "size": [fresh.session.tray_side(), fresh.session.tray_side()], "top": 0.0 },
+                            }));
+                            live = Some(fresh);
+                            next = Instant::now();
+                            Ok(())
+                        }
+                        Err(e) => Err(e),
+                    },
+                    None => Ok(()),
+                },
+                Command::Pause { paused: p } => {
+                    paused = p;
+                    Ok(())
+                }
+                Command::Step => {
+                    single = true;
+                    Ok(())
+                }
+                Command::Tool { .. } => Ok(()),
+                other => match &mut live {
+                    Some(l) => l.apply(other, &event),
+                    None => Err("load an organ first".to_owned()),
+                },
+            };
+            if let Err(message) = result {
+                fail("run", message);
+            }
+        }
+        if let Some(l) = &mut live {
+            if !paused || single {
+                match l.session.step() {
+                    Ok(events) => events.iter().for_each(event),
+                    Err(e) => {
+                        fail(
+                            "run",
+                            format!("the simulation failed: {e}; press Reset to start again"),
+                        );
+                        live = None;
+                        continue;
+                    }
+                }
+                rate.1 += 1;
+            }
+            let elapsed = rate.0.elapsed().as_secs_f64();
+            if elapsed >= 1.0 {
+                rate = (Instant::now(), 0, rate.1 as f64 / elapsed);
+            }
+            number = number.wrapping_add(1);
+            frames.send_replace(Some(Arc::new(l.frame(number))));
+            let s = &l.session;
+            let (median, p99) = s.step_ms();
+            let force = s.tool_force();
+            stats.send_replace(Stats {
+                steps: s.steps(),
+                step_ms: (median, p99),
+                steps_per_s: rate.2,
+                volume_drift: s.volume_drift(),
+                nodes: s.body().node_count(),
+                tets: s.body().tets().len(),
+                paused,
+                force_n: f64::from(force.length()),
+            });
+        }
+        next += period;
+        let now = Instant::now();
+        if next > now {
+            std::thread::sleep(next - now);
+        } else {
+            // Behind (a slow step): do not try to catch up with a burst.
+            next = now;
+        }
+    }
+}
+
+/// A live session and what the frames need.
+struct Live {
+    organ: Arc<Organ>,
+    session: Session,
+    surface: Arc<(u64, Vec<u32>)>,
+}
+
+impl Live {
+    fn new(organ: Arc<Organ>) -> Result<Live, String> {
+        let session = Session::new(&organ, SessionOptions::default()).map_err(|e| e.to_string())?;
+        Ok(Live {
+            organ,
+            surface: Arc::new((0, Vec::new())),
+            session,
+        })
+    }
+
+    fn apply(&mut self, command: Command, event: &impl Fn(&TrainerEvent)) -> Result<(), String> {
+        let v = |p: [f32; 3]| Vec3::from_array(p);
+        let s = &mut self.session;
+        let done = match command {
+            Command::Grab { point, triangle } => s.grab(v(point), triangle).map(|e| event(&e)),
+            Command::Drag { target } => {
+                s.drag(v(target));
+                Ok(())
+            }
+            Command::Release => s.release().map(|e| e.iter().for_each(event)),
+            Command::Cut { path, view_dir } => {
+                let path: Vec<Vec3> = path.into_iter().map(v).collect();
+                s.cut(&path, v(view_dir)).map(|_| ())
+            }
+            Command::Suture { a, b } => s.suture(v(a), v(b)).map(|e| event(&e)),
+            _ => Ok(()),
+        };
+        done.map_err(|e| e.to_string())
+    }
+
+    fn frame(&mut self, number: u32) -> Frame {
+        let s = &self.session;
+        if self.surface.0 != s.surface_version() {
+            self.surface = Arc::new((
+                s.surface_version(),
+                s.surface().iter().flatten().copied().collect(),
+            ));
+        }
+        let tip = s.tool_tip().map_or([f32::NAN; 3], |t| t.to_array());
+        Frame {
+            number,
+            step: s.steps() as u32,
+            positions: s.positions().iter().flat_map(|p| p.to_array()).collect(),
+            force: s.tool_force().to_array(),
+            tip,
+            surface: Arc::clone(&self.surface),
+        }
+    }
+}

@@ -1,0 +1,650 @@
+// The surgical trainer: an organ on a tray, simulated on the studio server and streamed to this
+// page; probe, scalpel and needle. See apps/studio/API.md, "The trainer".
+
+import * as THREE from 'three';
+import { TrainerSocket, listOrgans, uploadOrgan, MAX_UPLOAD } from './trainer-socket.js';
+import { TrainerView, ARROW_CM_PER_N } from './trainer-view.js';
+
+const TOOLS = ['probe', 'scalpel', 'needle'];
+const CLICK_SLOP_PX = 6;
+const WOUND_OFFSET_CM = 0.4;
+const EVENTS_SHOWN = 200;
+const PATH_SHOWN_MS = 1500;
+const PATH_SPACING_PX = 6; // the scalpel's path: a surface point every few pixels the pointer moves
+const MAX_PATH_POINTS = 2000;
+
+const $ = (id) => document.getElementById(id);
+
+// ---- The state hook for tests (kept up to date; see apps/studio/browser/README.md).
+const hook = {
+  ready: false,
+  steps: 0,
+  stepMs: { median: null, p99: null },
+  volumeDrift: null,
+  events: [],
+  tool: 'probe',
+  force: [0, 0, 0],
+  triangles: 0,
+  framesDrawn: 0,
+  error: null,
+  // beyond the required ones
+  paused: false,
+  organ: null,
+  scene: null,
+  stats: null,
+  framesReceived: 0,
+  fps: { received: 0, drawn: 0 },
+  reallocations: 0,
+  renderScale: 1,
+};
+window.tissueStudio = Object.assign(window.tissueStudio || {}, { trainer: hook });
+
+const state = {
+  organs: [],
+  organ: null, // the organ id asked for last
+  awaitingScene: false,
+  fitPending: false,
+  refused: false,
+  paused: false,
+  pauseSentAt: 0,
+  gesture: null,
+  needleFirst: null,
+  lastCut: null, // { path: [[x,y,z], ...] }
+  pathTimer: null,
+  tip: [NaN, NaN, NaN],
+  received: [], // arrival times of frames (ms), the last second
+  drawn: [],
+  adaptedAt: 0,
+};
+
+let view;
+let socket;
+
+// ---------------------------------------------------------------- formatting
+
+function fmt(x, digits = 2) {
+  if (x === null || x === undefined || !Number.isFinite(Number(x))) return '—';
+  let v = Number(x);
+  if (Math.abs(v) < 0.5 * 10 ** -digits) v = 0; // no "-0.00"
+  return v.toLocaleString('en-GB', { minimumFractionDigits: digits, maximumFractionDigits: digits });
+}
+function fmtInt(x) {
+  if (x === null || x === undefined || !Number.isFinite(Number(x))) return '—';
+  return Number(x).toLocaleString('en-GB');
+}
+function setText(id, text) {
+  $(id).textContent = text;
+}
+function el(tag, attrs = {}, ...children) {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === 'class') e.className = v;
+    else e.setAttribute(k, v);
+  }
+  for (const c of children) e.append(c);
+  return e;
+}
+
+// ---------------------------------------------------------------- messages
+
+function showError(message) {
+  hook.error = message;
+  const box = $('error');
+  box.textContent = message;
+  box.hidden = false;
+}
+function clearError() {
+  hook.error = null;
+  $('error').hidden = true;
+  $('error').textContent = '';
+}
+
+function setReady(on) {
+  hook.ready = on;
+  document.body.classList.toggle('loading', !on);
+  updateControls();
+}
+
+// ---------------------------------------------------------------- organs
+
+async function initOrgans() {
+  try {
+    state.organs = await listOrgans();
+  } catch (e) {
+    showError(e.message);
+    state.organs = [];
+  }
+  const select = $('organ-select');
+  select.replaceChildren();
+  const chosen = state.organs.find((o) => o.default) || state.organs[0];
+  for (const o of state.organs) select.append(el('option', { value: o.id }, o.label));
+  if (chosen) {
+    select.value = chosen.id;
+    load(chosen.id, chosen.label);
+  } else {
+    setText('view-empty', 'No organ to load. Upload one.');
+  }
+}
+
+function organLabel(id) {
+  const o = state.organs.find((x) => x.id === id);
+  return o ? o.label : id;
+}
+
+async function load(id, label = organLabel(id)) {
+  state.organ = id;
+  state.awaitingScene = true;
+  state.fitPending = true;
+  state.refused = false; // (pausing is the session's, not the organ's: it stays as it is)
+  hook.organ = id;
+  hook.events = [];
+  hook.steps = 0;
+  $('events').replaceChildren();
+  $('events-empty').hidden = false;
+  cancelGesture();
+  setNeedleFirst(null);
+  state.lastCut = null;
+  socket.dropFrames();
+  setReady(false);
+  setText('organ-status', `Loading ${label}…`);
+  $('view-empty').hidden = false;
+  setText('view-empty', `Loading ${label}…`);
+  try {
+    await socket.send({ type: 'load', organ: id });
+  } catch (e) {
+    showError(e.message);
+    setText('organ-status', '');
+    setText('view-empty', 'Not connected to the studio server.');
+  }
+}
+
+function uploadFile(file) {
+  if (!file) return;
+  $('file-input').value = '';
+  if (file.size > MAX_UPLOAD) {
+    showError(`${file.name} is larger than 64 MiB (${fmtInt(file.size)} bytes); files up to 64 MiB can be loaded.`);
+    return;
+  }
+  if (!/\.(obj|ply|stl|vtk|vtu|msh)$/i.test(file.name)) {
+    showError(`${file.name}: choose an OBJ, PLY or STL surface, or a VTK, VTU or MSH tet mesh (by its extension).`);
+    return;
+  }
+  const unit = $('unit-select').value;
+  setText('organ-status', `Uploading ${file.name} (${unit})…`);
+  $('file-input').disabled = true;
+  uploadOrgan(file, unit)
+    .then((answer) => {
+      clearError();
+      const label = `${answer.label} (uploaded, ${fmtInt(answer.nodes)} nodes, ${fmtInt(answer.tets)} tets)`;
+      state.organs.push({ id: answer.organ, label });
+      const select = $('organ-select');
+      select.append(el('option', { value: answer.organ }, label));
+      select.value = answer.organ;
+      load(answer.organ, label);
+    })
+    .catch((e) => {
+      showError(e.message);
+      setText('organ-status', hook.ready ? `Still showing ${organLabel(state.organ)}.` : '');
+      $('organ-select').value = state.organ ?? '';
+    })
+    .finally(() => {
+      $('file-input').disabled = false;
+    });
+}
+
+// ---------------------------------------------------------------- the session's messages
+
+function onMessage(msg) {
+  switch (msg.type) {
+    case 'scene':
+      onScene(msg);
+      break;
+    case 'stats':
+      onStats(msg);
+      break;
+    case 'event':
+      if (msg.event) addEvent(msg.event);
+      break;
+    case 'refused':
+      state.refused = true;
+      state.awaitingScene = false;
+      showError(msg.error?.message || 'The server refused the session.');
+      setText('organ-status', '');
+      setText('view-empty', 'The trainer is in use in another tab or window.');
+      setReady(false);
+      break;
+    case 'failed':
+      showError(msg.error?.message || 'The simulation failed.');
+      setText('organ-status', '');
+      if (state.awaitingScene) {
+        state.awaitingScene = false;
+        setText('view-empty', 'The organ could not be loaded.');
+      }
+      break;
+    default:
+      break;
+  }
+}
+
+function onScene(msg) {
+  const newOrgan = msg.organ !== hook.scene?.organ || state.fitPending;
+  hook.scene = msg;
+  hook.organ = msg.organ;
+  state.awaitingScene = false;
+  state.fitPending = newOrgan;
+  socket.dropFrames(); // anything before the scene belongs to the previous one
+  view.allocate(msg.capacity.vertices, msg.capacity.triangles);
+  if (msg.tray) view.setTray(msg.tray.size, msg.tray.top ?? 0);
+  hook.steps = 0;
+  hook.triangles = 0;
+  setReady(false);
+  setText('organ-badge', `${msg.label || organLabel(msg.organ)} · ${fmtInt(msg.nodes)} nodes · ${fmtInt(msg.tets)} tets`);
+  setText('h-mesh', `${fmtInt(msg.nodes)} nodes · ${fmtInt(msg.tets)} tets`);
+  socket.sendIfOpen({ type: 'tool', tool: hook.tool });
+}
+
+function onStats(msg) {
+  hook.stats = msg;
+  // Newer than the last drawn frame (while paused, say); not before this scene's first frame.
+  if (hook.ready && Number.isFinite(msg.steps) && msg.steps > hook.steps) hook.steps = msg.steps;
+  hook.stepMs = { median: msg.step_ms?.median ?? null, p99: msg.step_ms?.p99 ?? null };
+  hook.volumeDrift = msg.volume_drift ?? null;
+  hook.paused = !!msg.paused;
+  // The button shows what was asked; the server's word wins once the request had time to land.
+  if (hook.paused !== state.paused && performance.now() - state.pauseSentAt > 1000) {
+    state.paused = hook.paused;
+    updateControls();
+  }
+  renderHud();
+}
+
+function addEvent(ev) {
+  hook.events.push(ev);
+  $('events-empty').hidden = true;
+  const list = $('events');
+  const step = Number.isFinite(ev.step) ? ev.step : hook.steps;
+  const details = eventDetails(ev);
+  const li = el('li', { class: `ev ev-${String(ev.kind).replace(/[^a-z_]/gi, '')}` },
+    el('span', { class: 'ev-step' }, `step ${fmtInt(step)}`),
+    el('strong', {}, eventTitle(ev.kind)));
+  if (details) li.append(el('span', { class: 'ev-detail' }, details));
+  list.prepend(li);
+  while (list.children.length > EVENTS_SHOWN) list.lastElementChild.remove();
+}
+
+function eventTitle(kind) {
+  const titles = {
+    cut_advanced: 'Cut advanced',
+    piece_detached: 'Piece detached',
+    suture_placed: 'Suture placed',
+    suture_removed: 'Suture removed',
+    grabbed: 'Tissue grabbed',
+    released: 'Tissue released',
+  };
+  if (titles[kind]) return titles[kind];
+  const s = String(kind ?? 'event').replace(/_/g, ' ');
+  return s.charAt(0).toUpperCase() + s.slice(1);
+}
+
+/**
+ * The event in words: its `text` when the server gives one, otherwise its other fields
+ * ("triangles split 12 · length cm 3.20").
+ */
+function eventDetails(ev) {
+  if (typeof ev.text === 'string' && ev.text.trim() !== '') return ev.text;
+  const parts = [];
+  for (const [k, v] of Object.entries(ev)) {
+    if (k === 'kind' || k === 'step' || k === 'type') continue;
+    const name = k.replace(/_/g, ' ');
+    let value;
+    if (typeof v === 'number') value = Number.isInteger(v) ? fmtInt(v) : fmt(v, 2);
+    else if (Array.isArray(v) && v.length === 3 && v.every((x) => typeof x === 'number')) value = `(${v.map((x) => fmt(x, 1)).join(', ')})`;
+    else if (typeof v === 'string' || typeof v === 'boolean') value = String(v);
+    else continue;
+    parts.push(`${name} ${value}`);
+  }
+  return parts.join(' · ');
+}
+
+function onSocketClosed() {
+  cancelGesture();
+  setReady(false);
+  hook.scene = null;
+  if (!state.refused) {
+    showError('The connection to the studio server was lost. Choose an organ to start again.');
+  }
+  setText('hud-state', 'disconnected');
+}
+
+// ---------------------------------------------------------------- frames and drawing
+
+function onFrameReceived() {
+  hook.framesReceived++;
+  state.received.push(performance.now());
+}
+
+function loop() {
+  requestAnimationFrame(loop);
+  const frame = socket.takeFrame();
+  if (frame && !state.awaitingScene && hook.scene) {
+    const before = view.capacity;
+    if (view.applyFrame(frame)) {
+      if (view.capacity !== before) hook.reallocations++;
+      hook.steps = frame.step;
+      hook.triangles = view.triangles;
+      const f = frame.force;
+      const finite = f.every(Number.isFinite);
+      hook.force = finite ? [f[0], f[1], f[2]] : [0, 0, 0];
+      state.tip = frame.tip;
+      view.setForce(hook.force, frame.tip);
+      if (state.fitPending) {
+        view.fit();
+        state.fitPending = false;
+      }
+      view.renderNow();
+      hook.framesDrawn++;
+      state.drawn.push(performance.now());
+      if (!hook.ready) {
+        setReady(true);
+        clearErrorIfStale();
+        $('view-empty').hidden = true;
+        setText('organ-status', '');
+      }
+      return;
+    }
+  }
+  view.renderIfDirty();
+}
+
+function clearErrorIfStale() {
+  // A message about a lost connection or a refused session no longer applies once a frame is drawn.
+  if (hook.error && /connection|in use|refused/i.test(hook.error)) clearError();
+}
+
+function perSecond(times, now) {
+  while (times.length && now - times[0] > 1000) times.shift();
+  return times.length;
+}
+
+function renderHud() {
+  const now = performance.now();
+  hook.fps = { received: perSecond(state.received, now), drawn: perSecond(state.drawn, now) };
+  if (now - state.adaptedAt > 1000 && hook.ready && !hook.paused) {
+    state.adaptedAt = now;
+    view.adapt(hook.fps.drawn, hook.fps.received);
+    hook.renderScale = view.scale;
+  }
+  const s = hook.stats;
+  const fmag = Math.hypot(...hook.force);
+  setText('h-force', `${fmt(fmag, 3)} N`);
+  setText('h-step-ms', s ? `${fmt(s.step_ms?.median, 2)} ms · p99 ${fmt(s.step_ms?.p99, 2)} ms` : '—');
+  setText('h-sps', s ? `${fmt(s.steps_per_s, 0)} steps/s` : '—');
+  const scale = view.scale < 0.99 ? ` · ${Math.round(view.scale * 100)} % res.` : '';
+  setText('h-fps', `${hook.fps.received} in · ${hook.fps.drawn} drawn /s${scale}`);
+  setText('h-drift', s && Number.isFinite(s.volume_drift) ? `${fmt(s.volume_drift * 100, 3)} %` : '—');
+  const nodes = s?.nodes ?? hook.scene?.nodes;
+  const tets = s?.tets ?? hook.scene?.tets;
+  setText('h-mesh', `${fmtInt(nodes)} nodes · ${fmtInt(tets)} tets`);
+  setText('h-surface', `${fmtInt(view.vertices)} vertices · ${fmtInt(hook.triangles)} triangles`);
+  setText('h-steps', fmtInt(hook.steps));
+  let status;
+  if (state.refused) status = 'refused';
+  else if (!hook.ready) status = 'loading';
+  else status = hook.paused ? 'paused' : 'running';
+  const badge = $('hud-state');
+  badge.textContent = status;
+  badge.dataset.state = status;
+}
+
+// ---------------------------------------------------------------- tools
+
+const TOOL_HINTS = {
+  probe: 'Probe: press on the organ and drag to pull the tissue; let go to release. The red arrow is the tissue\'s force on the probe.',
+  scalpel: 'Scalpel: press on the organ and drag across its surface; the cut is made when you let go, into the surface as you see it.',
+  needle: 'Needle: click one side of a wound, then the other, to place a suture. Esc forgets the first point.',
+};
+
+function setTool(tool) {
+  if (!TOOLS.includes(tool)) return;
+  if (tool !== hook.tool) {
+    cancelGesture();
+    setNeedleFirst(null);
+  }
+  hook.tool = tool;
+  for (const b of document.querySelectorAll('.tool')) {
+    const on = b.dataset.tool === tool;
+    b.setAttribute('aria-pressed', on ? 'true' : 'false');
+    b.classList.toggle('active', on);
+  }
+  setText('tool-hint', TOOL_HINTS[tool]);
+  $('view').dataset.tool = tool;
+  socket.sendIfOpen({ type: 'tool', tool });
+}
+
+function setNeedleFirst(point) {
+  state.needleFirst = point;
+  view.setNeedleMarker(point);
+}
+
+function cancelGesture() {
+  const g = state.gesture;
+  if (!g) return;
+  state.gesture = null;
+  if (g.tool === 'probe') socket.sendIfOpen({ type: 'release' });
+  if (g.tool === 'scalpel') view.setPath(null);
+  try {
+    view.canvas.releasePointerCapture(g.pointerId);
+  } catch {
+    // not captured
+  }
+  view.controls.enabled = true;
+}
+
+function setupPointer() {
+  const container = $('view');
+  const canvas = view.canvas;
+  // Capture phase on the container: this runs before OrbitControls' own pointerdown on the canvas,
+  // and a left press on the organ turns the controls off for the gesture.
+  container.addEventListener('pointerdown', (ev) => {
+    if (ev.button !== 0 || state.gesture || !hook.ready) return;
+    const hit = view.pick(ev.clientX, ev.clientY);
+    if (!hit) return; // the background: OrbitControls orbits
+    view.controls.enabled = false;
+    ev.preventDefault();
+    canvas.focus({ preventScroll: true });
+    try {
+      canvas.setPointerCapture(ev.pointerId);
+    } catch {
+      // synthetic pointer
+    }
+    const g = { tool: hook.tool, pointerId: ev.pointerId, x0: ev.clientX, y0: ev.clientY, lastX: ev.clientX, lastY: ev.clientY, hit };
+    state.gesture = g;
+    if (g.tool === 'probe') {
+      g.grab = hit.point;
+      socket.sendIfOpen({ type: 'grab', point: hit.point, triangle: hit.triangle });
+    } else if (g.tool === 'scalpel') {
+      clearTimeout(state.pathTimer);
+      g.path = [hit.point];
+      view.setPath(g.path);
+    }
+  }, { capture: true });
+
+  canvas.addEventListener('pointermove', (ev) => {
+    const g = state.gesture;
+    if (!g || ev.pointerId !== g.pointerId) return;
+    if (g.tool === 'probe') {
+      const target = view.onCameraPlane(ev.clientX, ev.clientY, g.grab);
+      if (target) socket.sendIfOpen({ type: 'drag', target });
+    } else if (g.tool === 'scalpel') {
+      // Every pointer position since the last event, and between them every few pixels: the
+      // path follows the surface the pointer crossed, however fast it moved.
+      const events = typeof ev.getCoalescedEvents === 'function' ? ev.getCoalescedEvents() : [];
+      for (const e of events.length ? events : [ev]) {
+        const dx = e.clientX - g.lastX;
+        const dy = e.clientY - g.lastY;
+        const n = Math.max(1, Math.ceil(Math.hypot(dx, dy) / PATH_SPACING_PX));
+        for (let k = 1; k <= n; k++) {
+          const hit = view.pick(g.lastX + (dx * k) / n, g.lastY + (dy * k) / n);
+          if (!hit) continue; // off the organ: the path resumes where the pointer comes back
+          const last = g.path[g.path.length - 1];
+          const d = Math.hypot(hit.point[0] - last[0], hit.point[1] - last[1], hit.point[2] - last[2]);
+          if (d > view.size * 0.002 && g.path.length < MAX_PATH_POINTS) g.path.push(hit.point);
+        }
+        g.lastX = e.clientX;
+        g.lastY = e.clientY;
+      }
+      view.setPath(g.path);
+    }
+  });
+
+  const end = (ev) => {
+    const g = state.gesture;
+    if (!g || ev.pointerId !== g.pointerId) return;
+    state.gesture = null;
+    view.controls.enabled = true;
+    try {
+      canvas.releasePointerCapture(ev.pointerId);
+    } catch {
+      // not captured
+    }
+    if (g.tool === 'probe') {
+      socket.sendIfOpen({ type: 'release' });
+    } else if (g.tool === 'scalpel') {
+      if (ev.type === 'pointerup' && g.path.length >= 2) {
+        const viewDir = view.viewDir(new THREE.Vector3()).toArray();
+        socket.sendIfOpen({ type: 'cut', path: g.path, view_dir: viewDir });
+        state.lastCut = { path: g.path, viewDir };
+        hook.lastCut = state.lastCut;
+        state.pathTimer = setTimeout(() => view.setPath(null), PATH_SHOWN_MS);
+      } else {
+        view.setPath(null);
+      }
+    } else if (g.tool === 'needle') {
+      const moved = Math.hypot(ev.clientX - g.x0, ev.clientY - g.y0);
+      if (ev.type !== 'pointerup' || moved > CLICK_SLOP_PX) return;
+      const hit = view.pick(ev.clientX, ev.clientY) || g.hit;
+      if (!state.needleFirst) {
+        setNeedleFirst(hit.point);
+      } else {
+        socket.sendIfOpen({ type: 'suture', a: state.needleFirst, b: hit.point });
+        setNeedleFirst(null);
+      }
+    }
+  };
+  canvas.addEventListener('pointerup', end);
+  canvas.addEventListener('pointercancel', end);
+  canvas.addEventListener('lostpointercapture', (ev) => {
+    if (state.gesture && ev.pointerId === state.gesture.pointerId) end({ ...ev, type: 'pointercancel', pointerId: ev.pointerId, clientX: ev.clientX, clientY: ev.clientY });
+  });
+}
+
+// ---------------------------------------------------------------- controls
+
+function updateControls() {
+  const pause = $('pause');
+  pause.textContent = state.paused ? 'Resume' : 'Pause';
+  pause.setAttribute('aria-pressed', state.paused ? 'true' : 'false');
+  pause.disabled = !hook.ready && !state.paused;
+  $('step').disabled = !state.paused || !hook.scene;
+  $('reset').disabled = !hook.scene;
+  renderHud();
+}
+
+function togglePause() {
+  state.paused = !state.paused;
+  state.pauseSentAt = performance.now();
+  hook.paused = state.paused;
+  socket.send({ type: 'pause', paused: state.paused }).catch((e) => showError(e.message));
+  updateControls();
+}
+
+function reset() {
+  cancelGesture();
+  setNeedleFirst(null);
+  state.lastCut = null;
+  socket.send({ type: 'reset' }).catch((e) => showError(e.message));
+}
+
+function wire() {
+  $('organ-select').addEventListener('change', (e) => {
+    const id = e.target.value;
+    if (id) load(id);
+  });
+  $('file-input').addEventListener('change', (e) => uploadFile(e.target.files[0]));
+  for (const b of document.querySelectorAll('.tool')) b.addEventListener('click', () => setTool(b.dataset.tool));
+  $('pause').addEventListener('click', togglePause);
+  $('step').addEventListener('click', () => socket.send({ type: 'step' }).catch((e) => showError(e.message)));
+  $('reset').addEventListener('click', reset);
+  $('reset-view').addEventListener('click', () => view.fit());
+  document.addEventListener('keydown', (ev) => {
+    if (ev.ctrlKey || ev.metaKey || ev.altKey) return;
+    const t = ev.target;
+    if (t instanceof HTMLInputElement || t instanceof HTMLSelectElement || t instanceof HTMLTextAreaElement) return;
+    const tool = { 1: 'probe', 2: 'scalpel', 3: 'needle' }[ev.key];
+    if (tool) {
+      setTool(tool);
+      ev.preventDefault();
+    } else if (ev.key === 'Escape') {
+      setNeedleFirst(null);
+    }
+  });
+}
+
+// ---------------------------------------------------------------- test helpers
+
+/** Two surface points either side of the last cut's middle, re-picked on the surface; or null. */
+function woundSides() {
+  const path = state.lastCut?.path;
+  if (!path || path.length < 2) return null;
+  const pts = path.map((p) => new THREE.Vector3().fromArray(p));
+  const lengths = [0];
+  for (let i = 1; i < pts.length; i++) lengths.push(lengths[i - 1] + pts[i].distanceTo(pts[i - 1]));
+  const half = lengths[lengths.length - 1] / 2;
+  let i = 1;
+  while (i < pts.length - 1 && lengths[i] < half) i++;
+  const seg = lengths[i] - lengths[i - 1] || 1;
+  const mid = pts[i - 1].clone().lerp(pts[i], (half - lengths[i - 1]) / seg);
+  // The path's direction around the middle (over a few points, steadier than one segment).
+  const a = pts[Math.max(0, i - 3)];
+  const b = pts[Math.min(pts.length - 1, i + 2)];
+  const tangent = b.clone().sub(a).normalize();
+  const across = tangent.clone().cross(view.viewDir(new THREE.Vector3())).normalize();
+  if (!Number.isFinite(across.x) || across.lengthSq() < 0.5) return null;
+  const sides = [];
+  for (const sign of [-1, 1]) {
+    const p = mid.clone().addScaledVector(across, sign * WOUND_OFFSET_CM);
+    const s = view.screenOf(p.toArray());
+    const hit = view.pick(s.x, s.y);
+    if (!hit) return null;
+    sides.push(hit.point);
+  }
+  return sides;
+}
+
+// ---------------------------------------------------------------- start
+
+function main() {
+  view = new TrainerView($('view'));
+  socket = new TrainerSocket({ onMessage, onClose: onSocketClosed, onFrameReceived });
+  Object.assign(hook, {
+    screenOf: (p) => view.screenOf(p),
+    surfacePointAt: (x, y) => view.pick(x, y)?.point ?? null,
+    organBox: () => view.organBox(),
+    woundSides,
+    setTool,
+  });
+  wire();
+  setupPointer();
+  setTool('probe');
+  setText('view-hint', '');
+  $('view-hint').append(
+    'Left-drag ', el('strong', {}, 'on the organ'), ' uses the instrument. Orbit: right-drag, or left-drag on the background. ',
+    `Pan: middle-drag. Zoom: scroll. Force arrow: ${ARROW_CM_PER_N} cm per newton.`,
+  );
+  updateControls();
+  setInterval(renderHud, 250);
+  requestAnimationFrame(loop);
+  initOrgans();
+}
+
+main();

@@ -1,0 +1,64 @@
+//! # tissue-scenes: the trainer's scenes
+//!
+//! What a trainer front end (the headless `trainer`, the studio's `/trainer`) sets up and drives,
+//! in one place:
+//!
+//! - [`Organ`]: a tet mesh in cm on its tray (y up, lowest node on y = 0): a [`ShippedOrgan`]
+//!   (the bunny and the liver, surfaces in `fixtures/` filled by `tissue-tetra` on load; the
+//!   appendix, generated, its base pinned) or an upload ([`Organ::from_bytes`]: a closed surface,
+//!   filled, or a tet mesh), at most [`MAX_TETS`] tetrahedra.
+//! - [`Session`]: the organ as a `tissue-pbd` body with `tissue-surgery` state, stepped by the
+//!   caller ([`Session::step`], one per frame), with the trainee's tools: the probe
+//!   ([`Session::grab`], [`Session::drag`], [`Session::release`]: nodes attached to a moving
+//!   target), the scalpel ([`Session::cut`]: a path and the view direction make the blade's plane;
+//!   one segment is cut per step) and the needle ([`Session::suture`]); it reports
+//!   [`TrainerEvent`]s, the drawable surface ([`Session::surface`], versioned), the volume drift
+//!   `V/V₀ − 1`, step times and the tissue's force on the probe in newtons.
+//!
+//! No threads, no I/O beyond parsing bytes; a front end owns the loop and the clock.
+//!
+//! ## Units
+//! cm, g, s inside; forces out of [`Session::tool_force`] in newtons (1 N = 10⁵ g·cm/s²).
+//!
+//! ## Example: grab the appendix's tip, lift it, cut across it
+//! ```
+//! use glam::Vec3;
+//! use tissue_scenes::{Organ, Session, SessionOptions, ShippedOrgan};
+//!
+//! let organ = Organ::shipped(ShippedOrgan::Appendix)?;
+//! let mut session = Session::new(&organ, SessionOptions::default())?;
+//! // The top face's triangle nearest the tip, and a point on it.
+//! let x = session.positions();
+//! let (t, _) = session
+//!     .surface()
+//!     .iter()
+//!     .enumerate()
+//!     .map(|(i, f)| (i, f.iter().map(|&n| Vec3::from(x[n as usize])).sum::<Vec3>() / 3.0))
+//!     .max_by(|a, b| (a.1.x + a.1.y).total_cmp(&(b.1.x + b.1.y)))
+//!     .ok_or("no surface")?;
+//! let corner = Vec3::from(x[session.surface()[t][0] as usize]);
+//! session.grab(corner, t)?;
+//! session.drag(corner + Vec3::new(0.0, 1.0, 0.0));
+//! for _ in 0..5 {
+//!     session.step()?;
+//! }
+//! session.release()?;
+//! assert!(session.volume_drift().abs() < 0.1);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+#![forbid(unsafe_code)]
+#![warn(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::print_stdout,
+    clippy::print_stderr
+)]
+
+mod error;
+mod organ;
+mod session;
+
+pub use error::SceneError;
+pub use organ::{Organ, Setting, ShippedOrgan, APPENDIX_BASE_X, MAX_TETS};
+pub use session::{Session, SessionOptions, TrainerEvent};

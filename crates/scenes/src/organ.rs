@@ -1,0 +1,267 @@
+//! Organs: the shipped ones (the bunny and the liver surfaces in `fixtures/`, tetrahedralised on
+//! load; the appendix, generated) and uploads (a closed surface, tetrahedralised, or a tet mesh),
+//! placed on the tray: centred on x = z = 0 with its lowest node on y = 0 (y up).
+
+use glam::Vec3;
+use tissue_mesh::{TetMesh, TriMesh};
+use tissue_tetra::{tetrahedralize, TetraOptions};
+
+use crate::error::SceneError;
+
+/// The most tetrahedra a real-time session takes (a step must stay well under 16 ms).
+pub const MAX_TETS: usize = 150_000;
+
+/// How an organ is held in the scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Setting {
+    /// Free, lying on the tray (a static voxel collider whose top is y = 0).
+    Tray,
+    /// The appendix: its base (x below [`APPENDIX_BASE_X`]) pinned to the cecum, lying on the
+    /// abdominal wall (a floor at y = 0).
+    Appendix,
+}
+
+/// Nodes of the appendix with x below this (cm) are pinned: its base.
+pub const APPENDIX_BASE_X: f32 = -3.7;
+
+/// An organ shipped with the program.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShippedOrgan {
+    /// The Stanford Bunny of the PositionBasedDynamics demos, 10 cm (`fixtures/bunny_10k.obj`).
+    Bunny,
+    /// SOFA's liver, 16 cm across (`fixtures/liver_sofa.obj`).
+    Liver,
+    /// An appendix-like organ, 8 × 2 × 2 cm, 32 × 8 × 8 cells, pinned at its base.
+    Appendix,
+}
+
+const BUNNY_OBJ: &[u8] = include_bytes!("../../../fixtures/bunny_10k.obj");
+const LIVER_OBJ: &[u8] = include_bytes!("../../../fixtures/liver_sofa.obj");
+
+impl ShippedOrgan {
+    /// Every shipped organ, the default first.
+    pub const ALL: [ShippedOrgan; 3] = [
+        ShippedOrgan::Bunny,
+        ShippedOrgan::Liver,
+        ShippedOrgan::Appendix,
+    ];
+
+    /// Its short name.
+    pub fn id(self) -> &'static str {
+        match self {
+            ShippedOrgan::Bunny => "bunny",
+            ShippedOrgan::Liver => "liver",
+            ShippedOrgan::Appendix => "appendix",
+        }
+    }
+
+    /// The organ of `id`.
+    pub fn from_id(id: &str) -> Option<ShippedOrgan> {
+        ShippedOrgan::ALL.into_iter().find(|o| o.id() == id)
+    }
+
+    /// What a person reads.
+    pub fn label(self) -> &'static str {
+        match self {
+            ShippedOrgan::Bunny => "Stanford Bunny, 10 cm (PositionBasedDynamics demos)",
+            ShippedOrgan::Liver => "Liver, 16 cm (SOFA Framework, LGPL-2.1)",
+            ShippedOrgan::Appendix => "Appendix, 8 × 2 × 2 cm, base pinned",
+        }
+    }
+}
+
+/// An organ ready for a session: its tet mesh in cm, placed, and how it is held.
+#[derive(Debug, Clone)]
+pub struct Organ {
+    /// What a person reads.
+    pub label: String,
+    /// The tet mesh, cm, y up.
+    pub mesh: TetMesh,
+    /// How it is held.
+    pub setting: Setting,
+}
+
+impl Organ {
+    /// A shipped organ.
+    ///
+    /// # Errors
+    /// Not expected (the shipped files are valid); [`SceneError::Mesh`] if meshing failed.
+    pub fn shipped(which: ShippedOrgan) -> Result<Organ, SceneError> {
+        let _span = tracing::info_span!("organ_shipped", organ = which.id()).entered();
+        let (bytes, size) = match which {
+            ShippedOrgan::Bunny => (BUNNY_OBJ, 10.0),
+            ShippedOrgan::Liver => (LIVER_OBJ, 16.0),
+            ShippedOrgan::Appendix => {
+                let mesh = tissue_mesh::tet_box(32, 8, 8, Vec3::new(8.0, 2.0, 2.0))
+                    .map_err(|e| SceneError::mesh(which.id(), e))?;
+                // The generated box is centred on the origin: its underside onto y = 0.
+                let lifted = mesh.positions().iter().map(|&p| p + Vec3::Y).collect();
+                return Ok(Organ {
+                    label: which.label().to_owned(),
+                    mesh: TetMesh::new(lifted, mesh.tets().to_vec())
+                        .map_err(|e| SceneError::mesh(which.id(), e))?,
+                    setting: Setting::Appendix,
+                });
+            }
+        };
+        let name = format!("{}.obj", which.id());
+        let data = tissue_meshio::parse_surface_data(bytes, &name).map_err(SceneError::Read)?;
+        let surface =
+            TriMesh::new(data.positions, data.triangles).map_err(|e| SceneError::mesh(&name, e))?;
+        let tets = fill(&surface, &name)?;
+        let (lo, hi) = bounds(tets.positions());
+        let scale = size / (hi - lo).max_element();
+        Ok(Organ {
+            label: which.label().to_owned(),
+            mesh: place(&tets, scale, &name)?,
+            setting: Setting::Tray,
+        })
+    }
+
+    /// An organ from a file's bytes in `cm_per_unit`: a closed surface (`.obj`, `.ply`,
+    /// `.stl`), tetrahedralised, or a tet mesh (`.vtk` and the other tet formats of
+    /// tissue-meshio); kept at its size, placed on the tray.
+    ///
+    /// # Errors
+    /// [`SceneError::Read`] (the loader's message), [`SceneError::Mesh`] for an invalid mesh,
+    /// [`SceneError::Meshing`] for a surface that cannot be filled, [`SceneError::TooLarge`].
+    pub fn from_bytes(bytes: &[u8], name: &str, cm_per_unit: f32) -> Result<Organ, SceneError> {
+        let _span = tracing::info_span!("organ_upload", name).entered();
+        let ext = std::path::Path::new(name)
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        let tets = match ext.as_str() {
+            "obj" | "ply" | "stl" => {
+                let data =
+                    tissue_meshio::parse_surface_data(bytes, name).map_err(SceneError::Read)?;
+                let scaled: Vec<Vec3> = data.positions.iter().map(|&p| p * cm_per_unit).collect();
+                let surface =
+                    TriMesh::new(scaled, data.triangles).map_err(|e| SceneError::mesh(name, e))?;
+                fill(&surface, name)?
+            }
+            _ => {
+                let data = parse_tets(bytes, name)?;
+                let scaled: Vec<Vec3> = data.positions.iter().map(|&p| p * cm_per_unit).collect();
+                TetMesh::new(scaled, data.tets).map_err(|e| SceneError::mesh(name, e))?
+            }
+        };
+        Ok(Organ {
+            label: name.to_owned(),
+            mesh: place(&tets, 1.0, name)?,
+            setting: Setting::Tray,
+        })
+    }
+}
+
+/// Parses a tet mesh held in memory by its extension.
+fn parse_tets(bytes: &[u8], name: &str) -> Result<tissue_meshio::TetData, SceneError> {
+    match tissue_meshio::parse_vtk(bytes, name)
+        .map_err(SceneError::Read)?
+        .mesh
+    {
+        tissue_meshio::VtkMesh::Tets(t) => Ok(t),
+        tissue_meshio::VtkMesh::Surface(_) => Err(SceneError::Meshing {
+            name: name.to_owned(),
+            reason: "the VTK file holds triangles, not tetrahedra: upload it as a closed surface \
+                     (.obj, .ply, .stl) to have it filled"
+                .to_owned(),
+        }),
+    }
+}
+
+/// Fills a closed surface with tetrahedra, refusing more than [`MAX_TETS`].
+fn fill(surface: &TriMesh, name: &str) -> Result<TetMesh, SceneError> {
+    let tets =
+        tetrahedralize(surface, &TetraOptions::default()).map_err(|e| SceneError::Meshing {
+            name: name.to_owned(),
+            reason: e.to_string(),
+        })?;
+    check_size(&tets.mesh, name)?;
+    Ok(tets.mesh)
+}
+
+fn check_size(mesh: &TetMesh, name: &str) -> Result<(), SceneError> {
+    if mesh.tets().len() > MAX_TETS {
+        return Err(SceneError::TooLarge {
+            name: name.to_owned(),
+            tets: mesh.tets().len(),
+        });
+    }
+    Ok(())
+}
+
+fn bounds(positions: &[Vec3]) -> (Vec3, Vec3) {
+    positions.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    )
+}
+
+/// Scales by `scale`, centres on x = z = 0 and sets the lowest node on y = 0.
+fn place(mesh: &TetMesh, scale: f32, name: &str) -> Result<TetMesh, SceneError> {
+    check_size(mesh, name)?;
+    let (lo, hi) = bounds(mesh.positions());
+    let centre = Vec3::new((lo.x + hi.x) * 0.5, lo.y, (lo.z + hi.z) * 0.5);
+    let positions = mesh
+        .positions()
+        .iter()
+        .map(|&p| (p - centre) * scale)
+        .collect();
+    TetMesh::new(positions, mesh.tets().to_vec()).map_err(|e| SceneError::mesh(name, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shipped_organs_are_placed_on_the_tray_at_their_sizes() -> Result<(), SceneError> {
+        for which in ShippedOrgan::ALL {
+            let organ = Organ::shipped(which)?;
+            let (lo, hi) = bounds(organ.mesh.positions());
+            assert!(
+                lo.y.abs() < 1e-5,
+                "{}: lowest node at y = {}",
+                which.id(),
+                lo.y
+            );
+            assert!((lo.x + hi.x).abs() < 1e-4 && (lo.z + hi.z).abs() < 1e-4);
+            let size = (hi - lo).max_element();
+            let want = match which {
+                ShippedOrgan::Bunny => 10.0,
+                ShippedOrgan::Liver => 16.0,
+                ShippedOrgan::Appendix => 8.0,
+            };
+            assert!((size - want).abs() < 1e-3, "{}: {size} cm", which.id());
+            assert!(organ.mesh.volume() > 0.0);
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn uploads_keep_their_size_in_their_unit_and_broken_files_say_why() -> Result<(), SceneError> {
+        // A 2 cm cube surface in mm: 20 mm.
+        let cube =
+            tissue_mesh::subdivided_cube(4, 20.0).map_err(|e| SceneError::mesh("cube", e))?;
+        let mut obj = String::new();
+        for p in cube.positions() {
+            obj.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
+        }
+        for t in cube.triangles() {
+            obj.push_str(&format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1));
+        }
+        let organ = Organ::from_bytes(obj.as_bytes(), "cube.obj", 0.1)?;
+        assert!(
+            (organ.mesh.volume() - 8.0).abs() < 0.05,
+            "{} cm³",
+            organ.mesh.volume()
+        );
+        let broken = Organ::from_bytes(b"v 0 0 0\nf 1 2 3\n", "broken.obj", 1.0);
+        assert!(matches!(broken, Err(SceneError::Read(_))), "{broken:?}");
+        let open = Organ::from_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "open.obj", 1.0);
+        assert!(matches!(open, Err(SceneError::Meshing { .. })), "{open:?}");
+        Ok(())
+    }
+}

@@ -1,0 +1,545 @@
+//! The interactive session: an organ on its tray, stepped in real time, with the trainee's
+//! tools — the probe (grab and drag), the scalpel (a cut along a path), the needle (a suture
+//! across a wound) — its events, its surface for drawing, its volume drift and the force of the
+//! tissue on the probe.
+
+use std::collections::VecDeque;
+use std::time::Instant;
+
+use glam::{Mat3, Quat, Vec3, Vec3A};
+use tissue_pbd::{
+    ColliderShape, ContactParams, Floor, Material, OrientedBox, Pose, SoftBody, StepSettings,
+    ToolShape, VolumeConstraintKind, VoxelCollider,
+};
+use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
+
+use crate::error::SceneError;
+use crate::organ::{Organ, Setting, APPENDIX_BASE_X};
+
+/// How many recent step times the session keeps for its median and p99.
+const TIMES_KEPT: usize = 600;
+
+/// A session's settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SessionOptions {
+    /// The organ's material (the classic tet-volume constraint, as `trainer`).
+    pub material: Material,
+    /// The solver's step (the library's defaults, parallel).
+    pub step: StepSettings,
+    /// Contact with the tray and tools.
+    pub contact: ContactParams,
+    /// How deep the scalpel cuts below the surface it is drawn over (cm).
+    pub cut_depth: f32,
+    /// The probe grabs the surface nodes within this of the picked point (at least the picked
+    /// triangle's corners), cm.
+    pub grab_radius: f32,
+    /// How far below the surface the needle passes (cm).
+    pub suture_depth: f32,
+    /// Scalpel paths are taken in segments of at least this length (cm); one segment is cut per
+    /// step.
+    pub cut_segment: f32,
+}
+
+impl Default for SessionOptions {
+    fn default() -> Self {
+        SessionOptions {
+            material: Material {
+                volume: VolumeConstraintKind::Classic,
+                ..Material::default()
+            },
+            step: StepSettings {
+                damping: 0.05,
+                parallel: true,
+                ..StepSettings::default()
+            },
+            contact: ContactParams {
+                static_friction: 0.5,
+                kinetic_friction: 0.5,
+                ..ContactParams::default()
+            },
+            cut_depth: 1.0,
+            grab_radius: 0.6,
+            suture_depth: 0.35,
+            cut_segment: 0.4,
+        }
+    }
+}
+
+/// Something that happened, for the events list.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrainerEvent {
+    /// The step it happened in.
+    pub step: u64,
+    /// `cut_advanced`, `piece_detached`, `suture_placed`, `suture_removed`, `suture_missed`,
+    /// `grabbed`, `released`.
+    pub kind: &'static str,
+    /// One line for a person.
+    pub text: String,
+}
+
+#[derive(Debug, Clone)]
+struct Grab {
+    /// (node, attachment id, the node's offset from the grabbed point).
+    nodes: Vec<(u32, usize, Vec3)>,
+    /// Where the grabbed point is asked to be.
+    target: Vec3,
+}
+
+/// A trainee's session on one organ.
+pub struct Session {
+    label: String,
+    setting: Setting,
+    options: SessionOptions,
+    body: SoftBody,
+    surgery: Surgery,
+    initial_nodes: usize,
+    initial_triangles: usize,
+    surface: Vec<[u32; 3]>,
+    surface_version: u64,
+    grab: Option<Grab>,
+    force: Vec3,
+    cuts: VecDeque<(Pose, Pose)>,
+    blade: ToolShape,
+    times_ms: VecDeque<f64>,
+    steps: u64,
+    worst_drift: f64,
+    tray_side: f32,
+}
+
+impl std::fmt::Debug for Session {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Session")
+            .field("label", &self.label)
+            .field("nodes", &self.body.node_count())
+            .field("tets", &self.body.tets().len())
+            .field("steps", &self.steps)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Session {
+    /// A session on `organ`.
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] / [`SceneError::Surgery`] if the body cannot be built.
+    pub fn new(organ: &Organ, options: SessionOptions) -> Result<Session, SceneError> {
+        let _span = tracing::info_span!("session_new", organ = %organ.label).entered();
+        let mut body = SoftBody::new(&organ.mesh, &options.material)?;
+        body.set_settings(options.step)?;
+        let (lo, hi) = organ.mesh.positions().iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+        let extent = (hi - lo).max_element().max(1.0);
+        let tray_side = 3.0 * extent;
+        match organ.setting {
+            Setting::Tray => {
+                let cell = (extent / 20.0).clamp(0.2, 1.0);
+                let tray = VoxelCollider::new(
+                    &[ColliderShape::Box(OrientedBox::tray(
+                        0.0, 0.0, 0.0, tray_side, tray_side, 2.0,
+                    ))],
+                    cell,
+                    cell.max(options.contact.margin + options.contact.detection),
+                )?;
+                body.add_collider(tray, options.contact)?;
+            }
+            Setting::Appendix => {
+                body.set_floor(Some(Floor::y(0.0)))?;
+                for i in 0..body.node_count() as u32 {
+                    if body.positions()[i as usize].x < APPENDIX_BASE_X {
+                        body.pin(i)?;
+                    }
+                }
+            }
+        }
+        let surgery = Surgery::new(&body, SurgerySettings::default())?;
+        let surface = surgery.boundary_faces(&body);
+        let depth = options.cut_depth;
+        Ok(Session {
+            label: organ.label.clone(),
+            setting: organ.setting,
+            initial_nodes: body.node_count(),
+            initial_triangles: surface.len(),
+            surface,
+            surface_version: 1,
+            grab: None,
+            force: Vec3::ZERO,
+            cuts: VecDeque::new(),
+            // A blade in its local plane x = 0: the cutting edge `depth` below the surface
+            // (local −y is into the tissue), the back 1 cm above it.
+            blade: ToolShape::Blade {
+                a: Vec3::new(0.0, -depth, -0.05),
+                b: Vec3::new(0.0, -depth, 0.05),
+                c: Vec3::new(0.0, 1.0, 0.0),
+                thickness: 0.02,
+            },
+            times_ms: VecDeque::with_capacity(TIMES_KEPT),
+            steps: 0,
+            worst_drift: 0.0,
+            tray_side,
+            options,
+            body,
+            surgery,
+        })
+    }
+
+    /// The organ's label.
+    pub fn label(&self) -> &str {
+        &self.label
+    }
+
+    /// How the organ is held.
+    pub fn setting(&self) -> Setting {
+        self.setting
+    }
+
+    /// The tray's side (cm): a square centred on x = z = 0, its top at y = 0.
+    pub fn tray_side(&self) -> f32 {
+        self.tray_side
+    }
+
+    /// The body (read only).
+    pub fn body(&self) -> &SoftBody {
+        &self.body
+    }
+
+    /// Node positions, cm.
+    pub fn positions(&self) -> &[Vec3A] {
+        self.body.positions()
+    }
+
+    /// The surface triangles (outward), over the node indices.
+    pub fn surface(&self) -> &[[u32; 3]] {
+        &self.surface
+    }
+
+    /// Changes whenever [`Session::surface`] does (after a cut or suture).
+    pub fn surface_version(&self) -> u64 {
+        self.surface_version
+    }
+
+    /// Buffer sizes that hold what cuts are likely to add: (vertices, triangles).
+    pub fn capacity(&self) -> (usize, usize) {
+        (
+            self.initial_nodes + (self.initial_nodes / 2).max(20_000),
+            2 * self.initial_triangles + 40_000,
+        )
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// `V / V₀ − 1`: the volume now against the rest volume of its tetrahedra.
+    pub fn volume_drift(&self) -> f64 {
+        self.body.volume() / self.body.rest_volume() - 1.0
+    }
+
+    /// The largest |volume drift| seen at the end of a step.
+    pub fn worst_drift(&self) -> f64 {
+        self.worst_drift
+    }
+
+    /// Median and 99th percentile of the recent step times (ms), the tool work included.
+    pub fn step_ms(&self) -> (f64, f64) {
+        let mut t: Vec<f64> = self.times_ms.iter().copied().collect();
+        if t.is_empty() {
+            return (0.0, 0.0);
+        }
+        t.sort_by(f64::total_cmp);
+        let at = |q: f64| t[((t.len() - 1) as f64 * q).round() as usize];
+        (at(0.5), at(0.99))
+    }
+
+    /// The force of the tissue on the probe at the last step (newtons; zero when nothing is
+    /// held).
+    pub fn tool_force(&self) -> Vec3 {
+        self.force
+    }
+
+    /// The probe's tip: where the grabbed point is asked to be, or `None`.
+    pub fn tool_tip(&self) -> Option<Vec3> {
+        self.grab.as_ref().map(|g| g.target)
+    }
+
+    /// Takes one step: the probe's targets, the solver, one queued scalpel segment.
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] when the simulation diverges, [`SceneError::Surgery`] when a cut
+    /// fails.
+    pub fn step(&mut self) -> Result<Vec<TrainerEvent>, SceneError> {
+        let start = Instant::now();
+        let mut events = Vec::new();
+        if let Some(g) = &self.grab {
+            for &(_, id, offset) in &g.nodes {
+                self.body.set_attachment_target(id, g.target + offset)?;
+            }
+        }
+        self.body.step()?;
+        self.steps += 1;
+        self.force = self.probe_force();
+        if let Some((from, to)) = self.cuts.pop_front() {
+            let sweep = BladeSweep::new(&self.blade, &from, &to)?;
+            let happened = self.surgery.cut(&mut self.body, &sweep)?;
+            self.record(&happened, &mut events);
+        }
+        let drift = self.volume_drift().abs();
+        if drift.is_finite() {
+            self.worst_drift = self.worst_drift.max(drift);
+        }
+        if self.times_ms.len() == TIMES_KEPT {
+            self.times_ms.pop_front();
+        }
+        self.times_ms.push_back(start.elapsed().as_secs_f64() * 1e3);
+        Ok(events)
+    }
+
+    /// The force of the tissue on the grabbed nodes (N).
+    fn probe_force(&self) -> Vec3 {
+        let Some(g) = &self.grab else {
+            return Vec3::ZERO;
+        };
+        // FORCE: replaced by tissue-pbd's attachment force once merged.
+        let _ = g;
+        Vec3::ZERO
+    }
+
+    fn record(&mut self, happened: &[SurgeryEvent], events: &mut Vec<TrainerEvent>) {
+        if happened.is_empty() {
+            return;
+        }
+        for e in happened {
+            let (kind, text) = describe(e);
+            events.push(TrainerEvent {
+                step: self.steps,
+                kind,
+                text,
+            });
+        }
+        self.surface = self.surgery.boundary_faces(&self.body);
+        self.surface_version += 1;
+    }
+
+    /// Grabs the surface near `point` on surface triangle `triangle` (an index into
+    /// [`Session::surface`]): the free surface nodes within the grab radius, at least the
+    /// triangle's corners, follow the probe until [`Session::release`].
+    ///
+    /// # Errors
+    /// [`SceneError::Tool`] for a triangle out of range or a point that is not finite.
+    pub fn grab(&mut self, point: Vec3, triangle: usize) -> Result<TrainerEvent, SceneError> {
+        self.release()?;
+        let corners = *self.surface.get(triangle).ok_or_else(|| {
+            SceneError::Tool(format!(
+                "no surface triangle {triangle} (the surface has {}): pick the organ again",
+                self.surface.len()
+            ))
+        })?;
+        if !point.is_finite() {
+            return Err(SceneError::Tool("the grab point is not finite".to_owned()));
+        }
+        let x = self.body.positions();
+        let w = self.body.inverse_masses();
+        let r2 = self.options.grab_radius * self.options.grab_radius;
+        let mut picked: Vec<u32> = self
+            .surface
+            .iter()
+            .flatten()
+            .copied()
+            .filter(|&n| Vec3::from(x[n as usize]).distance_squared(point) <= r2)
+            .chain(corners)
+            .filter(|&n| w[n as usize] > 0.0)
+            .collect();
+        picked.sort_unstable();
+        picked.dedup();
+        let mut nodes = Vec::with_capacity(picked.len());
+        for n in picked {
+            let p = Vec3::from(self.body.positions()[n as usize]);
+            let id = self.body.attach(n, p)?;
+            nodes.push((n, id, p - point));
+        }
+        let count = nodes.len();
+        self.grab = Some(Grab {
+            nodes,
+            target: point,
+        });
+        Ok(TrainerEvent {
+            step: self.steps,
+            kind: "grabbed",
+            text: format!("probe grabbed {count} nodes"),
+        })
+    }
+
+    /// Moves the grabbed point towards `target` (cm) from the next step on.
+    pub fn drag(&mut self, target: Vec3) {
+        if let Some(g) = &mut self.grab {
+            if target.is_finite() {
+                g.target = target;
+            }
+        }
+    }
+
+    /// Lets go of what the probe holds.
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] (not expected: the nodes exist).
+    pub fn release(&mut self) -> Result<Option<TrainerEvent>, SceneError> {
+        let Some(g) = self.grab.take() else {
+            return Ok(None);
+        };
+        for &(n, _, _) in &g.nodes {
+            self.body.unpin(n)?;
+        }
+        self.force = Vec3::ZERO;
+        Ok(Some(TrainerEvent {
+            step: self.steps,
+            kind: "released",
+            text: format!("probe released {} nodes", g.nodes.len()),
+        }))
+    }
+
+    /// Queues a scalpel cut along `path` (surface points, cm) seen along `view_dir`: the blade's
+    /// plane holds the path's overall direction and the view direction; it cuts
+    /// [`SessionOptions::cut_depth`] below the path, one segment per step. Returns the segments
+    /// queued.
+    ///
+    /// # Errors
+    /// [`SceneError::Tool`] for fewer than two distinct points, a path along the view, or
+    /// non-finite input.
+    pub fn cut(&mut self, path: &[Vec3], view_dir: Vec3) -> Result<usize, SceneError> {
+        let v = view_dir.normalize_or_zero();
+        if v == Vec3::ZERO || path.iter().any(|p| !p.is_finite()) {
+            return Err(SceneError::Tool(
+                "a cut needs finite surface points and a view direction".to_owned(),
+            ));
+        }
+        let (Some(&first), Some(&last)) = (path.first(), path.last()) else {
+            return Err(SceneError::Tool(
+                "a cut needs a path of two points or more".to_owned(),
+            ));
+        };
+        let across = last - first;
+        let d = (across - v * across.dot(v)).normalize_or_zero();
+        if d == Vec3::ZERO {
+            return Err(SceneError::Tool(
+                "draw the cut across the organ, not along the view".to_owned(),
+            ));
+        }
+        let n = d.cross(v).normalize();
+        // Local x = the blade's normal, local y = towards the viewer, local z = along the cut.
+        let rotation = Quat::from_mat3(&Mat3::from_cols(n, -v, d));
+        let centroid = path.iter().copied().sum::<Vec3>() / path.len() as f32;
+        let on_plane = |p: Vec3| p - n * n.dot(p - centroid);
+        let mut points = vec![on_plane(first)];
+        for &p in &path[1..] {
+            let q = on_plane(p);
+            let last_kept = points[points.len() - 1];
+            if q.distance(last_kept) >= self.options.cut_segment {
+                points.push(q);
+            }
+        }
+        let end = on_plane(last);
+        if points.len() == 1 || points[points.len() - 1].distance(end) > 1e-4 {
+            points.push(end);
+        }
+        if points.len() < 2 || points[0].distance(end) < 1e-3 {
+            return Err(SceneError::Tool(
+                "the cut is too short: drag further".to_owned(),
+            ));
+        }
+        let pose = |p: Vec3| Pose::new(rotation, p);
+        for pair in points.windows(2) {
+            self.cuts.push_back((pose(pair[0]), pose(pair[1])));
+        }
+        Ok(points.len() - 1)
+    }
+
+    /// Places a suture between surface points `a` and `b` on the two sides of a wound: a needle
+    /// passes below them (the depth along the surface's inward normal), and the nodes of the
+    /// wound's walls nearest its crossings are linked.
+    ///
+    /// # Errors
+    /// [`SceneError::Tool`] for non-finite or coincident points; [`SceneError::Surgery`].
+    pub fn suture(&mut self, a: Vec3, b: Vec3) -> Result<TrainerEvent, SceneError> {
+        if !(a.is_finite() && b.is_finite()) || a.distance(b) < 1e-3 {
+            return Err(SceneError::Tool(
+                "click two different points, one on each side of the wound".to_owned(),
+            ));
+        }
+        let inward = -(self.normal_near(a) + self.normal_near(b)).normalize_or(Vec3::Y);
+        let dir = (b - a).normalize();
+        let reach = 0.5 * a.distance(b) + 0.6;
+        let mid = 0.5 * (a + b);
+        let base = self.options.suture_depth;
+        for depth in [base, 0.6 * base, 1.6 * base, 2.4 * base] {
+            let c = mid + inward * depth;
+            if let Some(e) =
+                self.surgery
+                    .suture_segment(&mut self.body, c - dir * reach, c + dir * reach)?
+            {
+                let (kind, text) = describe(&e);
+                self.surface_version += 1;
+                return Ok(TrainerEvent {
+                    step: self.steps,
+                    kind,
+                    text,
+                });
+            }
+        }
+        Ok(TrainerEvent {
+            step: self.steps,
+            kind: "suture_missed",
+            text: "the needle did not cross a wound there: click on each side of an open cut"
+                .to_owned(),
+        })
+    }
+
+    /// The outward normal of the surface triangle nearest `p` (by centroid).
+    fn normal_near(&self, p: Vec3) -> Vec3 {
+        let x = self.body.positions();
+        self.surface
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| Vec3::from(x[i as usize]));
+                ((a + b + c) / 3.0, (b - a).cross(c - a))
+            })
+            .min_by(|u, v| u.0.distance_squared(p).total_cmp(&v.0.distance_squared(p)))
+            .map_or(Vec3::Y, |(_, n)| n.normalize_or(Vec3::Y))
+    }
+}
+
+/// The kind and a line for a surgery event.
+fn describe(e: &SurgeryEvent) -> (&'static str, String) {
+    match e {
+        SurgeryEvent::CutAdvanced {
+            new_nodes,
+            opened_faces,
+            ..
+        } => (
+            "cut_advanced",
+            format!(
+                "cut advanced: {} wall triangles opened, {} nodes added",
+                opened_faces.len(),
+                new_nodes.len()
+            ),
+        ),
+        SurgeryEvent::PieceDetached {
+            tets, rest_volume, ..
+        } => (
+            "piece_detached",
+            format!("piece detached: {} tets, {rest_volume:.2} cm³", tets.len()),
+        ),
+        SurgeryEvent::SuturePlaced { suture, nodes, .. } => (
+            "suture_placed",
+            format!(
+                "suture {suture} placed between nodes {} and {}",
+                nodes[0], nodes[1]
+            ),
+        ),
+        SurgeryEvent::SutureRemoved { suture, .. } => {
+            ("suture_removed", format!("suture {suture} removed"))
+        }
+        other => ("surgery", format!("{other:?}")),
+    }
+}

@@ -1,0 +1,129 @@
+//! A trainee's session on the shipped organs: the scalpel opens the surface along the drawn path,
+//! the needle closes the wound it made, the probe lifts tissue and lets go, and the volume holds.
+
+use glam::Vec3;
+use tissue_scenes::{Organ, Session, SessionOptions, ShippedOrgan};
+
+type Result<T = ()> = std::result::Result<T, Box<dyn std::error::Error>>;
+
+/// The surface triangle whose centroid is nearest `p`, and that centroid.
+fn surface_near(session: &Session, p: Vec3) -> (usize, Vec3) {
+    let x = session.positions();
+    session
+        .surface()
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            (
+                i,
+                t.iter().map(|&n| Vec3::from(x[n as usize])).sum::<Vec3>() / 3.0,
+            )
+        })
+        .min_by(|a, b| a.1.distance_squared(p).total_cmp(&b.1.distance_squared(p)))
+        .unwrap_or((0, p))
+}
+
+/// The surface's top over (x, z): the highest node within 0.3 cm horizontally.
+fn top(session: &Session, x: f32, z: f32) -> Vec3 {
+    let y = session
+        .positions()
+        .iter()
+        .filter(|p| (p.x - x).hypot(p.z - z) < 0.3)
+        .map(|p| p.y)
+        .fold(f32::MIN, f32::max);
+    Vec3::new(x, y, z)
+}
+
+#[test]
+fn a_cut_across_the_appendix_opens_it_and_a_suture_closes_the_wound() -> Result {
+    let organ = Organ::shipped(ShippedOrgan::Appendix)?;
+    let mut s = Session::new(&organ, SessionOptions::default())?;
+    for _ in 0..20 {
+        s.step()?;
+    }
+    let triangles = s.surface().len();
+    let version = s.surface_version();
+    // Drawn across the top at x = 0 (the appendix lies along x), seen from above.
+    let path: Vec<Vec3> = (0..=10)
+        .map(|i| top(&s, 0.0, -1.3 + 0.26 * i as f32))
+        .collect();
+    let segments = s.cut(&path, Vec3::NEG_Y)?;
+    assert!(segments >= 2, "{segments} segments");
+    let mut kinds = Vec::new();
+    for _ in 0..segments + 5 {
+        kinds.extend(s.step()?.into_iter().map(|e| e.kind));
+    }
+    assert!(kinds.contains(&"cut_advanced"), "{kinds:?}");
+    assert!(
+        s.surface().len() > triangles,
+        "{} → {}",
+        triangles,
+        s.surface().len()
+    );
+    assert_ne!(s.surface_version(), version);
+    // The needle across the wound, 0.3 cm either side of the cut.
+    let a = top(&s, -0.3, 0.0);
+    let b = top(&s, 0.3, 0.0);
+    let sutured = s.suture(a, b)?;
+    assert_eq!(sutured.kind, "suture_placed", "{}", sutured.text);
+    // Away from any wound the needle misses, and says so.
+    let missed = s.suture(top(&s, -2.0, 0.0), top(&s, -1.5, 0.0))?;
+    assert_eq!(missed.kind, "suture_missed");
+    for _ in 0..30 {
+        s.step()?;
+    }
+    assert!(s.positions().iter().all(|p| p.is_finite()));
+    Ok(())
+}
+
+#[test]
+fn the_probe_lifts_the_appendix_tip_and_lets_go() -> Result {
+    let organ = Organ::shipped(ShippedOrgan::Appendix)?;
+    let mut s = Session::new(&organ, SessionOptions::default())?;
+    for _ in 0..10 {
+        s.step()?;
+    }
+    let (t, p) = surface_near(&s, Vec3::new(3.5, 3.0, 0.0));
+    let grabbed = s.grab(p, t)?;
+    assert_eq!(grabbed.kind, "grabbed");
+    let lift = Vec3::new(0.0, 1.5, 0.0);
+    for i in 1..=30 {
+        s.drag(p + lift * (i as f32 / 30.0));
+        s.step()?;
+    }
+    // The grabbed nodes are where the probe holds them.
+    let (_, now) = surface_near(&s, p + lift);
+    assert!(now.distance(p + lift) < 0.5, "{now} vs {}", p + lift);
+    assert_eq!(s.tool_tip(), Some(p + lift));
+    let released = s.release()?.map(|e| e.kind);
+    assert_eq!(released, Some("released"));
+    assert_eq!(s.tool_tip(), None);
+    assert!(
+        s.grab(p, usize::MAX).is_err(),
+        "a triangle out of range is refused"
+    );
+    Ok(())
+}
+
+#[test]
+fn the_bunny_rests_on_its_tray_and_keeps_its_volume() -> Result {
+    let organ = Organ::shipped(ShippedOrgan::Bunny)?;
+    let mut s = Session::new(&organ, SessionOptions::default())?;
+    for _ in 0..120 {
+        s.step()?;
+    }
+    let lowest = s.positions().iter().map(|p| p.y).fold(f32::MAX, f32::min);
+    assert!(
+        lowest > -0.1,
+        "the bunny sinks through its tray: lowest node at {lowest} cm"
+    );
+    let top = s.positions().iter().map(|p| p.y).fold(f32::MIN, f32::max);
+    assert!(top > 6.0, "the bunny collapsed: its top at {top} cm");
+    eprintln!(
+        "bunny after 120 steps: drift {:+.4}, worst {:.4}",
+        s.volume_drift(),
+        s.worst_drift()
+    );
+    assert!(s.worst_drift() < 0.10, "worst drift {}", s.worst_drift());
+    Ok(())
+}
