@@ -57,18 +57,21 @@
 mod atomic;
 mod data;
 mod error;
+mod gmsh;
 mod obj;
 mod ply;
 mod stl;
 mod tetgen;
 mod text;
 mod vtk;
+mod vtu;
 
 pub use data::{
-    parse_surface_data, read_surface, read_surface_data, read_tet_data, read_tets, write_surface,
-    SurfaceData, SurfaceFormat, TetData,
+    parse_surface_data, parse_tet_data, read_surface, read_surface_data, read_tet_data, read_tets,
+    write_surface, SurfaceData, SurfaceFormat, TetData, TetFormat,
 };
 pub use error::MeshIoError;
+pub use gmsh::{parse_msh, read_msh};
 pub use obj::{parse_obj, read_obj, write_obj};
 pub use ply::{parse_ply, read_ply, write_ply};
 pub use stl::{parse_stl, read_stl, write_stl};
@@ -77,3 +80,4 @@ pub use vtk::{
     parse_vtk, read_vtk, write_vtk, write_vtk_tets, FieldValues, PointField, PointValues,
     VertexField, VtkData, VtkMesh,
 };
+pub use vtu::{parse_vtu, read_vtu};
