@@ -144,7 +144,7 @@ pub enum TetFormat {
     Vtu,
     /// Gmsh `.msh`, versions 1, 2 and 4.1 ([`crate::read_msh`]).
     Msh,
-    /// Legacy VTK `.vtk` ([`read_vtk`]).
+    /// Legacy VTK `.vtk` ([`crate::read_vtk`]).
     Vtk,
     /// TetGen `.node` + `.ele` ([`read_tetgen`]).
     TetGen,
