@@ -12,11 +12,14 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
-/// Counts, measures, topology and defects of a mesh file (OBJ, PLY, STL, VTK, TetGen .node/.ele).
+/// Counts, measures, topology and defects of a mesh file (OBJ, PLY, STL, VTK, VTK XML .vtu, Gmsh
+/// .msh, TetGen .node/.ele).
 #[derive(Parser, Debug)]
 #[command(version, about)]
 struct Args {
-    /// The mesh file: .obj, .ply, .stl, .vtk, or a TetGen .node/.ele pair (give either file).
+    /// The mesh file: a surface (.obj, .ply, .stl, .vtk) or a tetrahedral mesh (.vtu, .msh as
+    /// Gmsh 1, 2.2 or 4.1, a .vtk tet grid, or a TetGen .node/.ele pair: give either file); of a
+    /// .vtu or .msh only the tetrahedra are read.
     file: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]

@@ -5,7 +5,9 @@ use std::path::Path;
 
 use serde::Serialize;
 use tissue_mesh::{diagnose, diagnose_tets, MeshError, TetMesh, TriMesh};
-use tissue_meshio::{read_surface_data, read_tet_data, MeshIoError};
+use tissue_meshio::{
+    read_surface_data, read_tet_data, read_vtk, MeshIoError, SurfaceFormat, TetFormat, VtkMesh,
+};
 
 /// Everything `meshinfo` says about a file.
 #[derive(Debug, Serialize)]
@@ -169,25 +171,31 @@ impl Report {
     }
 }
 
-fn is_tetgen(path: &Path) -> bool {
-    matches!(
-        path.extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .as_deref(),
-        Some("node" | "ele")
-    )
-}
+/// The file name endings `meshinfo` reads.
+const FORMATS: &str = ".obj, .ply, .stl, .vtk (surface or tets), .vtu, .msh, or TetGen .node/.ele";
 
-/// Reads and inspects one file. `Err` only when the file cannot be read or parsed at all; a mesh
-/// with defects gives `Ok` with `loaded == false`.
+/// Reads and inspects one file: a surface (`.obj`, `.ply`, `.stl`, a `.vtk` surface) or a
+/// tetrahedral mesh (`.vtu`, `.msh`, a `.vtk` tet grid, TetGen `.node`/`.ele`). `Err` only when
+/// the file cannot be read or parsed at all; a mesh with defects gives `Ok` with
+/// `loaded == false`.
 pub fn inspect(path: &Path) -> Result<Report, MeshIoError> {
-    if is_tetgen(path) {
-        let data = read_tet_data(path)?;
-        Ok(inspect_tets(path, data.positions, data.tets))
-    } else {
-        let data = read_surface_data(path)?;
-        Ok(inspect_surface(path, data.positions, data.triangles))
+    match TetFormat::from_path(path) {
+        Some(TetFormat::Vtk) => match read_vtk(path)?.mesh {
+            VtkMesh::Surface(s) => Ok(inspect_surface(path, s.positions, s.triangles)),
+            VtkMesh::Tets(t) => Ok(inspect_tets(path, t.positions, t.tets)),
+        },
+        Some(_) => {
+            let data = read_tet_data(path)?;
+            Ok(inspect_tets(path, data.positions, data.tets))
+        }
+        None if SurfaceFormat::from_path(path).is_some() => {
+            let data = read_surface_data(path)?;
+            Ok(inspect_surface(path, data.positions, data.triangles))
+        }
+        None => Err(MeshIoError::UnsupportedFormat {
+            path: path.to_path_buf(),
+            supported: FORMATS,
+        }),
     }
 }
 

@@ -219,3 +219,39 @@ fn broken_pipe_after_the_first_line_ends_meshinfo_quietly() {
         ended.assert_quiet();
     }
 }
+
+#[test]
+fn vtu_and_msh_tet_meshes_are_reported() {
+    // The Gmsh box of fixtures/tets: 50 nodes, 107 tetrahedra, volume 3 cm³.
+    for name in [
+        "box_v1.msh",
+        "box_v22_binary.msh",
+        "box_v41_ascii.msh",
+        "box_zlib.vtu",
+        "box_appended_raw.vtu",
+    ] {
+        let (code, r) = json(&fixture("tets").join(name));
+        assert_eq!(code, 0, "{name}: {r}");
+        assert_eq!(r["kind"], "tetrahedral", "{name}");
+        assert_eq!(r["vertices"], 50, "{name}");
+        assert_eq!(r["tetrahedra"], 107, "{name}");
+        assert_eq!(r["closed"], true, "{name}");
+        assert!(
+            (r["volume"].as_f64().unwrap() - 3.0).abs() < 1e-4,
+            "{name}: {r}"
+        );
+    }
+}
+
+#[test]
+fn unreadable_tet_files_say_why() {
+    let (code, _, stderr) = run(&[fixture("tets/square_no_tets.vtu").as_os_str()]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("no tetrahedra"), "{stderr}");
+    let (code, _, stderr) = run(&["organ.xyz".as_ref()]);
+    assert_eq!(code, 2);
+    assert!(
+        stderr.contains("unsupported") && stderr.contains(".msh"),
+        "{stderr}"
+    );
+}

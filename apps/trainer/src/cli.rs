@@ -88,8 +88,10 @@ pub struct Cli {
     /// its tip cut off, and the incision is sutured; per-step timing and the surgery events).
     #[arg(long, value_enum)]
     pub scenario: Option<Scenario>,
-    /// The organ: a TetGen mesh (its stem, .node or .ele) or a .vtk tet grid [default: the shipped
-    /// bunny, else a generated box].
+    /// The organ, a tetrahedral mesh: a VTK XML .vtu (ascii, base64 or raw appended, zlib or
+    /// uncompressed), a Gmsh .msh (versions 1 as SOFA ships, 2.2 and 4.1, ASCII or binary), a
+    /// legacy .vtk tet grid, or a TetGen mesh (its stem, .node or .ele); other cells than
+    /// tetrahedra are skipped [default: the shipped bunny, else a generated box].
     #[arg(long, value_name = "PATH", conflicts_with_all = ["surface", "box_cells"])]
     pub organ: Option<PathBuf>,
     /// A closed surface (.obj, .ply, .stl) to tetrahedralise first (tissue-tetra: the surface

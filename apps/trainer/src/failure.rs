@@ -54,9 +54,14 @@ impl Failure {
                 code::INPUT,
                 format!("cannot read the organ: {e}; check the --organ path"),
             ),
-            MeshIoError::UnsupportedFormat { .. } | MeshIoError::WrongKind { .. } => {
-                Failure::new(code::INPUT, format!("{e}; --organ takes a TetGen mesh or a .vtk tet grid (a surface goes to --surface)"))
-            }
+            MeshIoError::UnsupportedFormat { .. } => Failure::new(
+                code::INPUT,
+                format!("{e} (for --organ; a surface goes to --surface)"),
+            ),
+            MeshIoError::WrongKind { .. } => Failure::new(
+                code::INPUT,
+                format!("{e}; --organ takes a tetrahedral mesh: .vtu, .msh (Gmsh), .vtk or TetGen .node/.ele (a surface goes to --surface)"),
+            ),
             _ => Failure::new(
                 code::MESH,
                 format!("the organ mesh is not usable: {e}; check it with meshinfo"),

@@ -165,6 +165,36 @@ fn a_closed_surface_is_tetrahedralised_and_runs() {
 }
 
 #[test]
+fn gmsh_and_vtu_organs_run() {
+    // The Gmsh box of fixtures/tets (2 × 1.5 × 1 cm, 107 tets) as .msh and as .vtu (meshio).
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/tets"));
+    for name in ["box_v41_binary.msh", "box_zlib.vtu"] {
+        let organ = dir.join(name);
+        let out = run(&[
+            "--organ",
+            organ.to_str().unwrap_or_default(),
+            "--size",
+            "4",
+            "--settle-steps",
+            "2",
+            "--press-steps",
+            "2",
+            "--drag-steps",
+            "2",
+        ]);
+        let text = stdout(&out);
+        assert!(out.status.success(), "{name}: {}\n{text}", stderr(&out));
+        assert!(text.contains(name), "{text}");
+    }
+    // An extension no reader knows is "unsupported", not a missing TetGen file.
+    let out = run(&["--organ", "liver.xyz"]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(err.contains("unsupported") && err.contains(".vtu"), "{err}");
+    assert!(!err.contains(".node:"), "{err}");
+}
+
+#[test]
 fn vtk_frames_carry_the_displacement_field() {
     let dir = scratch("vtk");
     let out = run(&[

@@ -6,10 +6,11 @@ use glam::Vec3;
 use tissue_mesh::{TetMesh, TriMesh};
 
 use crate::atomic::read_file;
-use crate::error::SURFACE_EXTENSIONS;
+use crate::error::{SURFACE_EXTENSIONS, TET_EXTENSIONS};
+use crate::tetgen::tetgen_paths;
 use crate::{
-    parse_obj, parse_ply, parse_stl, parse_vtk, read_tetgen, read_vtk, write_obj, write_ply,
-    write_stl, write_vtk, MeshIoError, VtkMesh,
+    parse_msh, parse_obj, parse_ply, parse_stl, parse_vtk, parse_vtu, read_tetgen, write_obj,
+    write_ply, write_stl, write_vtk, MeshIoError, VtkMesh,
 };
 
 /// A triangle surface as a file stores it: not validated, so that every defect can still be
@@ -135,17 +136,86 @@ pub fn write_surface(path: impl AsRef<Path>, mesh: &TriMesh) -> Result<(), MeshI
     }
 }
 
-/// Reads a tetrahedral mesh without validating it: a `.vtk` file, or a TetGen mesh named by its
+/// A tetrahedral mesh file format, told by the file name's extension (ASCII case-insensitive).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum TetFormat {
+    /// VTK XML unstructured grid `.vtu` ([`crate::read_vtu`]).
+    Vtu,
+    /// Gmsh `.msh`, versions 1, 2 and 4.1 ([`crate::read_msh`]).
+    Msh,
+    /// Legacy VTK `.vtk` ([`crate::read_vtk`]).
+    Vtk,
+    /// TetGen `.node` + `.ele` ([`read_tetgen`]).
+    TetGen,
+}
+
+impl TetFormat {
+    /// The format of a file name: `.vtu`, `.msh`, `.vtk`, or `.node`/`.ele` for TetGen; `None`
+    /// for another extension or none (which [`read_tet_data`] may still read as a TetGen stem).
+    pub fn from_path(path: impl AsRef<Path>) -> Option<Self> {
+        let ext = path.as_ref().extension()?.to_str()?.to_ascii_lowercase();
+        Some(match ext.as_str() {
+            "vtu" => TetFormat::Vtu,
+            "msh" => TetFormat::Msh,
+            "vtk" => TetFormat::Vtk,
+            "node" | "ele" => TetFormat::TetGen,
+            _ => return None,
+        })
+    }
+}
+
+/// Reads a tetrahedral mesh without validating it, in the format its extension names: `.vtu`
+/// (VTK XML), `.msh` (Gmsh 1, 2 or 4.1), `.vtk` (legacy VTK), or a TetGen mesh named by its
 /// `.node` or `.ele` file or by their stem (see [`read_tetgen`]).
+///
+/// A path without an extension, or whose extension is a number (`bunny.1`), is a TetGen stem.
+/// Any other extension is [`MeshIoError::UnsupportedFormat`] listing the formats, unless a TetGen
+/// `.node` file of that stem exists.
 pub fn read_tet_data(path: impl AsRef<Path>) -> Result<TetData, MeshIoError> {
     let path = path.as_ref();
     let _span = tracing::info_span!("read_tet_data", path = %path.display()).entered();
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("vtk") => match read_vtk(path)?.mesh {
+    match TetFormat::from_path(path) {
+        Some(TetFormat::TetGen) => read_tetgen(path),
+        Some(format) => parse_tets_as(format, &read_file(path)?, path),
+        None => {
+            let ext = path.extension().and_then(|e| e.to_str());
+            let stem = ext.is_none_or(|e| e.bytes().all(|b| b.is_ascii_digit()));
+            if stem || tetgen_paths(path).0.is_file() {
+                read_tetgen(path)
+            } else {
+                Err(MeshIoError::UnsupportedFormat {
+                    path: path.to_path_buf(),
+                    supported: TET_EXTENSIONS,
+                })
+            }
+        }
+    }
+}
+
+/// Parses tetrahedral mesh data held in memory, in the format that `name`'s extension tells
+/// (`.vtu`, `.msh` or `.vtk`); `name` also stands for the file in error messages. A TetGen mesh
+/// is two files: parse it with [`crate::parse_tetgen`].
+pub fn parse_tet_data(bytes: &[u8], name: impl AsRef<Path>) -> Result<TetData, MeshIoError> {
+    let path = name.as_ref();
+    match TetFormat::from_path(path) {
+        Some(TetFormat::TetGen) => Err(MeshIoError::UnsupportedFormat {
+            path: path.to_path_buf(),
+            supported: ".vtu, .msh or .vtk (a TetGen mesh is two files, .node and .ele: parse them together with parse_tetgen)",
+        }),
+        Some(format) => parse_tets_as(format, bytes, path),
+        None => Err(MeshIoError::UnsupportedFormat {
+            path: path.to_path_buf(),
+            supported: ".vtu, .msh or .vtk",
+        }),
+    }
+}
+
+fn parse_tets_as(format: TetFormat, bytes: &[u8], path: &Path) -> Result<TetData, MeshIoError> {
+    match format {
+        TetFormat::Vtu => parse_vtu(bytes, path),
+        TetFormat::Msh => parse_msh(bytes, path),
+        TetFormat::Vtk => match parse_vtk(bytes, path)?.mesh {
             VtkMesh::Tets(t) => Ok(t),
             VtkMesh::Surface(_) => Err(MeshIoError::WrongKind {
                 path: path.to_path_buf(),
@@ -154,11 +224,10 @@ pub fn read_tet_data(path: impl AsRef<Path>) -> Result<TetData, MeshIoError> {
                 hint: "read it with read_surface or read_vtk",
             }),
         },
-        Some("obj" | "ply" | "stl") => Err(MeshIoError::UnsupportedFormat {
+        TetFormat::TetGen => Err(MeshIoError::UnsupportedFormat {
             path: path.to_path_buf(),
-            supported: ".vtk, .node, .ele, or a TetGen stem",
+            supported: TET_EXTENSIONS,
         }),
-        _ => read_tetgen(path),
     }
 }
 

@@ -8,6 +8,10 @@ use tissue_mesh::MeshError;
 /// The file name endings the surface readers and [`crate::write_surface`] understand.
 pub(crate) const SURFACE_EXTENSIONS: &str = ".obj, .ply, .stl or .vtk";
 
+/// The file name endings [`crate::read_tet_data`] understands.
+pub(crate) const TET_EXTENSIONS: &str =
+    ".vtu (VTK XML), .msh (Gmsh), .vtk (legacy VTK), or TetGen .node/.ele";
+
 /// Why reading or writing a mesh file failed.
 ///
 /// `path` is the file that was read or the file that was to be written (for data parsed from

@@ -4,9 +4,25 @@
 //! - [`read_surface`] reads an `.obj`, `.ply`, `.stl` or `.vtk` file (by extension) into a
 //!   validated [`tissue_mesh::TriMesh`]; [`read_surface_data`] stops before validation and gives
 //!   the raw [`SurfaceData`], so that a tool can list every defect of a bad file.
-//! - [`read_tets`] reads a validated [`tissue_mesh::TetMesh`] from TetGen `.node`/`.ele`
-//!   ([`read_tetgen`]) or VTK ([`read_vtk`], which also returns `POINT_DATA` fields);
-//!   [`read_tet_data`] stops before validation and gives the raw [`TetData`].
+//! - [`read_tets`] reads a validated [`tissue_mesh::TetMesh`], by extension ([`TetFormat`]), from
+//!   - VTK XML unstructured grids `.vtu` ([`read_vtu`]): ascii, inline base64 (UInt32 or
+//!     UInt64 `header_type`), `<AppendedData>` raw or base64, uncompressed or zlib
+//!     (`vtkZLibDataCompressor`, meshio's default); LZ4/LZMA are refused with the fix;
+//!   - Gmsh `.msh` ([`read_msh`]): MSH 1 (`$NOD`/`$ELM`, as SOFA ships its meshes), 2.x and
+//!     4.1, ASCII and binary; node tags of any value are renumbered 0, 1, ... in file order;
+//!     MSH 3 and 4.0 are refused with how to re-save;
+//!   - legacy VTK `.vtk` ([`read_vtk`], which also returns `POINT_DATA` fields);
+//!   - TetGen `.node`/`.ele` ([`read_tetgen`]), named by either file or their stem.
+//!
+//!   Of a `.vtu` or `.msh` only the linear tetrahedra (VTK cell type 10, Gmsh element type 4)
+//!   are kept; other cells (points, lines, triangles, ...) are skipped, and a file without
+//!   tetrahedra is an error saying what it holds. [`read_tet_data`] stops before validation and
+//!   gives the raw [`TetData`]; [`parse_tet_data`] does the same for bytes in memory. An
+//!   extension no tet reader knows is [`MeshIoError::UnsupportedFormat`] listing the formats.
+//! - Orientation: every tet reader returns the tetrahedra as stored (VTK, Gmsh and TetGen share
+//!   our convention: `(b−a)×(c−a)·(d−a) > 0`), and [`tissue_mesh::TetMesh::new`] refuses an
+//!   inverted one, naming it ([`tissue_mesh::MeshError::InvertedTet`]); nothing is flipped
+//!   silently.
 //! - [`write_surface`] writes by extension; [`write_obj`], [`write_ply`] (binary),
 //!   [`write_stl`] (binary), [`write_vtk`] and [`write_vtk_tets`] (ASCII, with per-vertex
 //!   [`VertexField`]s for ParaView) write one format each.
@@ -57,18 +73,21 @@
 mod atomic;
 mod data;
 mod error;
+mod gmsh;
 mod obj;
 mod ply;
 mod stl;
 mod tetgen;
 mod text;
 mod vtk;
+mod vtu;
 
 pub use data::{
-    parse_surface_data, read_surface, read_surface_data, read_tet_data, read_tets, write_surface,
-    SurfaceData, SurfaceFormat, TetData,
+    parse_surface_data, parse_tet_data, read_surface, read_surface_data, read_tet_data, read_tets,
+    write_surface, SurfaceData, SurfaceFormat, TetData, TetFormat,
 };
 pub use error::MeshIoError;
+pub use gmsh::{parse_msh, read_msh};
 pub use obj::{parse_obj, read_obj, write_obj};
 pub use ply::{parse_ply, read_ply, write_ply};
 pub use stl::{parse_stl, read_stl, write_stl};
@@ -77,3 +96,4 @@ pub use vtk::{
     parse_vtk, read_vtk, write_vtk, write_vtk_tets, FieldValues, PointField, PointValues,
     VertexField, VtkData, VtkMesh,
 };
+pub use vtu::{parse_vtu, read_vtu};

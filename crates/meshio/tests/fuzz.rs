@@ -13,8 +13,8 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use tissue_mesh::TriMesh;
 use tissue_meshio::{
-    parse_surface_data, parse_tetgen, parse_vtk, write_obj, write_ply, write_stl, write_vtk,
-    write_vtk_tets, FieldValues, VertexField,
+    parse_surface_data, parse_tet_data, parse_tetgen, parse_vtk, write_obj, write_ply, write_stl,
+    write_vtk, write_vtk_tets, FieldValues, VertexField,
 };
 
 /// xorshift64*: tiny, deterministic, good enough to pick positions.
@@ -70,6 +70,7 @@ fn read_any(input: &Input, bytes: &[u8]) {
     let partner = input.partner.as_deref().unwrap_or_default();
     match ext.as_str() {
         "vtk" => drop(parse_vtk(bytes, &input.name)),
+        "vtu" | "msh" => drop(parse_tet_data(bytes, &input.name)),
         "node" => drop(parse_tetgen(bytes, &input.name, partner, "partner.ele")),
         "ele" => drop(parse_tetgen(partner, "partner.node", bytes, &input.name)),
         _ => drop(parse_surface_data(bytes, &input.name)),
@@ -269,7 +270,7 @@ fn folder_inputs(dir: &Path, max_bytes: u64) -> Vec<Input> {
             .and_then(|e| e.to_str())
             .unwrap_or("")
             .to_ascii_lowercase();
-        if !["obj", "ply", "stl", "vtk", "node", "ele"].contains(&ext.as_str()) {
+        if !["obj", "ply", "stl", "vtk", "vtu", "msh", "node", "ele"].contains(&ext.as_str()) {
             continue;
         }
         if fs::metadata(&path)
@@ -340,6 +341,18 @@ fn no_reader_panics_on_mutated_fixtures_and_real_meshes() {
     assert!(
         failures.is_empty(),
         "readers panicked on fixtures:\n{}",
+        failures.join("\n")
+    );
+    // The .vtu and .msh files written by Gmsh, meshio and pyevtk.
+    let tets = folder_inputs(
+        Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/tets")),
+        200_000,
+    );
+    assert!(tets.len() >= 12, "{} tet fixtures", tets.len());
+    let failures = panics(&tets, 200);
+    assert!(
+        failures.is_empty(),
+        "readers panicked on tet fixtures:\n{}",
         failures.join("\n")
     );
     let shared = folder_inputs(
