@@ -107,8 +107,8 @@ fn pressed(depth: f32, steps: usize) -> (Vec3, Vec3, f32) {
         ..StepSettings::default()
     })
     .unwrap();
-    let tray = VoxelCollider::from_box(OrientedBox::tray(0.0, 0.0, 0.0, 20.0, 20.0, 2.0), 0.5)
-        .unwrap();
+    let tray =
+        VoxelCollider::from_box(OrientedBox::tray(0.0, 0.0, 0.0, 20.0, 20.0, 2.0), 0.5).unwrap();
     let tray = body.add_collider(tray, ContactParams::default()).unwrap();
     let radius = 0.6;
     let probe = ToolShape::Capsule {
@@ -166,7 +166,10 @@ fn probe_pressed_deeper_is_pushed_back_harder_and_tray_and_probe_carry_the_weigh
         // few per cent sideways, which the tray's friction takes).
         assert!(f.x.abs() < 0.1 * f.y.max(1.0) && f.z.abs() < 0.1 * f.y.max(1.0));
         // Statics: the tray carries the weight plus the probe's push, sideways too.
-        assert!(balance.abs() < 0.02, "tray {floor}, probe {f}, weight {weight}");
+        assert!(
+            balance.abs() < 0.02,
+            "tray {floor}, probe {f}, weight {weight}"
+        );
         assert!((floor.x + f.x).abs() < 0.01 * weight && (floor.z + f.z).abs() < 0.01 * weight);
         last = f.y;
         forces.push(f.y);
@@ -267,7 +270,10 @@ fn block_hanging_from_a_grasper_pulls_it_with_its_weight() {
             err_lifted * 100.0
         );
         assert!(err.abs() < 0.02, "hanging: {f} vs weight {weight}");
-        assert!(err_lifted.abs() < 0.02, "lifted: {lifted} vs weight {weight}");
+        assert!(
+            err_lifted.abs() < 0.02,
+            "lifted: {lifted} vs weight {weight}"
+        );
         assert!(f.x.abs() < 0.01 * weight && f.z.abs() < 0.01 * weight);
     }
 }
