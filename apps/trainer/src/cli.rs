@@ -27,7 +27,9 @@ UNITS: centimetres, grams, seconds. --size, --depth, --tool-radius, --cell, the 
 const AFTER_LONG_HELP: &str = "\
 OUTPUT: a summary on stdout: the organ, the steps, the per-step wall time (median, p99, max) \
 over all steps and over the tool steps, the volume drift V/V0 - 1 at the end and its largest \
-magnitude. With --frames DIR (created if missing): the organ's surface every --every steps and \
+magnitude, the contacts, and the force of the tissue on the probe in newtons (the largest \
+magnitude over the run and the last step's vector; tissue-pbd's SoftBody::tool_force, 1 N = 1e5 \
+dyn). With --frames DIR (created if missing): the organ's surface every --every steps and \
 at the end, frame_STEP.vtk (with point field `displacement`, cm: from the shape as loaded during \
 the settling, from the settled shape afterwards) or frame_STEP.obj (--format), and with --png \
 frame_STEP.png (coloured by that displacement, the probe in grey). Each file is \

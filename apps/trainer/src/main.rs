@@ -80,6 +80,14 @@ fn main_inner(cli: &Cli) -> Result<(), Failure> {
         "  contacts      {} with the tray, {} with the probe (last step)",
         summary.contacts.0, summary.contacts.1
     );
+    let (largest, last) = summary.probe_force;
+    println!(
+        "  probe force   largest {largest:.4} N, final {:.4} N ({:.4}, {:.4}, {:.4}) N, on the probe from the tissue",
+        last.length(),
+        last.x,
+        last.y,
+        last.z
+    );
     if let Some(dir) = &cli.frames {
         println!(
             "  frames        {} written to {}",

@@ -6,7 +6,7 @@ use std::time::Instant;
 use glam::Vec3;
 use tissue_mesh::{Aabb, TriMesh};
 use tissue_meshio::{FieldValues, VertexField};
-use tissue_pbd::{ContactSource, Pose, SoftBody, ToolShape};
+use tissue_pbd::{ContactSource, Pose, SoftBody, ToolShape, DYN_PER_NEWTON};
 use tissue_render::{draw_text, render, Camera, ColorScale, Image, Rgb, Surface, Viewport};
 
 use crate::cli::{Cli, FrameFormat};
@@ -25,6 +25,9 @@ pub struct Summary {
     pub worst_drift: f64,
     /// Contacts with the tray and the probe at the end.
     pub contacts: (usize, usize),
+    /// The force of the tissue on the probe (N, from [`SoftBody::tool_force`]): the largest
+    /// magnitude over all steps and the last step's vector.
+    pub probe_force: (f32, Vec3),
     /// Frames written (files per frame counted once).
     pub frames: usize,
 }
@@ -41,6 +44,7 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
     let mut step_seconds = Vec::with_capacity(total);
     let rest = scene.body.rest_volume();
     let mut worst_drift = 0.0f64;
+    let (mut largest_force, mut force) = (0.0f32, Vec3::ZERO);
     let radius = scene.probe.radius();
     let (mut start, mut end) = (Vec3::ZERO, Vec3::ZERO);
     if let Some(f) = frames.as_mut() {
@@ -82,6 +86,12 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
         let t = Instant::now();
         scene.body.step().map_err(|e| Failure::from_pbd(&e))?;
         step_seconds.push(t.elapsed().as_secs_f64());
+        force = scene
+            .body
+            .tool_force(scene.tool)
+            .map_err(|e| Failure::from_pbd(&e))?
+            / DYN_PER_NEWTON;
+        largest_force = largest_force.max(force.length());
         worst_drift = worst_drift.max((scene.body.volume() / rest - 1.0).abs());
         if let Some(f) = frames.as_mut() {
             if step % cli.every as usize == 0 || step == total {
@@ -101,6 +111,7 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
         volume_ratio: scene.body.volume() / rest,
         worst_drift,
         contacts: (tray, scene.body.contacts().len() - tray),
+        probe_force: (largest_force, force),
         frames: frames.map_or(0, |f| f.written),
     })
 }

@@ -108,6 +108,10 @@ fn a_small_box_runs_and_writes_frames_and_a_summary() {
     let drift = number_after(&text, "volume drift", "drift");
     assert!(drift.abs() < 50.0, "{text}");
     assert!(number_after(&text, "contacts", "contacts") > 0.0, "{text}");
+    // The probe pressed in: the tissue pushed back on it (N); never less than at the end.
+    let largest = number_after(&text, "probe force", "largest");
+    let last = number_after(&text, "probe force", "final");
+    assert!(largest > 0.0 && last <= largest + 1e-4, "{text}");
     // Frames at steps 0, 5, 10, 15 and the last (20): OBJ and PNG each, nothing else.
     let expected: Vec<String> = [0, 5, 10, 15, 20]
         .iter()

@@ -12,10 +12,28 @@
 //! tangential correction already made), and otherwise reduced by `μ_k d − r` (kinetic), so that
 //! over a step the tangential correction is at most `μ_k` times the normal one, as Coulomb's law
 //! for impulses. A collider or tool has no mass: only the node moves.
+//!
+//! ## Reaction forces (issue 19)
+//! Every correction a contact makes to a node (normal and friction parts alike, and the push-out
+//! of [`ContactState::resolve_remaining`]) is a position change `Δx` of a node of mass `m`
+//! within a (sub)step of length `h`; its velocity `(p − x)/h` so changes by `Δx/h`, an impulse
+//! `m Δx / h` given to the tissue by that collider or tool. Contacts are hard inequalities
+//! projected as plain position corrections in every solver mode (no compliance), so this is
+//! also XPBD's `λ n / h` with the contact's multiplier `λ = m Δx·n` (and the friction's
+//! tangential multiplier likewise). Summed per source over the iterations of the (sub)step and
+//! over the (sub)steps of a step of total length `T = Σ h`, the force on the source, averaged
+//! over the step, is
+//!
+//! `F = −(1/T) Σ_substeps (1/h) Σ_projections m_i Δx_i`   (dyn = g·cm/s²),
+//!
+//! i.e. `−Σ m Δx / h²` for one step of length `h`. It is accumulated here (`pending` per
+//! (sub)step in `f32`, `impulse` per step in `f64`), independent of the number of iterations and
+//! substeps, and read through [`SoftBody::tool_force`] and [`SoftBody::collider_force`]
+//! (`force.rs`). The floor's corrections are counted the same way (`step.rs`).
 
 use std::sync::Arc;
 
-use glam::{Vec3A, Vec4};
+use glam::{DVec3, Vec3, Vec3A, Vec4};
 
 use crate::tool::{check_pose, sweep_node, Pose, Tool, ToolShape};
 use crate::{PbdError, SoftBody, VoxelCollider};
@@ -136,6 +154,22 @@ pub(crate) struct ContactState {
     contacts: Vec<Contact>,
     /// Iterations projected since the contacts were generated.
     iteration: u32,
+    /// Reaction accounting (see the module docs), one entry per source, colliders then tools
+    /// (sized when one is added, so steps stay allocation-free): `Σ m Δx` of this (sub)step's
+    /// corrections (g·cm) ...
+    pending: Vec<Vec3A>,
+    /// ... and `Σ_substeps (Σ m Δx)/h` of the step: the impulse given to the tissue (g·cm/s).
+    impulse: Vec<DVec3>,
+    /// The floor's `Σ m Δx` of this (sub)step, along its axis (g·cm), and its impulse.
+    pub(crate) floor_pending: f32,
+    floor_impulse: f64,
+    /// Length `h` of the current (sub)step (s), `T = Σ h` of the step so far (s), and the
+    /// body's step count the sums belong to.
+    h: f32,
+    time: f64,
+    accounted_step: Option<u64>,
+    /// The force on the body's holders of the last step (`force.rs`), dyn.
+    pub(crate) holding: Vec3,
 }
 
 /// A node's sweep against a collider marches in steps of this many cells.
@@ -145,9 +179,73 @@ const MAX_SAMPLES: f32 = 64.0;
 
 impl ContactState {
     pub(crate) fn reserve(&mut self, nodes: usize) {
-        let need = nodes * (self.colliders.len() + self.tools.len());
+        let sources = self.colliders.len() + self.tools.len();
+        let need = nodes * sources;
         self.contacts
             .reserve_exact(need.saturating_sub(self.contacts.len()));
+        self.pending.resize(sources, Vec3A::ZERO);
+        self.impulse.resize(sources, DVec3::ZERO);
+    }
+
+    /// Starts the reaction accounting of a (sub)step of length `h` belonging to the body's step
+    /// `step`: the first (sub)step of a step clears the step's sums.
+    fn begin_accounting(&mut self, h: f32, step: u64) {
+        if self.accounted_step != Some(step) {
+            self.accounted_step = Some(step);
+            self.impulse.fill(DVec3::ZERO);
+            self.floor_impulse = 0.0;
+            self.time = 0.0;
+        }
+        self.pending.fill(Vec3A::ZERO);
+        self.floor_pending = 0.0;
+        self.h = h;
+    }
+
+    /// Ends a (sub)step's accounting (after its last iteration): its `Σ m Δx / h` join the
+    /// step's impulses, `h` its time.
+    fn end_accounting(&mut self) {
+        let inv_h = 1.0 / self.h as f64;
+        for (impulse, pending) in self.impulse.iter_mut().zip(&mut self.pending) {
+            *impulse += pending.as_dvec3() * inv_h;
+            *pending = Vec3A::ZERO;
+        }
+        self.floor_impulse += self.floor_pending as f64 * inv_h;
+        self.floor_pending = 0.0;
+        self.time += self.h as f64;
+    }
+
+    /// The step's length so far, `T = Σ h` (s; 0 before the first step).
+    pub(crate) fn accounted_time(&self) -> f64 {
+        self.time
+    }
+
+    /// The impulse given to the tissue over the last step by source `index` (colliders, then
+    /// tools), g·cm/s.
+    pub(crate) fn impulse(&self, index: usize) -> DVec3 {
+        self.impulse.get(index).copied().unwrap_or(DVec3::ZERO)
+    }
+
+    /// The impulse given by all colliders and tools over the last step, g·cm/s.
+    pub(crate) fn total_impulse(&self) -> DVec3 {
+        self.impulse.iter().sum()
+    }
+
+    /// The floor's impulse over the last step, along its axis, g·cm/s.
+    pub(crate) fn floor_impulse(&self) -> f64 {
+        self.floor_impulse
+    }
+
+    /// The force on source `index` averaged over the last step, `−impulse / T` (dyn).
+    pub(crate) fn source_force(&self, index: usize) -> Vec3 {
+        if self.time > 0.0 {
+            (-self.impulse(index) / self.time).as_vec3()
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    pub(crate) fn collider_count(&self) -> usize {
+        self.colliders.len()
     }
 
     /// Generates this step's contacts: `x` the positions at the start of the step, `p` the
@@ -250,11 +348,14 @@ impl ContactState {
     /// Projects every contact once (one Gauss–Seidel sweep in generation order), with friction
     /// relative to the start-of-step positions `x`.
     /// `p` in solver order (`p[rank[i]]` is node `i`'s, its inverse mass in the w lane).
+    /// Each correction's `m Δx` is added to its source's `pending` (module docs).
     pub(crate) fn project(&mut self, p: &mut [Vec4], rank: &[u32], x: &[Vec3A]) {
+        let colliders = self.colliders.len();
         for c in &mut self.contacts {
             let i = c.node as usize;
             let s = rank[i] as usize;
-            let mut q = Vec3A::from(p[s].truncate());
+            let before = Vec3A::from(p[s].truncate());
+            let mut q = before;
             let value = c.normal.dot(q - c.point) - c.margin;
             if value < 0.0 {
                 q -= value * c.normal;
@@ -276,7 +377,16 @@ impl ContactState {
                     }
                 }
             }
-            p[s] = q.extend(p[s].w);
+            let w = p[s].w;
+            p[s] = q.extend(w);
+            // A contact's node is free (w > 0): it gets contacts only then.
+            let source = match c.source {
+                ContactSource::Collider(k) => k,
+                ContactSource::Tool(k) => colliders + k,
+            };
+            if let Some(pending) = self.pending.get_mut(source) {
+                *pending += (q - before) / w;
+            }
         }
     }
 }
@@ -290,8 +400,12 @@ impl ContactState {
     /// body's constraints pushed it in during the iterations; it gets no friction this step.
     ///
     /// `p` in solver order (`p[rank[i]]` is node `i`'s), walked in the caller's node order.
-    fn resolve_remaining(&self, p: &mut [Vec4], rank: &[u32], x: &[Vec3A], w: &[f32]) {
-        for (collider, params) in &self.colliders {
+    ///
+    /// Their corrections count towards the sources' reactions like the contacts'.
+    fn resolve_remaining(&mut self, p: &mut [Vec4], rank: &[u32], x: &[Vec3A], w: &[f32]) {
+        let colliders = self.colliders.len();
+        let pending = &mut self.pending;
+        for (ci, (collider, params)) in self.colliders.iter().enumerate() {
             for ((&r, &xi), &wi) in rank.iter().zip(x).zip(w) {
                 if wi <= 0.0 {
                     continue;
@@ -316,11 +430,12 @@ impl ContactState {
                     if c < 0.0 {
                         *q -= c * n;
                         *slot = moved.extend(slot.w);
+                        pending[ci] += (-c * n) / wi;
                     }
                 }
             }
         }
-        for (tool, params) in &self.tools {
+        for (ti, (tool, params)) in self.tools.iter().enumerate() {
             let keep = tool.shape.radius() + params.margin;
             let (lo, hi) = tool.swept_bounds(&tool.pose, &tool.pose, params.margin);
             for (&r, &wi) in rank.iter().zip(w) {
@@ -334,7 +449,9 @@ impl ContactState {
                 let d = local.distance(core);
                 if d < keep && d > 1e-6 {
                     let out = core + (local - core) * (keep / d);
-                    *slot = Vec3A::from(tool.pose.transform_point(out)).extend(slot.w);
+                    let moved = Vec3A::from(tool.pose.transform_point(out));
+                    pending[colliders + ti] += (moved - q) / wi;
+                    *slot = moved.extend(slot.w);
                 }
             }
         }
@@ -515,8 +632,11 @@ impl SoftBody {
         &self.collision.contacts
     }
 
-    /// Step phase: contacts for the predictions (after attachments).
-    pub(crate) fn generate_contacts(&mut self) {
+    /// Step phase: contacts for the predictions (after attachments) of a (sub)step of length
+    /// `h` (s); starts that (sub)step's reaction accounting (the first (sub)step of a step, by
+    /// [`SoftBody::step_count`], clears the step's sums).
+    pub(crate) fn generate_contacts(&mut self, h: f32) {
+        self.collision.begin_accounting(h, self.step_count);
         self.collision
             .generate(&self.x, &self.q, &self.rank, &self.w);
     }
@@ -529,6 +649,7 @@ impl SoftBody {
         if self.collision.iteration == self.settings.iterations {
             self.collision
                 .resolve_remaining(&mut self.q, &self.rank, &self.x, &self.w);
+            self.collision.end_accounting();
         }
     }
 }

@@ -18,6 +18,13 @@
 //!   meets, an inequality `n·(p − q) − margin ≥ 0` projected in every iteration after the body's
 //!   own constraints, with static and kinetic friction ([`ContactParams`]; Macklin et al. 2014).
 //!   Contacts are per node: a tool thinner than the node spacing can pass between nodes.
+//! - Reaction forces (issue 19, "Tool force"), after each step, in dyn (g·cm/s²; 1 N =
+//!   [`DYN_PER_NEWTON`] dyn): [`SoftBody::tool_force`], [`SoftBody::collider_force`] and
+//!   [`SoftBody::floor_force`] from the source's own position corrections, averaged over the
+//!   step of length `T = Σ h` over its (sub)steps of length `h`:
+//!   `F = −(1/T) Σ_substeps (1/h) Σ m Δx` (normal and friction corrections; `−Σ m Δx / h²` for
+//!   one step); [`SoftBody::holding_force`] on the attachments and pins together, from the
+//!   momentum balance of the nodes (see the method).
 //! - Topology edits for cutting and suturing (issue 8, used by `tissue-surgery`):
 //!   [`SoftBody::duplicate_nodes`], [`SoftBody::set_tet_nodes`],
 //!   [`SoftBody::add_distance_constraint`], [`SoftBody::add_link_constraint`] (sutures),
@@ -142,6 +149,7 @@ mod constraint;
 mod contact;
 mod edit;
 mod error;
+mod force;
 mod geometry;
 mod partition;
 mod settings;
@@ -156,6 +164,7 @@ pub use constraint::{
 pub use contact::{Contact, ContactParams, ContactSource};
 pub use edit::ConstraintSlot;
 pub use error::PbdError;
+pub use force::DYN_PER_NEWTON;
 pub use settings::{Material, Solver, StepSettings, VolumeConstraintKind};
 pub use tool::{Pose, Tool, ToolShape};
 pub use voxel::{ColliderShape, OrientedBox, VoxelCollider, MAX_COLLIDER_CORNERS};

@@ -232,6 +232,8 @@ impl SoftBody {
         let _span = tracing::debug_span!("pbd_step", step = self.step_count).entered();
         let s = self.settings;
         let (dt, g) = (s.dt, Vec3A::from(s.gravity));
+        // Momentum before the step, for the holders' reaction (force.rs; only with attachments).
+        let held_from = self.holding_momentum();
         // 1–2, straight into solver order (crate::partition): the projection works on `q`.
         // Over the slots in use: empty ones (SPARE) stay as they are, zero, never touched.
         for r in self.edits.used_slots(self.q.len()) {
@@ -254,7 +256,7 @@ impl SoftBody {
             self.q[s] = target.extend(self.qw[s]);
         }
         // Contacts with colliders and tools for the predictions (contact.rs).
-        self.generate_contacts();
+        self.generate_contacts(dt);
         let xpbd = s.solver == Solver::Xpbd;
         if xpbd {
             self.distance_lambda.fill(F::ZERO);
@@ -295,6 +297,7 @@ impl SoftBody {
         if s.damping > 0.0 {
             self.damp_rigid_modes(s.damping, &rigid);
         }
+        self.finish_holding(held_from);
         let step = self.step_count;
         self.step_count += 1;
         if let Some(i) = self
@@ -391,14 +394,18 @@ impl SoftBody {
         }
         // Per-node projections from here on: `p` (xyz; w = inverse mass) and `w` are in solver
         // order, the caller's node `i` is `p[self.rank[i]]`.
+        // The floor's `Σ m Δx` goes to its reaction (contact.rs, force.rs).
         if let Some(f) = self.floor {
+            let mut pushed = 0.0f32;
             for r in e.used_slots(p.len()) {
                 for (p, &w) in p[r.clone()].iter_mut().zip(&w[r]) {
                     if w > 0.0 && p[f.axis] < f.height {
+                        pushed += (f.height - p[f.axis]) / w;
                         p[f.axis] = f.height;
                     }
                 }
             }
+            self.collision.floor_pending += pushed;
         }
     }
 
