@@ -23,7 +23,10 @@ fn ms(s: f64) -> String {
 
 /// The scheme of a run, for the summaries: `dt = 0.01 s, 8 substeps × K = 1, Xpbd, Classic
 /// volume`.
-fn describe_settings(s: &tissue_pbd::StepSettings, volume: tissue_pbd::VolumeConstraintKind) -> String {
+fn describe_settings(
+    s: &tissue_pbd::StepSettings,
+    volume: tissue_pbd::VolumeConstraintKind,
+) -> String {
     format!(
         "dt = {} s, {} substep{} × K = {}, {:?}, {:?} volume{}",
         s.dt,
