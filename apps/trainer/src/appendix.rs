@@ -9,10 +9,10 @@ use std::time::Instant;
 
 use glam::{Quat, Vec3};
 use tissue_mesh::{tet_box, TriMesh};
-use tissue_pbd::{Floor, Material, Pose, SoftBody, StepSettings, ToolShape, VolumeConstraintKind};
+use tissue_pbd::{Floor, Pose, SoftBody, StepSettings, ToolShape};
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
 
-use crate::cli::{Cli, Volume};
+use crate::cli::{Cli, Scheme};
 use crate::failure::{code, Failure};
 use crate::ms;
 use crate::run::percentiles;
@@ -25,23 +25,14 @@ fn surgery_failure(e: &tissue_surgery::SurgeryError) -> Failure {
 pub fn run(cli: &Cli) -> Result<(), Failure> {
     let mesh = tet_box(32, 8, 8, Vec3::new(8.0, 2.0, 2.0))
         .map_err(|e| Failure::new(code::MESH, format!("appendix mesh: {e}")))?;
-    let material = Material {
-        distance_stiffness: cli.stiffness,
-        volume: match cli.volume {
-            Volume::Classic => VolumeConstraintKind::Classic,
-            Volume::Centroid => VolumeConstraintKind::Centroid,
-            Volume::None => VolumeConstraintKind::None,
-        },
-        ..Material::default()
-    };
+    let (material, mut settings) = cli.physics();
+    if cli.scheme == Scheme::Legacy {
+        // The scenario's own damping before issue 19 (the library's default step).
+        settings.damping = StepSettings::default().damping;
+    }
     let mut body = SoftBody::new(&mesh, &material).map_err(|e| Failure::from_pbd(&e))?;
-    body.set_settings(StepSettings {
-        dt: cli.dt,
-        iterations: cli.iterations,
-        parallel: cli.parallel,
-        ..StepSettings::default()
-    })
-    .map_err(|e| Failure::from_pbd(&e))?;
+    body.set_settings(settings)
+        .map_err(|e| Failure::from_pbd(&e))?;
     // It lies on the abdominal wall (a floor at its underside).
     body.set_floor(Some(Floor::y(-1.0)))
         .map_err(|e| Failure::from_pbd(&e))?;
@@ -91,6 +82,7 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
     let mut frames = 0usize;
     let mut events_seen = 0usize;
     let mut last_pose: Option<Pose> = None;
+    let mut worst_drift = 0.0f64;
     for step in 1..=total {
         // The blade's pose for this step, relative to the sagging organ: found on the nodes.
         if step <= settle {
@@ -129,6 +121,8 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
         };
         let t = Instant::now();
         body.step().map_err(|e| Failure::from_pbd(&e))?;
+        let drift = body.volume() / body.rest_volume() - 1.0;
+        worst_drift = worst_drift.max(drift.abs());
         let mut events = Vec::new();
         if let (Some(to), Some(from)) = (pose, last_pose) {
             let sweep = BladeSweep::new(blade, &from, &to).map_err(|e| surgery_failure(&e))?;
@@ -187,6 +181,16 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
         ms(m),
         ms(p),
         ms(x)
+    );
+    println!(
+        "  run           {total} steps, {}",
+        crate::describe_settings(body.settings(), body.volume_kind())
+    );
+    println!(
+        "  volume drift  {:+.3} % at the end (V/V0 = {:.4}, V0 as built), largest |drift| {:.3} %",
+        (body.volume() / body.rest_volume() - 1.0) * 100.0,
+        body.volume() / body.rest_volume(),
+        worst_drift * 100.0
     );
     println!(
         "  surgery       {events_seen} events, {} pieces, {} nodes now ({} added), {} sutures",

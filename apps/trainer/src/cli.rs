@@ -18,8 +18,14 @@ presses --depth cm below the organ's top there in --press-steps, then drags alon
 
 With no arguments it runs the bunny of ../shared/meshes/bunny_10k_tet42k (9217 nodes, 42117 tets, \
 10 cm) when that folder is there (looked up from the current directory, then from the source \
-tree), else a generated 10 x 10 x 10-cell tet box, at the issue's benchmark step: dt = 10 ms, \
-K = 10 iterations.
+tree), else a generated 10 x 10 x 10-cell tet box, one step per 10 ms frame.
+
+SCHEMES (--scheme): `realtime` (the default, tissue-pbd's StepSettings::realtime and \
+Material::soft_tissue, which the studio uses too): each 10 ms step is 8 substeps of one \
+linearised-PBD iteration, classic volume constraints, k = 1. `legacy` (the scheme before issue \
+19, for comparison): one 10 ms step of K = 10 iterations, distance stiffness --stiffness. \
+--dt, --substeps, --iterations, --solver, --compliance and --volume override either scheme's \
+values (`--scheme legacy` is `--substeps 1 --iterations 10`). docs/trainer.md compares them.
 
 UNITS: centimetres, grams, seconds. --size, --depth, --tool-radius, --cell, the waypoints in cm \
 (x and z of the tray plane, the organ centred at x = z = 0); --dt in s.";
@@ -56,6 +62,27 @@ pub enum Volume {
     Centroid,
     /// None (distance constraints only).
     None,
+}
+
+/// The time-stepping scheme (its library preset).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Scheme {
+    /// tissue-pbd's real-time preset: 8 substeps of one iteration per 10 ms step, classic
+    /// volume, k = 1.
+    Realtime,
+    /// The scheme before issue 19: one 10 ms step of K = 10 linearised-PBD iterations.
+    Legacy,
+}
+
+/// The stiffness model (tissue_pbd::Solver).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SolverArg {
+    /// PBD, stiffness as given.
+    Pbd,
+    /// PBD with the stiffness linearised over the iterations.
+    Linearised,
+    /// XPBD with compliance.
+    Xpbd,
 }
 
 /// Format of the surface frames.
@@ -106,16 +133,29 @@ pub struct Cli {
     /// Largest extent of the organ after scaling (cm).
     #[arg(long, value_name = "CM", default_value_t = 10.0)]
     pub size: f32,
-    /// Time step (s).
-    #[arg(long, value_name = "S", default_value_t = 0.01)]
-    pub dt: f32,
-    /// Gauss–Seidel iterations K per step.
-    #[arg(long, value_name = "K", default_value_t = 10)]
-    pub iterations: u32,
-    /// Volume constraint.
+    /// Time-stepping scheme: `realtime` (library preset, 8 substeps of 1 iteration) or
+    /// `legacy` (one step of K = 10 PBD iterations, as before issue 19).
+    #[arg(long, value_enum, default_value_t = Scheme::Realtime)]
+    pub scheme: Scheme,
+    /// Time step per frame (s) [default: 0.01, both schemes].
+    #[arg(long, value_name = "S")]
+    pub dt: Option<f32>,
+    /// Substeps per step [default: realtime 8, legacy 1].
+    #[arg(long, value_name = "N")]
+    pub substeps: Option<u32>,
+    /// Gauss–Seidel iterations K per substep [default: realtime 1, legacy 10].
+    #[arg(long, value_name = "K")]
+    pub iterations: Option<u32>,
+    /// Stiffness model [default: linearised PBD, both schemes].
+    #[arg(long, value_enum)]
+    pub solver: Option<SolverArg>,
+    /// XPBD compliance of the distance constraints (cm/dyn; with --solver xpbd) [default: 0].
+    #[arg(long, value_name = "ALPHA")]
+    pub compliance: Option<f32>,
+    /// Volume constraint [default: classic].
     #[arg(long, value_enum, default_value_t = Volume::Classic)]
     pub volume: Volume,
-    /// PBD stiffness of the distance constraints, in [0, 1].
+    /// PBD stiffness of the distance constraints, in [0, 1] (legacy scheme).
     #[arg(long, value_name = "K", default_value_t = 1.0)]
     pub stiffness: f32,
     /// Voxel size of the tray collider (cm).
@@ -158,6 +198,51 @@ pub struct Cli {
     /// Project constraints colour-parallel on all cores (bit-identical to serial).
     #[arg(long)]
     pub parallel: bool,
+}
+
+impl Cli {
+    /// The material and step settings of the run: the scheme's library preset with the
+    /// overrides given.
+    pub fn physics(&self) -> (tissue_pbd::Material, tissue_pbd::StepSettings) {
+        use tissue_pbd::{Material, StepSettings, VolumeConstraintKind};
+        let (mut material, mut settings) = match self.scheme {
+            Scheme::Realtime => (Material::soft_tissue(), StepSettings::realtime()),
+            Scheme::Legacy => (
+                Material {
+                    distance_stiffness: self.stiffness,
+                    volume_stiffness: 1.0,
+                    ..Material::default()
+                },
+                StepSettings::legacy(),
+            ),
+        };
+        material.volume = match self.volume {
+            Volume::Classic => VolumeConstraintKind::Classic,
+            Volume::Centroid => VolumeConstraintKind::Centroid,
+            Volume::None => VolumeConstraintKind::None,
+        };
+        if let Some(solver) = self.solver {
+            settings.solver = match solver {
+                SolverArg::Pbd => tissue_pbd::Solver::Pbd,
+                SolverArg::Linearised => tissue_pbd::Solver::PbdLinearised,
+                SolverArg::Xpbd => tissue_pbd::Solver::Xpbd,
+            };
+        }
+        if let Some(a) = self.compliance {
+            material.distance_compliance = a;
+        }
+        if let Some(dt) = self.dt {
+            settings.dt = dt;
+        }
+        if let Some(n) = self.substeps {
+            settings.substeps = n;
+        }
+        if let Some(k) = self.iterations {
+            settings.iterations = k;
+        }
+        settings.parallel = self.parallel;
+        (material, settings)
+    }
 }
 
 fn parse_xz(s: &str) -> Result<[f32; 2], String> {

@@ -21,6 +21,24 @@ fn ms(s: f64) -> String {
     format!("{:.2} ms", s * 1e3)
 }
 
+/// The scheme of a run, for the summaries: `dt = 0.01 s, 8 substeps × K = 1, Xpbd, Classic
+/// volume`.
+fn describe_settings(
+    s: &tissue_pbd::StepSettings,
+    volume: tissue_pbd::VolumeConstraintKind,
+) -> String {
+    format!(
+        "dt = {} s, {} substep{} × K = {}, {:?}, {:?} volume{}",
+        s.dt,
+        s.substeps,
+        if s.substeps == 1 { "" } else { "s" },
+        s.iterations,
+        s.solver,
+        volume,
+        if s.parallel { ", colour-parallel" } else { "" }
+    )
+}
+
 fn main_inner(cli: &Cli) -> Result<(), Failure> {
     if cli.scenario == Some(cli::Scenario::Appendix) {
         return appendix::run(cli);
@@ -39,19 +57,12 @@ fn main_inner(cli: &Cli) -> Result<(), Failure> {
     let tool = &all[summary.tool_from.min(all.len())..];
     let (m, p, x) = run::percentiles(all);
     println!(
-        "  run           {} steps (settle {}, press {}, drag {}), dt = {} s, K = {}, {:?} volume{}",
+        "  run           {} steps (settle {}, press {}, drag {}), {}",
         all.len(),
         cli.settle_steps,
         cli.press_steps,
         cli.drag_steps,
-        cli.dt,
-        cli.iterations,
-        cli.volume,
-        if cli.parallel {
-            ", colour-parallel"
-        } else {
-            ""
-        }
+        describe_settings(scene.body.settings(), scene.body.volume_kind())
     );
     println!(
         "  step time     median {}, p99 {}, max {} (all {} steps)",
@@ -71,7 +82,7 @@ fn main_inner(cli: &Cli) -> Result<(), Failure> {
         );
     }
     println!(
-        "  volume drift  {:+.3} % at the end (V/V0 = {:.4}), largest |drift| {:.3} %",
+        "  volume drift  {:+.3} % at the end (V/V0 = {:.4}, V0 as loaded), largest |drift| {:.3} %",
         (summary.volume_ratio - 1.0) * 100.0,
         summary.volume_ratio,
         summary.worst_drift * 100.0

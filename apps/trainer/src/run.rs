@@ -95,7 +95,11 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
         worst_drift = worst_drift.max((scene.body.volume() / rest - 1.0).abs());
         if let Some(f) = frames.as_mut() {
             if step % cli.every as usize == 0 || step == total {
-                f.write(scene, step, Some(step as f64 * cli.dt as f64))?;
+                f.write(
+                    scene,
+                    step,
+                    Some(step as f64 * scene.body.settings().dt as f64),
+                )?;
             }
         }
     }

@@ -4,12 +4,9 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use tissue_mesh::{tet_box, TetMesh};
-use tissue_pbd::{
-    ContactParams, Material, OrientedBox, Pose, SoftBody, StepSettings, ToolShape,
-    VolumeConstraintKind, VoxelCollider,
-};
+use tissue_pbd::{ContactParams, OrientedBox, Pose, SoftBody, ToolShape, VoxelCollider};
 
-use crate::cli::{Cli, Volume};
+use crate::cli::Cli;
 use crate::failure::{code, Failure};
 
 /// The shipped bunny, relative to the repository root.
@@ -129,26 +126,10 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
         ));
     }
     let mesh = place(&raw, cli.size)?;
-    let material = Material {
-        distance_stiffness: cli.stiffness,
-        volume_stiffness: 1.0,
-        volume: match cli.volume {
-            Volume::Classic => VolumeConstraintKind::Classic,
-            Volume::Centroid => VolumeConstraintKind::Centroid,
-            Volume::None => VolumeConstraintKind::None,
-        },
-        ..Material::default()
-    };
+    let (material, settings) = cli.physics();
     let pbd = |e| Failure::from_pbd(&e);
     let mut body = SoftBody::new(&mesh, &material).map_err(pbd)?;
-    body.set_settings(StepSettings {
-        dt: cli.dt,
-        iterations: cli.iterations,
-        damping: 0.05,
-        parallel: cli.parallel,
-        ..StepSettings::default()
-    })
-    .map_err(pbd)?;
+    body.set_settings(settings).map_err(pbd)?;
     let contact = ContactParams {
         static_friction: cli.friction,
         kinetic_friction: cli.friction,

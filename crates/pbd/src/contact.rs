@@ -170,6 +170,10 @@ pub(crate) struct ContactState {
     accounted_step: Option<u64>,
     /// The force on the body's holders of the last step (`force.rs`), dyn.
     pub(crate) holding: Vec3,
+    /// The host's pose of each tool while a step's substeps move it there (step.rs).
+    targets: Vec<Pose>,
+    /// Whether the current substep is its step's last (step.rs; true without substeps).
+    pub(crate) last_substep: bool,
 }
 
 /// A node's sweep against a collider marches in steps of this many cells.
@@ -406,12 +410,17 @@ impl ContactState {
         let colliders = self.colliders.len();
         let pending = &mut self.pending;
         for (ci, (collider, params)) in self.colliders.iter().enumerate() {
+            let (lo, hi) = collider.bounds();
+            let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
             for ((&r, &xi), &wi) in rank.iter().zip(x).zip(w) {
                 if wi <= 0.0 {
                     continue;
                 }
                 let slot = &mut p[r as usize];
                 let mut moved = Vec3A::from(slot.truncate());
+                if moved.cmpgt(hi).any() || moved.cmplt(lo).any() {
+                    continue;
+                }
                 let q = &mut moved;
                 let Some((phi, _)) = collider.probe(*q) else {
                     continue;
@@ -572,6 +581,7 @@ impl SoftBody {
     ) -> Result<usize, PbdError> {
         params.validate()?;
         self.collision.tools.push((Tool::new(shape, pose)?, params));
+        self.collision.targets.push(pose);
         self.collision.reserve(self.x.len());
         Ok(self.collision.tools.len() - 1)
     }
@@ -647,9 +657,40 @@ impl SoftBody {
         self.collision.project(&mut self.q, &self.rank, &self.x);
         self.collision.iteration += 1;
         if self.collision.iteration == self.settings.iterations {
-            self.collision
-                .resolve_remaining(&mut self.q, &self.rank, &self.x, &self.w);
+            // The push-out after the last iteration: once per step, after its last substep.
+            if self.collision.last_substep {
+                self.collision
+                    .resolve_remaining(&mut self.q, &self.rank, &self.x, &self.w);
+            }
+            // Every substep closes its own reaction sums (its corrections over its `h`).
             self.collision.end_accounting();
+        }
+    }
+}
+
+/// Substeps (step.rs): each substep sweeps the tools a part of the way to the host's pose.
+impl ContactState {
+    /// Before the first substep: remembers the host's poses.
+    pub(crate) fn save_tool_targets(&mut self) {
+        for ((tool, _), target) in self.tools.iter().zip(&mut self.targets) {
+            *target = tool.pose;
+        }
+    }
+
+    /// Before a substep with `remaining` substeps left (this one included): each tool's pose
+    /// for it, `1/remaining` of the way from where the last substep left it to the host's pose
+    /// (exactly the host's pose for the last one).
+    pub(crate) fn substep_tool_poses(&mut self, remaining: u32) {
+        let f = 1.0 / remaining.max(1) as f32;
+        for ((tool, _), target) in self.tools.iter_mut().zip(&self.targets) {
+            tool.pose = if remaining <= 1 {
+                *target
+            } else {
+                Pose::new(
+                    tool.start.rotation.slerp(target.rotation, f),
+                    tool.start.translation.lerp(target.translation, f),
+                )
+            };
         }
     }
 }

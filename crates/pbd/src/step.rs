@@ -214,15 +214,21 @@ fn project_set<const XPBD: bool>(
 }
 
 impl SoftBody {
-    /// Advances the body by one step of the current [`crate::StepSettings`]:
-    /// 1. `v += Δt·g` for free nodes (`w·f_ext` with `f_ext = m g`);
-    /// 2. `p = x + Δt·v`; attached nodes take their targets; contacts with colliders and tools are
+    /// Advances the body by one step of the current [`crate::StepSettings`]: `n` substeps of
+    /// `h = Δt/n` (one when `n = 1`; before each, every tool is moved `1/(substeps left)` of
+    /// the way to the pose the host set, so that it sweeps its path in `n` parts), each:
+    /// 1. `v += h·g` for free nodes (`w·f_ext` with `f_ext = m g`);
+    /// 2. `p = x + h·v`; attached nodes take their targets; contacts with colliders and tools are
     ///    generated for the predictions (see [`crate::Contact`]);
     /// 3. `K` times: distance and volume constraints block by block, then the floor (Gauss–Seidel
     ///    in the order of the crate docs, in solver node order), then the contacts with friction;
     ///    XPBD multipliers start at 0 each step;
-    /// 4. `v = (1 − c)(p − x)/Δt` (`c` the linear damping, default 0), `x = p` (the old `x` becomes [`SoftBody::previous_positions`]);
-    /// 5. rigid-mode damping of the free nodes.
+    /// 4. `v = (1 − c)(p − x)/h` (`c` the linear damping per substep, default 0), `x = p` (the old `x` becomes [`SoftBody::previous_positions`]);
+    /// 5. after the last substep, rigid-mode damping of the free nodes.
+    ///
+    /// With substeps, [`SoftBody::contacts`] and [`SoftBody::previous_positions`] are those of
+    /// the last substep, and nodes the constraints pushed into a collider or tool are put back
+    /// on its surface after the last substep only (the next substep's contacts catch them).
     ///
     /// Allocates nothing.
     ///
@@ -230,10 +236,40 @@ impl SoftBody {
     /// [`PbdError::Diverged`] when a node became non-finite (the state is kept as it is).
     pub fn step(&mut self) -> Result<(), PbdError> {
         let _span = tracing::debug_span!("pbd_step", step = self.step_count).entered();
-        let s = self.settings;
-        let (dt, g) = (s.dt, Vec3A::from(s.gravity));
+        let n = self.settings.substeps;
         // Momentum before the step, for the holders' reaction (force.rs; only with attachments).
         let held_from = self.holding_momentum();
+        if n > 1 {
+            self.collision.save_tool_targets();
+        }
+        for j in 0..n {
+            if n > 1 {
+                self.collision.substep_tool_poses(n - j);
+            }
+            self.collision.last_substep = j + 1 == n;
+            self.substep(j + 1 == n);
+        }
+        self.finish_holding(held_from);
+        let step = self.step_count;
+        self.step_count += 1;
+        if let Some(i) = self
+            .x
+            .iter()
+            .zip(&self.v)
+            .position(|(x, v)| !(x.is_finite() && v.is_finite()))
+        {
+            return Err(PbdError::Diverged {
+                step,
+                node: i as u32,
+            });
+        }
+        Ok(())
+    }
+
+    /// One substep of `Δt/n` (the whole step when `n = 1`): steps 1–5 of [`SoftBody::step`].
+    fn substep(&mut self, last: bool) {
+        let s = self.settings;
+        let (dt, g) = (s.substep_dt(), Vec3A::from(s.gravity));
         // 1–2, straight into solver order (crate::partition): the projection works on `q`.
         // Over the slots in use: empty ones (SPARE) stay as they are, zero, never touched.
         for r in self.edits.used_slots(self.q.len()) {
@@ -279,8 +315,9 @@ impl SoftBody {
         }
         // 4, back in the caller's order (walked in that order: `q` is the array still in
         // cache), gathering the rigid-mode sums of step 5 on the way.
-        let scale = (1.0 - s.linear_damping) / dt;
+        let scale = (1.0 - s.per_substep(s.linear_damping)) / dt;
         let mut rigid = RigidSums::default();
+        let damp = s.damping > 0.0 && last;
         for ((x, prev), (v, (&r, (&m, &w)))) in self.x.iter_mut().zip(&mut self.p).zip(
             self.v
                 .iter_mut()
@@ -290,28 +327,13 @@ impl SoftBody {
             *v = (p - *x) * scale;
             *prev = *x;
             *x = p;
-            if s.damping > 0.0 && w > 0.0 {
+            if damp && w > 0.0 {
                 rigid.add(m, p, *v);
             }
         }
-        if s.damping > 0.0 {
+        if damp {
             self.damp_rigid_modes(s.damping, &rigid);
         }
-        self.finish_holding(held_from);
-        let step = self.step_count;
-        self.step_count += 1;
-        if let Some(i) = self
-            .x
-            .iter()
-            .zip(&self.v)
-            .position(|(x, v)| !(x.is_finite() && v.is_finite()))
-        {
-            return Err(PbdError::Diverged {
-                step,
-                node: i as u32,
-            });
-        }
-        Ok(())
     }
 
     /// One sweep over all constraints (the block tree with its blocks' dynamic batches, then the

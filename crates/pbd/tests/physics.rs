@@ -13,6 +13,7 @@ use tissue_pbd::{Floor, Material, SoftBody, Solver, StepSettings, VolumeConstrai
 fn free_settings(solver: Solver) -> StepSettings {
     StepSettings {
         dt: 0.01,
+        substeps: 1,
         iterations: 10,
         solver,
         gravity: Vec3::ZERO,
