@@ -330,40 +330,20 @@ fn simulate(
                 Err(std::sync::mpsc::TryRecvError::Disconnected) => return,
             };
             let result = match command {
-                Command::Load { organ } => match organs.get(&organ).and_then(|o| Live::new(o)) {
-                    Ok(l) => {
-                        let (vertices, triangles) = l.session.capacity();
-                        let _ = texts.send(json!({
-                            "type": "scene", "organ": organ, "label": l.session.label(),
-                            "nodes": l.session.body().node_count(),
-                            "tets": l.session.body().tets().len(),
-                            "capacity": { "vertices": vertices, "triangles": triangles },
-                            "tray": { "size": [l.session.tray_side(), l.session.tray_side()], "top": 0.0 },
-                        }));
+                Command::Load { organ } => organs
+                    .get(&organ)
+                    .and_then(|o| Live::new(o, &organ))
+                    .map(|l| {
+                        let _ = texts.send(l.scene_message());
                         live = Some(l);
                         next = Instant::now();
-                        Ok(())
-                    }
-                    Err(e) => Err(e),
-                },
+                    }),
                 Command::Reset => match &live {
-                    Some(l) => match Live::new(Arc::clone(&l.organ)) {
-                        Ok(fresh) => {
-                            let (vertices, triangles) = fresh.session.capacity();
-                            let _ = texts.send(json!({
-                                "type": "scene", "organ": fresh.session.label(),
-                                "label": fresh.session.label(),
-                                "nodes": fresh.session.body().node_count(),
-                                "tets": fresh.session.body().tets().len(),
-                                "capacity": { "vertices": vertices, "triangles": triangles },
-                                "tray": { "size": [fresh.session.tray_side(), fresh.session.tray_side()], "top": 0.0 },
-                            }));
-                            live = Some(fresh);
-                            next = Instant::now();
-                            Ok(())
-                        }
-                        Err(e) => Err(e),
-                    },
+                    Some(l) => Live::new(Arc::clone(&l.organ), &l.id).map(|fresh| {
+                        let _ = texts.send(fresh.scene_message());
+                        live = Some(fresh);
+                        next = Instant::now();
+                    }),
                     None => Ok(()),
                 },
                 Command::Pause { paused: p } => {
@@ -432,18 +412,32 @@ fn simulate(
 
 /// A live session and what the frames need.
 struct Live {
+    id: String,
     organ: Arc<Organ>,
     session: Session,
     surface: Arc<(u64, Vec<u32>)>,
 }
 
 impl Live {
-    fn new(organ: Arc<Organ>) -> Result<Live, String> {
+    fn new(organ: Arc<Organ>, id: &str) -> Result<Live, String> {
         let session = Session::new(&organ, SessionOptions::default()).map_err(|e| e.to_string())?;
         Ok(Live {
+            id: id.to_owned(),
             organ,
             surface: Arc::new((0, Vec::new())),
             session,
+        })
+    }
+
+    /// The `scene` message: what the page allocates for.
+    fn scene_message(&self) -> Value {
+        let s = &self.session;
+        let (vertices, triangles) = s.capacity();
+        json!({
+            "type": "scene", "organ": self.id, "label": s.label(),
+            "nodes": s.body().node_count(), "tets": s.body().tets().len(),
+            "capacity": { "vertices": vertices, "triangles": triangles },
+            "tray": { "size": [s.tray_side(), s.tray_side()], "top": 0.0 },
         })
     }
 

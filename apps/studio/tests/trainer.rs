@@ -62,8 +62,17 @@ async fn next(socket: &mut Socket) -> Result<In> {
 }
 
 async fn text_of(socket: &mut Socket, kind: &str, field: Option<(&str, &str)>) -> Result<Value> {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    let mut seen = Vec::new();
     loop {
+        assert!(
+            Instant::now() < deadline,
+            "no {kind} {field:?} within 60 s; events seen: {seen:?}"
+        );
         if let In::Text(v) = next(socket).await? {
+            if v["type"] == "event" {
+                seen.push(v["event"]["kind"].clone());
+            }
             let field_ok = field.is_none_or(|(k, want)| v["event"][k] == want);
             if v["type"] == kind && field_ok {
                 return Ok(v);
@@ -142,7 +151,8 @@ async fn the_appendix_streams_is_cut_and_sutured_and_one_session_runs_at_a_time(
     );
     assert!(cut.vertices > first.vertices);
 
-    // The needle across the wound.
+    // The needle across the wound, once the whole path is cut (a segment per step).
+    tokio::time::sleep(Duration::from_millis(1000)).await;
     send(
         &mut tab,
         json!({ "type": "suture", "a": [-0.3, top, 0.0], "b": [0.3, top, 0.0] }),

@@ -119,8 +119,8 @@ impl Organ {
     }
 
     /// An organ from a file's bytes in `cm_per_unit`: a closed surface (`.obj`, `.ply`,
-    /// `.stl`), tetrahedralised, or a tet mesh (`.vtk` and the other tet formats of
-    /// tissue-meshio); kept at its size, placed on the tray.
+    /// `.stl`), tetrahedralised, or a tet mesh (legacy `.vtk`, VTK XML `.vtu`, Gmsh `.msh` v1,
+    /// v2, v4: tissue-meshio's `parse_tet_data`); kept at its size, placed on the tray.
     ///
     /// # Errors
     /// [`SceneError::Read`] (the loader's message), [`SceneError::Mesh`] for an invalid mesh,
@@ -142,7 +142,7 @@ impl Organ {
                 fill(&surface, name)?
             }
             _ => {
-                let data = parse_tets(bytes, name)?;
+                let data = tissue_meshio::parse_tet_data(bytes, name).map_err(SceneError::Read)?;
                 let scaled: Vec<Vec3> = data.positions.iter().map(|&p| p * cm_per_unit).collect();
                 TetMesh::new(scaled, data.tets).map_err(|e| SceneError::mesh(name, e))?
             }
@@ -152,22 +152,6 @@ impl Organ {
             mesh: place(&tets, 1.0, name)?,
             setting: Setting::Tray,
         })
-    }
-}
-
-/// Parses a tet mesh held in memory by its extension.
-fn parse_tets(bytes: &[u8], name: &str) -> Result<tissue_meshio::TetData, SceneError> {
-    match tissue_meshio::parse_vtk(bytes, name)
-        .map_err(SceneError::Read)?
-        .mesh
-    {
-        tissue_meshio::VtkMesh::Tets(t) => Ok(t),
-        tissue_meshio::VtkMesh::Surface(_) => Err(SceneError::Meshing {
-            name: name.to_owned(),
-            reason: "the VTK file holds triangles, not tetrahedra: upload it as a closed surface \
-                     (.obj, .ply, .stl) to have it filled"
-                .to_owned(),
-        }),
     }
 }
 

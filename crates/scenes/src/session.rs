@@ -9,7 +9,7 @@ use std::time::Instant;
 use glam::{Mat3, Quat, Vec3, Vec3A};
 use tissue_pbd::{
     ColliderShape, ContactParams, Floor, Material, OrientedBox, Pose, SoftBody, StepSettings,
-    ToolShape, VolumeConstraintKind, VoxelCollider,
+    ToolShape, VoxelCollider, DYN_PER_NEWTON,
 };
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
 
@@ -22,9 +22,9 @@ const TIMES_KEPT: usize = 600;
 /// A session's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SessionOptions {
-    /// The organ's material (the classic tet-volume constraint, as `trainer`).
+    /// The organ's material ([`Material::soft_tissue`]).
     pub material: Material,
-    /// The solver's step (the library's defaults, parallel).
+    /// The solver's step ([`StepSettings::realtime`]: 10 ms as 8 substeps, in parallel).
     pub step: StepSettings,
     /// Contact with the tray and tools.
     pub contact: ContactParams,
@@ -43,14 +43,10 @@ pub struct SessionOptions {
 impl Default for SessionOptions {
     fn default() -> Self {
         SessionOptions {
-            material: Material {
-                volume: VolumeConstraintKind::Classic,
-                ..Material::default()
-            },
+            material: Material::soft_tissue(),
             step: StepSettings {
-                damping: 0.05,
                 parallel: true,
-                ..StepSettings::default()
+                ..StepSettings::realtime()
             },
             contact: ContactParams {
                 static_friction: 0.5,
@@ -81,6 +77,9 @@ pub struct TrainerEvent {
 struct Grab {
     /// (node, attachment id, the node's offset from the grabbed point).
     nodes: Vec<(u32, usize, Vec3)>,
+    /// The force on the body's holders just before the grab (dyn): the pins' share, which the
+    /// probe's force leaves out.
+    baseline: Vec3,
     /// Where the grabbed point is asked to be.
     target: Vec3,
 }
@@ -301,9 +300,9 @@ impl Session {
         let Some(g) = &self.grab else {
             return Vec3::ZERO;
         };
-        // FORCE: replaced by tissue-pbd's attachment force once merged.
-        let _ = g;
-        Vec3::ZERO
+        // tissue-pbd gives the force on all holders together (attachments and pins): the probe's
+        // is what the grab added to it.
+        (self.body.holding_force() - g.baseline) / DYN_PER_NEWTON
     }
 
     fn record(&mut self, happened: &[SurgeryEvent], events: &mut Vec<TrainerEvent>) {
@@ -353,6 +352,7 @@ impl Session {
             .collect();
         picked.sort_unstable();
         picked.dedup();
+        let baseline = self.body.holding_force();
         let mut nodes = Vec::with_capacity(picked.len());
         for n in picked {
             let p = Vec3::from(self.body.positions()[n as usize]);
@@ -362,6 +362,7 @@ impl Session {
         let count = nodes.len();
         self.grab = Some(Grab {
             nodes,
+            baseline,
             target: point,
         });
         Ok(TrainerEvent {

@@ -95,6 +95,11 @@ fn the_probe_lifts_the_appendix_tip_and_lets_go() -> Result {
     let (_, now) = surface_near(&s, p + lift);
     assert!(now.distance(p + lift) < 0.5, "{now} vs {}", p + lift);
     assert_eq!(s.tool_tip(), Some(p + lift));
+    // The lifted tissue pulls the probe down: less than the whole appendix's weight (32 g,
+    // 0.31 N), more than nothing.
+    let f = s.tool_force();
+    eprintln!("probe force lifting the appendix tip 1.5 cm: {f} N");
+    assert!(f.y < -0.001 && f.length() < 0.32, "{f} N");
     let released = s.release()?.map(|e| e.kind);
     assert_eq!(released, Some("released"));
     assert_eq!(s.tool_tip(), None);
@@ -118,12 +123,14 @@ fn the_bunny_rests_on_its_tray_and_keeps_its_volume() -> Result {
         "the bunny sinks through its tray: lowest node at {lowest} cm"
     );
     let top = s.positions().iter().map(|p| p.y).fold(f32::MIN, f32::max);
-    assert!(top > 6.0, "the bunny collapsed: its top at {top} cm");
     eprintln!(
-        "bunny after 120 steps: drift {:+.4}, worst {:.4}",
+        "bunny after 120 steps: top {top:.2} cm (9.91 as loaded), drift {:+.4}, worst {:.4}",
         s.volume_drift(),
         s.worst_drift()
     );
-    assert!(s.worst_drift() < 0.10, "worst drift {}", s.worst_drift());
+    // The realtime preset's measured worst on the bunny's settling is 4.8 % (docs/trainer.md);
+    // the legacy scheme's was 16 %.
+    assert!(s.worst_drift() < 0.06, "worst drift {}", s.worst_drift());
+    assert!(top > 4.0, "the bunny collapsed: its top at {top} cm");
     Ok(())
 }
