@@ -80,21 +80,25 @@ async function main() {
       `stats arrive: step ${fmt(h1.stepMs.median)} ms median, ${fmt(h1.stepMs.p99)} ms p99, volume drift ${fmt(h1.volumeDrift * 100, 3)} %`);
     await shot(page, 't1-organ.png');
 
-    // b. probe: a real drag from the organ's top
+    // b. probe: a real drag on the organ, once it has settled on its tray
+    await page.waitForTimeout(1500);
     await page.keyboard.press('1');
     check((await hookOf(page)).tool === 'probe', 'key 1 selects the probe');
     const start = await trainer(page, () => {
       const t = window.tissueStudio.trainer;
       const b = t.organBox();
-      const top = t.screenOf([(b.min[0] + b.max[0]) / 2, b.max[1], (b.min[2] + b.max[2]) / 2]);
-      // From the top centre's screen point downwards to the first pixel on the surface.
-      for (let dy = 0; dy < 300; dy += 3) {
-        const p = t.surfacePointAt(top.x, top.y + dy);
-        if (p) return { x: top.x, y: top.y + dy + 6, point: t.surfacePointAt(top.x, top.y + dy + 6) };
+      // The middle of the organ as seen: the screen point of its box's centre, well inside its
+      // outline (an edge point can slip off while the organ settles), checked on the surface.
+      const mid = t.screenOf([(b.min[0] + b.max[0]) / 2, (b.min[1] + b.max[1]) / 2, (b.min[2] + b.max[2]) / 2]);
+      for (let r = 0; r < 60; r += 4) {
+        for (const [dx, dy] of [[0, 0], [0, -r], [0, r], [-r, 0], [r, 0]]) {
+          const p = t.surfacePointAt(mid.x + dx, mid.y + dy);
+          if (p) return { x: mid.x + dx, y: mid.y + dy, point: p };
+        }
       }
       return null;
     });
-    check(start && start.point, `a point near the top of the organ is on the surface: (${start?.point?.map((v) => fmt(v)).join(', ')}) cm at ${fmt(start?.x, 0)}, ${fmt(start?.y, 0)} px`);
+    check(start && start.point, `a point in the middle of the organ is on the surface: (${start?.point?.map((v) => fmt(v)).join(', ')}) cm at ${fmt(start?.x, 0)}, ${fmt(start?.y, 0)} px`);
     await page.mouse.move(start.x, start.y);
     await page.mouse.down();
     for (let i = 1; i <= 10; i++) await page.mouse.move(start.x + 4 * i, start.y - 7 * i); // ~80 px up and right

@@ -148,21 +148,7 @@ async fn upload_organ(
     Query(query): Query<HashMap<String, String>>,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Json<serde_json::Value>, ApiError> {
-    let name = query.get("name").cloned().ok_or_else(|| {
-        ApiError::new(
-            StatusCode::BAD_REQUEST,
-            "usage",
-            "an upload needs ?name=FILE (its extension picks the format) and ?unit=",
-        )
-    })?;
-    let unit_symbol = query.get("unit").map_or("cm", String::as_str);
-    let unit = Unit::from_symbol(unit_symbol).ok_or_else(|| {
-        ApiError::new(
-            StatusCode::BAD_REQUEST,
-            "usage",
-            format!("unit {unit_symbol:?} is not one of mm, cm, dm, m"),
-        )
-    })?;
+    let (name, unit) = name_and_unit(&query)?;
     let bytes = body.map_err(|e| too_large_or(&name, &e))?;
     let organ = blocking(move || {
         Organ::from_bytes(&bytes, &name, unit.cm_per_unit())
@@ -176,6 +162,26 @@ async fn upload_organ(
     let mut reply = reply;
     reply["organ"] = json!(id);
     Ok(Json(reply))
+}
+
+/// An upload's `?name=` (its extension picks the format) and `?unit=` (cm when not given).
+fn name_and_unit(query: &HashMap<String, String>) -> Result<(String, Unit), ApiError> {
+    let name = query.get("name").cloned().ok_or_else(|| {
+        ApiError::new(
+            StatusCode::BAD_REQUEST,
+            "usage",
+            "an upload needs ?name=FILE (its extension picks the format) and ?unit=",
+        )
+    })?;
+    let symbol = query.get("unit").map_or("cm", String::as_str);
+    let unit = Unit::from_symbol(symbol).ok_or_else(|| {
+        ApiError::new(
+            StatusCode::BAD_REQUEST,
+            "usage",
+            format!("unit {symbol:?} is not one of mm, cm, dm, m"),
+        )
+    })?;
+    Ok((name, unit))
 }
 
 fn too_large_or(name: &str, e: &BytesRejection) -> ApiError {
@@ -252,21 +258,7 @@ async fn upload(
         })?;
         Source::Shipped(shipped)
     } else {
-        let name = query.get("name").cloned().ok_or_else(|| {
-            ApiError::new(
-                StatusCode::BAD_REQUEST,
-                "usage",
-                "an upload needs ?name=FILE.obj (its extension picks the format) and ?unit=",
-            )
-        })?;
-        let unit_symbol = query.get("unit").map_or("cm", String::as_str);
-        let unit = Unit::from_symbol(unit_symbol).ok_or_else(|| {
-            ApiError::new(
-                StatusCode::BAD_REQUEST,
-                "usage",
-                format!("unit {unit_symbol:?} is not one of mm, cm, dm, m"),
-            )
-        })?;
+        let (name, unit) = name_and_unit(&query)?;
         let bytes = body.map_err(|e| too_large_or(&name, &e))?;
         if bytes.is_empty() {
             return Err(ApiError::new(

@@ -1,41 +1,8 @@
 // The planner's side of apps/studio/API.md: HTTP calls and the page's one WebSocket.
 
-/** An error carrying the server's `{kind, field, message}`. */
-export class ApiError extends Error {
-  constructor(error, status) {
-    super(error && error.message ? error.message : 'The server gave an unexpected answer.');
-    this.kind = error && error.kind ? error.kind : 'unknown';
-    this.field = error ? error.field ?? null : null;
-    this.status = status;
-  }
-}
+import { ApiError, call } from './common.js';
 
-async function readJson(response) {
-  let body = null;
-  try {
-    body = await response.json();
-  } catch {
-    body = null;
-  }
-  if (!response.ok) {
-    if (body && body.error) throw new ApiError(body.error, response.status);
-    throw new ApiError({ kind: 'unknown', field: null,
-      message: `The server answered ${response.status} ${response.statusText}.` }, response.status);
-  }
-  if (body === null) throw new ApiError(null, response.status);
-  return body;
-}
-
-async function call(url, init) {
-  let response;
-  try {
-    response = await fetch(url, init);
-  } catch {
-    throw new ApiError({ kind: 'unknown', field: null,
-      message: 'Cannot reach the studio server. Is it still running?' }, 0);
-  }
-  return readJson(response);
-}
+export { ApiError };
 
 /** GET /api/meshes */
 export function listMeshes() {

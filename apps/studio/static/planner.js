@@ -2,12 +2,11 @@
 
 import * as api from './planner-api.js';
 import { PlannerView, RAMP } from './planner-view.js';
+import { $, MAX_UPLOAD, clearErrorIn, el, fmt, fmtInt, setText, showErrorIn } from './common.js';
 
-const MAX_UPLOAD = 64 * 1024 * 1024;
 const PREVIEW_DEBOUNCE_MS = 150;
 const CLICK_SLOP_PX = 5;
 
-const $ = (id) => document.getElementById(id);
 
 // ---- The state hook for tests (kept up to date; see the brief in apps/studio/browser/README.md).
 const hook = {
@@ -40,49 +39,16 @@ const state = {
   before: false,
 };
 
+const showError = (message) => showErrorIn(hook, message);
+const clearError = () => clearErrorIn(hook);
+
 let view;
 let socket;
 
 // ---------------------------------------------------------------- formatting
 
-function fmt(x, digits = 2) {
-  if (x === null || x === undefined || Number.isNaN(Number(x))) return '—';
-  let v = Number(x);
-  if (Math.abs(v) < 0.5 * 10 ** -digits) v = 0; // no "-0.00"
-  return v.toLocaleString('en-GB', { minimumFractionDigits: digits, maximumFractionDigits: digits });
-}
-function fmtInt(x) {
-  if (x === null || x === undefined) return '—';
-  return Number(x).toLocaleString('en-GB');
-}
 function fmtPoint(p, digits = 2) {
   return `(${p.map((v) => fmt(v, digits)).join(', ')})`;
-}
-function setText(id, text) {
-  $(id).textContent = text;
-}
-function el(tag, attrs = {}, ...children) {
-  const e = document.createElement(tag);
-  for (const [k, v] of Object.entries(attrs)) {
-    if (k === 'class') e.className = v;
-    else e.setAttribute(k, v);
-  }
-  for (const c of children) e.append(c);
-  return e;
-}
-
-// ---------------------------------------------------------------- messages
-
-function showError(message) {
-  hook.error = message;
-  const box = $('error');
-  box.textContent = message;
-  box.hidden = false;
-}
-function clearError() {
-  hook.error = null;
-  $('error').hidden = true;
-  $('error').textContent = '';
 }
 
 // ---------------------------------------------------------------- steps

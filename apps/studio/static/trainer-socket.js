@@ -1,36 +1,12 @@
 // The trainer's side of apps/studio/API.md ("The trainer"): the organ calls, the session socket and
 // the binary surface frames.
 
-import { ApiError } from './planner-api.js';
+import { ApiError, MAX_UPLOAD, call } from './common.js';
 
-export { ApiError };
-
-export const MAX_UPLOAD = 64 * 1024 * 1024;
+export { ApiError, MAX_UPLOAD };
 export const FRAME_MAGIC = 0x31465354; // "TSF1", little-endian
 const HEADER_BYTES = 48;
 
-async function call(url, init) {
-  let response;
-  try {
-    response = await fetch(url, init);
-  } catch {
-    throw new ApiError({ kind: 'unknown', field: null,
-      message: 'Cannot reach the studio server. Is it still running?' }, 0);
-  }
-  let body = null;
-  try {
-    body = await response.json();
-  } catch {
-    body = null;
-  }
-  if (!response.ok) {
-    if (body && body.error) throw new ApiError(body.error, response.status);
-    throw new ApiError({ kind: 'unknown', field: null,
-      message: `The server answered ${response.status} ${response.statusText}.` }, response.status);
-  }
-  if (body === null) throw new ApiError(null, response.status);
-  return body;
-}
 
 /** GET /api/organs → [{id, label, default}] */
 export function listOrgans() {

@@ -4,6 +4,7 @@
 import * as THREE from 'three';
 import { TrainerSocket, listOrgans, uploadOrgan, MAX_UPLOAD } from './trainer-socket.js';
 import { TrainerView, ARROW_CM_PER_N } from './trainer-view.js';
+import { $, clearErrorIn, el, fmt, fmtInt, setText, showErrorIn } from './common.js';
 
 const TOOLS = ['probe', 'scalpel', 'needle'];
 const CLICK_SLOP_PX = 6;
@@ -13,7 +14,6 @@ const PATH_SHOWN_MS = 1500;
 const PATH_SPACING_PX = 6; // the scalpel's path: a surface point every few pixels the pointer moves
 const MAX_PATH_POINTS = 2000;
 
-const $ = (id) => document.getElementById(id);
 
 // ---- The state hook for tests (kept up to date; see apps/studio/browser/README.md).
 const hook = {
@@ -57,47 +57,14 @@ const state = {
   adaptedAt: 0,
 };
 
+const showError = (message) => showErrorIn(hook, message);
+const clearError = () => clearErrorIn(hook);
+
 let view;
 let socket;
 
 // ---------------------------------------------------------------- formatting
 
-function fmt(x, digits = 2) {
-  if (x === null || x === undefined || !Number.isFinite(Number(x))) return '—';
-  let v = Number(x);
-  if (Math.abs(v) < 0.5 * 10 ** -digits) v = 0; // no "-0.00"
-  return v.toLocaleString('en-GB', { minimumFractionDigits: digits, maximumFractionDigits: digits });
-}
-function fmtInt(x) {
-  if (x === null || x === undefined || !Number.isFinite(Number(x))) return '—';
-  return Number(x).toLocaleString('en-GB');
-}
-function setText(id, text) {
-  $(id).textContent = text;
-}
-function el(tag, attrs = {}, ...children) {
-  const e = document.createElement(tag);
-  for (const [k, v] of Object.entries(attrs)) {
-    if (k === 'class') e.className = v;
-    else e.setAttribute(k, v);
-  }
-  for (const c of children) e.append(c);
-  return e;
-}
-
-// ---------------------------------------------------------------- messages
-
-function showError(message) {
-  hook.error = message;
-  const box = $('error');
-  box.textContent = message;
-  box.hidden = false;
-}
-function clearError() {
-  hook.error = null;
-  $('error').hidden = true;
-  $('error').textContent = '';
-}
 
 function setReady(on) {
   hook.ready = on;
