@@ -21,7 +21,7 @@ With no arguments it runs the bunny of ../shared/meshes/bunny_10k_tet42k (9217 n
 tree), else a generated 10 x 10 x 10-cell tet box, one step per 10 ms frame.
 
 SCHEMES (--scheme): `realtime` (the default, tissue-pbd's StepSettings::realtime and \
-Material::soft_tissue, which the studio uses too): each 10 ms step is 8 substeps of one \
+Material::soft_tissue, which the studio uses too): each 10 ms step is 9 substeps of one \
 linearised-PBD iteration, classic volume constraints, k = 1. `legacy` (the scheme before issue \
 19, for comparison): one 10 ms step of K = 10 iterations, distance stiffness --stiffness. \
 --dt, --substeps, --iterations, --solver, --compliance and --volume override either scheme's \
@@ -67,7 +67,7 @@ pub enum Volume {
 /// The time-stepping scheme (its library preset).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Scheme {
-    /// tissue-pbd's real-time preset: 8 substeps of one iteration per 10 ms step, classic
+    /// tissue-pbd's real-time preset: 9 substeps of one iteration per 10 ms step, classic
     /// volume, k = 1.
     Realtime,
     /// The scheme before issue 19: one 10 ms step of K = 10 linearised-PBD iterations.
@@ -133,7 +133,7 @@ pub struct Cli {
     /// Largest extent of the organ after scaling (cm).
     #[arg(long, value_name = "CM", default_value_t = 10.0)]
     pub size: f32,
-    /// Time-stepping scheme: `realtime` (library preset, 8 substeps of 1 iteration) or
+    /// Time-stepping scheme: `realtime` (library preset, 9 substeps of 1 iteration) or
     /// `legacy` (one step of K = 10 PBD iterations, as before issue 19).
     #[arg(long, value_enum, default_value_t = Scheme::Realtime)]
     pub scheme: Scheme,

@@ -21,7 +21,7 @@ fn ms(s: f64) -> String {
     format!("{:.2} ms", s * 1e3)
 }
 
-/// The scheme of a run, for the summaries: `dt = 0.01 s, 8 substeps × K = 1, Xpbd, Classic
+/// The scheme of a run, for the summaries: `dt = 0.01 s, 9 substeps × K = 1, Xpbd, Classic
 /// volume`.
 fn describe_settings(
     s: &tissue_pbd::StepSettings,

@@ -174,6 +174,16 @@ pub(crate) struct ContactState {
     targets: Vec<Pose>,
     /// Whether the current substep is its step's last (step.rs; true without substeps).
     pub(crate) last_substep: bool,
+    /// With substeps: the step's contact candidates (Macklin et al. 2019), the free nodes near
+    /// each collider or tool over the whole step, found once per step
+    /// ([`ContactState::find_candidates`]); each substep evaluates only these. Node indices,
+    /// by source (colliders, then tools), in node order within each; `candidate_ends[k]` ends
+    /// source `k`'s. Capacity reserved with the contacts'.
+    candidates: Vec<u32>,
+    candidate_ends: Vec<u32>,
+    /// Whether `candidates` hold this step's (set by step.rs for the substeps of a step; when
+    /// `false` every free node is tested, as without substeps).
+    pub(crate) use_candidates: bool,
 }
 
 /// A node's sweep against a collider marches in steps of this many cells.
@@ -187,6 +197,9 @@ impl ContactState {
         let need = nodes * sources;
         self.contacts
             .reserve_exact(need.saturating_sub(self.contacts.len()));
+        self.candidates
+            .reserve_exact(need.saturating_sub(self.candidates.len()));
+        self.candidate_ends.resize(sources, 0);
         self.pending.resize(sources, Vec3A::ZERO);
         self.impulse.resize(sources, DVec3::ZERO);
     }
@@ -273,13 +286,17 @@ impl ContactState {
             colliders,
             tools,
             contacts,
+            candidates,
+            candidate_ends,
+            use_candidates,
             ..
         } = self;
         for (ci, (collider, params)) in colliders.iter().enumerate() {
             let reach = params.margin + params.detection;
             let (lo, hi) = collider.bounds();
             let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
-            for (i, ((&xi, &r), &wi)) in x.iter().zip(rank).zip(w).enumerate() {
+            for i in nodes(candidates, candidate_ends, *use_candidates, ci, x.len()) {
+                let (xi, r, wi) = (x[i], rank[i], w[i]);
                 if wi <= 0.0 {
                     continue;
                 }
@@ -317,7 +334,9 @@ impl ContactState {
             };
             let to = tool.pose;
             let (lo, hi) = tool.swept_bounds(&from, &to, reach);
-            for (i, ((&xi, &r), &wi)) in x.iter().zip(rank).zip(w).enumerate() {
+            let k = colliders.len() + ti;
+            for i in nodes(candidates, candidate_ends, *use_candidates, k, x.len()) {
+                let (xi, r, wi) = (x[i], rank[i], w[i]);
                 if wi <= 0.0 {
                     continue;
                 }
@@ -346,6 +365,87 @@ impl ContactState {
             }
             tool.last_sweep = (tool.start, tool.pose);
             tool.start = tool.pose;
+        }
+    }
+
+    /// With substeps, before the first substep's contacts: this step's candidates (see
+    /// `candidates`). `x` the positions at the start of the step, `q` the first substep's
+    /// predictions (solver order), `n` the substeps: the step's path of a node is taken as
+    /// `x → p̂ = x + n (q − x)`, and widened by its length (the constraints, the tools and the
+    /// later substeps' gravity move a node off it). A node is a collider's candidate when that
+    /// widened path meets a cell of the collider within its [`VoxelCollider::reach`] (which is
+    /// at least `margin + detection`), a tool's when the path's box, widened, meets the tool's
+    /// swept box from its pose at the start of the step to the host's, widened by
+    /// `margin + detection` and the node's path. Nodes that the constraints push in from
+    /// further away are put back by the push-out after the last substep, as without substeps.
+    pub(crate) fn find_candidates(
+        &mut self,
+        x: &[Vec3A],
+        q: &[Vec4],
+        rank: &[u32],
+        w: &[f32],
+        n: u32,
+    ) {
+        self.candidates.clear();
+        self.use_candidates = true;
+        if self.colliders.is_empty() && self.tools.is_empty() {
+            return;
+        }
+        let _span = tracing::debug_span!("candidates").entered();
+        let n = n as f32;
+        let Self {
+            colliders,
+            tools,
+            candidates,
+            candidate_ends,
+            targets,
+            ..
+        } = self;
+        // The node's path over the step, widened: from `x − d` to `x + 2d`, `d = p̂ − x`.
+        let path = |i: usize| {
+            let xi = x[i];
+            let d = (Vec3A::from(q[rank[i] as usize].truncate()) - xi) * n;
+            (xi - d, xi + 2.0 * d, d.length())
+        };
+        let mut k = 0;
+        for (collider, _) in colliders.iter() {
+            let (lo, hi) = collider.bounds();
+            let (lo, hi) = (Vec3A::from(lo), Vec3A::from(hi));
+            let reach = collider.reach();
+            for (i, &wi) in w.iter().enumerate() {
+                if wi <= 0.0 {
+                    continue;
+                }
+                let (a, b, len) = path(i);
+                if a.min(b).cmpgt(hi + len).any() || a.max(b).cmplt(lo - len).any() {
+                    continue;
+                }
+                if collider_plane(collider, a, b, reach, true).is_some()
+                    && candidates.len() < candidates.capacity()
+                {
+                    candidates.push(i as u32);
+                }
+            }
+            candidate_ends[k] = candidates.len() as u32;
+            k += 1;
+        }
+        for ((tool, params), target) in tools.iter().zip(targets.iter()) {
+            let reach = params.margin + params.detection;
+            let (lo, hi) = tool.swept_bounds(&tool.start, target, reach);
+            for (i, &wi) in w.iter().enumerate() {
+                if wi <= 0.0 {
+                    continue;
+                }
+                let (a, b, len) = path(i);
+                if a.min(b).cmpgt(hi + len).any() || a.max(b).cmplt(lo - len).any() {
+                    continue;
+                }
+                if candidates.len() < candidates.capacity() {
+                    candidates.push(i as u32);
+                }
+            }
+            candidate_ends[k] = candidates.len() as u32;
+            k += 1;
         }
     }
 
@@ -510,6 +610,24 @@ fn collider_plane(
     None
 }
 
+/// The nodes a (sub)step tests against source `k`: this step's candidates when `use_them`,
+/// else all `count` nodes.
+fn nodes<'a>(
+    candidates: &'a [u32],
+    ends: &'a [u32],
+    use_them: bool,
+    k: usize,
+    count: usize,
+) -> impl Iterator<Item = usize> + 'a {
+    let (all, some) = if use_them {
+        let start = if k == 0 { 0 } else { ends[k - 1] as usize };
+        (0..0, &candidates[start..ends[k] as usize])
+    } else {
+        (0..count, &candidates[..0])
+    };
+    all.chain(some.iter().map(|&i| i as usize))
+}
+
 /// Appends a contact within the reserved capacity (one per node and source), so that a step
 /// never grows the buffer.
 fn push(contacts: &mut Vec<Contact>, c: Contact) {
@@ -645,8 +763,18 @@ impl SoftBody {
     /// Step phase: contacts for the predictions (after attachments) of a (sub)step of length
     /// `h` (s); starts that (sub)step's reaction accounting (the first (sub)step of a step, by
     /// [`SoftBody::step_count`], clears the step's sums).
-    pub(crate) fn generate_contacts(&mut self, h: f32) {
+    ///
+    /// With substeps (`substeps > 1`), the first substep (`first`) finds the step's contact
+    /// candidates first, and every substep evaluates only those (Macklin et al. 2019).
+    pub(crate) fn generate_contacts(&mut self, h: f32, first: bool) {
         self.collision.begin_accounting(h, self.step_count);
+        let n = self.settings.substeps;
+        if n <= 1 {
+            self.collision.use_candidates = false;
+        } else if first {
+            self.collision
+                .find_candidates(&self.x, &self.q, &self.rank, &self.w, n);
+        }
         self.collision
             .generate(&self.x, &self.q, &self.rank, &self.w);
     }

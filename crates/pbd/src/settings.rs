@@ -160,7 +160,7 @@ impl StepSettings {
     }
 
     /// Substeps of [`StepSettings::realtime`].
-    pub const REALTIME_SUBSTEPS: u32 = 8;
+    pub const REALTIME_SUBSTEPS: u32 = 9;
 
     /// The time one substep advances, `Δt/n` (s).
     pub fn substep_dt(&self) -> f32 {

@@ -247,7 +247,7 @@ impl SoftBody {
                 self.collision.substep_tool_poses(n - j);
             }
             self.collision.last_substep = j + 1 == n;
-            self.substep(j + 1 == n);
+            self.substep(j == 0, j + 1 == n);
         }
         self.finish_holding(held_from);
         let step = self.step_count;
@@ -267,7 +267,7 @@ impl SoftBody {
     }
 
     /// One substep of `Δt/n` (the whole step when `n = 1`): steps 1–5 of [`SoftBody::step`].
-    fn substep(&mut self, last: bool) {
+    fn substep(&mut self, first: bool, last: bool) {
         let s = self.settings;
         let (dt, g) = (s.substep_dt(), Vec3A::from(s.gravity));
         // 1–2, straight into solver order (crate::partition): the projection works on `q`.
@@ -292,7 +292,7 @@ impl SoftBody {
             self.q[s] = target.extend(self.qw[s]);
         }
         // Contacts with colliders and tools for the predictions (contact.rs).
-        self.generate_contacts(dt);
+        self.generate_contacts(dt, first);
         let xpbd = s.solver == Solver::Xpbd;
         if xpbd {
             self.distance_lambda.fill(F::ZERO);

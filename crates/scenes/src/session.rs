@@ -24,7 +24,7 @@ const TIMES_KEPT: usize = 600;
 pub struct SessionOptions {
     /// The organ's material ([`Material::soft_tissue`]).
     pub material: Material,
-    /// The solver's step ([`StepSettings::realtime`]: 10 ms as 8 substeps, in parallel).
+    /// The solver's step ([`StepSettings::realtime`]: 10 ms as 9 substeps, in parallel).
     pub step: StepSettings,
     /// Contact with the tray and tools.
     pub contact: ContactParams,
