@@ -77,6 +77,8 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
     // Phases (steps): settle 60, incise 20, cut off 30, suture at 140, run to 200.
     let (settle, incise, cutoff, suture_at, total) =
         (60usize, 20usize, 30usize, 140usize, 200usize);
+    // The grasper lets go as the cut-off starts: the tip falls while it is cut.
+    let release = settle + incise + 1;
     let mut plain = Vec::new();
     let mut with_cut = Vec::new();
     let mut frames = 0usize;
@@ -91,7 +93,7 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
                 body.set_attachment_target(id, p + Vec3::new(0.0, lift, 0.0))
                     .map_err(|e| Failure::from_pbd(&e))?;
             }
-        } else if step == settle + incise + 1 {
+        } else if step == release {
             for &(i, _, _) in &grasp {
                 body.unpin(i).map_err(|e| Failure::from_pbd(&e))?;
             }
@@ -119,6 +121,11 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
         } else {
             None
         };
+        if step == settle + incise + 1 {
+            // A new blade: its first pose starts a new sweep (not one from where the scalpel
+            // ended, 4.5 cm away).
+            last_pose = None;
+        }
         let t = Instant::now();
         body.step().map_err(|e| Failure::from_pbd(&e))?;
         let drift = body.volume() / body.rest_volume() - 1.0;
@@ -139,12 +146,17 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
                     b: Vec3::new(0.6, 0.0, 0.0),
                     radius: 0.02,
                 };
-                let at = Pose::from_translation(Vec3::new(-2.45, top - 0.35, z + 0.05));
-                if let Some(e) = surgery
-                    .suture(&mut body, &needle, &at)
-                    .map_err(|e| surgery_failure(&e))?
-                {
-                    events.push(e);
+                // As the studio's needle: 0.35 cm under the top, then shallower and deeper
+                // until it crosses the wound.
+                for depth in [0.35f32, 0.21, 0.56, 0.84] {
+                    let at = Pose::from_translation(Vec3::new(-2.45, top - depth, z + 0.05));
+                    if let Some(e) = surgery
+                        .suture(&mut body, &needle, &at)
+                        .map_err(|e| surgery_failure(&e))?
+                    {
+                        events.push(e);
+                        break;
+                    }
                 }
             }
         }

@@ -16,13 +16,14 @@ vertical probe (a capsule of --tool-radius, tip down) comes down over the first 
 presses --depth cm below the organ's top there in --press-steps, then drags along the waypoints \
 (a polyline at constant height) in --drag-steps.
 
-With no arguments it runs the bunny of ../shared/meshes/bunny_10k_tet42k (9217 nodes, 42117 tets, \
-10 cm) when that folder is there (looked up from the current directory, then from the source \
-tree), else a generated 10 x 10 x 10-cell tet box, one step per 10 ms frame.
+With no arguments it runs the Stanford Bunny shipped in the program (fixtures/bunny_10k.obj, \
+tetrahedralised on load by tissue-tetra: 9046 nodes, 39706 tets, 10 cm), the studio's default \
+organ too.
 
 SCHEMES (--scheme): `realtime` (the default, tissue-pbd's StepSettings::realtime and \
 Material::soft_tissue, which the studio uses too): each 10 ms step is 9 substeps of one \
-linearised-PBD iteration, classic volume constraints, k = 1. `legacy` (the scheme before issue \
+linearised-PBD iteration, classic volume constraints and one volume constraint per connected \
+piece (--no-piece-volumes drops it), k = 1. `legacy` (the scheme before issue \
 19, for comparison): one 10 ms step of K = 10 iterations, distance stiffness --stiffness. \
 --dt, --substeps, --iterations, --solver, --compliance and --volume override either scheme's \
 values (`--scheme legacy` is `--substeps 1 --iterations 10`). docs/trainer.md compares them.
@@ -33,7 +34,9 @@ UNITS: centimetres, grams, seconds. --size, --depth, --tool-radius, --cell, the 
 const AFTER_LONG_HELP: &str = "\
 OUTPUT: a summary on stdout: the organ, the steps, the per-step wall time (median, p99, max) \
 over all steps and over the tool steps, the volume drift V/V0 - 1 at the end and its largest \
-magnitude, the contacts, and the force of the tissue on the probe in newtons (the largest \
+magnitude, the tets' own volume errors at the end (median, p90, volume-weighted mean of \
+|V/V0 - 1| per tet: the local compression the total can hide), the organ's height as loaded and \
+settled, the contacts, and the force of the tissue on the probe in newtons (the largest \
 magnitude over the run and the last step's vector; tissue-pbd's SoftBody::tool_force, 1 N = 1e5 \
 dyn). With --frames DIR (created if missing): the organ's surface every --every steps and \
 at the end, frame_STEP.vtk (with point field `displacement`, cm: from the shape as loaded during \
@@ -198,6 +201,10 @@ pub struct Cli {
     /// Project constraints colour-parallel on all cores (bit-identical to serial).
     #[arg(long)]
     pub parallel: bool,
+    /// Drop the realtime scheme's volume constraint per connected piece (tissue-pbd's
+    /// Material::hold_piece_volumes), keeping the tets' own: for comparison.
+    #[arg(long)]
+    pub no_piece_volumes: bool,
 }
 
 impl Cli {
@@ -241,6 +248,9 @@ impl Cli {
             settings.iterations = k;
         }
         settings.parallel = self.parallel;
+        if self.no_piece_volumes {
+            material.hold_piece_volumes = false;
+        }
         (material, settings)
     }
 }

@@ -88,6 +88,17 @@ fn main_inner(cli: &Cli) -> Result<(), Failure> {
         summary.worst_drift * 100.0
     );
     println!(
+        "  tet volumes   |V/V0 - 1| per tet at the end: median {:.2} %, p90 {:.2} %, volume-weighted mean {:.2} %",
+        summary.tet_error[0] * 100.0,
+        summary.tet_error[1] * 100.0,
+        summary.tet_error[2] * 100.0
+    );
+    let (loaded, settled) = summary.height;
+    println!(
+        "  height        {loaded:.2} cm as loaded, {settled:.2} cm settled ({:+.1} %)",
+        (settled / loaded - 1.0) * 100.0
+    );
+    println!(
         "  contacts      {} with the tray, {} with the probe (last step)",
         summary.contacts.0, summary.contacts.1
     );

@@ -23,6 +23,12 @@ pub struct Summary {
     pub volume_ratio: f64,
     /// Largest `|V/V₀ − 1|` after any step.
     pub worst_drift: f64,
+    /// The organ's height (extent along gravity, cm): as loaded and after settling.
+    pub height: (f32, f32),
+    /// The tets' volume errors at the end (the local compression and swelling that the total
+    /// drift can hide): `|V_t/V_t,rest − 1|` median and 90th percentile, and the volume-weighted
+    /// mean `Σ|V_t − V_t,rest| / Σ V_t,rest`.
+    pub tet_error: [f64; 3],
     /// Contacts with the tray and the probe at the end.
     pub contacts: (usize, usize),
     /// The force of the tissue on the probe (N, from [`SoftBody::tool_force`]): the largest
@@ -47,11 +53,14 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
     let (mut largest_force, mut force) = (0.0f32, Vec3::ZERO);
     let radius = scene.probe.radius();
     let (mut start, mut end) = (Vec3::ZERO, Vec3::ZERO);
+    let loaded_height = height(&scene.body);
+    let mut settled_height = loaded_height;
     if let Some(f) = frames.as_mut() {
         f.write(scene, 0, None)?;
     }
     for step in 1..=total {
         if step == settle + 1 {
+            settled_height = height(&scene.body);
             // Over the first waypoint, from 0.5 cm above the top down to `depth` below it.
             let xz = scene.waypoints[0];
             let top = top_at(&scene.body, xz, scene.reach).ok_or_else(|| {
@@ -114,10 +123,55 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
         tool_from: settle,
         volume_ratio: scene.body.volume() / rest,
         worst_drift,
+        height: (loaded_height, settled_height),
+        tet_error: tet_error(&scene.body),
         contacts: (tray, scene.body.contacts().len() - tray),
         probe_force: (largest_force, force),
         frames: frames.map_or(0, |f| f.written),
     })
+}
+
+/// The body's extent along gravity (cm).
+fn height(body: &SoftBody) -> f32 {
+    let up = -body.settings().gravity.normalize_or(Vec3::NEG_Y);
+    let (lo, hi) = body
+        .positions()
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(lo, hi), x| {
+            let h = up.dot(Vec3::from(*x));
+            (lo.min(h), hi.max(h))
+        });
+    hi - lo
+}
+
+/// The tets' `|V/V_rest − 1|`: median and 90th percentile; and `Σ|V − V_rest| / ΣV_rest`.
+fn tet_error(body: &SoftBody) -> [f64; 3] {
+    let x = body.positions();
+    let mut e: Vec<f64> = body
+        .tets()
+        .iter()
+        .zip(body.tet_rest_volumes())
+        .map(|(t, &rest)| {
+            let [a, b, c, d] = t.map(|i| x[i as usize].as_dvec3());
+            ((b - a).cross(c - a).dot(d - a) / 6.0 / rest as f64 - 1.0).abs()
+        })
+        .collect();
+    if e.is_empty() {
+        return [0.0; 3];
+    }
+    e.sort_unstable_by(f64::total_cmp);
+    let at = |q: f64| e[((e.len() - 1) as f64 * q).round() as usize];
+    let weighted: f64 = body
+        .tets()
+        .iter()
+        .zip(body.tet_rest_volumes())
+        .map(|(t, &rest)| {
+            let [a, b, c, d] = t.map(|i| x[i as usize].as_dvec3());
+            ((b - a).cross(c - a).dot(d - a) / 6.0 - rest as f64).abs()
+        })
+        .sum::<f64>()
+        / body.rest_volume();
+    [at(0.5), at(0.9), weighted]
 }
 
 fn set_pose(body: &mut SoftBody, tool: usize, tip: Vec3) -> Result<(), Failure> {

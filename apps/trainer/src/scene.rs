@@ -1,6 +1,6 @@
 //! The scene: the organ loaded, scaled and set on the tray, the body, and the probe's path.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use glam::Vec3;
 use tissue_mesh::{tet_box, TetMesh};
@@ -9,12 +9,11 @@ use tissue_pbd::{ContactParams, OrientedBox, Pose, SoftBody, ToolShape, VoxelCol
 use crate::cli::Cli;
 use crate::failure::{code, Failure};
 
-/// The shipped bunny, relative to the repository root.
-const BUNNY: &str = "../shared/meshes/bunny_10k_tet42k";
-
 /// Where the organ came from.
 #[derive(Debug, Clone)]
 pub enum Source {
+    /// An organ shipped with `tissue-scenes` (the default: the bunny).
+    Shipped(tissue_scenes::ShippedOrgan),
     /// A file.
     File(PathBuf),
     /// A generated box of N³ cells.
@@ -26,6 +25,7 @@ pub enum Source {
 impl std::fmt::Display for Source {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            Source::Shipped(o) => write!(f, "shipped: {}", o.label()),
             Source::File(p) => write!(f, "{}", p.display()),
             Source::Box(n) => write!(f, "generated tet box of {n}×{n}×{n} cells"),
             Source::Surface(p, report) => write!(
@@ -42,20 +42,6 @@ impl std::fmt::Display for Source {
             ),
         }
     }
-}
-
-/// The default organ: the shipped bunny from the current directory or the source tree, else a
-/// box.
-fn default_source() -> Source {
-    let from_source = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../..")
-        .join(BUNNY);
-    for stem in [PathBuf::from(BUNNY), from_source] {
-        if stem.with_extension("node").exists() {
-            return Source::File(stem);
-        }
-    }
-    Source::Box(10)
 }
 
 /// Everything set up, before the run.
@@ -96,22 +82,17 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
             Source::File(p.clone()),
             tissue_meshio::read_tets(p).map_err(|e| Failure::from_mesh_io(&e))?,
         ),
-        (None, None, cells) => match cells.map_or_else(default_source, Source::Box) {
-            Source::Box(n) => (
-                Source::Box(n),
-                tet_box(n, n, n, Vec3::ONE)
-                    .map_err(|e| Failure::new(code::PARAMETERS, format!("--box: {e}")))?,
-            ),
-            source => {
-                let raw = match &source {
-                    Source::File(p) | Source::Surface(p, _) => {
-                        tissue_meshio::read_tets(p).map_err(|e| Failure::from_mesh_io(&e))?
-                    }
-                    Source::Box(_) => return Err(Failure::new(code::INPUT, "no organ")),
-                };
-                (source, raw)
-            }
-        },
+        (None, None, Some(n)) => (
+            Source::Box(n),
+            tet_box(n, n, n, Vec3::ONE)
+                .map_err(|e| Failure::new(code::PARAMETERS, format!("--box: {e}")))?,
+        ),
+        (None, None, None) => {
+            let bunny = tissue_scenes::ShippedOrgan::Bunny;
+            let organ = tissue_scenes::Organ::shipped(bunny)
+                .map_err(|e| Failure::new(code::MESHING, format!("the shipped bunny: {e}")))?;
+            (Source::Shipped(bunny), organ.mesh)
+        }
     };
     if !(cli.size.is_finite() && cli.size > 0.0) {
         return Err(Failure::new(

@@ -83,6 +83,8 @@ pub struct SoftBody {
     /// Topology edits (`edit.rs`): where each record is projected, the dynamic set, rest
     /// volumes and density for local mass rebuilds.
     pub(crate) edits: crate::edit::Edits,
+    /// The connected pieces and their volume constraints (`pieces.rs`).
+    pub(crate) pieces: crate::pieces::Pieces,
 }
 
 /// `order` of an empty solver slot.
@@ -425,6 +427,10 @@ impl SoftBody {
             step_count: 0,
             rest_volume,
             edits: Default::default(),
+            pieces: crate::pieces::Pieces::new(
+                material.hold_piece_volumes,
+                material.volume_stiffness,
+            ),
         };
         body.edits = crate::edit::Edits::new(&body, material.density, tree, post);
         body.set_settings(StepSettings::default())?;
@@ -461,6 +467,9 @@ impl SoftBody {
             });
         }
         self.refresh_edit_params();
+        let iterations = settings.iterations as f64 * settings.substeps as f64;
+        self.pieces.per_iteration =
+            1.0 - ((1.0 - self.pieces.stiffness as f64).powf(1.0 / iterations)) as f32;
         Ok(())
     }
 

@@ -151,7 +151,7 @@ pub(crate) struct ContactState {
     tools: Vec<(Tool, ContactParams)>,
     /// Capacity `node_count × (colliders + tools)`, reserved when one is added: a node has at
     /// most one contact per collider or tool, so a step never grows it.
-    contacts: Vec<Contact>,
+    pub(crate) contacts: Vec<Contact>,
     /// Iterations projected since the contacts were generated.
     iteration: u32,
     /// Reaction accounting (see the module docs), one entry per source, colliders then tools
@@ -780,9 +780,13 @@ impl SoftBody {
     }
 
     /// Step phase: one projection of every contact (after the body's constraints, in each
-    /// iteration).
+    /// iteration), then of the pieces' volumes (before the last push-out).
     pub(crate) fn project_contacts(&mut self) {
         self.collision.project(&mut self.q, &self.rank, &self.x);
+        if self.pieces.enabled {
+            // The pieces' volumes after the contacts, the nodes in contact held (pieces.rs).
+            self.pieces.project(&mut self.q);
+        }
         self.collision.iteration += 1;
         if self.collision.iteration == self.settings.iterations {
             // The push-out after the last iteration: once per step, after its last substep.

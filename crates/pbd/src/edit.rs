@@ -454,6 +454,7 @@ impl SoftBody {
         for &s in sources {
             let s = s as usize;
             let i = self.x.len() as u32;
+            self.pieces.stale = true;
             self.x.push(self.x[s]);
             self.p.push(self.p[s]);
             self.v.push(self.v[s]);
@@ -935,6 +936,7 @@ impl SoftBody {
         rest: Option<(f32, [f32; 4])>,
     ) {
         self.tets[t] = nodes;
+        self.pieces.stale = true;
         if let Some((volume, _)) = rest {
             self.edits.tet_rest[t] = volume;
         }
@@ -1025,6 +1027,7 @@ impl SoftBody {
         self.check_nodes("tet", t, &nodes)?;
         let (volume, heights) = rest_shape(&rest)?;
         self.tets.push(nodes);
+        self.pieces.stale = true;
         self.edits.tet_rest.push(volume);
         self.edits.tet_slot.push(ConstraintSlot::Removed);
         match self.volume_kind {

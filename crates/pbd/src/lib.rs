@@ -5,7 +5,10 @@
 //!   velocities, masses, inverse masses; inverse mass 0 = pinned) and constraints stored flat by
 //!   kind: [`DistanceConstraint`] per unique tet edge, and per [`Material::volume`] either
 //!   [`TetVolumeConstraint`] (classic, one per tet), [`CentroidVolumeConstraint`] (the slides',
-//!   four per tet) or none. Pins, kinematic attachments, a static [`Floor`].
+//!   four per tet) or none; with [`Material::hold_piece_volumes`], one more volume constraint
+//!   per connected piece (its tets' total volume, projected on its boundary nodes after the
+//!   contacts, the nodes in contact held: Müller et al. 2007 §4.4; a cut that separates a piece
+//!   gives it its own). Pins, kinematic attachments, a static [`Floor`].
 //! - [`StepSettings`] / [`Solver`]: `Δt`, `K` Gauss–Seidel iterations, PBD with raw or linearised
 //!   stiffness (`k' = 1 − (1 − k)^{1/K}`), or XPBD (compliance `α`, `α̃ = α/Δt²`), gravity,
 //!   rigid-mode damping, serial or parallel projection (same result).
@@ -152,6 +155,7 @@ mod error;
 mod force;
 mod geometry;
 mod partition;
+mod pieces;
 mod settings;
 mod step;
 mod tool;

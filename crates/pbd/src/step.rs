@@ -242,6 +242,11 @@ impl SoftBody {
         if n > 1 {
             self.collision.save_tool_targets();
         }
+        if self.pieces.enabled && self.pieces.stale {
+            // After a topology edit (allocates; a plain step does not).
+            self.pieces
+                .rebuild(&self.tets, &self.edits.tet_rest, &self.rank, self.q.len());
+        }
         for j in 0..n {
             if n > 1 {
                 self.collision.substep_tool_poses(n - j);
@@ -293,6 +298,16 @@ impl SoftBody {
         }
         // Contacts with colliders and tools for the predictions (contact.rs).
         self.generate_contacts(dt, first);
+        if self.pieces.enabled {
+            // The nodes the colliders, tools and attachments hold this substep.
+            let rank = &self.rank;
+            self.pieces.hold(
+                &self.qw,
+                (self.collision.contacts.iter().map(|c| c.node))
+                    .chain(self.attachments.iter().map(|a| a.0))
+                    .map(|i| rank[i as usize]),
+            );
+        }
         let xpbd = s.solver == Solver::Xpbd;
         if xpbd {
             self.distance_lambda.fill(F::ZERO);

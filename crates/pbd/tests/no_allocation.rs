@@ -49,6 +49,7 @@ fn steps_allocate_nothing_after_the_first() {
                     distance_compliance: 1e-5,
                     volume_compliance: 1e-5,
                     volume: kind,
+                    hold_piece_volumes: true,
                     ..Material::default()
                 };
                 let mut body = SoftBody::new(&mesh, &material).unwrap();
