@@ -223,6 +223,15 @@ export class TrainerView {
     this.dirty = true;
   }
 
+  /** The centroid of the vertices from index `from` on (a THREE.Vector3), or null if none. */
+  nodesFrom(from) {
+    if (!this.mesh || from >= this.vertices) return null;
+    const p = this.mesh.geometry.attributes.position.array;
+    const c = new THREE.Vector3();
+    for (let i = 3 * from, end = 3 * this.vertices; i < end; i += 3) c.add(new THREE.Vector3(p[i], p[i + 1], p[i + 2]));
+    return c.divideScalar(this.vertices - from);
+  }
+
   /**
    * Copies a frame into the buffers. Returns false when it cannot be drawn (no index buffer
    * received yet for this scene). Reallocates (and logs it) only when the frame exceeds the

@@ -480,7 +480,9 @@ function setupPointer() {
       if (ev.type === 'pointerup' && g.path.length >= 2) {
         const viewDir = view.viewDir(new THREE.Vector3()).toArray();
         socket.sendIfOpen({ type: 'cut', path: g.path, view_dir: viewDir });
-        state.lastCut = { path: g.path, viewDir };
+        // The nodes this cut adds come after the ones there now (the frame's vertices are the
+        // body's nodes): where the wound is as the organ moves on.
+        state.lastCut = { path: g.path, viewDir, fromVertex: view.vertices };
         hook.lastCut = state.lastCut;
         state.pathTimer = setTimeout(() => view.setPath(null), PATH_SHOWN_MS);
       } else {
@@ -570,7 +572,11 @@ function woundSides() {
   let i = 1;
   while (i < pts.length - 1 && lengths[i] < half) i++;
   const seg = lengths[i] - lengths[i - 1] || 1;
-  const mid = pts[i - 1].clone().lerp(pts[i], (half - lengths[i - 1]) / seg);
+  let mid = pts[i - 1].clone().lerp(pts[i], (half - lengths[i - 1]) / seg);
+  // The wound where it is now: the middle of the nodes the cut added (on its walls), which
+  // moved with the organ since the path was drawn. The path as drawn when there are none.
+  const added = view.nodesFrom(state.lastCut.fromVertex ?? view.vertices);
+  if (added) mid = added;
   // The path's direction around the middle (over a few points, steadier than one segment).
   const a = pts[Math.max(0, i - 3)];
   const b = pts[Math.min(pts.length - 1, i + 2)];

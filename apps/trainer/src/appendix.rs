@@ -112,11 +112,12 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
                 Vec3::new(-2.45, top - 0.8, -1.4 + 2.8 * k),
             ))
         } else if step > settle + incise && step <= settle + incise + cutoff {
-            // Cut-off at x = 2.05: the blade is drawn down through the whole organ.
+            // Cut-off at x = 2.05: the blade is drawn down through the whole organ, from above
+            // the lifted tip (y 3) to below the abdominal wall (y −2).
             let k = (step - settle - incise) as f32 / cutoff as f32;
             Some(Pose::new(
                 Quat::IDENTITY,
-                Vec3::new(2.05, 1.5 - 3.5 * k, 0.0),
+                Vec3::new(2.05, 3.0 - 5.0 * k, 0.0),
             ))
         } else {
             None

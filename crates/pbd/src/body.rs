@@ -467,7 +467,8 @@ impl SoftBody {
             });
         }
         self.refresh_edit_params();
-        let iterations = settings.iterations as f64 * settings.substeps as f64;
+        // Projected in the K iterations of the last substep only (pieces.rs).
+        let iterations = settings.iterations as f64;
         self.pieces.per_iteration =
             1.0 - ((1.0 - self.pieces.stiffness as f64).powf(1.0 / iterations)) as f32;
         Ok(())

@@ -780,11 +780,12 @@ impl SoftBody {
     }
 
     /// Step phase: one projection of every contact (after the body's constraints, in each
-    /// iteration), then of the pieces' volumes (before the last push-out).
+    /// iteration), then, in the last substep, of the pieces' volumes (before the push-out).
     pub(crate) fn project_contacts(&mut self) {
         self.collision.project(&mut self.q, &self.rank, &self.x);
-        if self.pieces.enabled {
-            // The pieces' volumes after the contacts, the nodes in contact held (pieces.rs).
+        if self.pieces.enabled && self.collision.last_substep {
+            // The pieces' volumes after the contacts, the nodes in contact held, in each
+            // iteration of the step's last substep (pieces.rs).
             self.pieces.project(&mut self.q);
         }
         self.collision.iteration += 1;

@@ -455,6 +455,8 @@ impl SoftBody {
             let s = s as usize;
             let i = self.x.len() as u32;
             self.pieces.stale = true;
+            self.pieces.split.push(s as u32);
+            self.pieces.split.push(self.x.len() as u32);
             self.x.push(self.x[s]);
             self.p.push(self.p[s]);
             self.v.push(self.v[s]);

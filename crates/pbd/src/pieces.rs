@@ -12,11 +12,15 @@
 //! projection the volume's lowest mode, the one a Gauss–Seidel sweep carries across the body
 //! slowest (an organ settling under its weight).
 //!
-//! The step projects it after the contacts, with the nodes in contact held (weight zero): the
+//! The step projects it in each iteration of its last substep (once per step with the
+//! real-time preset's one iteration: the volume a step's sweeps lost is given back before the
+//! step ends, at the cost of one pass over the boundary), after the contacts, with the nodes in
+//! contact held (weight zero): the
 //! collider or tool keeps them where its contact put them, and the free surface takes up the
 //! volume. So it neither pushes nodes back into a tool nor undoes the tool's reaction force.
 //! The projection's net impulse is then the contacts' (the support of the tray under an organ),
-//! as the held nodes' weight would have it.
+//! as the held nodes' weight would have it. The nodes a cut split (the walls of wounds) are held
+//! too: a wall's outward normal points into the wound, and the correction would close it.
 //!
 //! The pieces and their boundary are found again after a topology edit, before the next step
 //! (union–find over the tets' nodes, faces counted by their sorted nodes); a step allocates
@@ -33,8 +37,8 @@ pub(crate) struct Pieces {
     pub enabled: bool,
     /// The material's volume stiffness `k`.
     pub stiffness: f32,
-    /// Its per-iteration value `1 − (1 − k)^{1/(n K)}` over the `n K` iterations of a step
-    /// (set with the step settings).
+    /// Its per-iteration value `1 − (1 − k)^{1/K}` over the `K` iterations of a step's last
+    /// substep, where it is projected (set with the step settings).
     pub per_iteration: f32,
     /// The tets or nodes changed since the pieces were found.
     pub stale: bool,
@@ -53,6 +57,22 @@ pub(crate) struct Pieces {
     /// The inverse masses the projection uses, per solver slot: the body's, zero for a node
     /// in contact (set every substep by [`Pieces::hold`]).
     w: Vec<f32>,
+    /// The nodes a cut split (both the source and the copy of [`crate::SoftBody::duplicate_nodes`]):
+    /// the walls of wounds. Held, so that the correction does not push the walls of a wound
+    /// into each other (a wall's outward normal points into the wound).
+    pub split: Vec<u32>,
+    /// Their solver slots (at the last rebuild).
+    split_slots: Vec<u32>,
+    /// The weights with only the nodes in contact held (walls free): those that carry the
+    /// translation that gives back the momentum the held walls did not take.
+    w_move: Vec<f32>,
+    /// All nodes grouped by piece, as solver slots: `members[member_start[p]..member_start[p + 1]]`.
+    members: Vec<u32>,
+    member_start: Vec<u32>,
+    /// Whether each piece has split nodes (walls).
+    walled: Vec<bool>,
+    /// Whether each slot is a split node.
+    wall: Vec<bool>,
 }
 
 /// The outward faces of a positively oriented tet `[a, b, c, d]`
@@ -134,6 +154,36 @@ impl Pieces {
         self.grad.resize(slots, Vec3A::ZERO);
         self.w.clear();
         self.w.resize(slots, 0.0);
+        self.split.sort_unstable();
+        self.split.dedup();
+        self.split_slots.clear();
+        self.split_slots
+            .extend(self.split.iter().map(|&i| rank[i as usize]));
+        self.w_move.clear();
+        self.w_move.resize(slots, 0.0);
+        self.wall.clear();
+        self.wall.resize(slots, false);
+        self.walled.clear();
+        self.walled.resize(count, false);
+        for &i in &self.split {
+            self.wall[rank[i as usize] as usize] = true;
+            if let Some(&p) = piece_of_node.get(i as usize).filter(|&&p| p != NONE) {
+                self.walled[p as usize] = true;
+            }
+        }
+        let mut all: Vec<Vec<u32>> = vec![Vec::new(); count];
+        for (i, &p) in piece_of_node.iter().enumerate() {
+            if p != NONE {
+                all[p as usize].push(rank[i]);
+            }
+        }
+        self.members.clear();
+        self.member_start.clear();
+        self.member_start.push(0);
+        for m in &all {
+            self.members.extend_from_slice(m);
+            self.member_start.push(self.members.len() as u32);
+        }
         self.stale = false;
     }
 
@@ -185,9 +235,23 @@ impl Pieces {
     /// The weights of this substep's projections: `w` (solver order), zero at the slots of
     /// `held` (the nodes in contact).
     pub fn hold(&mut self, w: &[f32], held: impl Iterator<Item = u32>) {
-        self.w.copy_from_slice(w);
+        self.w_move.copy_from_slice(w);
         for s in held {
+            self.w_move[s as usize] = 0.0;
+        }
+        self.w.copy_from_slice(&self.w_move);
+        for &s in &self.split_slots {
             self.w[s as usize] = 0.0;
+        }
+    }
+
+    /// Also holds the nodes at or under the floor `x[axis] = height` at `q` (solver order).
+    pub fn hold_on_floor(&mut self, q: &[Vec4], axis: usize, height: f32) {
+        for ((w, m), q) in self.w.iter_mut().zip(&mut self.w_move).zip(q) {
+            if q[axis] <= height {
+                *w = 0.0;
+                *m = 0.0;
+            }
         }
     }
 
@@ -209,11 +273,44 @@ impl Pieces {
             } else {
                 0.0
             };
+            // The momentum the held walls would have taken, `λ Σ_walls 6∇C` (g·cm with the
+            // weights' masses), before the gradient is cleared.
+            let mut walls = Vec3A::ZERO;
             for &s in nodes {
                 let s = s as usize;
+                if self.wall[s] && self.w_move[s] > 0.0 {
+                    walls += self.grad[s];
+                }
                 let d = lambda * self.w[s] * self.grad[s];
                 q[s] += d.extend(0.0);
                 self.grad[s] = Vec3A::ZERO;
+            }
+            if self.walled[p] && lambda != 0.0 {
+                self.give_back(q, p, lambda * walls);
+            }
+        }
+    }
+
+    /// Translates piece `p`'s nodes that are not in contact (a translation keeps the volume)
+    /// so that they take the momentum `impulse` (g·cm), which the held walls would have taken:
+    /// without it a cut piece would push itself along (the projection's corrections sum to
+    /// zero only over all its boundary nodes).
+    fn give_back(&self, q: &mut [Vec4], p: usize, impulse: Vec3A) {
+        let members =
+            &self.members[self.member_start[p] as usize..self.member_start[p + 1] as usize];
+        let mass: f64 = members
+            .iter()
+            .map(|&s| self.w_move[s as usize])
+            .filter(|&w| w > 0.0)
+            .map(|w| 1.0 / w as f64)
+            .sum();
+        if mass <= 0.0 {
+            return;
+        }
+        let d = (impulse / mass as f32).extend(0.0);
+        for &s in members {
+            if self.w_move[s as usize] > 0.0 {
+                q[s as usize] += d;
             }
         }
     }

@@ -298,8 +298,9 @@ impl SoftBody {
         }
         // Contacts with colliders and tools for the predictions (contact.rs).
         self.generate_contacts(dt, first);
-        if self.pieces.enabled {
-            // The nodes the colliders, tools and attachments hold this substep.
+        if self.pieces.enabled && last {
+            // The pieces' volumes are projected in the step's last substep (contact.rs): the
+            // nodes the colliders, tools and attachments hold in it.
             let rank = &self.rank;
             self.pieces.hold(
                 &self.qw,
@@ -307,6 +308,10 @@ impl SoftBody {
                     .chain(self.attachments.iter().map(|a| a.0))
                     .map(|i| rank[i as usize]),
             );
+            if let Some(f) = self.floor {
+                // And those on the floor (predicted at or under it): the floor holds them.
+                self.pieces.hold_on_floor(&self.q, f.axis, f.height);
+            }
         }
         let xpbd = s.solver == Solver::Xpbd;
         if xpbd {

@@ -82,7 +82,15 @@ impl Surgery {
             }
         }
         hits.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let Some(w) = hits.windows(2).find(|w| w[0].1 && !w[1].1) else {
+        // The wound: the needle leaves the body through one wall and enters it again through
+        // the other. Walls that were pressed into each other (nothing keeps a wound's walls
+        // apart: there is no self-collision) are crossed the other way round, into the far
+        // wall before out of the near one; that overlap is the wound too.
+        let Some(w) = hits
+            .windows(2)
+            .find(|w| w[0].1 && !w[1].1)
+            .or_else(|| hits.windows(2).find(|w| !w[0].1 && w[1].1))
+        else {
             return Ok(None);
         };
         // The closest pair of distinct nodes, one from each face, to the two crossings (the
