@@ -695,12 +695,12 @@ void tissue_body_free(struct tissue_body *body);
 //
 // Thread safety: any thread; it holds the body's lock for the step, so other body calls wait,
 // but `tissue_tool_set_pose` and `tissue_tool_force` do not.
-enum tissue_status tissue_body_step(const struct tissue_body *body_ptr, size_t *events);
+enum tissue_status tissue_body_step(const struct tissue_body *body, size_t *events);
 
 // The body's figures (counts, revisions, volume drift, step times).
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_get_info(const struct tissue_body *body_ptr,
+enum tissue_status tissue_body_get_info(const struct tissue_body *body,
                                         struct tissue_body_info *info);
 
 // Copies every node's position (x, y, z, cm) into `out` (`capacity` floats: at least 3 ×
@@ -708,7 +708,7 @@ enum tissue_status tissue_body_get_info(const struct tissue_body *body_ptr,
 // they are from. The surface triangles index these nodes.
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_copy_positions(const struct tissue_body *body_ptr,
+enum tissue_status tissue_body_copy_positions(const struct tissue_body *body,
                                               float *out,
                                               size_t capacity,
                                               uint64_t *revision);
@@ -718,7 +718,7 @@ enum tissue_status tissue_body_copy_positions(const struct tissue_body *body_ptr
 // (may be NULL) to the topology revision they are from.
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_copy_triangles(const struct tissue_body *body_ptr,
+enum tissue_status tissue_body_copy_triangles(const struct tissue_body *body,
                                               uint32_t *out,
                                               size_t capacity,
                                               uint64_t *revision);
@@ -729,11 +729,11 @@ enum tissue_status tissue_body_copy_triangles(const struct tissue_body *body_ptr
 // in the order tools are added.
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_add_capsule(const struct tissue_body *body_ptr,
+enum tissue_status tissue_body_add_capsule(const struct tissue_body *body,
                                            const float *a,
                                            const float *b,
                                            float radius,
-                                           const struct tissue_pose *pose_ptr,
+                                           const struct tissue_pose *pose,
                                            uint32_t *id);
 
 // Adds a blade tool: the points within `thickness / 2` cm of the triangle `a b c` in the
@@ -741,12 +741,12 @@ enum tissue_status tissue_body_add_capsule(const struct tissue_body *body_ptr,
 // `tissue_body_cut_sweep` or `tissue_body_cut`).
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_add_blade(const struct tissue_body *body_ptr,
+enum tissue_status tissue_body_add_blade(const struct tissue_body *body,
                                          const float *a,
                                          const float *b,
                                          const float *c,
                                          float thickness,
-                                         const struct tissue_pose *pose_ptr,
+                                         const struct tissue_pose *pose,
                                          uint32_t *id);
 
 // Sets tool `tool`'s newest pose: the next step sweeps the tool from its last pose to it, and
@@ -754,9 +754,9 @@ enum tissue_status tissue_body_add_blade(const struct tissue_body *body_ptr,
 //
 // Thread safety: any thread, at any rate (a lock held only to copy the pose: it never waits
 // for a step). Meant for the haptic thread.
-enum tissue_status tissue_tool_set_pose(const struct tissue_body *body_ptr,
+enum tissue_status tissue_tool_set_pose(const struct tissue_body *body,
                                         uint32_t tool,
-                                        const struct tissue_pose *pose_ptr);
+                                        const struct tissue_pose *pose);
 
 // The force of the tissue on tool `tool`, in newtons (world axes), at the tool's newest pose
 // (`tissue_tool_set_pose`), from the last step's contacts through a local linear model: the
@@ -769,7 +769,7 @@ enum tissue_status tissue_tool_set_pose(const struct tissue_body *body_ptr,
 // Thread safety: any thread, at 1 kHz or more while another thread steps: it takes two short
 // locks that only copy (a pose, and an `Arc` of the model) and never waits for a step;
 // allocation-free; a few hundred nanoseconds for tens of contacts.
-enum tissue_status tissue_tool_force(const struct tissue_body *body_ptr,
+enum tissue_status tissue_tool_force(const struct tissue_body *body,
                                      uint32_t tool,
                                      float *force_newtons,
                                      uint64_t *step);
@@ -780,7 +780,7 @@ enum tissue_status tissue_tool_force(const struct tissue_body *body_ptr,
 // `tissue_body_release`. Adds a `TISSUE_EVENT_GRABBED` event.
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_grab(const struct tissue_body *body_ptr,
+enum tissue_status tissue_body_grab(const struct tissue_body *body,
                                     const float *point,
                                     uint32_t triangle);
 
@@ -788,19 +788,18 @@ enum tissue_status tissue_body_grab(const struct tissue_body *body_ptr,
 // grasped).
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_drag(const struct tissue_body *body_ptr, const float *target);
+enum tissue_status tissue_body_drag(const struct tissue_body *body, const float *target);
 
 // Lets go of what the probe grasps (nothing when nothing is).
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_release(const struct tissue_body *body_ptr);
+enum tissue_status tissue_body_release(const struct tissue_body *body);
 
 // The force of the tissue on the grasp at the last step, newtons (zero when nothing is
 // grasped).
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_grasp_force(const struct tissue_body *body_ptr,
-                                           float *force_newtons);
+enum tissue_status tissue_body_grasp_force(const struct tissue_body *body, float *force_newtons);
 
 // Queues a scalpel cut along `path` (`point_count` surface points, x y z each, cm) seen along
 // `view_dir`: the blade's plane holds the path's overall direction and the view direction; it
@@ -811,7 +810,7 @@ enum tissue_status tissue_body_grasp_force(const struct tissue_body *body_ptr,
 // view, or a path too short.
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_cut(const struct tissue_body *body_ptr,
+enum tissue_status tissue_body_cut(const struct tissue_body *body,
                                    const float *path,
                                    size_t point_count,
                                    const float *view_dir,
@@ -826,7 +825,7 @@ enum tissue_status tissue_body_cut(const struct tissue_body *body_ptr,
 // Errors: `TISSUE_INVALID_ARGUMENT` for a bad pose, `TISSUE_SIMULATION` when the cut fails.
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_cut_sweep(const struct tissue_body *body_ptr,
+enum tissue_status tissue_body_cut_sweep(const struct tissue_body *body,
                                          const struct tissue_pose *from,
                                          const struct tissue_pose *to);
 
@@ -836,7 +835,7 @@ enum tissue_status tissue_body_cut_sweep(const struct tissue_body *body_ptr,
 // no wound) is queued and, if `event` is not NULL, also written there.
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_suture(const struct tissue_body *body_ptr,
+enum tissue_status tissue_body_suture(const struct tissue_body *body,
                                       const float *a,
                                       const float *b,
                                       struct tissue_event *event);
@@ -845,7 +844,7 @@ enum tissue_status tissue_body_suture(const struct tissue_body *body_ptr,
 // (the event is left alone when not).
 //
 // Thread safety: any thread (waits for a running step).
-enum tissue_status tissue_body_next_event(const struct tissue_body *body_ptr,
+enum tissue_status tissue_body_next_event(const struct tissue_body *body,
                                           struct tissue_event *event,
                                           bool *has_event);
 

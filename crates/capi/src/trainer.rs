@@ -153,12 +153,12 @@ impl tissue_body {
 }
 
 /// `&*body`, or `TISSUE_NULL_ARGUMENT`.
-fn body<'a>(p: *const tissue_body) -> Result<&'a tissue_body, Error> {
+fn body_of<'a>(p: *const tissue_body) -> Result<&'a tissue_body, Error> {
     // SAFETY: the header's contract: NULL or a live body.
     unsafe { get(p, "body") }
 }
 
-fn pose(p: *const tissue_pose, name: &str) -> Result<Pose, Error> {
+fn pose_of(p: *const tissue_pose, name: &str) -> Result<Pose, Error> {
     // SAFETY: the header's contract.
     let p = unsafe { get(p, name) }?;
     let [x, y, z, w] = p.rotation;
@@ -277,9 +277,9 @@ pub extern "C" fn tissue_body_free(body: *mut tissue_body) {
 /// Thread safety: any thread; it holds the body's lock for the step, so other body calls wait,
 /// but `tissue_tool_set_pose` and `tissue_tool_force` do not.
 #[no_mangle]
-pub extern "C" fn tissue_body_step(body_ptr: *const tissue_body, events: *mut usize) -> tissue_status {
+pub extern "C" fn tissue_body_step(body: *const tissue_body, events: *mut usize) -> tissue_status {
     guard(|| {
-        let body = body(body_ptr)?;
+        let body = body_of(body)?;
         let mut sim = body.sim()?;
         let poses = body.haptic.poses.lock().map_err(poisoned)?.clone();
         for (id, pose) in poses.into_iter().enumerate() {
@@ -304,11 +304,11 @@ pub extern "C" fn tissue_body_step(body_ptr: *const tissue_body, events: *mut us
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_get_info(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     info: *mut tissue_body_info,
 ) -> tissue_status {
     guard(|| {
-        let sim = body(body_ptr)?.sim()?;
+        let sim = body_of(body)?.sim()?;
         let s = &sim.session;
         let (median, p99) = s.step_ms();
         let out = tissue_body_info {
@@ -336,13 +336,13 @@ pub extern "C" fn tissue_body_get_info(
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_copy_positions(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     out: *mut f32,
     capacity: usize,
     revision: *mut u64,
 ) -> tissue_status {
     guard(|| {
-        let sim = body(body_ptr)?.sim()?;
+        let sim = body_of(body)?.sim()?;
         let positions: Vec<Vec3> = sim.session.positions().iter().map(|&p| p.into()).collect();
         // SAFETY: `out` holds `capacity` floats; `revision` is NULL or valid.
         unsafe {
@@ -360,13 +360,13 @@ pub extern "C" fn tissue_body_copy_positions(
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_copy_triangles(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     out: *mut u32,
     capacity: usize,
     revision: *mut u64,
 ) -> tissue_status {
     guard(|| {
-        let sim = body(body_ptr)?.sim()?;
+        let sim = body_of(body)?.sim()?;
         // SAFETY: `out` holds `capacity` values; `revision` is NULL or valid.
         unsafe {
             copy_out(
@@ -381,8 +381,8 @@ pub extern "C" fn tissue_body_copy_triangles(
     })
 }
 
-fn add_tool(body_ptr: *const tissue_body, shape: ToolShape, at: Pose, id: *mut u32) -> Result<(), Error> {
-    let body = body(body_ptr)?;
+fn add_tool(body: *const tissue_body, shape: ToolShape, at: Pose, id: *mut u32) -> Result<(), Error> {
+    let body = body_of(body)?;
     let mut sim = body.sim()?;
     let mut poses = body.haptic.poses.lock().map_err(poisoned)?;
     let new = sim.session.add_tool(shape, at)?;
@@ -404,18 +404,18 @@ fn add_tool(body_ptr: *const tissue_body, shape: ToolShape, at: Pose, id: *mut u
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_add_capsule(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     a: *const f32,
     b: *const f32,
     radius: f32,
-    pose_ptr: *const tissue_pose,
+    pose: *const tissue_pose,
     id: *mut u32,
 ) -> tissue_status {
     guard(|| {
         // SAFETY: the header's contract: 3 floats each.
         let (a, b) = unsafe { (vec3(a, "a")?, vec3(b, "b")?) };
         let shape = ToolShape::Capsule { a, b, radius };
-        add_tool(body_ptr, shape, pose(pose_ptr, "pose")?, id)
+        add_tool(body, shape, pose_of(pose, "pose")?, id)
     })
 }
 
@@ -426,19 +426,19 @@ pub extern "C" fn tissue_body_add_capsule(
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_add_blade(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     a: *const f32,
     b: *const f32,
     c: *const f32,
     thickness: f32,
-    pose_ptr: *const tissue_pose,
+    pose: *const tissue_pose,
     id: *mut u32,
 ) -> tissue_status {
     guard(|| {
         // SAFETY: the header's contract: 3 floats each.
         let (a, b, c) = unsafe { (vec3(a, "a")?, vec3(b, "b")?, vec3(c, "c")?) };
         let shape = ToolShape::Blade { a, b, c, thickness };
-        add_tool(body_ptr, shape, pose(pose_ptr, "pose")?, id)
+        add_tool(body, shape, pose_of(pose, "pose")?, id)
     })
 }
 
@@ -449,13 +449,13 @@ pub extern "C" fn tissue_body_add_blade(
 /// for a step). Meant for the haptic thread.
 #[no_mangle]
 pub extern "C" fn tissue_tool_set_pose(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     tool: u32,
-    pose_ptr: *const tissue_pose,
+    pose: *const tissue_pose,
 ) -> tissue_status {
     guard(|| {
-        let body = body(body_ptr)?;
-        let p = pose(pose_ptr, "pose")?;
+        let body = body_of(body)?;
+        let p = pose_of(pose, "pose")?;
         let mut poses = body.haptic.poses.lock().map_err(poisoned)?;
         let count = poses.len();
         let slot = poses.get_mut(tool as usize).ok_or_else(|| no_tool(tool, count))?;
@@ -484,13 +484,13 @@ fn no_tool(tool: u32, count: usize) -> Error {
 /// allocation-free; a few hundred nanoseconds for tens of contacts.
 #[no_mangle]
 pub extern "C" fn tissue_tool_force(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     tool: u32,
     force_newtons: *mut f32,
     step: *mut u64,
 ) -> tissue_status {
     guard(|| {
-        let body = body(body_ptr)?;
+        let body = body_of(body)?;
         let position = {
             let poses = body.haptic.poses.lock().map_err(poisoned)?;
             poses
@@ -523,14 +523,14 @@ pub extern "C" fn tissue_tool_force(
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_grab(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     point: *const f32,
     triangle: u32,
 ) -> tissue_status {
     guard(|| {
         // SAFETY: 3 floats.
         let point = unsafe { vec3(point, "point") }?;
-        let mut sim = body(body_ptr)?.sim()?;
+        let mut sim = body_of(body)?.sim()?;
         let e = sim.session.grab(point, triangle as usize)?;
         sim.events.push_back(e);
         Ok(())
@@ -542,11 +542,11 @@ pub extern "C" fn tissue_body_grab(
 ///
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
-pub extern "C" fn tissue_body_drag(body_ptr: *const tissue_body, target: *const f32) -> tissue_status {
+pub extern "C" fn tissue_body_drag(body: *const tissue_body, target: *const f32) -> tissue_status {
     guard(|| {
         // SAFETY: 3 floats.
         let target = unsafe { vec3(target, "target") }?;
-        body(body_ptr)?.sim()?.session.drag(target);
+        body_of(body)?.sim()?.session.drag(target);
         Ok(())
     })
 }
@@ -555,9 +555,9 @@ pub extern "C" fn tissue_body_drag(body_ptr: *const tissue_body, target: *const 
 ///
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
-pub extern "C" fn tissue_body_release(body_ptr: *const tissue_body) -> tissue_status {
+pub extern "C" fn tissue_body_release(body: *const tissue_body) -> tissue_status {
     guard(|| {
-        let mut sim = body(body_ptr)?.sim()?;
+        let mut sim = body_of(body)?.sim()?;
         if let Some(e) = sim.session.release()? {
             sim.events.push_back(e);
         }
@@ -571,11 +571,11 @@ pub extern "C" fn tissue_body_release(body_ptr: *const tissue_body) -> tissue_st
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_grasp_force(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     force_newtons: *mut f32,
 ) -> tissue_status {
     guard(|| {
-        let f = body(body_ptr)?.sim()?.session.tool_force();
+        let f = body_of(body)?.sim()?.session.tool_force();
         if force_newtons.is_null() {
             return Err(Error::null("force_newtons"));
         }
@@ -595,7 +595,7 @@ pub extern "C" fn tissue_body_grasp_force(
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_cut(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     path: *const f32,
     point_count: usize,
     view_dir: *const f32,
@@ -610,7 +610,7 @@ pub extern "C" fn tissue_body_cut(
             )
         };
         let points: Vec<Vec3> = points.chunks_exact(3).map(Vec3::from_slice).collect();
-        let n = body(body_ptr)?.sim()?.session.cut(&points, view)?;
+        let n = body_of(body)?.sim()?.session.cut(&points, view)?;
         // SAFETY: NULL or valid.
         unsafe { put_opt(segments, n) };
         Ok(())
@@ -628,13 +628,13 @@ pub extern "C" fn tissue_body_cut(
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_cut_sweep(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     from: *const tissue_pose,
     to: *const tissue_pose,
 ) -> tissue_status {
     guard(|| {
-        let (from, to) = (pose(from, "from")?, pose(to, "to")?);
-        let mut sim = body(body_ptr)?.sim()?;
+        let (from, to) = (pose_of(from, "from")?, pose_of(to, "to")?);
+        let mut sim = body_of(body)?.sim()?;
         let events = sim.session.cut_sweep(from, to)?;
         sim.events.extend(events);
         sim.positions_revision += 1;
@@ -650,7 +650,7 @@ pub extern "C" fn tissue_body_cut_sweep(
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_suture(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     a: *const f32,
     b: *const f32,
     event: *mut tissue_event,
@@ -658,7 +658,7 @@ pub extern "C" fn tissue_body_suture(
     guard(|| {
         // SAFETY: 3 floats each.
         let (a, b) = unsafe { (vec3(a, "a")?, vec3(b, "b")?) };
-        let mut sim = body(body_ptr)?.sim()?;
+        let mut sim = body_of(body)?.sim()?;
         let e = sim.session.suture(a, b)?;
         // SAFETY: NULL or valid.
         unsafe { put_opt(event, to_c(&e)) };
@@ -701,7 +701,7 @@ fn to_c(e: &TrainerEvent) -> tissue_event {
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_next_event(
-    body_ptr: *const tissue_body,
+    body: *const tissue_body,
     event: *mut tissue_event,
     has_event: *mut bool,
 ) -> tissue_status {
@@ -712,7 +712,7 @@ pub extern "C" fn tissue_body_next_event(
         if has_event.is_null() {
             return Err(Error::null("has_event"));
         }
-        let next = body(body_ptr)?.sim()?.events.pop_front();
+        let next = body_of(body)?.sim()?.events.pop_front();
         // SAFETY: `event` is valid (checked not NULL); `has_event` NULL or valid.
         unsafe {
             put(has_event, "has_event", next.is_some())?;
