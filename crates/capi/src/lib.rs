@@ -88,6 +88,5 @@ pub use trainer::{
     tissue_body_free, tissue_body_get_info, tissue_body_grab, tissue_body_grasp_force,
     tissue_body_info, tissue_body_new, tissue_body_new_shipped, tissue_body_next_event,
     tissue_body_release, tissue_body_step, tissue_body_suture, tissue_event, tissue_event_kind,
-    tissue_pose, tissue_shipped_organ, tissue_tool_force, tissue_tool_set_pose,
-    TISSUE_EVENT_TEXT,
+    tissue_pose, tissue_shipped_organ, tissue_tool_force, tissue_tool_set_pose, TISSUE_EVENT_TEXT,
 };

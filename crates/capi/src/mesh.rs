@@ -4,8 +4,8 @@
 use std::ffi::c_char;
 use std::path::Path;
 
-use glam::Vec3;
 use ::tissue_mesh::{TetMesh, TriMesh};
+use glam::Vec3;
 
 use crate::ffi::{
     copy_out, free_handle, get, guard, guard_void, into_handle, put, slice, text, tissue_status,
@@ -73,14 +73,17 @@ fn extension(path: &Path) -> String {
 ///
 /// Thread safety: any thread.
 #[no_mangle]
-pub extern "C" fn tissue_mesh_load(path: *const c_char, out: *mut *mut tissue_mesh) -> tissue_status {
+pub extern "C" fn tissue_mesh_load(
+    path: *const c_char,
+    out: *mut *mut tissue_mesh,
+) -> tissue_status {
     guard(|| {
         // SAFETY: the header's contract: a NUL-terminated path.
         let path = Path::new(unsafe { text(path, "path") }?);
         let kind = match extension(path).as_str() {
-            "obj" | "ply" | "stl" => MeshKind::Surface(
-                tissue_meshio::read_surface(path).map_err(|e| Error::from(&e))?,
-            ),
+            "obj" | "ply" | "stl" => {
+                MeshKind::Surface(tissue_meshio::read_surface(path).map_err(|e| Error::from(&e))?)
+            }
             "vtk" => match tissue_meshio::read_tets(path) {
                 Ok(m) => MeshKind::Tets(m),
                 Err(_) => MeshKind::Surface(
@@ -162,7 +165,9 @@ pub extern "C" fn tissue_mesh_from_tets(
         };
         let mesh = TetMesh::new(
             p.chunks_exact(3).map(Vec3::from_slice).collect(),
-            t.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect(),
+            t.chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect(),
         )
         .map_err(|e| Error::new(tissue_status::TISSUE_INVALID_MESH, e.to_string()))?;
         // SAFETY: `out` is NULL or valid.

@@ -293,7 +293,10 @@ fn unit(value: u32) -> Result<Unit, Error> {
 ///
 /// Thread safety: any thread.
 #[no_mangle]
-pub extern "C" fn tissue_patient_shipped(which: u32, out: *mut *mut tissue_patient) -> tissue_status {
+pub extern "C" fn tissue_patient_shipped(
+    which: u32,
+    out: *mut *mut tissue_patient,
+) -> tissue_status {
     guard(|| {
         let shipped = match which {
             0 => Shipped::Table2,
@@ -539,7 +542,12 @@ fn start(
     let driver = std::thread::Builder::new()
         .name("tissue-capi-job".into())
         .spawn(move || drive(&theirs, job, &scenario, inputs, &mode))
-        .map_err(|e| Error::new(tissue_status::TISSUE_RUN, format!("cannot start a thread: {e}")))?;
+        .map_err(|e| {
+            Error::new(
+                tissue_status::TISSUE_RUN,
+                format!("cannot start a thread: {e}"),
+            )
+        })?;
     Ok(tissue_job {
         shared,
         driver: Mutex::new(Some(driver)),
@@ -600,12 +608,21 @@ fn drive(shared: &JobShared, job: Job, scenario: &Scenario, inputs: Inputs, mode
 }
 
 fn json(value: &impl serde::Serialize) -> Result<String, Error> {
-    serde_json::to_string_pretty(value)
-        .map_err(|e| Error::new(tissue_status::TISSUE_OUTPUT, format!("cannot write the report: {e}")))
+    serde_json::to_string_pretty(value).map_err(|e| {
+        Error::new(
+            tissue_status::TISSUE_OUTPUT,
+            format!("cannot write the report: {e}"),
+        )
+    })
 }
 
 /// The results of a finished job, and its report.
-fn finish(outcome: Outcome, scenario: &Scenario, inputs: Inputs, mode: &Mode) -> Result<Done, Error> {
+fn finish(
+    outcome: Outcome,
+    scenario: &Scenario,
+    inputs: Inputs,
+    mode: &Mode,
+) -> Result<Done, Error> {
     let max_steps = scenario.job.params.run.stop.max_steps;
     match (outcome, mode) {
         (Outcome::Insertion(planned), Mode::Single) => {
@@ -678,7 +695,13 @@ pub extern "C" fn tissue_plan_start(
     guard(|| {
         // SAFETY: the header's contract.
         let (patient, options) = unsafe { (get(patient, "patient")?, get(options, "options")?) };
-        let job = start(patient, request(options)?, JsonMode::Single, &[], (None, None, None))?;
+        let job = start(
+            patient,
+            request(options)?,
+            JsonMode::Single,
+            &[],
+            (None, None, None),
+        )?;
         // SAFETY: `out` is NULL or valid.
         unsafe { put(out, "out", into_handle(job)) }
     })
@@ -708,7 +731,13 @@ pub extern "C" fn tissue_sweep_start(
                 slice(volumes_cm3, count, "volumes_cm3")?,
             )
         };
-        let job = start(patient, request(options)?, JsonMode::Sweep, volumes, (None, None, None))?;
+        let job = start(
+            patient,
+            request(options)?,
+            JsonMode::Sweep,
+            volumes,
+            (None, None, None),
+        )?;
         // SAFETY: `out` is NULL or valid.
         unsafe { put(out, "out", into_handle(job)) }
     })
@@ -851,8 +880,9 @@ pub extern "C" fn tissue_job_wait(job: *const tissue_job, timeout_s: f64) -> tis
             end = match deadline {
                 None if timeout_s < 0.0 => job.shared.ended.wait(end).map_err(poisoned)?,
                 _ => {
-                    let left = deadline
-                        .map_or(Duration::ZERO, |d| d.saturating_duration_since(Instant::now()));
+                    let left = deadline.map_or(Duration::ZERO, |d| {
+                        d.saturating_duration_since(Instant::now())
+                    });
                     if left.is_zero() {
                         return Err(Error::new(
                             tissue_status::TISSUE_TIMEOUT,
@@ -955,7 +985,10 @@ pub extern "C" fn tissue_job_free(job: *mut tissue_job) {
 }
 
 /// Runs `f` on the finished job's results, or says why there are none.
-fn with_done<T>(job: *const tissue_job, f: impl FnOnce(&Done) -> Result<T, Error>) -> Result<T, Error> {
+fn with_done<T>(
+    job: *const tissue_job,
+    f: impl FnOnce(&Done) -> Result<T, Error>,
+) -> Result<T, Error> {
     // SAFETY: the header's contract.
     let job = unsafe { get(job, "job") }?;
     let end = job.shared.end.lock().map_err(poisoned)?;
@@ -1024,7 +1057,10 @@ pub extern "C" fn tissue_job_result(
 ///
 /// Thread safety: any thread.
 #[no_mangle]
-pub extern "C" fn tissue_job_sweep_count(job: *const tissue_job, count: *mut usize) -> tissue_status {
+pub extern "C" fn tissue_job_sweep_count(
+    job: *const tissue_job,
+    count: *mut usize,
+) -> tissue_status {
     guard(|| {
         let n = with_done(job, |done| match &done.finished {
             Finished::Sweep(rows) => Ok(rows.len()),

@@ -12,8 +12,8 @@ use std::collections::VecDeque;
 use std::ffi::c_char;
 use std::sync::{Arc, Mutex, MutexGuard, RwLock};
 
-use glam::{Quat, Vec3};
 use ::tissue_mesh::{TetMesh, TriMesh};
+use glam::{Quat, Vec3};
 use tissue_pbd::{ContactForceModel, Pose, ToolShape};
 use tissue_scenes::{Organ, Session, SessionOptions, ShippedOrgan, TrainerEvent};
 
@@ -381,7 +381,12 @@ pub extern "C" fn tissue_body_copy_triangles(
     })
 }
 
-fn add_tool(body: *const tissue_body, shape: ToolShape, at: Pose, id: *mut u32) -> Result<(), Error> {
+fn add_tool(
+    body: *const tissue_body,
+    shape: ToolShape,
+    at: Pose,
+    id: *mut u32,
+) -> Result<(), Error> {
     let body = body_of(body)?;
     let mut sim = body.sim()?;
     let mut poses = body.haptic.poses.lock().map_err(poisoned)?;
@@ -389,7 +394,12 @@ fn add_tool(body: *const tissue_body, shape: ToolShape, at: Pose, id: *mut u32) 
     poses.push(at);
     drop(poses);
     let mut models: Vec<ContactForceModel> = body.haptic.models.read().map_err(poisoned)?.to_vec();
-    models.push(sim.session.contact_force_model(new).cloned().unwrap_or_default());
+    models.push(
+        sim.session
+            .contact_force_model(new)
+            .cloned()
+            .unwrap_or_default(),
+    );
     *body.haptic.models.write().map_err(poisoned)? = Arc::new(models);
     // SAFETY: `id` is NULL or valid.
     unsafe { put_opt(id, new as u32) };
@@ -458,7 +468,9 @@ pub extern "C" fn tissue_tool_set_pose(
         let p = pose_of(pose, "pose")?;
         let mut poses = body.haptic.poses.lock().map_err(poisoned)?;
         let count = poses.len();
-        let slot = poses.get_mut(tool as usize).ok_or_else(|| no_tool(tool, count))?;
+        let slot = poses
+            .get_mut(tool as usize)
+            .ok_or_else(|| no_tool(tool, count))?;
         *slot = p;
         Ok(())
     })

@@ -55,7 +55,9 @@ fn build_and_run(source: &str, args: &[&str]) {
     // One program at a time: the force loop's 1 kHz thread is timed, and the machine may have
     // two cores only.
     static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let _one = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
     let cpp = source.ends_with(".cpp");
     let out_dir = profile_dir().join("capi-tests");
@@ -69,7 +71,15 @@ fn build_and_run(source: &str, args: &[&str]) {
         .arg(&exe)
         .arg(static_library())
         // What Rust's standard library needs from the system (rustc --print native-static-libs).
-        .args(["-lgcc_s", "-lutil", "-lrt", "-lpthread", "-lm", "-ldl", "-lc"]);
+        .args([
+            "-lgcc_s",
+            "-lutil",
+            "-lrt",
+            "-lpthread",
+            "-lm",
+            "-ldl",
+            "-lc",
+        ]);
     let built = cmd.output().unwrap_or_else(|e| panic!("{cmd:?}: {e}"));
     assert!(
         built.status.success(),
@@ -84,7 +94,11 @@ fn build_and_run(source: &str, args: &[&str]) {
     let stdout = String::from_utf8_lossy(&ran.stdout);
     let stderr = String::from_utf8_lossy(&ran.stderr);
     println!("---- {source}\n{stdout}{stderr}");
-    assert!(ran.status.success(), "{source} failed ({}):\n{stdout}{stderr}", ran.status);
+    assert!(
+        ran.status.success(),
+        "{source} failed ({}):\n{stdout}{stderr}",
+        ran.status
+    );
 }
 
 fn fixture(name: &str) -> String {
@@ -99,7 +113,10 @@ fn fixture(name: &str) -> String {
 fn c99_plans_table_2_in_band_reads_the_report_and_reports_errors_and_panics() {
     build_and_run(
         "plan.c",
-        &[&fixture("plane_20cm_65.obj"), &fixture("tets/box_v41_ascii.msh")],
+        &[
+            &fixture("plane_20cm_65.obj"),
+            &fixture("tets/box_v41_ascii.msh"),
+        ],
     );
 }
 

@@ -28,7 +28,10 @@ fn the_checked_in_header_is_what_cbindgen_makes_of_the_source() {
             .lines()
             .zip(fresh.lines())
             .position(|(a, b)| a != b)
-            .map_or_else(|| "at the end".to_owned(), |i| format!("from line {}", i + 1));
+            .map_or_else(
+                || "at the end".to_owned(),
+                |i| format!("from line {}", i + 1),
+            );
         panic!(
             "crates/capi/include/tissue.h is stale (it differs {line}): regenerate it with \
              `TISSUE_BLESS=1 cargo test -p tissue-capi --test header` and commit it"

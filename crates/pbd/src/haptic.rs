@@ -122,7 +122,8 @@ impl ContactForceModel {
             return self.force;
         }
         let dp = Vec3A::from(position - self.origin);
-        let (mut normal_part, mut residual, mut loaded) = (Vec3A::ZERO, Vec3A::from(self.force), 0.0);
+        let (mut normal_part, mut residual, mut loaded) =
+            (Vec3A::ZERO, Vec3A::from(self.force), 0.0);
         for c in &self.contacts {
             let n = Vec3A::from(c.normal);
             let k = self.stiffness * c.load / total;
@@ -257,10 +258,7 @@ mod tests {
         };
         let d = 0.1;
         let g = 1.0 + 2.0 * d * s;
-        assert!(close(
-            m.evaluate(Vec3::NEG_Y * d),
-            Vec3::Y * (2.0 * g * s)
-        ));
+        assert!(close(m.evaluate(Vec3::NEG_Y * d), Vec3::Y * (2.0 * g * s)));
     }
 
     #[test]
