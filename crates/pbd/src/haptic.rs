@@ -25,8 +25,10 @@
 //! back lowers it until the contact lets go (no contact pulls). `R` is what the per-contact loads
 //! do not explain (friction, mostly); it scales with the normal load, as Coulomb friction does,
 //! and vanishes with it. At `p = p₀` the model gives exactly `F₀`. Tool rotations between steps
-//! are not modelled (the tool's frame is taken as translated only), and a contact that begins
-//! between two steps is felt from the next step on (at most one step late).
+//! are not modelled (the tool's frame is taken as translated only), a contact that begins
+//! between two steps is felt from the next step on (at most one step late), and a contact whose
+//! normal is across the motion (a shaft's side while the tool is drawn out along its axis) keeps
+//! its load until the next step.
 //!
 //! ## The stiffness
 //! [`StiffnessEstimator`] measures `k` as the secant of the normal load against the tool's
