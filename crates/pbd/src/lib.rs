@@ -28,6 +28,9 @@
 //!   `F = −(1/T) Σ_substeps (1/h) Σ m Δx` (normal and friction corrections; `−Σ m Δx / h²` for
 //!   one step); [`SoftBody::holding_force`] on the attachments and pins together, from the
 //!   momentum balance of the nodes (see the method).
+//! - Between steps, for a haptic loop (issue 20): [`ContactForceModel`], the force on a tool as
+//!   a local linear model of the last step's contacts (normals, loads, the tissue's normal
+//!   stiffness from a [`StiffnessEstimator`]), evaluated at the tool's newest position (N).
 //! - Topology edits for cutting and suturing (issue 8, used by `tissue-surgery`):
 //!   [`SoftBody::duplicate_nodes`], [`SoftBody::set_tet_nodes`],
 //!   [`SoftBody::add_distance_constraint`], [`SoftBody::add_link_constraint`] (sutures),
@@ -154,6 +157,7 @@ mod edit;
 mod error;
 mod force;
 mod geometry;
+mod haptic;
 mod partition;
 mod pieces;
 mod settings;
@@ -169,6 +173,7 @@ pub use contact::{Contact, ContactParams, ContactSource};
 pub use edit::ConstraintSlot;
 pub use error::PbdError;
 pub use force::DYN_PER_NEWTON;
+pub use haptic::{ContactForceModel, ModelContact, StiffnessEstimator};
 pub use settings::{Material, Solver, StepSettings, VolumeConstraintKind};
 pub use tool::{Pose, Tool, ToolShape};
 pub use voxel::{ColliderShape, OrientedBox, VoxelCollider, MAX_COLLIDER_CORNERS};

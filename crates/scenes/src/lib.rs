@@ -13,7 +13,11 @@
 //!   target), the scalpel ([`Session::cut`]: a path and the view direction make the blade's plane;
 //!   one segment is cut per step) and the needle ([`Session::suture`]); it reports
 //!   [`TrainerEvent`]s, the drawable surface ([`Session::surface`], versioned), the volume drift
-//!   `V/V₀ − 1`, step times and the tissue's force on the probe in newtons.
+//!   `V/V₀ − 1`, step times and the tissue's force on the probe in newtons; contact tools the
+//!   host poses ([`Session::add_tool`], [`Session::set_tool_pose`]: a probe's tip, a needle, a
+//!   blade) with each one's force model of the last step for a haptic loop
+//!   ([`Session::contact_force_model`], tissue-pbd's `ContactForceModel`, N), and a blade-sweep
+//!   cut at once ([`Session::cut_sweep`]).
 //!
 //! No threads, no I/O beyond parsing bytes; a front end owns the loop and the clock.
 //!

@@ -155,6 +155,34 @@ impl Organ {
     }
 }
 
+impl Organ {
+    /// An organ from a closed surface in cm, filled with tetrahedra by `tissue-tetra`, kept at
+    /// its size, placed on the tray; `name` stands for it in messages.
+    ///
+    /// # Errors
+    /// [`SceneError::Meshing`] for a surface that cannot be filled, [`SceneError::TooLarge`].
+    pub fn from_surface(surface: &TriMesh, name: &str) -> Result<Organ, SceneError> {
+        let tets = fill(surface, name)?;
+        Ok(Organ {
+            label: name.to_owned(),
+            mesh: place(&tets, 1.0, name)?,
+            setting: Setting::Tray,
+        })
+    }
+
+    /// An organ from a tet mesh in cm, kept at its size, placed on the tray.
+    ///
+    /// # Errors
+    /// [`SceneError::TooLarge`], [`SceneError::Mesh`] if it is not valid once placed.
+    pub fn from_tets(tets: &TetMesh, name: &str) -> Result<Organ, SceneError> {
+        Ok(Organ {
+            label: name.to_owned(),
+            mesh: place(tets, 1.0, name)?,
+            setting: Setting::Tray,
+        })
+    }
+}
+
 /// Fills a closed surface with tetrahedra, refusing more than [`MAX_TETS`].
 fn fill(surface: &TriMesh, name: &str) -> Result<TetMesh, SceneError> {
     let tets =

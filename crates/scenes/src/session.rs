@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use glam::{Mat3, Quat, Vec3, Vec3A};
 use tissue_pbd::{
-    ColliderShape, ContactParams, Floor, Material, OrientedBox, Pose, SoftBody, StepSettings,
-    ToolShape, VoxelCollider, DYN_PER_NEWTON,
+    ColliderShape, ContactForceModel, ContactParams, Floor, Material, OrientedBox, Pose, SoftBody,
+    StepSettings, StiffnessEstimator, ToolShape, VoxelCollider, DYN_PER_NEWTON,
 };
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
 
@@ -103,6 +103,9 @@ pub struct Session {
     steps: u64,
     worst_drift: f64,
     tray_side: f32,
+    /// Per contact tool ([`Session::add_tool`]): its force model after the last step and the
+    /// stiffness estimate that feeds it.
+    tools: Vec<(ContactForceModel, StiffnessEstimator)>,
 }
 
 impl std::fmt::Debug for Session {
@@ -177,6 +180,7 @@ impl Session {
             steps: 0,
             worst_drift: 0.0,
             tray_side,
+            tools: Vec::new(),
             options,
             body,
             surgery,
@@ -279,6 +283,11 @@ impl Session {
         self.body.step()?;
         self.steps += 1;
         self.force = self.probe_force();
+        for (id, (model, estimator)) in self.tools.iter_mut().enumerate() {
+            let mut next = ContactForceModel::from_body(&self.body, id, 0.0)?;
+            next.stiffness = estimator.update(&next);
+            *model = next;
+        }
         if let Some((from, to)) = self.cuts.pop_front() {
             let sweep = BladeSweep::new(&self.blade, &from, &to)?;
             let happened = self.surgery.cut(&mut self.body, &sweep)?;
@@ -292,6 +301,59 @@ impl Session {
             self.times_ms.pop_front();
         }
         self.times_ms.push_back(start.elapsed().as_secs_f64() * 1e3);
+        Ok(events)
+    }
+
+    /// Adds a kinematic contact tool (a capsule: a probe's tip, a needle, a shaft; or a blade)
+    /// at `pose` (cm) and returns its id (0, 1, … in order). It pushes the tissue with the
+    /// session's contact parameters from the next step on; its force is
+    /// [`Session::contact_force_model`].
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] for a degenerate shape or a bad pose.
+    pub fn add_tool(&mut self, shape: ToolShape, pose: Pose) -> Result<usize, SceneError> {
+        let id = self.body.add_tool(shape, pose, self.options.contact)?;
+        let model = ContactForceModel {
+            step: self.body.step_count(),
+            origin: pose.translation,
+            ..ContactForceModel::default()
+        };
+        self.tools.push((model, StiffnessEstimator::default()));
+        Ok(id)
+    }
+
+    /// Moves contact tool `id`: the next step sweeps it from its last pose to `pose`.
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] for an unknown tool or a bad pose.
+    pub fn set_tool_pose(&mut self, id: usize, pose: Pose) -> Result<(), SceneError> {
+        Ok(self.body.set_tool_pose(id, pose)?)
+    }
+
+    /// The contact tools added so far.
+    pub fn tool_count(&self) -> usize {
+        self.tools.len()
+    }
+
+    /// Contact tool `id`'s force model after the last step (`tissue-pbd`'s
+    /// [`ContactForceModel`]: evaluate it at the tool's newest position for the force in
+    /// newtons between steps), or `None` for an unknown tool.
+    pub fn contact_force_model(&self, id: usize) -> Option<&ContactForceModel> {
+        self.tools.get(id).map(|t| &t.0)
+    }
+
+    /// Cuts at once along a blade sweep from `from` to `to` (the scalpel's blade in its own
+    /// frame: its plane x = 0, its edge along z [`SessionOptions::cut_depth`] below the frame's
+    /// origin, i.e. at local y = −depth, its back 1 cm above; a pose puts the origin on the
+    /// surface where the cut goes, local −y into the tissue, local z along the cut).
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] for a bad pose, [`SceneError::Surgery`] when the cut fails.
+    pub fn cut_sweep(&mut self, from: Pose, to: Pose) -> Result<Vec<TrainerEvent>, SceneError> {
+        let sweep = BladeSweep::new(&self.blade, &from, &to)?;
+        let happened = self.surgery.cut(&mut self.body, &sweep)?;
+        let mut events = Vec::new();
+        self.record(&happened, &mut events);
         Ok(events)
     }
 

@@ -134,3 +134,43 @@ fn the_bunny_rests_on_its_tray_and_keeps_its_volume() -> Result {
     assert!(top > 4.0, "the bunny collapsed: its top at {top} cm");
     Ok(())
 }
+
+#[test]
+fn a_probe_pressed_into_the_appendix_is_pushed_back_and_its_model_meets_the_step_force() -> Result {
+    use tissue_pbd::{Pose, ToolShape};
+    let organ = Organ::shipped(ShippedOrgan::Appendix)?;
+    let mut s = Session::new(&organ, SessionOptions::default())?;
+    for _ in 0..10 {
+        s.step()?;
+    }
+    // A vertical capsule, radius 0.3 cm, its tip's centre at the pose: down from y = 2.6 to 1.9
+    // at 1 cm/s (the tip 0.4 cm into the 2 cm organ).
+    let probe = ToolShape::Capsule {
+        a: Vec3::ZERO,
+        b: Vec3::new(0.0, 3.0, 0.0),
+        radius: 0.3,
+    };
+    let id = s.add_tool(probe, Pose::from_translation(Vec3::new(1.5, 2.6, 0.0)))?;
+    assert_eq!((id, s.tool_count()), (0, 1));
+    let mut stiffness = 0.0f32;
+    for i in 1..=70 {
+        let y = 2.6 - 0.01 * i as f32;
+        s.set_tool_pose(id, Pose::from_translation(Vec3::new(1.5, y, 0.0)))?;
+        s.step()?;
+        let m = s.contact_force_model(id).ok_or("no model")?;
+        stiffness = stiffness.max(m.stiffness);
+        // At the step's own pose the model gives the step's force.
+        let f = s.body().tool_force(id)? / tissue_pbd::DYN_PER_NEWTON;
+        assert!((m.evaluate(m.origin) - f).length() <= 1e-6 * (1.0 + f.length()));
+    }
+    let m = s.contact_force_model(id).ok_or("no model")?.clone();
+    let here = m.evaluate(m.origin);
+    assert!(here.y > 0.01, "the tissue pushes the probe up: {here}");
+    assert!(stiffness > 0.0, "a stiffness was measured");
+    // Deeper presses harder; backed off 1 cm, the tip's contacts let go (the shaft's side
+    // contacts, their normals across the motion, keep their small loads until the next step).
+    assert!(m.evaluate(m.origin - Vec3::Y * 0.02).y > here.y);
+    let off = m.evaluate(m.origin + Vec3::Y);
+    assert!(off.length() < 0.1 * here.length(), "{off} against {here}");
+    Ok(())
+}
