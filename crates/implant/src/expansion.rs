@@ -77,12 +77,12 @@ pub struct BandOptions {
 }
 
 impl Default for BandOptions {
-    /// 32 samples, seed 21, a ladder of 3 volumes.
+    /// 32 samples, seed 21, a ladder of 5 volumes.
     fn default() -> Self {
         BandOptions {
             samples: 32,
             seed: 21,
-            rungs: 3,
+            rungs: 5,
         }
     }
 }
@@ -296,6 +296,8 @@ pub struct ExpansionOutcome {
     pub grown_gain: f64,
     /// `grown_gain / geometric_gain`.
     pub efficiency: f64,
+    /// The flap's mean area growth, `grown_area / (base_area + recruited_area)`.
+    pub flap_growth: f64,
     /// The region at rest.
     pub region_rest: TriMesh,
     /// The region on the expander at removal.
@@ -467,11 +469,12 @@ fn settle(
     budget: u64,
     stage: ExpansionStage,
     day: f64,
+    quick: bool,
     monitor: ExpansionMonitor<'_>,
 ) -> Result<(u64, bool), ImplantError> {
     // A day's growth from a settled state is a small change: the criterion's speed floor on a
     // window of QUICK_WINDOW steps ends its settle.
-    let quick = matches!(stage, ExpansionStage::Grow).then_some(QUICK_WINDOW);
+    let quick = quick.then_some(QUICK_WINDOW);
     insertion.settle(budget, quick, |p| {
         monitor(&ExpansionProgress {
             stage,
@@ -550,7 +553,7 @@ fn nominal_run(
             }
             insertion.layers_mut().grow(theta_g)?;
             *day += dt;
-            let taken = settle(insertion, budget, ExpansionStage::Grow, *day, monitor)?;
+            let taken = settle(insertion, budget, ExpansionStage::Grow, *day, true, monitor)?;
             *steps += taken.0;
             records.push(record(insertion, theta_g, *day, taken));
         }
@@ -584,6 +587,7 @@ fn nominal_run(
             budget,
             ExpansionStage::Fill { index, count },
             day,
+            false,
             monitor,
         )?;
         steps += taken.0;
@@ -629,6 +633,7 @@ fn nominal_run(
             geometric_gain: f64::NAN,
             grown_gain: grown_area - shared.base_area,
             efficiency: f64::NAN,
+            flap_growth: grown_area / flap_scan,
             theta,
             theta_g,
             flap,
@@ -685,7 +690,7 @@ fn reference_runs(
             index: j - 1,
             count,
         };
-        steps += settle(&mut ins, budget, stage, 0.0, monitor)?.0;
+        steps += settle(&mut ins, budget, stage, 0.0, false, monitor)?.0;
         ins.contact_run().layers().area_stretch(&mut theta);
         ladder.push((volume, theta.iter().map(|&t| t as f32).collect()));
         insertion = Some(ins);
@@ -713,7 +718,7 @@ fn reference_runs(
                 index: rungs + i,
                 count,
             };
-            steps += settle(&mut ins, budget, stage, 0.0, monitor)?.0;
+            steps += settle(&mut ins, budget, stage, 0.0, true, monitor)?.0;
             ins.contact_run().layers().area_stretch(&mut theta);
             out[i] = theta.iter().map(|&t| t as f32).collect();
         }
