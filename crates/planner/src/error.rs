@@ -176,6 +176,17 @@ impl PlanError {
                 Some("volume_cm3"),
                 "; change `volume_cm3` or the implant's size",
             ),
+            E::InvalidProtocol { field, .. } => (
+                K::Parameters,
+                Some(match *field {
+                    "fills" | "expand_weeks" => "expand_weeks",
+                    "hold_weeks" => "hold_weeks",
+                    "leakage" => "leakage",
+                    "overfill" => "overfill",
+                    _ => "volume_cm3",
+                }),
+                "",
+            ),
             E::TargetNotBracketed { .. } => {
                 (K::Parameters, Some("bracket_cm3"), " (`bracket_cm3`)")
             }
