@@ -507,13 +507,15 @@ fn nominal_run(
     let mut steps = 0u64;
     let count = protocol.fills.len();
 
+    // `injected`: what is in the expander during the settle (a growth step ending on a fill's
+    // day is before that fill).
     let record = |insertion: &Insertion,
                   theta_g: &[f64],
                   day: f64,
+                  injected: f64,
                   taken: (u64, bool)|
      -> ExpansionRecord {
         let grown: f64 = theta_g.iter().zip(&shared.areas).map(|(g, a)| g * a).sum();
-        let injected = protocol.injected_by(day);
         ExpansionRecord {
             day,
             injected,
@@ -552,10 +554,11 @@ fn nominal_run(
                 });
             }
             insertion.layers_mut().grow(theta_g)?;
+            let injected = protocol.injected_by(*day);
             *day += dt;
             let taken = settle(insertion, budget, ExpansionStage::Grow, *day, true, monitor)?;
             *steps += taken.0;
-            records.push(record(insertion, theta_g, *day, taken));
+            records.push(record(insertion, theta_g, *day, injected, taken));
         }
         Ok(())
     };
@@ -594,7 +597,7 @@ fn nominal_run(
         if !taken.1 {
             tracing::warn!(index, "the fill did not settle within its budget");
         }
-        records.push(record(&ins, &theta_g, day, taken));
+        records.push(record(&ins, &theta_g, day, protocol.injected_by(day), taken));
         insertion = Some(ins);
     }
     let mut ins = insertion.ok_or_else(|| ImplantError::InvalidProtocol {

@@ -881,3 +881,59 @@ pub fn expansion(
         wall_time_s: o.wall_time.as_secs_f64(),
     }
 }
+
+impl ExpansionReport {
+    /// The chart over the protocol's days as PNG bytes: the expander's volume (cm³), the
+    /// region's area gain and the skin grown (cm²), and at removal the flap's area with its
+    /// P5–P95 whisker when there is a band.
+    ///
+    /// # Errors
+    /// [`ErrorKind::Output`] when drawing or encoding fails.
+    pub fn chart(&self, size: (u32, u32)) -> Result<Vec<u8>, PlanError> {
+        use tissue_render::{LineChart, Rgb, Series, Whisker};
+        let series = |label: &str, color: [u8; 3], f: fn(&ExpansionRow) -> f64| Series {
+            label: label.into(),
+            color: Rgb(color),
+            points: self.days.iter().map(|r| (r.day, f(r))).collect(),
+        };
+        let removal = self.protocol.removal_day;
+        let mut whiskers = Vec::new();
+        if let Some(b) = &self.band {
+            whiskers.push(Whisker {
+                x: removal,
+                low: b.flap_area_cm2.p5,
+                mid: b.flap_area_cm2.p50,
+                high: b.flap_area_cm2.p95,
+                color: Rgb([200, 60, 40]),
+            });
+        }
+        let chart = LineChart {
+            title: format!(
+                "Expansion: {} fills to {:.0} cm3, removal day {:.0}, flap {:.1} cm2, retraction {:.0} %",
+                self.protocol.fills.len(),
+                self.protocol.injected_cm3,
+                removal,
+                self.flap.flap_area_cm2,
+                100.0 * self.flap.retraction
+            ),
+            x_label: "day".into(),
+            y_label: "cm2 / cm3".into(),
+            series: vec![
+                series("expander volume, cm3", [90, 90, 90], |r| r.volume_cm3),
+                series("area gain, cm2", [40, 90, 200], |r| r.area_gain_cm2),
+                series("skin grown, cm2", [30, 150, 60], |r| r.grown_gain_cm2),
+                Series {
+                    label: "flap after removal, P5-P95, cm2".into(),
+                    color: Rgb([200, 60, 40]),
+                    points: vec![(removal, self.flap.flap_area_cm2)],
+                },
+            ],
+            whiskers,
+        };
+        let output = |e: &dyn std::fmt::Display| {
+            PlanError::new(ErrorKind::Output, format!("cannot draw the chart: {e}"))
+        };
+        let image = chart.draw(size.0, size.1).map_err(|e| output(&e))?;
+        image.encode_png().map_err(|e| output(&e))
+    }
+}
