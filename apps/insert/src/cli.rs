@@ -78,6 +78,13 @@ max_steps, time_step_s (null: automatic), fill_time_s.
 run's result fields}].
   --target-gain: mode \"target-gain\", inputs (+ target_gain_cm2, bracket_cm3), volume_cm3, \
 area_gain_cm2, converged, runs: [{volume_cm3, area_gain_cm2}].
+  --expand-weeks: mode \"expansion\", inputs (+ expand_weeks, hold_weeks, leakage, overfill, \
+band_samples, band_seed, growth_step_h), protocol, growth, weeks and days [{day, week, \
+injected_cm3, volume_cm3, area_gain_cm2, grown_area_cm2, grown_gain_cm2, mean_growth}], flap \
+{base_area_cm2, recruited_area_cm2, dome_area_cm2, grown_area_cm2, flap_area_cm2, retraction, \
+geometric_gain_cm2, grown_gain_cm2, efficiency, flap_growth}, band {samples, seed, method, \
+flap_area_cm2, retraction, efficiency, grown_area_cm2: {p5, p50, p95}} or null, steps, \
+reference_steps, wall_time_s.
 
 EXIT CODES:
   0    success
