@@ -420,7 +420,12 @@ pub struct Cli {
 
     /// Expansion: write a PNG chart over the days (volume, area gain, skin grown, the flap's
     /// band at removal).
-    #[arg(long, value_name = "FILE", requires = "expand_weeks", help_heading = "Expansion")]
+    #[arg(
+        long,
+        value_name = "FILE",
+        requires = "expand_weeks",
+        help_heading = "Expansion"
+    )]
     pub chart: Option<PathBuf>,
 
     /// Write every result and its inputs as JSON (see the contract in --help).

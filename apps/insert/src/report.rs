@@ -160,10 +160,7 @@ pub fn expansion_summary(r: &tissue_planner::report::ExpansionReport) -> String 
             ),
         ),
         ("flap grown area", format!("{:.2} cm²", f.grown_area_cm2)),
-        (
-            "flap after removal",
-            format!("{:.2} cm²", f.flap_area_cm2),
-        ),
+        ("flap after removal", format!("{:.2} cm²", f.flap_area_cm2)),
         (
             "linear retraction",
             format!("{:.1} %", 100.0 * f.retraction),

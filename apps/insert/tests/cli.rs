@@ -701,7 +701,12 @@ fn an_expansion_prints_its_weeks_and_band_and_writes_its_report_and_chart() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
-    for needle in ["expansion: 2 fills", "flap after removal", "efficiency", "band (8 samples, seed 5)"] {
+    for needle in [
+        "expansion: 2 fills",
+        "flap after removal",
+        "efficiency",
+        "band (8 samples, seed 5)",
+    ] {
         assert!(out.contains(needle), "no {needle:?} in:\n{out}");
     }
     let json = read_json(&report);

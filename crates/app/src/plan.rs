@@ -10,11 +10,11 @@ use std::time::Duration;
 
 use glam::Vec3;
 use tissue_implant::{
-    expand, BandOptions, ExpansionOutcome, ExpansionProgress, ExpansionSetup, GrowthParams,
-    Protocol, default_radius, place_implant, prepare_scan, rim_border_clearance, select_region_with, sweep,
-    volume_for_gain, Implant, ImplantError, ImplantShape, ImplantSpec, InsertionOutcome,
-    InsertionParams, InverseOptions, InverseSearch, Progress, RegionOptions, RegionSelection,
-    ScanOptions, ScanResult, SimSurface, TissueLayers,
+    default_radius, expand, place_implant, prepare_scan, rim_border_clearance, select_region_with,
+    sweep, volume_for_gain, BandOptions, ExpansionOutcome, ExpansionProgress, ExpansionSetup,
+    GrowthParams, Implant, ImplantError, ImplantShape, ImplantSpec, InsertionOutcome,
+    InsertionParams, InverseOptions, InverseSearch, Progress, Protocol, RegionOptions,
+    RegionSelection, ScanOptions, ScanResult, SimSurface, TissueLayers,
 };
 use tissue_mesh::TriMesh;
 

@@ -11,8 +11,8 @@ use std::time::{Duration, Instant};
 
 use crossbeam_channel::{bounded, Receiver, RecvTimeoutError, Sender, TryRecvError};
 use tissue_implant::{
-    plane_press, ExpansionProgress, ExpansionStage, ImplantError, InverseSearch,
-    PlanePressOutcome, Progress, RunParams,
+    plane_press, ExpansionProgress, ExpansionStage, ImplantError, InverseSearch, PlanePressOutcome,
+    Progress, RunParams,
 };
 
 use crate::plan::{

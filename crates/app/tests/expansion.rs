@@ -38,9 +38,13 @@ fn an_expansion_runs_on_the_worker_with_days_in_its_progress_and_equals_the_dire
     let planned = outcome
         .into_expansion()
         .unwrap_or_else(|| panic!("not an expansion"));
-    assert!(days.iter().any(|&d| d > 7.0), "days seen: {:?}", days.last());
-    let direct = plan_expansion(&job(), &|_| ControlFlow::Continue(()))
-        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        days.iter().any(|&d| d > 7.0),
+        "days seen: {:?}",
+        days.last()
+    );
+    let direct =
+        plan_expansion(&job(), &|_| ControlFlow::Continue(())).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(planned.outcome.flap_area, direct.outcome.flap_area);
     assert_eq!(planned.outcome.records.len(), direct.outcome.records.len());
     assert!(planned.outcome.flap_area > 0.0);

@@ -14,8 +14,8 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 use tissue_implant::{
     default_radius, expand, place_implant, select_region_with, BandOptions, ExpansionOutcome,
-    ExpansionSetup, GrowthParams, ImplantShape, ImplantSpec, Insertion, InsertionParams,
-    Protocol, RegionOptions, RegionRule, TissueLayers, LEAKAGE_MEAN,
+    ExpansionSetup, GrowthParams, ImplantShape, ImplantSpec, Insertion, InsertionParams, Protocol,
+    RegionOptions, RegionRule, TissueLayers, LEAKAGE_MEAN,
 };
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
@@ -126,7 +126,14 @@ fn main() -> Result<()> {
         for r in &o.records {
             println!(
                 "{:>5.1} {:>8.1} {:>7.1} {:>9.2} {:>10.2} {:>10.4} {:>6} {}",
-                r.day, r.injected, r.volume, r.area_gain, r.grown_gain, r.mean_growth, r.steps, r.settled
+                r.day,
+                r.injected,
+                r.volume,
+                r.area_gain,
+                r.grown_gain,
+                r.mean_growth,
+                r.steps,
+                r.settled
             );
         }
     }

@@ -339,7 +339,7 @@ struct Shared<'a> {
 
 impl Shared<'_> {
     fn implant(&self, volume: f64) -> Result<Implant, ImplantError> {
-        let mut spec = self.setup.implant.clone();
+        let mut spec = self.setup.implant;
         spec.volume_cm3 = volume;
         place_implant(
             &self.rest,
@@ -531,13 +531,13 @@ fn nominal_run(
 
     // Grows from `day` to `until` in steps of at most `step_hours`, re-settling after each.
     let advance = |insertion: &mut Insertion,
-                       theta_g: &mut [f64],
-                       theta: &mut [f64],
-                       day: &mut f64,
-                       until: f64,
-                       records: &mut Vec<ExpansionRecord>,
-                       history: &mut Vec<StepRecord>,
-                       steps: &mut u64|
+                   theta_g: &mut [f64],
+                   theta: &mut [f64],
+                   day: &mut f64,
+                   until: f64,
+                   records: &mut Vec<ExpansionRecord>,
+                   history: &mut Vec<StepRecord>,
+                   steps: &mut u64|
      -> Result<(), ImplantError> {
         let step_days = growth.step_hours / 24.0;
         while until - *day > 1e-9 {
@@ -580,9 +580,7 @@ fn nominal_run(
         let volume = protocol.volume_by(fill.day, protocol.leakage);
         let implant = shared.implant(volume)?;
         let mut ins = match insertion.take() {
-            None => {
-                Insertion::new(region, &implant, params)?
-            }
+            None => Insertion::new(region, &implant, params)?,
             Some(previous) => previous.refill(&implant, params)?,
         };
         let taken = settle(
@@ -597,7 +595,13 @@ fn nominal_run(
         if !taken.1 {
             tracing::warn!(index, "the fill did not settle within its budget");
         }
-        records.push(record(&ins, &theta_g, day, protocol.injected_by(day), taken));
+        records.push(record(
+            &ins,
+            &theta_g,
+            day,
+            protocol.injected_by(day),
+            taken,
+        ));
         insertion = Some(ins);
     }
     let mut ins = insertion.ok_or_else(|| ImplantError::InvalidProtocol {
@@ -824,7 +828,8 @@ fn surrogate_band(
             }
         })
         .collect();
-    let of = |f: fn(&SampleResult) -> f64| Percentiles::of(&samples.iter().map(f).collect::<Vec<_>>());
+    let of =
+        |f: fn(&SampleResult) -> f64| Percentiles::of(&samples.iter().map(f).collect::<Vec<_>>());
     Band {
         seed: options.seed,
         flap_area: of(|s| s.flap_area),

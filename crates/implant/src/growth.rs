@@ -69,7 +69,11 @@ impl GrowthLaw {
             })
         };
         if !(self.rate.is_finite() && self.rate >= 0.0) {
-            return bad("growth rate", self.rate, "finite and ≥ 0 (1/h; median 0.045)");
+            return bad(
+                "growth rate",
+                self.rate,
+                "finite and ≥ 0 (1/h; median 0.045)",
+            );
         }
         if !(self.prestretch.is_finite() && self.prestretch > 0.0) {
             return bad(
@@ -92,7 +96,9 @@ impl GrowthLaw {
     /// closed form; module docs). Never less than `theta_g`.
     pub fn step(&self, theta_g: f64, theta: f64, hours: f64) -> f64 {
         let c = self.threshold;
-        if !(theta > c * theta_g) || hours <= 0.0 {
+        // Not above the threshold (or not a number): no growth.
+        let above = theta.partial_cmp(&(c * theta_g)) == Some(std::cmp::Ordering::Greater);
+        if !above || hours <= 0.0 {
             return theta_g;
         }
         let adt = self.rate_constant() * hours;
@@ -457,7 +463,11 @@ mod tests {
         let mut p = Protocol::weekly(100.0, 10, 1.0, 0.29, 0.0).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(p.removal_day, 70.0);
         p.fills.swap(1, 2);
-        let e = p.validate().err().map(|e| e.to_string()).unwrap_or_default();
+        let e = p
+            .validate()
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
         assert!(e.contains("not after"), "{e}");
     }
 }

@@ -609,10 +609,7 @@ impl Insertion {
                 });
             }
         }
-        Ok((
-            self.run.steps() - first,
-            self.run.settled() || self.plateau,
-        ))
+        Ok((self.run.steps() - first, self.run.settled() || self.plateau))
     }
 
     /// The underlying run (time step, step count, the layers and the implant's system).

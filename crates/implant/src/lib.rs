@@ -73,13 +73,14 @@ mod walk;
 pub use contact_run::{ContactRun, RunParams, StepSummary};
 pub use error::ImplantError;
 pub use expansion::{
-    expand, Band, BandOptions, QUICK_WINDOW, ExpansionMonitor, ExpansionOutcome, ExpansionProgress,
+    expand, Band, BandOptions, ExpansionMonitor, ExpansionOutcome, ExpansionProgress,
     ExpansionRecord, ExpansionSetup, ExpansionStage, Percentiles, SampleParams, SampleResult,
+    QUICK_WINDOW,
 };
 pub use growth::{
-    Fill, GrowthLaw, GrowthParams, Protocol, FLAP_RELEASE, HUMAN_THRESHOLD,
-    HUMAN_THRESHOLD_SPREAD, LEAKAGE_MEAN, LEAKAGE_SD, LN_RATE_MEAN, LN_RATE_SD, MAX_OVERFILL,
-    MAX_PROTOCOL_DAYS, PIG_PRESTRETCH, RATE_MEDIAN,
+    Fill, GrowthLaw, GrowthParams, Protocol, FLAP_RELEASE, HUMAN_THRESHOLD, HUMAN_THRESHOLD_SPREAD,
+    LEAKAGE_MEAN, LEAKAGE_SD, LN_RATE_MEAN, LN_RATE_SD, MAX_OVERFILL, MAX_PROTOCOL_DAYS,
+    PIG_PRESTRETCH, RATE_MEDIAN,
 };
 pub use insertion::{
     dissect_pocket, implant_system, place_implant, rim_border_clearance, ImplantParams, Insertion,

@@ -8,9 +8,9 @@ use std::ops::ControlFlow;
 
 use glam::Vec3;
 use tissue_implant::{
-    expand, select_region_with, BandOptions, ExpansionOutcome, ExpansionSetup, Fill,
-    GrowthLaw, GrowthParams, ImplantShape, ImplantSpec, InsertionParams, Protocol,
-    RegionOptions, RegionRule, SampleParams, LEAKAGE_MEAN,
+    expand, select_region_with, BandOptions, ExpansionOutcome, ExpansionSetup, Fill, GrowthLaw,
+    GrowthParams, ImplantShape, ImplantSpec, InsertionParams, Protocol, RegionOptions, RegionRule,
+    SampleParams, LEAKAGE_MEAN,
 };
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
@@ -158,9 +158,7 @@ fn the_pig_patch_grows_within_the_measured_spread_at_24_72_and_168_hours() -> Re
     };
     for (day, mean, spread) in [(1.0, 1.18, 0.15), (3.0, 1.25, 0.23), (7.0, 1.35, 0.25)] {
         let (growth, theta) = at(day).ok_or("no record on that day")?;
-        println!(
-            "day {day}: mean θg {growth:.3} (measured {mean} ± {spread}), θ {theta:.3}"
-        );
+        println!("day {day}: mean θg {growth:.3} (measured {mean} ± {spread}), θ {theta:.3}");
         assert!(
             (growth - mean).abs() <= spread,
             "day {day}: {growth} outside {mean} ± {spread}"
@@ -203,7 +201,12 @@ fn a_round_expander_grows_more_skin_than_a_crescent_of_the_same_volume() -> Resu
         );
         growth.push(out.flap_growth);
     }
-    assert!(growth[0] > growth[1], "round {} vs crescent {}", growth[0], growth[1]);
+    assert!(
+        growth[0] > growth[1],
+        "round {} vs crescent {}",
+        growth[0],
+        growth[1]
+    );
     Ok(())
 }
 
@@ -227,8 +230,16 @@ fn a_ten_week_round_protocol_meets_the_clinical_targets_and_its_surrogate_band_m
         out.grown_area,
         out.geometric_gain
     );
-    assert!((0.25..=0.40).contains(&out.efficiency), "{}", out.efficiency);
-    assert!((0.25..=0.35).contains(&out.retraction), "{}", out.retraction);
+    assert!(
+        (0.25..=0.40).contains(&out.efficiency),
+        "{}",
+        out.efficiency
+    );
+    assert!(
+        (0.25..=0.35).contains(&out.retraction),
+        "{}",
+        out.retraction
+    );
     // Growth never resorbs, and the grown area rises over the weeks.
     assert!(out.theta_g.iter().all(|&g| g >= 1.0));
     assert!(out

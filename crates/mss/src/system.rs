@@ -341,7 +341,10 @@ impl MassSpringSystem {
     ) -> Result<(), MssError> {
         let mut new = Vec::with_capacity(self.springs.len());
         for (i, s) in self.springs.iter().enumerate() {
-            let spring = Spring { rest: rest(i, s), ..*s };
+            let spring = Spring {
+                rest: rest(i, s),
+                ..*s
+            };
             spring.check(i, self.particles.len())?;
             new.push(spring.rest);
         }

@@ -177,7 +177,9 @@ impl PlanError {
                 "; change `volume_cm3` or the implant's size",
             ),
             E::InvalidProtocol { field, .. } => match *field {
-                "fills" | "expand_weeks" => (K::Parameters, Some("expand_weeks"), " (`expand_weeks`)"),
+                "fills" | "expand_weeks" => {
+                    (K::Parameters, Some("expand_weeks"), " (`expand_weeks`)")
+                }
                 "hold_weeks" => (K::Parameters, Some("hold_weeks"), " (`hold_weeks`)"),
                 "leakage" => (K::Parameters, Some("leakage"), " (`leakage`)"),
                 "overfill" => (K::Parameters, Some("overfill"), " (`overfill`)"),

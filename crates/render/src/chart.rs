@@ -97,7 +97,7 @@ impl LineChart {
         let mut image = Image::new(width, height, WHITE)?;
         let scale = if width >= 800 { 2 } else { 1 };
         let glyph = i64::from(GLYPH_HEIGHT * scale);
-        let (left, right) = (i64::from(14 * 6 * scale) / 2 + 2 * glyph, 20 + 0);
+        let (left, right) = (i64::from(14 * 6 * scale) / 2 + 2 * glyph, 20);
         let (top, bottom) = (2 * glyph + 10, 2 * glyph + 20);
         let (w, h) = (
             (i64::from(width) - left - right).max(10),
@@ -118,7 +118,9 @@ impl LineChart {
         let (x0, x1) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
             (a.min(x), b.max(x))
         });
-        let (y0, y1) = ys.fold((0.0f64, f64::NEG_INFINITY), |(a, b), y| (a.min(y), b.max(y)));
+        let (y0, y1) = ys.fold((0.0f64, f64::NEG_INFINITY), |(a, b), y| {
+            (a.min(y), b.max(y))
+        });
         let (x0, x1) = if x1 > x0 { (x0, x1) } else { (0.0, 1.0) };
         let ystep = tick_step(if y1 > y0 { y1 - y0 } else { 1.0 }, 5.0);
         let y1 = if y1 > y0 {
@@ -167,9 +169,21 @@ impl LineChart {
         }
         for wh in &self.whiskers {
             let x = px(wh.x);
-            line(&mut image, (x, py(wh.low)), (x, py(wh.high)), 1 + scale, wh.color);
+            line(
+                &mut image,
+                (x, py(wh.low)),
+                (x, py(wh.high)),
+                1 + scale,
+                wh.color,
+            );
             for v in [wh.low, wh.high] {
-                line(&mut image, (x - 6.0, py(v)), (x + 6.0, py(v)), 1 + scale, wh.color);
+                line(
+                    &mut image,
+                    (x - 6.0, py(v)),
+                    (x + 6.0, py(v)),
+                    1 + scale,
+                    wh.color,
+                );
             }
             let r = i64::from(3 * scale);
             image.fill_rect(
