@@ -78,6 +78,13 @@ max_steps, time_step_s (null: automatic), fill_time_s.
 run's result fields}].
   --target-gain: mode \"target-gain\", inputs (+ target_gain_cm2, bracket_cm3), volume_cm3, \
 area_gain_cm2, converged, runs: [{volume_cm3, area_gain_cm2}].
+  --expand-weeks: mode \"expansion\", inputs (+ expand_weeks, hold_weeks, leakage, overfill, \
+band_samples, band_seed, growth_step_h), protocol, growth, weeks and days [{day, week, \
+injected_cm3, volume_cm3, area_gain_cm2, grown_area_cm2, grown_gain_cm2, mean_growth}], flap \
+{base_area_cm2, recruited_area_cm2, dome_area_cm2, grown_area_cm2, flap_area_cm2, retraction, \
+geometric_gain_cm2, grown_gain_cm2, efficiency, flap_growth}, band {samples, seed, method, \
+flap_area_cm2, retraction, efficiency, grown_area_cm2: {p5, p50, p95}} or null, steps, \
+reference_steps, wall_time_s.
 
 EXIT CODES:
   0    success
@@ -375,6 +382,52 @@ pub struct Cli {
     #[arg(long, value_name = "FILE", value_parser = parse_mesh_out, help_heading = "Outputs")]
     pub out: Vec<PathBuf>,
 
+    /// Expansion over weeks: this many equal weekly fills to --volume, with skin growth, then
+    /// the hold and removal; prints the weekly figures and the flap at removal with its band.
+    #[arg(long, value_name = "N", conflicts_with_all = ["sweep", "target_gain", "out", "png"],
+          help_heading = "Expansion")]
+    pub expand_weeks: Option<u32>,
+
+    /// Expansion: weeks the expander is held full before removal.
+    #[arg(long, value_name = "WEEKS", default_value_t = defaults().hold_weeks,
+          requires = "expand_weeks", help_heading = "Expansion")]
+    pub hold_weeks: f64,
+
+    /// Expansion: the fraction of every fill that leaks (in vivo 0.29 ± 0.125).
+    #[arg(long, value_name = "FRACTION", default_value_t = defaults().leakage,
+          requires = "expand_weeks", help_heading = "Expansion")]
+    pub leakage: f64,
+
+    /// Expansion: saline injected beyond --volume, as a fraction of it (0.41: +41 %).
+    #[arg(long, value_name = "FRACTION", default_value_t = defaults().overfill,
+          requires = "expand_weeks", help_heading = "Expansion")]
+    pub overfill: f64,
+
+    /// Expansion: samples of the uncertainty band (0: none; 8 or more).
+    #[arg(long, value_name = "N", default_value_t = defaults().band_samples,
+          requires = "expand_weeks", help_heading = "Expansion")]
+    pub band_samples: usize,
+
+    /// Expansion: the band's seed.
+    #[arg(long, value_name = "N", default_value_t = defaults().band_seed,
+          requires = "expand_weeks", help_heading = "Expansion")]
+    pub seed: u64,
+
+    /// Expansion: the growth step in hours (the skin re-settles after each; at most 24).
+    #[arg(long, value_name = "HOURS", default_value_t = defaults().growth_step_h,
+          requires = "expand_weeks", help_heading = "Expansion")]
+    pub growth_step: f64,
+
+    /// Expansion: write a PNG chart over the days (volume, area gain, skin grown, the flap's
+    /// band at removal).
+    #[arg(
+        long,
+        value_name = "FILE",
+        requires = "expand_weeks",
+        help_heading = "Expansion"
+    )]
+    pub chart: Option<PathBuf>,
+
     /// Write every result and its inputs as JSON (see the contract in --help).
     #[arg(long, value_name = "FILE", help_heading = "Outputs")]
     pub report: Option<PathBuf>,
@@ -431,6 +484,13 @@ impl Cli {
             detect: self.detect,
             max_steps: self.max_steps,
             time_step_s: self.time_step,
+            expand_weeks: self.expand_weeks,
+            hold_weeks: self.hold_weeks,
+            leakage: self.leakage,
+            overfill: self.overfill,
+            band_samples: self.band_samples,
+            band_seed: self.seed,
+            growth_step_h: self.growth_step,
         }
     }
 }
@@ -470,6 +530,13 @@ pub fn flag_of(field: &str) -> Option<&'static str> {
         "bracket_cm3" => "--bracket",
         "gain_tolerance_cm2" => "--gain-tolerance",
         "out" => "--out",
+        "expand_weeks" => "--expand-weeks",
+        "hold_weeks" => "--hold-weeks",
+        "leakage" => "--leakage",
+        "overfill" => "--overfill",
+        "band_samples" => "--band-samples",
+        "band_seed" => "--seed",
+        "growth_step_h" => "--growth-step",
         _ => return None,
     })
 }

@@ -31,6 +31,8 @@ fn run(cli: &Cli) -> Result<(), Failure> {
     let inputs = Inputs::new(&scenario).map_err(|e| Failure::from_plan(&e))?;
     if let Some(volumes) = &cli.sweep {
         modes::sweep(cli, &scenario, &inputs, volumes, &interrupt)
+    } else if cli.expand_weeks.is_some() {
+        modes::expansion(cli, &scenario, &inputs, &interrupt)
     } else if let Some(target) = cli.target_gain {
         modes::target_gain(cli, &scenario, &inputs, target, &interrupt)
     } else {

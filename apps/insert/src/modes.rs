@@ -198,3 +198,39 @@ pub fn target_gain(
     }
     commit(staged, interrupt)
 }
+
+/// An expansion over weeks: the weekly figures and the flap on stdout, then `--report`,
+/// `--chart`.
+pub fn expansion(
+    cli: &Cli,
+    scenario: &Scenario,
+    inputs: &Inputs,
+    interrupt: &Interrupt,
+) -> Result<(), Failure> {
+    let job = scenario
+        .expansion_job()
+        .map_err(|e| Failure::from_plan(&e))?
+        .ok_or_else(|| Failure::new(code::USAGE, "--expand-weeks is required"))?;
+    let mut display = Display::new(cli.quiet, true);
+    let planned = match drive(
+        Job::Expansion(Box::new(job.clone())),
+        &mut display,
+        interrupt,
+    )? {
+        Outcome::Expansion(p) => *p,
+        other => return Err(unexpected(&other)),
+    };
+    let report = contract::expansion(TOOL, inputs.clone(), &scenario.request, &job, &planned);
+    print!("{}", report::expansion_summary(&report));
+    let mut staged = Staged::default();
+    if let Some(path) = &cli.report {
+        staged.bytes(path, &json(&report)?, "report")?;
+    }
+    if let Some(path) = &cli.chart {
+        let bytes = report
+            .chart(cli.png_size)
+            .map_err(|e| Failure::from_plan(&e))?;
+        staged.bytes(path, &bytes, "chart")?;
+    }
+    commit(staged, interrupt)
+}

@@ -114,7 +114,10 @@ impl Display {
                 });
                 bar.set_length(p.max_steps);
                 bar.set_position(p.step);
-                bar.set_message(format!("{:>3.0}%", 100.0 * p.settle));
+                match p.day {
+                    Some(day) => bar.set_message(format!("day {day:.1}")),
+                    None => bar.set_message(format!("{:>3.0}%", 100.0 * p.settle)),
+                }
             }
             Mode::Plain { last } => {
                 let tenth = (p.max_steps / 10).max(1);
@@ -126,7 +129,16 @@ impl Display {
                         decile > d || now.duration_since(at) >= Duration::from_secs(1)
                     }
                 };
-                if due {
+                if due && p.day.is_some() {
+                    last.insert(p.run, (now, decile));
+                    eprintln!(
+                        "{label}: day {:.1}, settle step {}/{}, {:.1} s",
+                        p.day.unwrap_or(0.0),
+                        p.step,
+                        p.max_steps,
+                        p.elapsed.as_secs_f64()
+                    );
+                } else if due {
                     last.insert(p.run, (now, decile));
                     eprintln!(
                         "{label}: step {}/{}, settle {:.0}%, {:.1} s",

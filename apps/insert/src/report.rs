@@ -115,3 +115,98 @@ pub fn sweep_row(volume: f64, r: &RunResult) -> String {
 pub fn sweep_failed_row(volume: f64, message: &str) -> String {
     format!("{volume:>10.3}  failed: {message}")
 }
+
+/// The summary of an expansion over weeks, for stdout: the protocol, one row per week, the flap
+/// at removal and its band.
+pub fn expansion_summary(r: &tissue_planner::report::ExpansionReport) -> String {
+    let mut s = String::new();
+    let p = &r.protocol;
+    let _ = writeln!(
+        s,
+        "expansion: {} fills to {:.1} cm³ injected ({:.1} cm³ nominal), {:.0} % leakage, removal on day {:.0}",
+        p.fills.len(),
+        p.injected_cm3,
+        p.nominal_volume_cm3,
+        100.0 * p.leakage,
+        p.removal_day
+    );
+    let _ = writeln!(
+        s,
+        "  week   day  injected cm³  volume cm³  area gain cm²  skin grown cm²  mean growth"
+    );
+    for w in &r.weeks {
+        let _ = writeln!(
+            s,
+            "  {:>4}  {:>4.0}  {:>12.1}  {:>10.1}  {:>13.2}  {:>14.2}  {:>11.4}",
+            w.week,
+            w.day,
+            w.injected_cm3,
+            w.volume_cm3,
+            w.area_gain_cm2,
+            w.grown_gain_cm2,
+            w.mean_growth
+        );
+    }
+    let f = &r.flap;
+    let rows: [(&str, String); 8] = [
+        ("base area", format!("{:.2} cm²", f.base_area_cm2)),
+        (
+            "flap on the expander",
+            format!(
+                "{:.2} cm² (from {:.2} cm² of skin: {:.2} cm² recruited)",
+                f.dome_area_cm2,
+                f.base_area_cm2 + f.recruited_area_cm2,
+                f.recruited_area_cm2
+            ),
+        ),
+        ("flap grown area", format!("{:.2} cm²", f.grown_area_cm2)),
+        ("flap after removal", format!("{:.2} cm²", f.flap_area_cm2)),
+        (
+            "linear retraction",
+            format!("{:.1} %", 100.0 * f.retraction),
+        ),
+        (
+            "geometric gain",
+            format!("{:.2} cm² (no growth, no leakage)", f.geometric_gain_cm2),
+        ),
+        ("grown gain", format!("{:.2} cm²", f.grown_gain_cm2)),
+        ("efficiency", format!("{:.1} %", 100.0 * f.efficiency)),
+    ];
+    for (name, value) in rows {
+        let _ = writeln!(s, "  {name:<22} {value}");
+    }
+    if let Some(b) = &r.band {
+        let _ = writeln!(
+            s,
+            "  band ({} samples, seed {}): P5 / P50 / P95",
+            b.samples, b.seed
+        );
+        let _ = writeln!(
+            s,
+            "  {:<22} {:.2} / {:.2} / {:.2} cm²",
+            "flap after removal", b.flap_area_cm2.p5, b.flap_area_cm2.p50, b.flap_area_cm2.p95
+        );
+        let _ = writeln!(
+            s,
+            "  {:<22} {:.1} / {:.1} / {:.1} %",
+            "linear retraction",
+            100.0 * b.retraction.p5,
+            100.0 * b.retraction.p50,
+            100.0 * b.retraction.p95
+        );
+        let _ = writeln!(
+            s,
+            "  {:<22} {:.1} / {:.1} / {:.1} %",
+            "efficiency",
+            100.0 * b.efficiency.p5,
+            100.0 * b.efficiency.p50,
+            100.0 * b.efficiency.p95
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  {:<22} {} + {} reference, {:.1} s",
+        "steps", r.steps, r.reference_steps, r.wall_time_s
+    );
+    s
+}

@@ -666,3 +666,65 @@ fn a_closed_body_is_taken_as_it_is_and_the_region_cut_out_of_it() {
         .iter()
         .all(|&v| before.positions()[v].z > 0.5 && (before.positions()[v].y - 1.57).abs() < 0.6));
 }
+
+#[test]
+fn an_expansion_prints_its_weeks_and_band_and_writes_its_report_and_chart() {
+    let dir = scratch("expansion");
+    let (mesh, _) = small_plane(&dir);
+    let report = dir.join("expansion.json");
+    let chart = dir.join("expansion.png");
+    let o = run(&[
+        "--mesh",
+        mesh.to_str().unwrap(),
+        "--unit",
+        "dm",
+        "--at",
+        "0,0,0",
+        "--diameter",
+        "4",
+        "--volume",
+        "12",
+        "--scan-triangles",
+        "--expand-weeks",
+        "2",
+        "--hold-weeks",
+        "0.5",
+        "--band-samples",
+        "8",
+        "--seed",
+        "5",
+        "--report",
+        report.to_str().unwrap(),
+        "--chart",
+        chart.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    for needle in [
+        "expansion: 2 fills",
+        "flap after removal",
+        "efficiency",
+        "band (8 samples, seed 5)",
+    ] {
+        assert!(out.contains(needle), "no {needle:?} in:\n{out}");
+    }
+    let json = read_json(&report);
+    assert_eq!(json["mode"], "expansion");
+    assert_eq!(json["inputs"]["expand_weeks"], 2);
+    assert_eq!(json["band"]["samples"], 8);
+    assert!(json["flap"]["flap_area_cm2"].as_f64().unwrap() > 0.0);
+    assert!(!json["weeks"].as_array().unwrap().is_empty());
+    let png = std::fs::read(&chart).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+}
+
+#[test]
+fn a_bad_protocol_is_refused_naming_its_flag() {
+    let o = run(&["--expand-weeks", "10", "--leakage", "0.95"]);
+    assert_eq!(o.status.code(), Some(6), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--leakage"), "{}", stderr(&o));
+    let o = run(&["--expand-weeks", "0"]);
+    assert_eq!(o.status.code(), Some(6), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--expand-weeks"), "{}", stderr(&o));
+}

@@ -103,6 +103,22 @@ async function main() {
     const status = await page.textContent('#job-status');
     check(/cancelled after \d/i.test(status), `the page says so: "${status}"`);
 
+    // d2. an expansion over weeks (issue 21): the weekly chart and the flap's band
+    await planner(page, () => window.tissueStudio.planner.startExpansion(2, { volume_cm3: 40, band_samples: 8 }));
+    await page.waitForFunction(() => {
+      const s = window.tissueStudio.planner.job;
+      return s.mode === 'expansion' && s.state !== 'running' && s.state !== 'idle';
+    }, null, { timeout: RUN_TIMEOUT_MS, polling: 200 });
+    const expansion = await planner(page, () => ({ job: window.tissueStudio.planner.job, result: window.tissueStudio.planner.result, error: window.tissueStudio.planner.error }));
+    check(expansion.job.state === 'finished' && expansion.result?.mode === 'expansion',
+      `the expansion finished: flap ${expansion.result?.flap?.flap_area_cm2?.toFixed(1)} cm² after removal`, `${expansion.job.state}: ${expansion.error}`);
+    check(expansion.result?.band?.samples === 8 && expansion.result.band.flap_area_cm2.p5 <= expansion.result.band.flap_area_cm2.p95,
+      'the expansion has its band (8 samples, P5 ≤ P95)');
+    const lines = await page.locator('#expansion-chart polyline.expansion-line').count();
+    const whisker = await page.locator('#expansion-chart line.expansion-band').count();
+    check(lines === 3 && whisker === 1, `the weekly chart draws volume, area gain and growth, and the band (${lines} lines, ${whisker} whisker)`);
+    await shot(page, '4b-expansion.png');
+
     // e. files: too large (refused in the page) and broken (the server's message)
     await page.click('#tab-1');
     let uploads = 0;

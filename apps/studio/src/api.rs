@@ -387,7 +387,13 @@ async fn preview(
 }
 
 /// The files a finished job offers.
-pub const DOWNLOADS: [&str; 4] = ["patient.ply", "patient.obj", "patient.vtk", "report.json"];
+pub const DOWNLOADS: [&str; 5] = [
+    "patient.ply",
+    "patient.obj",
+    "patient.vtk",
+    "report.json",
+    "chart.png",
+];
 
 async fn download(
     State(studio): State<Studio>,
@@ -414,7 +420,7 @@ async fn download(
         ApiError::new(
             StatusCode::NOT_FOUND,
             "not_found",
-            format!("job {job} has no {file} (a sweep or a search has the report only)"),
+            format!("job {job} has no {file} (a sweep or a search has the report only, an expansion the report and chart.png)"),
         )
     })?;
     let mime = mime_guess::from_path(&file).first_or_octet_stream();

@@ -56,6 +56,8 @@ enum Mode {
     Single,
     Sweep,
     TargetGain,
+    /// Expansion over weeks (issue 21): the request's `expand_weeks` and its companions.
+    Expansion,
 }
 
 impl Mode {
@@ -64,6 +66,7 @@ impl Mode {
             Mode::Single => "single",
             Mode::Sweep => "sweep",
             Mode::TargetGain => "target-gain",
+            Mode::Expansion => "expansion",
         }
     }
 }
@@ -196,7 +199,19 @@ fn run_job(
     let inputs = Inputs::new(&scenario)?;
     let max_steps = scenario.job.params.run.stop.max_steps;
     let mut search = None;
+    let mut expansion = None;
     let (job, runs) = match run.mode {
+        Mode::Expansion => {
+            let job = scenario.expansion_job()?.ok_or_else(|| {
+                PlanError::field(
+                    ErrorKind::Usage,
+                    "expand_weeks",
+                    "an expansion needs `expand_weeks` in the request",
+                )
+            })?;
+            expansion = Some(job.clone());
+            (Job::Expansion(Box::new(job)), 1)
+        }
         Mode::Single => (Job::Insertion(scenario.job.clone()), 1),
         Mode::Sweep => (
             Job::Sweep(scenario.sweep_job(&run.volumes_cm3)?),
@@ -258,6 +273,23 @@ fn run_job(
             write_report(&dir, &report)?;
             json!({ "type": "finished", "job": running.id, "report": report, "fields": null, "warnings": warnings })
         }
+        Outcome::Expansion(planned) => {
+            let job = expansion.ok_or_else(|| {
+                PlanError::new(ErrorKind::Run, "an expansion result without its job")
+            })?;
+            let r = report::expansion(TOOL, inputs, &scenario.request, &job, &planned);
+            let png = r.chart((1200, 600))?;
+            let report = serde_json::to_value(&r)
+                .map_err(|e| PlanError::new(ErrorKind::Output, e.to_string()))?;
+            write_report(&dir, &report)?;
+            let tmp = dir.join(".chart.png.tmp");
+            std::fs::write(&tmp, png)
+                .and_then(|()| std::fs::rename(&tmp, dir.join("chart.png")))
+                .map_err(|e| {
+                    PlanError::new(ErrorKind::Output, format!("cannot write the chart: {e}"))
+                })?;
+            json!({ "type": "finished", "job": running.id, "report": report, "fields": null })
+        }
         Outcome::Inverse(found) => {
             let (target, bracket) = search.unwrap_or_default();
             let report =
@@ -310,6 +342,7 @@ fn drive(
                         "type": "progress", "job": running.id, "run": p.run,
                         "runs": runs.max(p.run + 1), "step": p.step, "max_steps": p.max_steps,
                         "settle": p.settle, "elapsed_s": p.elapsed.as_secs_f64(),
+                        "day": p.day,
                     }));
                 }
             }

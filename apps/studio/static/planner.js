@@ -565,6 +565,7 @@ function updateRunControls() {
   $('run').disabled = !ok;
   $('sweep-start').disabled = !ok;
   $('target-start').disabled = !ok;
+  $('expansion-start').disabled = !ok;
   $('cancel').disabled = !running || state.cancelSent;
   const blocked = $('run-blocked');
   let why = null;
@@ -605,11 +606,11 @@ function setJob(fields) {
   document.body.dataset.job = hook.job.state;
 }
 
-async function startJob(mode, extra) {
+async function startJob(mode, extra, requestExtra) {
   if (!canRun()) return;
   let request;
   try {
-    request = buildRequest();
+    request = { ...buildRequest(), ...(requestExtra || {}) };
   } catch (e) {
     showError(e.message);
     return;
@@ -628,6 +629,7 @@ async function startJob(mode, extra) {
   }
   if (mode === 'sweep') $('sweep-result').hidden = true;
   if (mode === 'target-gain') $('target-result').hidden = true;
+  if (mode === 'expansion') $('expansion-result').hidden = true;
   updateRunControls();
   try {
     await socket.send({ type: 'run', patient: state.patient.patient, mode, ...extra, request });
@@ -717,6 +719,9 @@ function onFinished(msg) {
   if (mode === 'sweep') {
     renderSweep(report, msg.job);
     setText('job-status', `Series finished: ${report.runs?.length ?? 0} runs.`);
+  } else if (mode === 'expansion') {
+    renderExpansion(report, msg.job);
+    setText('job-status', `Expansion finished: flap ${fmt(report.flap?.flap_area_cm2, 1)} cm² after removal.`);
   } else if (mode === 'target-gain') {
     renderTarget(report, msg.job);
     setText('job-status', report.converged ? 'Search finished.' : 'Search finished without converging.');
@@ -823,6 +828,93 @@ function renderTarget(report, job) {
     { label: 'Area gain (cm²)', value: (r) => fmt(r.area_gain_cm2, 2) },
   ]);
   addReportLink($('target-result'), job);
+}
+
+function renderExpansion(report, job) {
+  $('expansion-result').hidden = false;
+  $('expansion-chart').replaceChildren(expansionChart(report));
+  const dl = $('expansion-figures');
+  dl.replaceChildren();
+  const row = (label, value, cls) => dl.append(el('dt', cls ? { class: cls } : {}, label), el('dd', cls ? { class: cls } : {}, value));
+  const f = report.flap || {};
+  const b = report.band;
+  row('Flap after removal', `${fmt(f.flap_area_cm2, 1)} cm²` + (b ? ` (P5–P95 ${fmt(b.flap_area_cm2.p5, 1)}–${fmt(b.flap_area_cm2.p95, 1)})` : ''), 'key');
+  row('Linear retraction', `${fmt(100 * f.retraction, 1)} %` + (b ? ` (${fmt(100 * b.retraction.p5, 1)}–${fmt(100 * b.retraction.p95, 1)})` : ''));
+  row('Flap on the expander', `${fmt(f.dome_area_cm2, 1)} cm² (recruited ${fmt(f.recruited_area_cm2, 1)} cm²)`);
+  row('Grown area', `${fmt(f.grown_area_cm2, 1)} cm²`);
+  row('Geometric gain', `${fmt(f.geometric_gain_cm2, 1)} cm²`);
+  row('Efficiency', `${fmt(100 * f.efficiency, 1)} %`);
+  runsTable($('expansion-table'), report.weeks || [], [
+    { label: 'Week', value: (r) => String(r.week) },
+    { label: 'Volume (cm³)', value: (r) => fmt(r.volume_cm3, 0) },
+    { label: 'Area gain (cm²)', value: (r) => fmt(r.area_gain_cm2, 1) },
+    { label: 'Grown (cm²)', value: (r) => fmt(r.grown_gain_cm2, 1) },
+  ]);
+  addReportLink($('expansion-result'), job);
+  const p = $('expansion-result').querySelector('.report-link');
+  p.append(' · ', el('a', { href: api.resultUrl(job, 'chart.png'), download: '' }, 'chart.png'));
+}
+
+/** An SVG chart of an expansion's days: volume (cm³), area gain and skin grown (cm²), the flap's band. */
+function expansionChart(report) {
+  const NS = 'http://www.w3.org/2000/svg';
+  const W = 340;
+  const H = 230;
+  const m = { l: 44, r: 14, t: 12, b: 40 };
+  const svg = document.createElementNS(NS, 'svg');
+  svg.setAttribute('viewBox', `0 0 ${W} ${H}`);
+  svg.setAttribute('role', 'img');
+  svg.setAttribute('aria-label', 'Expansion over the days: volume, area gain, skin grown, and the flap at removal');
+  const add = (tag, attrs, text) => {
+    const e = document.createElementNS(NS, tag);
+    for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, v);
+    if (text !== undefined) e.textContent = text;
+    svg.append(e);
+    return e;
+  };
+  const days = report.days || [];
+  const series = [
+    { key: 'volume_cm3', color: '#5a5a5a', label: 'volume cm³' },
+    { key: 'area_gain_cm2', color: '#285ac8', label: 'area gain cm²' },
+    { key: 'grown_gain_cm2', color: '#1e963c', label: 'grown cm²' },
+  ];
+  const band = report.band?.flap_area_cm2;
+  const removal = report.protocol?.removal_day ?? 0;
+  const ys = days.flatMap((d) => series.map((s) => d[s.key])).concat(band ? [band.p95] : []).filter(Number.isFinite);
+  const x1 = Math.max(removal, ...days.map((d) => d.day), 1);
+  const y1 = Math.max(1, ...ys) * 1.1;
+  const X = (x) => m.l + (x / x1) * (W - m.l - m.r);
+  const Y = (y) => H - m.b - (y / y1) * (H - m.t - m.b);
+  for (const t of niceTicks(0, x1)) {
+    add('line', { x1: X(t), x2: X(t), y1: m.t, y2: H - m.b, class: 'grid' });
+    add('text', { x: X(t), y: H - m.b + 16, 'text-anchor': 'middle', class: 'tick' }, String(t));
+  }
+  for (const t of niceTicks(0, y1)) {
+    add('line', { x1: m.l, x2: W - m.r, y1: Y(t), y2: Y(t), class: 'grid' });
+    add('text', { x: m.l - 6, y: Y(t) + 4, 'text-anchor': 'end', class: 'tick' }, String(t));
+  }
+  add('line', { x1: m.l, x2: W - m.r, y1: H - m.b, y2: H - m.b, class: 'axis' });
+  add('line', { x1: m.l, x2: m.l, y1: m.t, y2: H - m.b, class: 'axis' });
+  add('text', { x: (m.l + W - m.r) / 2, y: H - 6, 'text-anchor': 'middle', class: 'axis-label' }, 'day');
+  series.forEach((s, i) => {
+    const pts = days.filter((d) => Number.isFinite(d[s.key])).map((d) => `${X(d.day)},${Y(d[s.key])}`);
+    add('polyline', { points: pts.join(' '), fill: 'none', stroke: s.color, 'stroke-width': 2, class: 'expansion-line' });
+    add('text', { x: m.l + 8, y: m.t + 12 + 13 * i, class: 'tick', style: `fill: ${s.color}` }, s.label);
+  });
+  if (band) {
+    add('line', { x1: X(removal), x2: X(removal), y1: Y(band.p5), y2: Y(band.p95), stroke: '#c83c28', 'stroke-width': 2, class: 'expansion-band' });
+    add('circle', { cx: X(removal), cy: Y(band.p50), r: 4, fill: '#c83c28' });
+  }
+  return svg;
+}
+
+function startExpansion() {
+  const weeks = Number($('expand-weeks').value);
+  if (!Number.isInteger(weeks) || weeks < 1 || weeks > 52) {
+    showError('Weeks of fills: give a whole number from 1 to 52 (usually 8–12).');
+    return;
+  }
+  startJob('expansion', {}, { expand_weeks: weeks });
 }
 
 function addReportLink(section, job) {
@@ -976,6 +1068,7 @@ function wire() {
   $('cancel').addEventListener('click', cancelJob);
   $('sweep-start').addEventListener('click', startSweep);
   $('target-start').addEventListener('click', startTarget);
+  $('expansion-start').addEventListener('click', startExpansion);
   for (const r of document.querySelectorAll('input[name="beforeafter"]')) {
     r.addEventListener('change', () => {
       state.before = document.querySelector('input[name="beforeafter"]:checked').value === 'before';
@@ -1001,6 +1094,10 @@ function main() {
     screenOf: (p) => view.screenOf(p),
     pixelStats: () => view.pixelStats(),
     showStep,
+    startExpansion: (weeks, extra) => {
+      $('expand-weeks').value = String(weeks);
+      return startJob('expansion', {}, { expand_weeks: weeks, ...(extra || {}) });
+    },
   });
   wire();
   setupPointer();

@@ -6,7 +6,8 @@
 //! - [`Handle::start`] runs a [`Job`] on a new worker thread: one insertion
 //!   ([`InsertionJob`]), a sweep over implant volumes run in parallel ([`SweepJob`]), the
 //!   inverse search for the volume of a target area gain ([`InverseJob`]), the plane press
-//!   ([`PlanePressJob`]), or a host's own work ([`Job::custom`], reporting through a
+//!   ([`PlanePressJob`]), an expansion over weeks with skin growth and its band
+//!   ([`ExpansionJob`], issue 21; progress per settle, tagged with the protocol day), or a host's own work ([`Job::custom`], reporting through a
 //!   [`ProgressSink`]).
 //! - The handle delivers [`Event`]s: [`Event::Progress`] ([`ProgressEvent`]: run, step, step
 //!   limit, the last step's summed displacement, how close the stop criterion is, elapsed time),
@@ -102,9 +103,9 @@ mod worker;
 
 pub use error::AppError;
 pub use plan::{
-    footprint_radius, plan, plan_inverse, plan_sweep, prepare, InsertionJob, InverseJob,
-    PatientAfter, Placement, PlanePressJob, PlannedInsertion, PreparedInsertion, SimMesh, SweepJob,
-    SweepResult, SweepRun,
+    footprint_radius, plan, plan_expansion, plan_inverse, plan_sweep, prepare, ExpansionJob,
+    InsertionJob, InverseJob, PatientAfter, Placement, PlanePressJob, PlannedExpansion,
+    PlannedInsertion, PreparedInsertion, SimMesh, SweepJob, SweepResult, SweepRun,
 };
 pub use worker::{
     CustomJob, Event, Events, Handle, HandleOptions, Job, Outcome, ProgressEvent, ProgressSink,

@@ -10,10 +10,11 @@ use std::time::Duration;
 
 use glam::Vec3;
 use tissue_implant::{
-    default_radius, place_implant, prepare_scan, rim_border_clearance, select_region_with, sweep,
-    volume_for_gain, Implant, ImplantError, ImplantShape, ImplantSpec, InsertionOutcome,
-    InsertionParams, InverseOptions, InverseSearch, Progress, RegionOptions, RegionSelection,
-    ScanOptions, ScanResult, SimSurface, TissueLayers,
+    default_radius, expand, place_implant, prepare_scan, rim_border_clearance, select_region_with,
+    sweep, volume_for_gain, BandOptions, ExpansionOutcome, ExpansionProgress, ExpansionSetup,
+    GrowthParams, Implant, ImplantError, ImplantShape, ImplantSpec, InsertionOutcome,
+    InsertionParams, InverseOptions, InverseSearch, Progress, Protocol, RegionOptions,
+    RegionSelection, ScanOptions, ScanResult, SimSurface, TissueLayers,
 };
 use tissue_mesh::TriMesh;
 
@@ -532,6 +533,103 @@ pub fn plan(
     progress: impl FnMut(&Progress) -> ControlFlow<()>,
 ) -> Result<PlannedInsertion, ImplantError> {
     prepare(job)?.run(progress)
+}
+
+/// An expansion over weeks (issue 21): the insertion's patient, placement, expander shape
+/// and parameters, a fill protocol, growth, and the band.
+#[derive(Debug, Clone)]
+pub struct ExpansionJob {
+    /// The patient, placement, expander (its volume is the protocol's nominal volume) and
+    /// mechanics, as for one insertion.
+    pub insertion: InsertionJob,
+    /// The fills, leakage and removal day.
+    pub protocol: Protocol,
+    /// The growth law and the flap's release at removal.
+    pub growth: GrowthParams,
+    /// The band; `None` for the nominal run only.
+    pub band: Option<BandOptions>,
+}
+
+impl ExpansionJob {
+    /// The usual protocol on `insertion`'s expander: `weeks` equal weekly fills to its volume,
+    /// a week's hold, the mean in-vivo leakage, no over-fill, human growth, the default band.
+    ///
+    /// # Errors
+    /// [`ImplantError::InvalidProtocol`] as [`Protocol::weekly`].
+    pub fn weekly(insertion: InsertionJob, weeks: u32) -> Result<Self, ImplantError> {
+        let protocol = Protocol::weekly(
+            insertion.implant.volume_cm3,
+            weeks,
+            1.0,
+            tissue_implant::LEAKAGE_MEAN,
+            0.0,
+        )?;
+        Ok(ExpansionJob {
+            insertion,
+            protocol,
+            growth: GrowthParams::human(),
+            band: Some(BandOptions::default()),
+        })
+    }
+}
+
+/// The result of an expansion: the region, the simulation surface and the outcome.
+#[derive(Debug, Clone)]
+pub struct PlannedExpansion {
+    /// The region of the patient surface.
+    pub selection: RegionSelection,
+    /// The simulation surface, when the region was remeshed.
+    pub surface: Option<SimSurface>,
+    /// The weekly figures, the flap at removal and the band (on the simulation surface).
+    pub outcome: ExpansionOutcome,
+}
+
+/// Runs an expansion without a thread: the region and the simulation surface set up as for
+/// one insertion (the expander at the protocol's injected total must fit, as
+/// [`plan`] checks it), then [`tissue_implant::expand`]. `monitor` is called from the runs'
+/// threads and cancels with [`ControlFlow::Break`].
+///
+/// # Errors
+/// Those of [`prepare`] and [`tissue_implant::expand`].
+pub fn plan_expansion(
+    job: &ExpansionJob,
+    monitor: &(dyn Fn(&ExpansionProgress) -> ControlFlow<()> + Sync),
+) -> Result<PlannedExpansion, ImplantError> {
+    expansion_with(job, &|| false, monitor)
+}
+
+pub(crate) fn expansion_with(
+    job: &ExpansionJob,
+    cancelled: &dyn Fn() -> bool,
+    monitor: &(dyn Fn(&ExpansionProgress) -> ControlFlow<()> + Sync),
+) -> Result<PlannedExpansion, ImplantError> {
+    let _span = tracing::info_span!("app_expansion").entered();
+    job.protocol.validate()?;
+    let scene = scene(&job.insertion, cancelled)?;
+    let mut top = job.insertion.implant;
+    top.volume_cm3 = job.protocol.injected_total();
+    // Placement and the rim's clearance at the largest volume, as for one insertion.
+    build(&scene, &job.insertion, &top, cancelled)?;
+    let setup = ExpansionSetup {
+        region: scene.sim_mesh().clone(),
+        centre: scene.selection.centre().position(),
+        normal: scene.normal,
+        tangent: job.insertion.placement.tangent,
+        implant: job.insertion.implant,
+        params: scene.params.clone(),
+    };
+    let outcome = expand(
+        &setup,
+        &job.protocol,
+        &job.growth,
+        job.band.as_ref(),
+        monitor,
+    )?;
+    Ok(PlannedExpansion {
+        selection: scene.selection,
+        surface: scene.surface,
+        outcome,
+    })
 }
 
 /// One run of a sweep.

@@ -11,12 +11,14 @@ use std::time::{Duration, Instant};
 
 use crossbeam_channel::{bounded, Receiver, RecvTimeoutError, Sender, TryRecvError};
 use tissue_implant::{
-    plane_press, ImplantError, InverseSearch, PlanePressOutcome, Progress, RunParams,
+    plane_press, ExpansionProgress, ExpansionStage, ImplantError, InverseSearch, PlanePressOutcome,
+    Progress, RunParams,
 };
 
 use crate::plan::{
-    inverse_with, prepare_with, saturating_elapsed, sweep_with, InsertionJob, InverseJob,
-    PlanePressJob, PlannedInsertion, RunEvent, SweepJob, SweepResult,
+    expansion_with, inverse_with, prepare_with, saturating_elapsed, sweep_with, ExpansionJob,
+    InsertionJob, InverseJob, PlanePressJob, PlannedExpansion, PlannedInsertion, RunEvent,
+    SweepJob, SweepResult,
 };
 use crate::settle::SettleMeter;
 use crate::AppError;
@@ -38,6 +40,10 @@ pub enum Job {
     Inverse(InverseJob),
     /// The plane press ([`tissue_implant::plane_press`]); gives [`Outcome::PlanePress`].
     PlanePress(PlanePressJob),
+    /// Expansion over weeks with skin growth and its band
+    /// ([`plan_expansion`](crate::plan_expansion)); gives [`Outcome::Expansion`]. Progress:
+    /// one event per settle step, tagged with the protocol day.
+    Expansion(Box<ExpansionJob>),
     /// A host's own work ([`Job::custom`]); gives [`Outcome::Custom`]. A panic in it comes back
     /// as [`Event::Failed`] with [`AppError::Panicked`]; returning [`AppError::Cancelled`] (or
     /// the library's `Cancelled`) gives [`Event::Cancelled`].
@@ -64,6 +70,7 @@ impl Job {
             Job::Sweep(_) => "sweep",
             Job::Inverse(_) => "inverse",
             Job::PlanePress(_) => "plane_press",
+            Job::Expansion(_) => "expansion",
             Job::Custom(_) => "custom",
         }
     }
@@ -76,6 +83,7 @@ impl fmt::Debug for Job {
             Job::Sweep(j) => f.debug_tuple("Sweep").field(j).finish(),
             Job::Inverse(j) => f.debug_tuple("Inverse").field(j).finish(),
             Job::PlanePress(j) => f.debug_tuple("PlanePress").field(j).finish(),
+            Job::Expansion(j) => f.debug_tuple("Expansion").field(j).finish(),
             Job::Custom(_) => f.write_str("Custom(..)"),
         }
     }
@@ -91,6 +99,8 @@ pub enum Outcome {
     Inverse(InverseSearch),
     /// Of [`Job::PlanePress`].
     PlanePress(Box<PlanePressOutcome>),
+    /// Of [`Job::Expansion`].
+    Expansion(Box<PlannedExpansion>),
     /// Of [`Job::Custom`]: the host's value (downcast with [`Outcome::into_custom`]).
     Custom(Box<dyn Any + Send>),
 }
@@ -128,6 +138,14 @@ impl Outcome {
         }
     }
 
+    /// The expansion's result, if this is one.
+    pub fn into_expansion(self) -> Option<PlannedExpansion> {
+        match self {
+            Outcome::Expansion(p) => Some(*p),
+            _ => None,
+        }
+    }
+
     /// A custom job's value, if this is one of type `T`.
     pub fn into_custom<T: Any>(self) -> Option<T> {
         match self {
@@ -144,6 +162,7 @@ impl fmt::Debug for Outcome {
             Outcome::Sweep(s) => f.debug_tuple("Sweep").field(s).finish(),
             Outcome::Inverse(s) => f.debug_tuple("Inverse").field(s).finish(),
             Outcome::PlanePress(p) => f.debug_tuple("PlanePress").field(p).finish(),
+            Outcome::Expansion(p) => f.debug_tuple("Expansion").field(p).finish(),
             Outcome::Custom(_) => f.write_str("Custom(..)"),
         }
     }
@@ -173,6 +192,10 @@ pub struct ProgressEvent {
     pub settle: f64,
     /// Wall time since the worker started the job.
     pub elapsed: Duration,
+    /// An expansion job's protocol day (of its nominal run; `None` for its reference runs and
+    /// every other job). An expansion's `run` is 0 for the protocol, `1 + i` for reference
+    /// run `i`; `step` and `max_steps` count the current settle.
+    pub day: Option<f64>,
 }
 
 /// What the worker reports: zero or more [`Event::Progress`], then exactly one terminal event
@@ -286,6 +309,7 @@ impl RunMonitor<'_> {
             contacts: progress.last.contacts,
             settle,
             elapsed: self.sink.elapsed(),
+            day: None,
         })
     }
 }
@@ -622,6 +646,31 @@ fn execute(job: Job, sink: &ProgressSink) -> Result<Outcome, AppError> {
             let outcome = plane_press(&job.region, &job.params, |p| monitor.observe(p))?;
             Ok(Outcome::PlanePress(Box::new(outcome)))
         }
+        Job::Expansion(job) => {
+            let monitor = |p: &ExpansionProgress| {
+                let run = match p.stage {
+                    ExpansionStage::Reference { index, .. } => 1 + index,
+                    _ => 0,
+                };
+                sink.report(ProgressEvent {
+                    run,
+                    step: p.steps,
+                    max_steps: p.budget,
+                    displacement: 0.0,
+                    contacts: 0,
+                    settle: 0.0,
+                    elapsed: sink.elapsed(),
+                    day: (run == 0).then_some(p.day),
+                })
+            };
+            match expansion_with(&job, &is_cancelled, &monitor) {
+                Ok(planned) => Ok(Outcome::Expansion(Box::new(planned))),
+                Err(ImplantError::Cancelled { .. }) => Err(AppError::Cancelled {
+                    steps: sink.steps(),
+                }),
+                Err(e) => Err(e.into()),
+            }
+        }
         Job::Custom(f) => {
             let _span = tracing::info_span!("app_custom").entered();
             f(sink).map(Outcome::Custom)
@@ -667,6 +716,7 @@ mod tests {
             contacts: 0,
             settle: 0.0,
             elapsed: Duration::ZERO,
+            day: None,
         }
     }
 

@@ -271,6 +271,7 @@ fn a_panic_in_a_job_comes_back_as_failed_with_its_message() {
                 contacts: 0,
                 settle: 0.0,
                 elapsed: sink.elapsed(),
+                day: None,
             });
         }
         panic!("boom at step {}", 3)

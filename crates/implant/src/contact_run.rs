@@ -194,6 +194,8 @@ pub struct ContactRun {
     contact_distance: f32,
     params: RunParams,
     detector: SettleDetector,
+    /// The stop criterion's speed floor (summed displacement per step, cm).
+    floor: f64,
     fill: Option<Fill>,
     settled: bool,
     steps: u64,
@@ -284,6 +286,7 @@ impl ContactRun {
             ..params.stop
         };
         let detector = SettleDetector::new(&stop)?;
+        let floor = stop.floor;
         Ok(ContactRun {
             previous_tissue: vec![Vec3A::ZERO; layers.system().particles().len()],
             previous_body: vec![Vec3A::ZERO; body.particles().len()],
@@ -294,6 +297,7 @@ impl ContactRun {
             contact_distance,
             params: params.clone(),
             detector,
+            floor,
             fill: None,
             settled: false,
             steps: 0,
@@ -352,6 +356,29 @@ impl ContactRun {
         self.fill = None;
         self.detector.reset();
         Ok(())
+    }
+
+    /// Starts the stop criterion over (a warm start: the tissue's rest metric or the body
+    /// changed and the run is to settle again from where it is).
+    pub(crate) fn restart_settle(&mut self) {
+        self.detector.reset();
+        self.settled = false;
+    }
+
+    /// The stop criterion's speed floor: summed displacement per step (cm) below which the
+    /// particles' mean speed is under `RunParams::settle_speed`.
+    pub(crate) fn speed_floor(&self) -> f64 {
+        self.floor
+    }
+
+    /// The layers, taken back (to build a new run on them, warm).
+    pub(crate) fn into_layers(self) -> TissueLayers {
+        self.layers
+    }
+
+    /// The layers, to change their rest metric between settles.
+    pub(crate) fn layers_mut(&mut self) -> &mut TissueLayers {
+        &mut self.layers
     }
 
     /// Whether the body is still being filled.

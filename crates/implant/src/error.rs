@@ -23,6 +23,16 @@ pub enum ImplantError {
         /// Its triangle count.
         triangles: usize,
     },
+    /// An expansion protocol cannot be run (issue 21): `field` is at fault, `problem` says
+    /// what is wrong and how to fix it.
+    #[error("protocol {field}: {problem}")]
+    InvalidProtocol {
+        /// The protocol field at fault (`fills`, `expand_weeks`, `hold_weeks`, `leakage`,
+        /// `overfill`, `volume`).
+        field: &'static str,
+        /// What is wrong, and how to fix it.
+        problem: String,
+    },
     /// The point given for the implant is too far from the patient surface.
     #[error("the point {point:?} is {distance:.3} cm from the surface (nearest surface point {nearest:?}); at most {max_distance:.3} cm is accepted: pick a point on the skin")]
     PointOffSurface {

@@ -494,6 +494,124 @@ impl Insertion {
         })
     }
 
+    /// The same tissue, where it is now (positions, pocket, rest metric), under another
+    /// implant (issue 21: the next fill of an expander): the implant is built for the new
+    /// volume on the same base, and fills from where the previous one stood when both have the
+    /// same vertices (from flat otherwise); the tissue starts at rest where it was. A warm
+    /// start: the run then settles only the change.
+    ///
+    /// # Errors
+    /// As [`Insertion::new`].
+    pub(crate) fn refill(
+        self,
+        implant: &Implant,
+        params: &InsertionParams,
+    ) -> Result<Insertion, ImplantError> {
+        let _span = tracing::debug_span!("insertion_refill", volume = implant.volume()).entered();
+        let previous: Vec<Vec3A> = self.run.body().particles().positions().to_vec();
+        let mut layers = self.run.into_layers();
+        layers
+            .system_mut()
+            .particles_mut()
+            .velocities_mut()
+            .fill(Vec3A::ZERO);
+        let body = implant_system(implant, &params.implant)?;
+        let mut run = ContactRun::new(layers, body, implant.mesh(), &params.run)?;
+        let (start, fraction) = if previous.len() == implant.mesh().vertex_count() {
+            // The dome rises at the speed of a full fill, over the part of the height it has
+            // still to go (at least a tenth of the fill's time).
+            let moved = previous
+                .iter()
+                .zip(implant.mesh().positions())
+                .map(|(&a, &b)| a.distance(Vec3A::from(b)))
+                .fold(0.0f32, f32::max);
+            let fraction = (f64::from(moved) / implant.dome_height().max(1e-6)).clamp(0.1, 1.0);
+            (previous, fraction as f32)
+        } else {
+            (flat_start(implant), 1.0)
+        };
+        run.fill_body(&start, params.fill_time * fraction)?;
+        Ok(Insertion {
+            run,
+            implant_rest: implant.mesh().clone(),
+            implant_volume: implant.volume(),
+            dome_height: implant.dome_height(),
+            areas: Vec::with_capacity(2 * PLATEAU_HALF),
+            plateau: false,
+        })
+    }
+
+    /// The implant at its current positions.
+    pub(crate) fn outcome_implant(&self) -> Result<TriMesh, ImplantError> {
+        Ok(self.implant_rest.with_positions(
+            self.run
+                .body()
+                .particles()
+                .positions()
+                .iter()
+                .map(|&p| Vec3::from(p))
+                .collect(),
+        )?)
+    }
+
+    /// The layers, to change their rest metric ([`TissueLayers::grow`]) before
+    /// [`Insertion::settle`].
+    pub(crate) fn layers_mut(&mut self) -> &mut TissueLayers {
+        self.run.layers_mut()
+    }
+
+    /// Settles again from the current state (after a change of the rest metric, or a refill):
+    /// steps until the stop criterion or the plateau rule fires, at most `budget` steps;
+    /// returns the steps taken and whether it settled. With `quick = Some(w)` it has also
+    /// settled once the summed displacement stayed under the speed floor (the mean speed under
+    /// `RunParams::settle_speed`) for `w` steps in a row after the fill: the criterion's floor
+    /// on a shorter window, for small changes from a settled state (a day's growth).
+    /// `progress` as in [`Insertion::run`].
+    ///
+    /// # Errors
+    /// As [`Insertion::run`].
+    pub(crate) fn settle(
+        &mut self,
+        budget: u64,
+        quick: Option<u64>,
+        mut progress: impl FnMut(&Progress) -> ControlFlow<()>,
+    ) -> Result<(u64, bool), ImplantError> {
+        self.run.restart_settle();
+        self.areas.clear();
+        self.plateau = false;
+        let first = self.run.steps();
+        let window = self.run.stop_window().max(1) as u64;
+        let floor = self.run.speed_floor();
+        let mut calm = 0u64;
+        while !self.run.settled() && !self.plateau && self.run.steps() - first < budget {
+            let last = self.run.step()?;
+            if let Some(w) = quick {
+                calm = if !self.run.filling() && last.displacement <= floor {
+                    calm + 1
+                } else {
+                    0
+                };
+                if calm >= w {
+                    self.plateau = true;
+                }
+            }
+            if !self.run.filling() && (self.run.steps() - first) % window == 0 {
+                self.plateau = self.sample_plateau();
+            }
+            let report = Progress {
+                steps: self.run.steps() - first,
+                max_steps: budget,
+                last,
+            };
+            if progress(&report).is_break() {
+                return Err(ImplantError::Cancelled {
+                    steps: self.run.steps(),
+                });
+            }
+        }
+        Ok((self.run.steps() - first, self.run.settled() || self.plateau))
+    }
+
     /// The underlying run (time step, step count, the layers and the implant's system).
     pub fn contact_run(&self) -> &ContactRun {
         &self.run

@@ -325,6 +325,9 @@ pub struct TissueLayers {
     floored: usize,
     boundary: Vec<u32>,
     min_thickness: f32,
+    /// The in-plane springs of both layers as `(spring, edge, rest length as built)`, found on
+    /// the first [`TissueLayers::grow`] (skin growth, issue 21).
+    growth_map: Option<Vec<(u32, u32, f32)>>,
 }
 
 impl TissueLayers {
@@ -508,6 +511,7 @@ impl TissueLayers {
             floored,
             boundary,
             min_thickness: (params.min_thickness * params.depth) as f32,
+            growth_map: None,
         })
     }
 
@@ -627,6 +631,127 @@ impl TissueLayers {
             }
         }
         moved
+    }
+
+    /// Sets the rest metric of a grown skin (issue 21): `theta_g[t]` is region triangle `t`'s
+    /// area growth `θg ≥ 1` relative to its rest (scan) area. Every in-plane spring of both
+    /// layers gets the rest length it had as built times `√θ̄g`, `θ̄g` the area-weighted mean of
+    /// its edge's one or two triangles (in-plane isotropic growth, `Fg = √θg·I` in the plane);
+    /// the springs through the thickness, the slab's shear, the anchors and the hinges are left
+    /// as built (the thickness does not grow). All ones restore the skin as built.
+    ///
+    /// # Errors
+    /// [`ImplantError::InvalidParameter`] when `theta_g` does not have one finite value ≥ 1 per
+    /// region triangle.
+    pub fn grow(&mut self, theta_g: &[f64]) -> Result<(), ImplantError> {
+        let triangles = self.outer.triangle_count();
+        if theta_g.len() != triangles {
+            return Err(ImplantError::InvalidParameter {
+                name: "theta_g",
+                value: theta_g.len() as f64,
+                expected: format!("one area growth per region triangle ({triangles})"),
+            });
+        }
+        if let Some((t, &g)) = theta_g
+            .iter()
+            .enumerate()
+            .find(|(_, g)| !(g.is_finite() && **g >= 1.0))
+        {
+            return Err(ImplantError::InvalidParameter {
+                name: "theta_g",
+                value: g,
+                expected: format!("finite and ≥ 1 (skin does not resorb), at triangle {t}"),
+            });
+        }
+        if self.growth_map.is_none() {
+            let topo = self.outer.topology();
+            let edges = topo.edges();
+            let map: Vec<(u32, u32, f32)> = self
+                .system
+                .springs()
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.a % 2 == s.b % 2)
+                .filter_map(|(i, s)| {
+                    let (u, v) = (s.a / 2, s.b / 2);
+                    let key = [u.min(v), u.max(v)];
+                    edges
+                        .binary_search(&key)
+                        .ok()
+                        .map(|e| (i as u32, e as u32, s.rest))
+                })
+                .collect();
+            self.growth_map = Some(map);
+        }
+        let topo = self.outer.topology();
+        let edge_triangles = topo.edge_triangles();
+        let areas = self.outer.triangle_areas();
+        let factor: Vec<f32> = edge_triangles
+            .iter()
+            .map(|pair| {
+                let (mut sum, mut weight) = (0.0, 0.0);
+                for &t in pair {
+                    if t != tissue_mesh::NO_TRIANGLE {
+                        sum += theta_g[t as usize] * areas[t as usize];
+                        weight += areas[t as usize];
+                    }
+                }
+                if weight > 0.0 {
+                    (sum / weight).sqrt() as f32
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let map = self.growth_map.as_deref().unwrap_or(&[]);
+        let mut rest = vec![None; self.system.springs().len()];
+        for &(i, e, r0) in map {
+            rest[i as usize] = Some(r0 * factor[e as usize]);
+        }
+        self.system
+            .set_rest_lengths(|i, s| rest[i].unwrap_or(s.rest))?;
+        Ok(())
+    }
+
+    /// Scales the skin's stiffness (layer 1's in-plane springs and bending hinges) by `factor`
+    /// from what it is now: the band's stiffness samples, warm-started from a settled state.
+    ///
+    /// # Errors
+    /// [`ImplantError::InvalidParameter`] for a factor that is not positive and finite.
+    pub fn scale_skin_stiffness(&mut self, factor: f64) -> Result<(), ImplantError> {
+        if !(factor.is_finite() && factor > 0.0) {
+            return Err(ImplantError::InvalidParameter {
+                name: "stiffness",
+                value: factor,
+                expected: "a positive, finite factor".into(),
+            });
+        }
+        let f = factor as f32;
+        self.system.set_stiffnesses(|_, s| {
+            if s.a % 2 == 0 && s.b % 2 == 0 {
+                s.k * f
+            } else {
+                s.k
+            }
+        })?;
+        for h in &mut self.hinges {
+            h.k *= f;
+        }
+        Ok(())
+    }
+
+    /// Writes every region triangle's total area stretch `θ = A / A_rest` of layer 1 (current
+    /// area over rest area) into `out` (one per triangle; no allocation).
+    pub fn area_stretch(&self, out: &mut [f64]) {
+        let position = self.system.particles().positions();
+        let rest = self.outer.positions();
+        let at = |v: u32| position[Self::particle(Layer::Outer, v) as usize];
+        for (o, &[a, b, c]) in out.iter_mut().zip(self.outer.triangles()) {
+            let now = 0.5 * f64::from((at(b) - at(a)).cross(at(c) - at(a)).length());
+            let (ra, rb, rc) = (rest[a as usize], rest[b as usize], rest[c as usize]);
+            let was = 0.5 * f64::from((rb - ra).cross(rc - ra).length());
+            *o = if was > 0.0 { now / was } else { 1.0 };
+        }
     }
 
     /// The current area of layer 1 (cm²), from the particles' positions (no allocation).

@@ -24,6 +24,9 @@
 //!   ([`ImplantError::RegionReachesBorder`]), remeshed into a simulation surface of its own
 //!   (edge [`default_sim_edge`], smoothed below it), every scan vertex of the region bound to
 //!   it and moved with it afterwards ([`SimSurface::map_to_scan`], [`ScanResult`]).
+//! - [`expand`]: expansion over weeks (issue 21) — a fill [`Protocol`], skin growth by the
+//!   calibrated law ([`GrowthLaw`], [`GrowthParams`]) re-settled at least daily from the
+//!   previous state, removal, the flap ([`ExpansionOutcome`]) and its band ([`Band`]).
 //! - [`walk_on_surface`]: straightest geodesics, the exponential map that wraps an expander's
 //!   base onto the body ([`ImplantSpec::build_wrapped`], [`place_implant`]).
 //!
@@ -53,7 +56,9 @@ mod adjacency;
 mod bending;
 mod contact_run;
 mod error;
+mod expansion;
 mod geodesic;
+mod growth;
 mod insertion;
 mod layers;
 mod outcome;
@@ -67,6 +72,16 @@ mod walk;
 
 pub use contact_run::{ContactRun, RunParams, StepSummary};
 pub use error::ImplantError;
+pub use expansion::{
+    expand, Band, BandOptions, ExpansionMonitor, ExpansionOutcome, ExpansionProgress,
+    ExpansionRecord, ExpansionSetup, ExpansionStage, Percentiles, SampleParams, SampleResult,
+    QUICK_WINDOW,
+};
+pub use growth::{
+    Fill, GrowthLaw, GrowthParams, Protocol, FLAP_RELEASE, HUMAN_THRESHOLD, HUMAN_THRESHOLD_SPREAD,
+    LEAKAGE_MEAN, LEAKAGE_SD, LN_RATE_MEAN, LN_RATE_SD, MAX_OVERFILL, MAX_PROTOCOL_DAYS,
+    PIG_PRESTRETCH, RATE_MEDIAN,
+};
 pub use insertion::{
     dissect_pocket, implant_system, place_implant, rim_border_clearance, ImplantParams, Insertion,
     InsertionOutcome, InsertionParams, Progress, PLATEAU_HALF, PLATEAU_TOLERANCE, RUNAWAY_FACTOR,

@@ -328,6 +328,60 @@ impl MassSpringSystem {
         &self.springs
     }
 
+    /// Sets every spring's rest length to `rest(index, spring)` (index in [`Self::springs`]'
+    /// order): a grown or remodelled tissue changes its rest metric between runs, the
+    /// particles, stiffnesses and layout stay. Nothing is changed when a value is not finite
+    /// or negative ([`MssError::InvalidSpring`] names the spring).
+    ///
+    /// # Errors
+    /// [`MssError::InvalidSpring`].
+    pub fn set_rest_lengths(
+        &mut self,
+        mut rest: impl FnMut(usize, &Spring) -> f32,
+    ) -> Result<(), MssError> {
+        let mut new = Vec::with_capacity(self.springs.len());
+        for (i, s) in self.springs.iter().enumerate() {
+            let spring = Spring {
+                rest: rest(i, s),
+                ..*s
+            };
+            spring.check(i, self.particles.len())?;
+            new.push(spring.rest);
+        }
+        for (s, r) in self.springs.iter_mut().zip(new) {
+            s.rest = r;
+        }
+        self.min_rest = self
+            .springs
+            .iter()
+            .map(|s| s.rest)
+            .filter(|&r| r > 0.0)
+            .fold(f32::INFINITY, f32::min);
+        Ok(())
+    }
+
+    /// Sets every spring's stiffness to `k(index, spring)` (index in [`Self::springs`]' order),
+    /// e.g. a material scaled between runs. Nothing is changed when a value is not finite or
+    /// negative. The stable time step changes with it: a running integrator keeps its own.
+    ///
+    /// # Errors
+    /// [`MssError::InvalidSpring`].
+    pub fn set_stiffnesses(
+        &mut self,
+        mut k: impl FnMut(usize, &Spring) -> f32,
+    ) -> Result<(), MssError> {
+        let mut new = Vec::with_capacity(self.springs.len());
+        for (i, s) in self.springs.iter().enumerate() {
+            let spring = Spring { k: k(i, s), ..*s };
+            spring.check(i, self.particles.len())?;
+            new.push(spring.k);
+        }
+        for (s, k) in self.springs.iter_mut().zip(new) {
+            s.k = k;
+        }
+        Ok(())
+    }
+
     /// Number of springs whose ends lie in different particle blocks.
     pub fn crossing_springs(&self) -> usize {
         self.layout.crossing(self.springs.len())

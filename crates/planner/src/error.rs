@@ -176,6 +176,15 @@ impl PlanError {
                 Some("volume_cm3"),
                 "; change `volume_cm3` or the implant's size",
             ),
+            E::InvalidProtocol { field, .. } => match *field {
+                "fills" | "expand_weeks" => {
+                    (K::Parameters, Some("expand_weeks"), " (`expand_weeks`)")
+                }
+                "hold_weeks" => (K::Parameters, Some("hold_weeks"), " (`hold_weeks`)"),
+                "leakage" => (K::Parameters, Some("leakage"), " (`leakage`)"),
+                "overfill" => (K::Parameters, Some("overfill"), " (`overfill`)"),
+                _ => (K::Parameters, Some("volume_cm3"), " (`volume_cm3`)"),
+            },
             E::TargetNotBracketed { .. } => {
                 (K::Parameters, Some("bracket_cm3"), " (`bracket_cm3`)")
             }

@@ -66,6 +66,21 @@ pub struct PlanRequest {
     pub max_steps: u64,
     /// The time step, s [default: automatic].
     pub time_step_s: Option<f32>,
+    /// Expansion over weeks (issue 21): this many weekly fills to `volume_cm3`, with skin
+    /// growth [default: none, one insertion].
+    pub expand_weeks: Option<u32>,
+    /// Expansion: weeks the expander is held full before removal.
+    pub hold_weeks: f64,
+    /// Expansion: the fraction of every fill that leaks, in [0, 0.9] (in vivo 0.29 ± 0.125).
+    pub leakage: f64,
+    /// Expansion: saline injected beyond `volume_cm3`, as a fraction of it, in [0, 1].
+    pub overfill: f64,
+    /// Expansion: samples of the uncertainty band (0: none; at least 8).
+    pub band_samples: usize,
+    /// Expansion: the band's seed.
+    pub band_seed: u64,
+    /// Expansion: the growth step, hours, in (0, 24].
+    pub growth_step_h: f64,
 }
 
 impl Default for PlanRequest {
@@ -97,6 +112,13 @@ impl Default for PlanRequest {
             detect: Detect::Bvh,
             max_steps: InsertionParams::default().run.stop.max_steps,
             time_step_s: None,
+            expand_weeks: None,
+            hold_weeks: 1.0,
+            leakage: tissue_implant::LEAKAGE_MEAN,
+            overfill: 0.0,
+            band_samples: tissue_implant::BandOptions::default().samples,
+            band_seed: tissue_implant::BandOptions::default().seed,
+            growth_step_h: tissue_implant::GrowthParams::human().step_hours,
         }
     }
 }
@@ -183,6 +205,34 @@ impl PlanRequest {
                 "`rotation_deg` must be a finite angle in degrees",
             ));
         }
+        if self.expand_weeks.is_some() {
+            self.expansion_protocol()?;
+            if self.band_samples != 0 && !(8..=4096).contains(&self.band_samples) {
+                return Err(PlanError::field(
+                    ErrorKind::Parameters,
+                    "band_samples",
+                    format!(
+                        "`band_samples` must be 0 (no band) or 8 to 4096 (32 is the full band), \
+                         got {}",
+                        self.band_samples
+                    ),
+                ));
+            }
+            if !(self.growth_step_h.is_finite()
+                && self.growth_step_h > 0.0
+                && self.growth_step_h <= 24.0)
+            {
+                return Err(PlanError::field(
+                    ErrorKind::Parameters,
+                    "growth_step_h",
+                    format!(
+                        "`growth_step_h` must be in (0, 24] hours (the skin re-settles at least \
+                         daily), got {}",
+                        self.growth_step_h
+                    ),
+                ));
+            }
+        }
         if self.max_steps == 0 {
             return Err(PlanError::field(
                 ErrorKind::Parameters,
@@ -191,6 +241,44 @@ impl PlanRequest {
             ));
         }
         Ok(())
+    }
+
+    /// The expansion's fill protocol (`expand_weeks` weekly fills to `volume_cm3` plus
+    /// `overfill`, `hold_weeks`, `leakage`), or `None` without `expand_weeks`.
+    ///
+    /// # Errors
+    /// [`ErrorKind::Parameters`] naming the field at fault.
+    pub fn expansion_protocol(&self) -> Result<Option<tissue_implant::Protocol>, PlanError> {
+        let Some(weeks) = self.expand_weeks else {
+            return Ok(None);
+        };
+        tissue_implant::Protocol::weekly(
+            self.volume_cm3,
+            weeks,
+            self.hold_weeks,
+            self.leakage,
+            self.overfill,
+        )
+        .map(Some)
+        .map_err(|e| PlanError::from_implant(&e))
+    }
+
+    /// The expansion's growth parameters: human skin ([`tissue_implant::GrowthParams::human`])
+    /// with `growth_step_h`.
+    pub fn growth(&self) -> tissue_implant::GrowthParams {
+        tissue_implant::GrowthParams {
+            step_hours: self.growth_step_h,
+            ..tissue_implant::GrowthParams::human()
+        }
+    }
+
+    /// The band's options, or `None` when `band_samples` is 0.
+    pub fn band(&self) -> Option<tissue_implant::BandOptions> {
+        (self.band_samples > 0).then(|| tissue_implant::BandOptions {
+            samples: self.band_samples,
+            seed: self.band_seed,
+            ..tissue_implant::BandOptions::default()
+        })
     }
 
     /// The implant's outline; a missing size is [`ErrorKind::Usage`].

@@ -98,6 +98,22 @@ impl Scenario {
         matches!(self.job.sim, SimMesh::Remeshed(_))
     }
 
+    /// The expansion over weeks the request asks for (`expand_weeks`), or `None`.
+    ///
+    /// # Errors
+    /// [`PlanRequest::expansion_protocol`]'s.
+    pub fn expansion_job(&self) -> Result<Option<tissue_app::ExpansionJob>, PlanError> {
+        Ok(self
+            .request
+            .expansion_protocol()?
+            .map(|protocol| tissue_app::ExpansionJob {
+                insertion: self.job.clone(),
+                protocol,
+                growth: self.request.growth(),
+                band: self.request.band(),
+            }))
+    }
+
     /// The sweep over `volumes` (cm³) from this placement.
     ///
     /// # Errors

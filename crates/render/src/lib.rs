@@ -74,6 +74,7 @@
 )]
 
 mod camera;
+mod chart;
 mod colormap;
 mod compose;
 mod error;
@@ -83,6 +84,7 @@ mod legend;
 mod raster;
 
 pub use camera::{Camera, View};
+pub use chart::{LineChart, Series, Whisker};
 pub use colormap::{viridis, ColorScale, NAN_COLOR};
 pub use compose::{before_after, BeforeAfterOptions};
 pub use error::RenderError;
