@@ -17,16 +17,22 @@ fn profile_dir() -> PathBuf {
         .unwrap_or_else(|| panic!("{} is not in target/<profile>/deps", exe.display()))
 }
 
-/// `libtissue.a`: cargo builds the crate's `staticlib` with the `rlib` this test links, and
-/// copies it to `target/<profile>`.
+/// `libtissue.a`: cargo builds the crate's `staticlib` with the `rlib` this test links (the
+/// newer of `target/<profile>/deps` and `target/<profile>`).
 fn static_library() -> PathBuf {
-    let lib = profile_dir().join("libtissue.a");
-    assert!(
-        lib.exists(),
-        "{} is missing: cargo builds it with the test (crate-type staticlib)",
-        lib.display()
-    );
-    lib
+    // `cargo build` copies it up to `target/<profile>`; `cargo test` leaves it in `deps`.
+    let dir = profile_dir();
+    [dir.join("deps/libtissue.a"), dir.join("libtissue.a")]
+        .into_iter()
+        .filter(|p| p.exists())
+        .max_by_key(|p| p.metadata().and_then(|m| m.modified()).ok())
+        .unwrap_or_else(|| {
+            panic!(
+                "libtissue.a is in neither {0}/deps nor {0}: cargo builds it with the test \
+                 (crate-type staticlib)",
+                dir.display()
+            )
+        })
 }
 
 /// A compiler for C (`cpp = false`) or C++ as cc-rs finds it (honouring `CC`, `CXX`), with
