@@ -143,6 +143,7 @@
     clippy::print_stderr
 )]
 
+mod attachment;
 mod body;
 mod colour;
 mod constraint;
@@ -157,6 +158,7 @@ mod step;
 mod tool;
 mod voxel;
 
+pub use attachment::AttachmentId;
 pub use body::SoftBody;
 pub use constraint::{
     CentroidVolumeConstraint, ConstraintKind, DistanceConstraint, Floor, TetVolumeConstraint,
