@@ -34,6 +34,8 @@ use crate::{
 ///   with the per-constraint parameter of the current [`StepSettings`].
 #[derive(Debug, Clone)]
 pub struct SoftBody {
+    /// This body's identity ([`SoftBody::id`]).
+    id: BodyId,
     pub(crate) x: Vec<Vec3A>,
     pub(crate) p: Vec<Vec3A>,
     pub(crate) v: Vec<Vec3A>,
@@ -83,6 +85,30 @@ pub struct SoftBody {
     /// Topology edits (`edit.rs`): where each record is projected, the dynamic set, rest
     /// volumes and density for local mass rebuilds.
     pub(crate) edits: crate::edit::Edits,
+}
+
+/// The identity of a [`SoftBody`] ([`SoftBody::id`]): a process-unique number given at
+/// construction, kept by clones.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BodyId(u64);
+
+impl BodyId {
+    /// A number no body built before in this process has.
+    fn next() -> Self {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        BodyId(NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed))
+    }
+
+    /// The number.
+    pub fn get(self) -> u64 {
+        self.0
+    }
+}
+
+impl std::fmt::Display for BodyId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "body #{}", self.0)
+    }
 }
 
 /// `order` of an empty solver slot.
@@ -395,6 +421,7 @@ impl SoftBody {
             .collect();
         let x: Vec<Vec3A> = positions.iter().map(|&p| p.into()).collect();
         let mut body = Self {
+            id: BodyId::next(),
             p: x.clone(),
             v: vec![Vec3A::ZERO; n],
             x,
@@ -676,6 +703,14 @@ impl SoftBody {
         }
         self.floor = floor;
         Ok(())
+    }
+
+    /// This body's identity: unique in the process among bodies built by [`SoftBody::new`] or
+    /// [`SoftBody::from_tets`], even from the same mesh. A clone keeps it: a clone is a snapshot
+    /// of the same body, so that a body and the state kept beside it (e.g. a
+    /// `tissue_surgery::Surgery`) can be cloned together and go on together.
+    pub fn id(&self) -> BodyId {
+        self.id
     }
 
     /// Total mass (g), in `f64`.

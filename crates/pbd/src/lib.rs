@@ -159,7 +159,7 @@ mod tool;
 mod voxel;
 
 pub use attachment::AttachmentId;
-pub use body::SoftBody;
+pub use body::{BodyId, SoftBody};
 pub use constraint::{
     CentroidVolumeConstraint, ConstraintKind, DistanceConstraint, Floor, TetVolumeConstraint,
 };
