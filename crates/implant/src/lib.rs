@@ -66,7 +66,7 @@ mod shape;
 mod walk;
 
 pub use contact_run::{ContactRun, RunParams, StepSummary};
-pub use error::ImplantError;
+pub use error::{ImplantError, SearchedSurface};
 pub use insertion::{
     dissect_pocket, implant_system, place_implant, rim_border_clearance, ImplantParams, Insertion,
     InsertionOutcome, InsertionParams, Progress, PLATEAU_HALF, PLATEAU_TOLERANCE, RUNAWAY_FACTOR,
@@ -85,4 +85,6 @@ pub use scan::{
     DEFAULT_MAX_HOLE, TABLE2_REGION_VERTICES,
 };
 pub use shape::{Implant, ImplantFrame, ImplantShape, ImplantSpec};
+/// The search hierarchy's error, carried by [`ImplantError::Search`].
+pub use tissue_bvh::BvhError;
 pub use walk::{walk_on_surface, WalkEnd};
