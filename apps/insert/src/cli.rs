@@ -118,6 +118,15 @@ fn default_max_steps() -> u64 {
     defaults().max_steps
 }
 
+/// `--time-step`'s help, with the factor the library uses for the automatic step.
+fn time_step_help() -> String {
+    format!(
+        "Time step (s) [default: automatic, {} × the stability limit]. A larger step than the \
+         automatic one may diverge (exit 7).",
+        defaults().automatic_step_safety(),
+    )
+}
+
 /// Parses `X,Y,Z`.
 fn parse_vec3(s: &str) -> Result<[f32; 3], String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
@@ -346,9 +355,9 @@ pub struct Cli {
     #[arg(long, value_name = "N", default_value_t = default_max_steps(), help_heading = "Run")]
     pub max_steps: u64,
 
-    /// Time step (s) [default: automatic, half the stability limit]. A larger step than the
-    /// automatic one may diverge (exit 7).
-    #[arg(long, value_name = "S", help_heading = "Run")]
+    /// Time step (s); the default, automatic, is a fraction of the stability limit (see
+    /// `time_step_help`).
+    #[arg(long, value_name = "S", help_heading = "Run", help = time_step_help())]
     pub time_step: Option<f32>,
 
     /// Run a series of implant volumes in parallel (cm³, comma-separated) instead of --volume;

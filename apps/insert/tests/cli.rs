@@ -527,6 +527,29 @@ fn help_documents_units_exit_codes_and_the_report() {
     }
 }
 
+/// `--time-step`'s help gives the factor of the stability limit the library's automatic step
+/// uses (issue 22: it said half, the library used 0.8).
+#[test]
+fn help_gives_the_automatic_steps_factor_the_library_uses() {
+    let factor = tissue_implant::InsertionParams::default().run.step_safety;
+    assert_eq!(factor, tissue_implant::RunParams::DEFAULT_STEP_SAFETY);
+    for flag in ["-h", "--help"] {
+        let help = stdout(&run(&[flag]));
+        let line = help
+            .lines()
+            .skip_while(|l| !l.contains("--time-step"))
+            .take(4)
+            .collect::<Vec<_>>()
+            .join(" ");
+        let line = line.split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(
+            line.contains(&format!("automatic, {factor} × the stability limit")),
+            "{flag}: {line}"
+        );
+        assert!(!line.contains("half"), "{flag}: {line}");
+    }
+}
+
 #[test]
 fn ctrl_c_cancels_cleanly_and_writes_nothing() {
     let dir = scratch("cancel");
