@@ -77,22 +77,36 @@ max_steps, time_step_s (null: automatic), fill_time_s.
   --sweep: mode \"sweep\", inputs (+ sweep_volumes_cm3), runs: [{volume_cm3, and the single \
 run's result fields}].
   --target-gain: mode \"target-gain\", inputs (+ target_gain_cm2, bracket_cm3), volume_cm3, \
-area_gain_cm2, converged, runs: [{volume_cm3, area_gain_cm2}].
+area_gain_cm2, converged, runs: [{volume_cm3, area_gain_cm2}].";
 
-EXIT CODES:
-  0    success
-  2    usage: unknown flag, bad value syntax, missing --at/--vertex with --mesh, missing shape size
-  3    input file: missing, unreadable, or not a supported mesh type (.obj .ply .stl .vtk)
-  4    mesh: malformed file or invalid surface (defects)
-  5    placement/region: point off the surface, vertex out of range, region empty, region \
-covering the whole surface or too small for the implant, badly shaped triangles at the point
-  6    implant/tissue parameters: non-positive volume or size, a volume the base cannot hold, \
-tissue values out of range, a --target-gain not inside the volume bracket
-  7    the run diverged or failed
-  8    an output could not be written
-  130  interrupted (Ctrl-C): the run is cancelled, nothing is written
-  141  (unix, shown by the shell) stdout closed by its reader (| head): SIGPIPE ends the program \
-at its next write to stdout, silently; outputs not yet written are not written";
+/// The text after the options in `--help`: outputs, the report, and the exit codes (the table
+/// every tissue binary shares, with what each code means here).
+fn after_long_help() -> String {
+    use tissue_cli::Exit;
+    format!(
+        "{AFTER_LONG_HELP}\n\n{}\n  (130 here: the run is cancelled; 141: outputs not yet written are not written)",
+        Exit::help_section(&[
+            (
+                Exit::Usage,
+                "missing --at/--vertex with --mesh, missing shape size",
+            ),
+            (
+                Exit::Input,
+                "the --mesh file (.obj .ply .stl .vtk)",
+            ),
+            (
+                Exit::Placement,
+                "point off the surface, vertex out of range, region empty, covering the whole \
+                 surface or too small for the implant, badly shaped triangles at the point",
+            ),
+            (
+                Exit::Parameters,
+                "non-positive volume or size, a volume the base cannot hold, tissue values out \
+                 of range, a --target-gain not inside the volume bracket",
+            ),
+        ])
+    )
+}
 
 fn default_young_kpa() -> f64 {
     defaults().young_kpa
@@ -122,8 +136,9 @@ fn default_max_steps() -> u64 {
 fn time_step_help() -> String {
     format!(
         "Time step (s) [default: automatic, {} × the stability limit]. A larger step than the \
-         automatic one may diverge (exit 7).",
+         automatic one may diverge (exit {}).",
         defaults().automatic_step_safety(),
+        tissue_cli::Exit::Run.code()
     )
 }
 
@@ -204,7 +219,7 @@ fn parse_mesh_out(s: &str) -> Result<PathBuf, String> {
     version,
     about = ABOUT,
     long_about = LONG_ABOUT,
-    after_long_help = AFTER_LONG_HELP,
+    after_long_help = after_long_help(),
     after_help = "Units, orientation, outputs, the JSON contract and the exit codes: insert --help",
     allow_negative_numbers = true
 )]

@@ -4,6 +4,12 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
+use tissue_cli::Exit;
+
+/// The code of `exit`, as the process reports it.
+fn code(exit: Exit) -> i32 {
+    exit.code().into()
+}
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures")).join(name)
@@ -81,9 +87,9 @@ fn binary_ply_fixture_loads() {
 }
 
 #[test]
-fn broken_mesh_lists_every_defect_and_exits_2() {
-    let (code, v) = json(&fixture("defects/broken.obj"));
-    assert_eq!(code, 2);
+fn broken_mesh_lists_every_defect_and_exits_with_the_mesh_code() {
+    let (status, v) = json(&fixture("defects/broken.obj"));
+    assert_eq!(status, code(Exit::Mesh));
     assert_eq!(v["loaded"], false);
     assert_eq!(v["vertices"], 11);
     assert_eq!(v["triangles"], 10);
@@ -110,8 +116,8 @@ fn broken_mesh_lists_every_defect_and_exits_2() {
     assert_eq!(kinds.len(), 5, "{kinds:?}");
 
     // The text form says the same, and stderr says why it was rejected.
-    let (code, out, err) = run(&[fixture("defects/broken.obj").as_os_str()]);
-    assert_eq!(code, 2);
+    let (status, out, err) = run(&[fixture("defects/broken.obj").as_os_str()]);
+    assert_eq!(status, code(Exit::Mesh));
     assert!(
         out.contains("defects               5 (4 errors, 1 warnings)"),
         "{out}"
@@ -131,15 +137,15 @@ fn unreferenced_vertex_is_a_warning_and_loads() {
 }
 
 #[test]
-fn unreadable_file_exits_2_naming_it() {
+fn unreadable_file_exits_with_the_input_code_naming_it() {
     let missing = fixture("no_such_mesh.obj");
-    let (code, out, err) = run(&[missing.as_os_str()]);
-    assert_eq!(code, 2);
+    let (status, out, err) = run(&[missing.as_os_str()]);
+    assert_eq!(status, code(Exit::Input));
     assert!(out.is_empty());
     assert!(err.contains("no_such_mesh.obj"), "{err}");
 
-    let (code, _, err) = run(&[fixture("README.md").as_os_str()]);
-    assert_eq!(code, 2);
+    let (status, _, err) = run(&[fixture("README.md").as_os_str()]);
+    assert_eq!(status, code(Exit::Input));
     assert!(err.contains("README.md"), "{err}");
 }
 
@@ -245,11 +251,11 @@ fn vtu_and_msh_tet_meshes_are_reported() {
 
 #[test]
 fn unreadable_tet_files_say_why() {
-    let (code, _, stderr) = run(&[fixture("tets/square_no_tets.vtu").as_os_str()]);
-    assert_eq!(code, 2);
+    let (status, _, stderr) = run(&[fixture("tets/square_no_tets.vtu").as_os_str()]);
+    assert_eq!(status, code(Exit::Mesh));
     assert!(stderr.contains("no tetrahedra"), "{stderr}");
-    let (code, _, stderr) = run(&["organ.xyz".as_ref()]);
-    assert_eq!(code, 2);
+    let (status, _, stderr) = run(&["organ.xyz".as_ref()]);
+    assert_eq!(status, code(Exit::Input));
     assert!(
         stderr.contains("unsupported") && stderr.contains(".msh"),
         "{stderr}"

@@ -7,7 +7,7 @@ use tissue_mesh::{tet_box, TetMesh};
 use tissue_pbd::{ContactParams, OrientedBox, Pose, SoftBody, ToolShape, VoxelCollider};
 
 use crate::cli::Cli;
-use crate::failure::{code, Failure};
+use crate::failure::{Exit, Failure};
 
 /// The shipped bunny, relative to the repository root.
 const BUNNY: &str = "../shared/meshes/bunny_10k_tet42k";
@@ -86,7 +86,7 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
                 tissue_tetra::tetrahedralize(&surface, &tissue_tetra::TetraOptions::default())
                     .map_err(|e| {
                         Failure::new(
-                            code::MESHING,
+                            Exit::Meshing,
                             format!("{} cannot be tetrahedralised: {e}", p.display()),
                         )
                     })?;
@@ -100,14 +100,14 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
             Source::Box(n) => (
                 Source::Box(n),
                 tet_box(n, n, n, Vec3::ONE)
-                    .map_err(|e| Failure::new(code::PARAMETERS, format!("--box: {e}")))?,
+                    .map_err(|e| Failure::new(Exit::Parameters, format!("--box: {e}")))?,
             ),
             source => {
                 let raw = match &source {
                     Source::File(p) | Source::Surface(p, _) => {
                         tissue_meshio::read_tets(p).map_err(|e| Failure::from_mesh_io(&e))?
                     }
-                    Source::Box(_) => return Err(Failure::new(code::INPUT, "no organ")),
+                    Source::Box(_) => return Err(Failure::new(Exit::Input, "no organ")),
                 };
                 (source, raw)
             }
@@ -115,13 +115,13 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
     };
     if !(cli.size.is_finite() && cli.size > 0.0) {
         return Err(Failure::new(
-            code::PARAMETERS,
+            Exit::Parameters,
             format!("--size {} must be a positive length in cm", cli.size),
         ));
     }
     if !(cli.depth.is_finite() && cli.depth >= 0.0) {
         return Err(Failure::new(
-            code::PARAMETERS,
+            Exit::Parameters,
             format!("--depth {} must be ≥ 0 cm", cli.depth),
         ));
     }
@@ -156,7 +156,7 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
         0 => vec![[-0.25 * cli.size, 0.0], [0.25 * cli.size, 0.0]],
         1 => {
             return Err(Failure::new(
-                code::PARAMETERS,
+                Exit::Parameters,
                 "one --waypoint is not a path: give two or more",
             ))
         }
@@ -193,7 +193,7 @@ fn place(raw: &TetMesh, size: f32) -> Result<TetMesh, Failure> {
         .collect();
     TetMesh::new(positions, raw.tets().to_vec()).map_err(|e| {
         Failure::new(
-            code::MESH,
+            Exit::Mesh,
             format!("the organ scaled to --size {size} cm is not valid: {e}; use a larger --size"),
         )
     })
