@@ -678,16 +678,8 @@ fn broken_pipe_ends_insert_quietly_by_sigpipe() {
 #[test]
 fn a_closed_body_is_taken_as_it_is_and_the_region_cut_out_of_it() {
     // Regression (issue 17): a watertight body was refused with "the skin must be an open scan
-    // patch". The MakeHuman body (dm, closed) is third-party test data beside the repository.
-    let body = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/meshes/makehuman_body_closed.obj");
-    if !body.is_file() {
-        eprintln!(
-            "SKIPPED: {} not found (third-party test data, see ../shared/meshes/SOURCES.md)",
-            body.display()
-        );
-        return;
-    }
+    // patch". The MakeHuman body (dm, closed, CC0) ships in fixtures/.
+    let body = fixture("makehuman_body_closed.obj");
     let dir = scratch("closed_body");
     let out = dir.join("body_after.obj");
     let o = run(&[

@@ -1,4 +1,4 @@
-//! Runs the real `meshinfo` binary on fixtures and on the shared real meshes.
+//! Runs the real `meshinfo` binary on the fixtures, the real third-party meshes among them.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -13,19 +13,6 @@ fn code(exit: Exit) -> i32 {
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures")).join(name)
-}
-
-fn shared_meshes() -> Option<PathBuf> {
-    let dir = Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/meshes"
-    ));
-    if dir.is_dir() {
-        Some(dir.to_path_buf())
-    } else {
-        eprintln!("skipping: {} not found", dir.display());
-        None
-    }
 }
 
 /// Runs meshinfo; returns (exit code, stdout, stderr).
@@ -151,7 +138,7 @@ fn unreadable_file_exits_with_the_input_code_naming_it() {
 
 #[test]
 fn real_open_scans_report_their_boundary_loops() {
-    let Some(dir) = shared_meshes() else { return };
+    let dir = fixture("");
     for (file, v, f, edges) in [
         ("makehuman_head_open.obj", 4257, 8470, 42),
         ("makehuman_chest_open.obj", 4921, 9632, 208),
@@ -171,8 +158,7 @@ fn real_open_scans_report_their_boundary_loops() {
 
 #[test]
 fn real_tet_mesh_reports_nodes_tets_and_closed_boundary() {
-    let Some(dir) = shared_meshes() else { return };
-    let (code, r) = json(&dir.join("pbd_armadillo_4k.node"));
+    let (code, r) = json(&fixture("armadillo_4k.node"));
     assert_eq!(code, 0, "{r}");
     assert_eq!(r["kind"], "tetrahedral");
     assert_eq!(r["vertices"], 1180);

@@ -1,10 +1,9 @@
-//! The insertion run on a real patient surface: the MakeHuman head patch of `../shared/meshes`
+//! The insertion run on a real patient surface: the MakeHuman head patch of `fixtures/`
 //! (open at the neck, decimetres, +Y up, +Z front), a round 7 cm expander of 50 cm³ at the top
 //! of the forehead, on the front hairline. The checks are the ones every run must pass (as in
 //! `insertion.rs` on the flat plane), here on a curved base.
 //!
-//! The mesh is third-party test data kept outside the repository (`SOURCES.md` there). When it is
-//! missing, the test says so and passes.
+//! The mesh is third-party test data (CC0) shipped in `fixtures/` (provenance in its README).
 //!
 //! # Why the top of the forehead and not the crown
 //! MakeHuman's scalp is coarse. Around the crown (the highest vertex) the 5.25 cm region has 44
@@ -33,9 +32,9 @@ use tissue_implant::{
 use tissue_mesh::TriMesh;
 use tissue_mss::StopReason;
 
-/// `../shared/meshes/makehuman_head_open.obj` from the repository root.
+/// `fixtures/makehuman_head_open.obj`.
 fn head_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes/makehuman_head_open.obj")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/makehuman_head_open.obj")
 }
 
 /// The head in cm (the file is in decimetres).
@@ -48,14 +47,6 @@ fn read_head(path: &Path) -> TriMesh {
 #[test]
 fn a_round_expander_on_the_forehead_settles_and_keeps_every_invariant() {
     let path = head_path();
-    if !path.is_file() {
-        eprintln!(
-            "SKIPPED head insertion test: patient mesh {} not found (third-party test data \
-             kept outside the repository, see ../shared/meshes/SOURCES.md)",
-            path.display()
-        );
-        return;
-    }
     let patient = read_head(&path);
     assert_eq!(patient.vertex_count(), 4257);
 
