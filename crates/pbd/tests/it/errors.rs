@@ -162,9 +162,15 @@ fn unpinning_one_attachment_keeps_the_others_ids() {
     body.set_attachment_target(id_b, p(b) + lift).unwrap();
     body.step().unwrap();
     let x = |n: u32| Vec3::from(body.positions()[n as usize]);
-    assert!((x(b) - (p(b) + lift)).length() < 1e-6, "B's node moved to B's target");
+    assert!(
+        (x(b) - (p(b) + lift)).length() < 1e-6,
+        "B's node moved to B's target"
+    );
     assert!((x(c) - p(c)).length() < 1e-6, "C's node stayed");
-    assert!((x(a) - p(a)).length() < 1e-6, "A's node, attached again, stayed");
+    assert!(
+        (x(a) - p(a)).length() < 1e-6,
+        "A's node, attached again, stayed"
+    );
     // The stale id is refused; the others still work.
     assert!(matches!(
         body.set_attachment_target(id_a, Vec3::ZERO),

@@ -2,7 +2,7 @@
 //! (validity, topology, orientation, closeness to the input, edge lengths), smoothing, errors,
 //! determinism.
 
-mod common;
+use crate::common;
 
 use common::{assert_same_topology, fit, read_obj};
 use glam::Vec3;

@@ -1,7 +1,7 @@
 //! Conservation, damping, volume and stiffness behaviour of the public API.
 #![allow(clippy::print_stderr, clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use std::time::Instant;
 

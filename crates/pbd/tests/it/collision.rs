@@ -3,7 +3,7 @@
 //! field against brute force, and bad input.
 #![allow(clippy::print_stderr, clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use std::sync::Arc;
 

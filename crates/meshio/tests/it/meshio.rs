@@ -727,28 +727,19 @@ fn real_surfaces_have_the_documented_counts_and_topology() {
 }
 
 #[test]
-fn real_tet_meshes_have_the_documented_counts() {
-    let dir = fixtures();
-    // stem, nodes, tets, boundary triangles, interior nodes (None: not documented).
-    for (stem, nodes, tets, boundary, interior) in [("armadillo_4k", 1_180, 3_717, 2_102, Some(127))]
-    {
-        let data = read_tetgen(dir.join(format!("{stem}.node"))).unwrap();
-        assert_eq!(
-            (data.positions.len(), data.tets.len()),
-            (nodes, tets),
-            "{stem}"
-        );
-        // Validation checks what SOURCES.md says: all positive, no face in more than 2 tets.
-        let mesh = read_tets(dir.join(format!("{stem}.ele"))).unwrap_or_else(|e| panic!("{e}"));
-        let surface = mesh.boundary_surface().unwrap();
-        assert_eq!(surface.triangle_count(), boundary, "{stem}");
-        assert!(surface.is_closed(), "{stem}");
-        let unused = surface.unreferenced_vertices().len();
-        assert_eq!(surface.euler_characteristic() - unused as i64, 2, "{stem}");
-        if let Some(interior) = interior {
-            assert_eq!(unused, interior, "{stem}");
-        }
-    }
+fn real_tet_mesh_has_the_documented_counts() {
+    // The TetGen armadillo: nodes, tets, boundary triangles, interior nodes (fixtures/README.md).
+    let stem = fixtures().join("armadillo_4k");
+    let data = read_tetgen(&stem).unwrap();
+    assert_eq!((data.positions.len(), data.tets.len()), (1_180, 3_717));
+    // Validation checks what the provenance says: all positive, no face in more than 2 tets.
+    let mesh = read_tets(stem.with_extension("ele")).unwrap_or_else(|e| panic!("{e}"));
+    let surface = mesh.boundary_surface().unwrap();
+    assert_eq!(surface.triangle_count(), 2_102);
+    assert!(surface.is_closed());
+    let unused = surface.unreferenced_vertices().len();
+    assert_eq!(surface.euler_characteristic() - unused as i64, 2);
+    assert_eq!(unused, 127);
 }
 
 /// tobj (the design card's OBJ crate) as an oracle: on well-formed single-group files it must
@@ -762,11 +753,7 @@ fn obj_reader_agrees_with_tobj_on_well_formed_files() {
         write_obj(&path, &mesh).unwrap();
         files.push(path);
     }
-    for f in [
-        "makehuman_head_open.obj",
-        "liver_sofa.obj",
-        "bunny_10k.obj",
-    ] {
+    for f in ["makehuman_head_open.obj", "liver_sofa.obj", "bunny_10k.obj"] {
         files.push(fixtures().join(f));
     }
     let options = tobj::LoadOptions {

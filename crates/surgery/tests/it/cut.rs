@@ -2,7 +2,7 @@
 //! the surface along its length and leaves one piece.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use tissue_pbd::{Pose, SoftBody, StepSettings, ToolShape};
