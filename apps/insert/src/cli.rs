@@ -84,22 +84,36 @@ injected_cm3, volume_cm3, area_gain_cm2, grown_area_cm2, grown_gain_cm2, mean_gr
 {base_area_cm2, recruited_area_cm2, dome_area_cm2, grown_area_cm2, flap_area_cm2, retraction, \
 geometric_gain_cm2, grown_gain_cm2, efficiency, flap_growth}, band {samples, seed, method, \
 flap_area_cm2, retraction, efficiency, grown_area_cm2: {p5, p50, p95}} or null, steps, \
-reference_steps, wall_time_s.
+reference_steps, wall_time_s.";
 
-EXIT CODES:
-  0    success
-  2    usage: unknown flag, bad value syntax, missing --at/--vertex with --mesh, missing shape size
-  3    input file: missing, unreadable, or not a supported mesh type (.obj .ply .stl .vtk)
-  4    mesh: malformed file or invalid surface (defects)
-  5    placement/region: point off the surface, vertex out of range, region empty, region \
-covering the whole surface or too small for the implant, badly shaped triangles at the point
-  6    implant/tissue parameters: non-positive volume or size, a volume the base cannot hold, \
-tissue values out of range, a --target-gain not inside the volume bracket
-  7    the run diverged or failed
-  8    an output could not be written
-  130  interrupted (Ctrl-C): the run is cancelled, nothing is written
-  141  (unix, shown by the shell) stdout closed by its reader (| head): SIGPIPE ends the program \
-at its next write to stdout, silently; outputs not yet written are not written";
+/// The text after the options in `--help`: outputs, the report, and the exit codes (the table
+/// every tissue binary shares, with what each code means here).
+fn after_long_help() -> String {
+    use tissue_cli::Exit;
+    format!(
+        "{AFTER_LONG_HELP}\n\n{}\n  (130 here: the run is cancelled; 141: outputs not yet written are not written)",
+        Exit::help_section(&[
+            (
+                Exit::Usage,
+                "missing --at/--vertex with --mesh, missing shape size",
+            ),
+            (
+                Exit::Input,
+                "the --mesh file (.obj .ply .stl .vtk)",
+            ),
+            (
+                Exit::Placement,
+                "point off the surface, vertex out of range, region empty, covering the whole \
+                 surface or too small for the implant, badly shaped triangles at the point",
+            ),
+            (
+                Exit::Parameters,
+                "non-positive volume or size, a volume the base cannot hold, tissue values out \
+                 of range, a --target-gain not inside the volume bracket",
+            ),
+        ])
+    )
+}
 
 fn default_young_kpa() -> f64 {
     defaults().young_kpa
@@ -123,6 +137,16 @@ fn default_depth() -> f64 {
 
 fn default_max_steps() -> u64 {
     defaults().max_steps
+}
+
+/// `--time-step`'s help, with the factor the library uses for the automatic step.
+fn time_step_help() -> String {
+    format!(
+        "Time step (s) [default: automatic, {} × the stability limit]. A larger step than the \
+         automatic one may diverge (exit {}).",
+        defaults().automatic_step_safety(),
+        tissue_cli::Exit::Run.code()
+    )
 }
 
 /// Parses `X,Y,Z`.
@@ -202,7 +226,7 @@ fn parse_mesh_out(s: &str) -> Result<PathBuf, String> {
     version,
     about = ABOUT,
     long_about = LONG_ABOUT,
-    after_long_help = AFTER_LONG_HELP,
+    after_long_help = after_long_help(),
     after_help = "Units, orientation, outputs, the JSON contract and the exit codes: insert --help",
     allow_negative_numbers = true
 )]
@@ -353,9 +377,9 @@ pub struct Cli {
     #[arg(long, value_name = "N", default_value_t = default_max_steps(), help_heading = "Run")]
     pub max_steps: u64,
 
-    /// Time step (s) [default: automatic, half the stability limit]. A larger step than the
-    /// automatic one may diverge (exit 7).
-    #[arg(long, value_name = "S", help_heading = "Run")]
+    /// Time step (s); the default, automatic, is a fraction of the stability limit (see
+    /// `time_step_help`).
+    #[arg(long, value_name = "S", help_heading = "Run", help = time_step_help())]
     pub time_step: Option<f32>,
 
     /// Run a series of implant volumes in parallel (cm³, comma-separated) instead of --volume;

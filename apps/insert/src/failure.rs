@@ -6,38 +6,21 @@ use tissue_planner::{ErrorKind, PlanError};
 
 use crate::cli::flag_of;
 
-/// The documented exit codes (see `insert --help`).
-pub mod code {
-    /// Usage: clap's code for a bad command line.
-    pub const USAGE: u8 = 2;
-    /// The input file is missing, unreadable or of an unsupported type.
-    pub const INPUT: u8 = 3;
-    /// The mesh is malformed or invalid.
-    pub const MESH: u8 = 4;
-    /// The point is off the surface, or the region is empty, too large or too small.
-    pub const PLACEMENT: u8 = 5;
-    /// An implant or tissue parameter is out of range.
-    pub const PARAMETERS: u8 = 6;
-    /// The run diverged or failed.
-    pub const RUN: u8 = 7;
-    /// An output could not be written.
-    pub const OUTPUT: u8 = 8;
-    /// Interrupted by Ctrl-C.
-    pub const INTERRUPTED: u8 = 130;
-}
+/// The exit codes: the table every tissue binary shares (see `insert --help`).
+pub use tissue_cli::Exit;
 
 /// A reason to stop with a non-zero exit code.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Failure {
     /// The exit code.
-    pub code: u8,
+    pub code: Exit,
     /// What went wrong and what to change, on one line.
     pub message: String,
 }
 
 impl Failure {
     /// A failure with `code` and `message`.
-    pub fn new(code: u8, message: impl Into<String>) -> Self {
+    pub fn new(code: Exit, message: impl Into<String>) -> Self {
         Failure {
             code,
             message: message.into(),
@@ -55,14 +38,14 @@ impl Failure {
     /// The planner's error, its fields named by their flags.
     pub fn from_plan(e: &PlanError) -> Self {
         let code = match e.kind {
-            ErrorKind::Usage => code::USAGE,
-            ErrorKind::Input => code::INPUT,
-            ErrorKind::Mesh => code::MESH,
-            ErrorKind::Placement => code::PLACEMENT,
-            ErrorKind::Parameters => code::PARAMETERS,
-            ErrorKind::Run => code::RUN,
-            ErrorKind::Output => code::OUTPUT,
-            ErrorKind::Cancelled => code::INTERRUPTED,
+            ErrorKind::Usage => Exit::Usage,
+            ErrorKind::Input => Exit::Input,
+            ErrorKind::Mesh => Exit::Mesh,
+            ErrorKind::Placement => Exit::Placement,
+            ErrorKind::Parameters => Exit::Parameters,
+            ErrorKind::Run => Exit::Run,
+            ErrorKind::Output => Exit::Output,
+            ErrorKind::Cancelled => Exit::Interrupted,
         };
         Failure::new(code, e.message_with(flag_of))
     }
@@ -70,7 +53,7 @@ impl Failure {
     /// Writing an output failed.
     pub fn output(what: &str, e: impl std::fmt::Display) -> Self {
         Failure::new(
-            code::OUTPUT,
+            Exit::Output,
             format!("cannot write the {what}: {e}; check the folder exists and is writable"),
         )
     }
@@ -78,7 +61,7 @@ impl Failure {
     /// Ctrl-C.
     pub fn interrupted(steps: u64) -> Self {
         Failure::new(
-            code::INTERRUPTED,
+            Exit::Interrupted,
             format!("interrupted after {steps} steps; nothing was written"),
         )
     }
@@ -96,10 +79,10 @@ mod tests {
             "use a smaller `region_radius_cm` or implant",
         );
         let f = Failure::from_plan(&e);
-        assert_eq!(f.code, code::PLACEMENT);
+        assert_eq!(f.code, Exit::Placement);
         assert_eq!(f.line(), "use a smaller --radius or implant");
         let v = PlanError::field(ErrorKind::Parameters, "volume_cm3", "`volume_cm3` < 0");
-        assert_eq!(Failure::from_plan(&v).code, code::PARAMETERS);
+        assert_eq!(Failure::from_plan(&v).code, Exit::Parameters);
         assert_eq!(Failure::from_plan(&v).message, "--volume < 0");
     }
 }

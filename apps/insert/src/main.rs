@@ -20,7 +20,7 @@ use clap::Parser;
 use tissue_planner::report::Inputs;
 
 use crate::cli::Cli;
-use crate::failure::{code, Failure};
+use crate::failure::{Exit, Failure};
 use crate::progress::Interrupt;
 
 fn run(cli: &Cli) -> Result<(), Failure> {
@@ -62,7 +62,7 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(failure) => {
-            let hint = if failure.code == code::USAGE {
+            let hint = if failure.code == Exit::Usage {
                 " (see insert --help)"
             } else {
                 ""

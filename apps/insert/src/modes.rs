@@ -5,7 +5,7 @@ use tissue_planner::report::{self as contract, Inputs, RunResult};
 use tissue_planner::{Job, Outcome, PatientResult, Scenario};
 
 use crate::cli::Cli;
-use crate::failure::{code, Failure};
+use crate::failure::{Exit, Failure};
 use crate::output::Staged;
 use crate::progress::{drive, Display, Interrupt};
 use crate::report;
@@ -15,7 +15,7 @@ const TOOL: &str = "insert";
 
 fn unexpected(outcome: &Outcome) -> Failure {
     Failure::new(
-        code::RUN,
+        Exit::Run,
         format!("the worker returned an unexpected result: {outcome:?}"),
     )
 }
@@ -64,7 +64,7 @@ pub fn single(
     };
     if !planned.outcome.is_finite() {
         return Err(Failure::new(
-            code::RUN,
+            Exit::Run,
             "the run diverged: the result has positions that are not finite; leave --time-step \
              automatic, or lower it",
         ));
@@ -210,7 +210,7 @@ pub fn expansion(
     let job = scenario
         .expansion_job()
         .map_err(|e| Failure::from_plan(&e))?
-        .ok_or_else(|| Failure::new(code::USAGE, "--expand-weeks is required"))?;
+        .ok_or_else(|| Failure::new(Exit::Usage, "--expand-weeks is required"))?;
     let mut display = Display::new(cli.quiet, true);
     let planned = match drive(
         Job::Expansion(Box::new(job.clone())),

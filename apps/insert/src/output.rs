@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use tissue_planner::PatientResult;
 
 use crate::cli::Cli;
-use crate::failure::{code, Failure};
+use crate::failure::{Exit, Failure};
 use crate::progress::Interrupt;
 
 /// Every output path of the command line.
@@ -31,7 +31,7 @@ pub fn check_targets(cli: &Cli) -> Result<(), Failure> {
         };
         if !dir.is_dir() {
             return Err(Failure::new(
-                code::OUTPUT,
+                Exit::Output,
                 format!(
                     "cannot write {}: the folder {} does not exist; create it or pick another path",
                     path.display(),
@@ -41,7 +41,7 @@ pub fn check_targets(cli: &Cli) -> Result<(), Failure> {
         }
         if path.is_dir() {
             return Err(Failure::new(
-                code::OUTPUT,
+                Exit::Output,
                 format!(
                     "cannot write {}: it is a folder; give a file name",
                     path.display()

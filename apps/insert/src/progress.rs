@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use tissue_planner::{Event, Handle, Job, Outcome, ProgressEvent};
 
-use crate::failure::{code, Failure};
+use crate::failure::{Exit, Failure};
 
 /// Set by Ctrl-C (SIGINT); read by the events loop and before outputs are committed.
 #[derive(Debug, Clone)]
@@ -25,7 +25,7 @@ impl Interrupt {
         let flag = Arc::new(AtomicBool::new(false));
         let set = Arc::clone(&flag);
         ctrlc::set_handler(move || set.store(true, Ordering::SeqCst)).map_err(|e| {
-            Failure::new(code::RUN, format!("cannot install the Ctrl-C handler: {e}"))
+            Failure::new(Exit::Run, format!("cannot install the Ctrl-C handler: {e}"))
         })?;
         Ok(Interrupt(flag))
     }
@@ -183,6 +183,6 @@ pub fn drive(job: Job, display: &mut Display, interrupt: &Interrupt) -> Result<O
         Event::Finished(outcome) => Ok(outcome),
         Event::Cancelled { steps } => Err(Failure::interrupted(steps)),
         Event::Failed(e) => Err(Failure::from_plan(&tissue_planner::PlanError::from_app(&e))),
-        Event::Progress(_) => Err(Failure::new(code::RUN, "the worker ended without a result")),
+        Event::Progress(_) => Err(Failure::new(Exit::Run, "the worker ended without a result")),
     }
 }

@@ -14,6 +14,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 use serde_json::Value;
 use tissue_app::{InsertionJob, Placement, PlannedInsertion, SimMesh};
+use tissue_cli::Exit;
 use tissue_implant::{ImplantShape, ImplantSpec, RegionOptions, RegionRule};
 use tissue_mesh::TriMesh;
 
@@ -434,10 +435,14 @@ fn a_target_gain_search_prints_its_runs_and_the_volume() {
 }
 
 /// Runs with `args`, expects exit `code` and one `insert: error:` line containing `words`.
-fn assert_fails(args: &[&str], code: i32, words: &[&str]) {
+fn assert_fails(args: &[&str], code: Exit, words: &[&str]) {
     let o = run(args);
     let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(code), "{args:?}: stderr {err}");
+    assert_eq!(
+        o.status.code(),
+        Some(code.code().into()),
+        "{args:?}: stderr {err}"
+    );
     let errors: Vec<&str> = err
         .lines()
         .filter(|l| l.starts_with("insert: error:"))
@@ -466,41 +471,61 @@ fn each_error_has_its_exit_code_and_a_message_that_says_what_to_change() {
 
     assert_fails(
         &["--mesh", missing.to_str().unwrap(), "--at", "0,0,0"],
-        3,
+        Exit::Input,
         &["cannot read", "--mesh"],
     );
     assert_fails(
         &["--mesh", garbage.to_str().unwrap(), "--at", "0,0,0"],
-        4,
+        Exit::Mesh,
         &["malformed", "line 2"],
     );
     // A closed surface is taken as it is; this 2 cm cube is too small for the region.
     assert_fails(
         &["--mesh", cube.to_str().unwrap(), "--at", "0,0,1"],
-        5,
+        Exit::Placement,
         &["covers the whole surface", "smaller --radius"],
     );
-    assert_fails(&["--at", "0,0,5"], 5, &["from the surface", "--at"]);
-    assert_fails(&["--vertex", "99999"], 5, &["out of range", "4225"]);
-    assert_fails(&["--volume", "0"], 6, &["--volume", "positive"]);
-    assert_fails(&["--volume=-5"], 6, &["--volume", "positive"]);
-    assert_fails(&["--diameter", "0"], 6, &["--diameter", "positive"]);
+    assert_fails(
+        &["--at", "0,0,5"],
+        Exit::Placement,
+        &["from the surface", "--at"],
+    );
+    assert_fails(
+        &["--vertex", "99999"],
+        Exit::Placement,
+        &["out of range", "4225"],
+    );
+    assert_fails(
+        &["--volume", "0"],
+        Exit::Parameters,
+        &["--volume", "positive"],
+    );
+    assert_fails(
+        &["--volume=-5"],
+        Exit::Parameters,
+        &["--volume", "positive"],
+    );
+    assert_fails(
+        &["--diameter", "0"],
+        Exit::Parameters,
+        &["--diameter", "positive"],
+    );
     assert_fails(
         &["--mesh", plane_1cm.to_str().unwrap(), "--at", "0,0,0"],
-        5,
+        Exit::Placement,
         &["covers the whole surface", "smaller --radius"],
     );
     let mut diverging = vec!["--mesh", small];
     diverging.extend(SMALL_ARGS);
     diverging.extend(["--time-step", "1e-3"]);
-    assert_fails(&diverging, 7, &["diverged", "--time-step"]);
+    assert_fails(&diverging, Exit::Run, &["diverged", "--time-step"]);
     let nowhere = dir.join("no/such/folder/out.obj");
     assert_fails(
         &["--out", nowhere.to_str().unwrap()],
-        8,
+        Exit::Output,
         &["does not exist"],
     );
-    assert_fails(&["--mesh", small], 2, &["--at", "--vertex"]);
+    assert_fails(&["--mesh", small], Exit::Usage, &["--at", "--vertex"]);
     // clap's own usage errors: exit 2.
     assert_eq!(run(&["--no-such-flag"]).status.code(), Some(2));
     assert_eq!(run(&["--out", "x.xyz"]).status.code(), Some(2));
@@ -524,6 +549,29 @@ fn help_documents_units_exit_codes_and_the_report() {
         "mesh's unit",
     ] {
         assert!(help.contains(needle), "--help lacks {needle:?}");
+    }
+}
+
+/// `--time-step`'s help gives the factor of the stability limit the library's automatic step
+/// uses (issue 22: it said half, the library used 0.8).
+#[test]
+fn help_gives_the_automatic_steps_factor_the_library_uses() {
+    let factor = tissue_implant::InsertionParams::default().run.step_safety;
+    assert_eq!(factor, tissue_implant::RunParams::DEFAULT_STEP_SAFETY);
+    for flag in ["-h", "--help"] {
+        let help = stdout(&run(&[flag]));
+        let line = help
+            .lines()
+            .skip_while(|l| !l.contains("--time-step"))
+            .take(4)
+            .collect::<Vec<_>>()
+            .join(" ");
+        let line = line.split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(
+            line.contains(&format!("automatic, {factor} × the stability limit")),
+            "{flag}: {line}"
+        );
+        assert!(!line.contains("half"), "{flag}: {line}");
     }
 }
 
@@ -564,7 +612,11 @@ fn ctrl_c_cancels_cleanly_and_writes_nothing() {
     assert!(status.success());
     let rest: Vec<String> = lines.map_while(Result::ok).collect();
     let exit = child.wait().unwrap();
-    assert_eq!(exit.code(), Some(130), "stderr after the signal: {rest:?}");
+    assert_eq!(
+        exit.code(),
+        Some(Exit::Interrupted.code().into()),
+        "stderr after the signal: {rest:?}"
+    );
     assert!(
         rest.iter().any(|l| l.contains("interrupted")),
         "stderr after the signal: {rest:?}"
@@ -626,16 +678,8 @@ fn broken_pipe_ends_insert_quietly_by_sigpipe() {
 #[test]
 fn a_closed_body_is_taken_as_it_is_and_the_region_cut_out_of_it() {
     // Regression (issue 17): a watertight body was refused with "the skin must be an open scan
-    // patch". The MakeHuman body (dm, closed) is third-party test data beside the repository.
-    let body = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/meshes/makehuman_body_closed.obj");
-    if !body.is_file() {
-        eprintln!(
-            "SKIPPED: {} not found (third-party test data, see ../shared/meshes/SOURCES.md)",
-            body.display()
-        );
-        return;
-    }
+    // patch". The MakeHuman body (dm, closed, CC0) ships in fixtures/.
+    let body = fixture("makehuman_body_closed.obj");
     let dir = scratch("closed_body");
     let out = dir.join("body_after.obj");
     let o = run(&[

@@ -6,7 +6,9 @@
 //! meshgen cube   --per-edge 8 --side 2 OUT.obj
 //! meshgen disc   --radial 8 --segments 32 --radius 1 OUT.obj
 //! ```
-//! The output format follows the extension (obj, ply, stl, vtk). Exit code 2 on bad arguments.
+//! The output format follows the extension (obj, ply, stl, vtk). Exit codes from the table every
+//! tissue binary shares ([`tissue_cli::Exit`]): 2 for a bad command line or an output extension
+//! no writer knows, 6 for a size out of range, 8 when the file cannot be written.
 //! Only clap's help and version go to stdout; a closed stdout ends the program by SIGPIPE without
 //! a message (status 141 in a shell).
 
@@ -14,11 +16,16 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use tissue_cli::Exit;
 use tissue_mesh::{disc, grid, subdivided_cube, uv_sphere, TriMesh};
+use tissue_meshio::MeshIoError;
 
 /// Writes deterministic test meshes (the thesis's planes, spheres and cube).
 #[derive(Parser, Debug)]
-#[command(version, about)]
+#[command(version, about, after_long_help = Exit::help_section(&[
+    (Exit::Usage, "or an output extension other than obj, ply, stl, vtk"),
+    (Exit::Parameters, "a count or size the generator refuses"),
+]))]
 struct Args {
     #[command(subcommand)]
     shape: Shape,
@@ -92,12 +99,16 @@ fn main() -> ExitCode {
         Ok(m) => m,
         Err(e) => {
             eprintln!("meshgen: {e}");
-            return ExitCode::from(2);
+            return Exit::Parameters.into();
         }
     };
     if let Err(e) = tissue_meshio::write_surface(&out, &mesh) {
         eprintln!("meshgen: {e}");
-        return ExitCode::from(2);
+        return match e {
+            MeshIoError::UnsupportedFormat { .. } => Exit::Usage,
+            _ => Exit::Output,
+        }
+        .into();
     }
     ExitCode::SUCCESS
 }

@@ -1,25 +1,18 @@
-//! Runs the real `meshinfo` binary on fixtures and on the shared real meshes.
+//! Runs the real `meshinfo` binary on the fixtures, the real third-party meshes among them.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
+use tissue_cli::Exit;
+
+/// The code of `exit`, as the process reports it.
+fn code(exit: Exit) -> i32 {
+    exit.code().into()
+}
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures")).join(name)
-}
-
-fn shared_meshes() -> Option<PathBuf> {
-    let dir = Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/meshes"
-    ));
-    if dir.is_dir() {
-        Some(dir.to_path_buf())
-    } else {
-        eprintln!("skipping: {} not found", dir.display());
-        None
-    }
 }
 
 /// Runs meshinfo; returns (exit code, stdout, stderr).
@@ -81,9 +74,9 @@ fn binary_ply_fixture_loads() {
 }
 
 #[test]
-fn broken_mesh_lists_every_defect_and_exits_2() {
-    let (code, v) = json(&fixture("defects/broken.obj"));
-    assert_eq!(code, 2);
+fn broken_mesh_lists_every_defect_and_exits_with_the_mesh_code() {
+    let (status, v) = json(&fixture("defects/broken.obj"));
+    assert_eq!(status, code(Exit::Mesh));
     assert_eq!(v["loaded"], false);
     assert_eq!(v["vertices"], 11);
     assert_eq!(v["triangles"], 10);
@@ -110,8 +103,8 @@ fn broken_mesh_lists_every_defect_and_exits_2() {
     assert_eq!(kinds.len(), 5, "{kinds:?}");
 
     // The text form says the same, and stderr says why it was rejected.
-    let (code, out, err) = run(&[fixture("defects/broken.obj").as_os_str()]);
-    assert_eq!(code, 2);
+    let (status, out, err) = run(&[fixture("defects/broken.obj").as_os_str()]);
+    assert_eq!(status, code(Exit::Mesh));
     assert!(
         out.contains("defects               5 (4 errors, 1 warnings)"),
         "{out}"
@@ -131,21 +124,21 @@ fn unreferenced_vertex_is_a_warning_and_loads() {
 }
 
 #[test]
-fn unreadable_file_exits_2_naming_it() {
+fn unreadable_file_exits_with_the_input_code_naming_it() {
     let missing = fixture("no_such_mesh.obj");
-    let (code, out, err) = run(&[missing.as_os_str()]);
-    assert_eq!(code, 2);
+    let (status, out, err) = run(&[missing.as_os_str()]);
+    assert_eq!(status, code(Exit::Input));
     assert!(out.is_empty());
     assert!(err.contains("no_such_mesh.obj"), "{err}");
 
-    let (code, _, err) = run(&[fixture("README.md").as_os_str()]);
-    assert_eq!(code, 2);
+    let (status, _, err) = run(&[fixture("README.md").as_os_str()]);
+    assert_eq!(status, code(Exit::Input));
     assert!(err.contains("README.md"), "{err}");
 }
 
 #[test]
 fn real_open_scans_report_their_boundary_loops() {
-    let Some(dir) = shared_meshes() else { return };
+    let dir = fixture("");
     for (file, v, f, edges) in [
         ("makehuman_head_open.obj", 4257, 8470, 42),
         ("makehuman_chest_open.obj", 4921, 9632, 208),
@@ -165,8 +158,7 @@ fn real_open_scans_report_their_boundary_loops() {
 
 #[test]
 fn real_tet_mesh_reports_nodes_tets_and_closed_boundary() {
-    let Some(dir) = shared_meshes() else { return };
-    let (code, r) = json(&dir.join("pbd_armadillo_4k.node"));
+    let (code, r) = json(&fixture("armadillo_4k.node"));
     assert_eq!(code, 0, "{r}");
     assert_eq!(r["kind"], "tetrahedral");
     assert_eq!(r["vertices"], 1180);
@@ -245,11 +237,11 @@ fn vtu_and_msh_tet_meshes_are_reported() {
 
 #[test]
 fn unreadable_tet_files_say_why() {
-    let (code, _, stderr) = run(&[fixture("tets/square_no_tets.vtu").as_os_str()]);
-    assert_eq!(code, 2);
+    let (status, _, stderr) = run(&[fixture("tets/square_no_tets.vtu").as_os_str()]);
+    assert_eq!(status, code(Exit::Mesh));
     assert!(stderr.contains("no tetrahedra"), "{stderr}");
-    let (code, _, stderr) = run(&["organ.xyz".as_ref()]);
-    assert_eq!(code, 2);
+    let (status, _, stderr) = run(&["organ.xyz".as_ref()]);
+    assert_eq!(status, code(Exit::Input));
     assert!(
         stderr.contains("unsupported") && stderr.contains(".msh"),
         "{stderr}"

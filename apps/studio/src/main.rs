@@ -5,12 +5,16 @@ use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::process::ExitCode;
 
 use clap::Parser;
+use tissue_cli::Exit;
 
 /// Plan a tissue-expander insertion in the browser: pick the patient, place and size the
 /// implant, run and see the result. Serves on 127.0.0.1 (this computer only) unless --host is
 /// given, and prints the address to open.
 #[derive(Debug, Parser)]
-#[command(name = "studio", version)]
+#[command(name = "studio", version, after_long_help = Exit::help_section(&[
+    (Exit::Output, "the temporary folder cannot be made"),
+    (Exit::Failure, "the server cannot start or listen (another --port?) or stopped"),
+]))]
 struct Cli {
     /// The address to listen on; another than 127.0.0.1 lets other computers reach the studio.
     #[arg(long, default_value_t = IpAddr::V4(Ipv4Addr::LOCALHOST))]
@@ -34,27 +38,35 @@ fn main() -> ExitCode {
         Ok(r) => r,
         Err(e) => {
             eprintln!("studio: error: cannot start the async runtime: {e}");
-            return ExitCode::from(1);
+            return Exit::Failure.into();
         }
     };
     match runtime.block_on(serve(SocketAddr::new(cli.host, cli.port))) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
+        Err((exit, message)) => {
             eprintln!("studio: error: {message}");
-            ExitCode::from(1)
+            exit.into()
         }
     }
 }
 
-async fn serve(addr: SocketAddr) -> Result<(), String> {
-    let studio = tissue_studio::Studio::new()
-        .map_err(|e| format!("cannot make the temporary folder: {e}"))?;
+/// Serves until Ctrl-C; a failure is its exit code and message.
+async fn serve(addr: SocketAddr) -> Result<(), (Exit, String)> {
+    let studio = tissue_studio::Studio::new().map_err(|e| {
+        (
+            Exit::Output,
+            format!("cannot make the temporary folder: {e}"),
+        )
+    })?;
     let listener = tokio::net::TcpListener::bind(addr).await.map_err(|e| {
-        format!("cannot listen on {addr}: {e}; give another --port (0 picks a free one)")
+        (
+            Exit::Failure,
+            format!("cannot listen on {addr}: {e}; give another --port (0 picks a free one)"),
+        )
     })?;
     let local = listener
         .local_addr()
-        .map_err(|e| format!("cannot read the address: {e}"))?;
+        .map_err(|e| (Exit::Failure, format!("cannot read the address: {e}")))?;
     println!("studio: http://{local}/");
     let app = tissue_studio::router(studio.clone());
     let stopping = studio.clone();
@@ -66,5 +78,5 @@ async fn serve(addr: SocketAddr) -> Result<(), String> {
         })
         .await;
     studio.shutdown();
-    served.map_err(|e| format!("the server stopped: {e}"))
+    served.map_err(|e| (Exit::Failure, format!("the server stopped: {e}")))
 }

@@ -13,18 +13,18 @@ use tissue_pbd::{Floor, Pose, SoftBody, StepSettings, ToolShape};
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
 
 use crate::cli::{Cli, Scheme};
-use crate::failure::{code, Failure};
+use crate::failure::{Exit, Failure};
 use crate::ms;
 use crate::run::percentiles;
 
 fn surgery_failure(e: &tissue_surgery::SurgeryError) -> Failure {
-    Failure::new(code::RUN, format!("surgery: {e}"))
+    Failure::new(Exit::Run, format!("surgery: {e}"))
 }
 
 /// Runs the scenario and prints its summary.
 pub fn run(cli: &Cli) -> Result<(), Failure> {
     let mesh = tet_box(32, 8, 8, Vec3::new(8.0, 2.0, 2.0))
-        .map_err(|e| Failure::new(code::MESH, format!("appendix mesh: {e}")))?;
+        .map_err(|e| Failure::new(Exit::Mesh, format!("appendix mesh: {e}")))?;
     let (material, mut settings) = cli.physics();
     if cli.scheme == Scheme::Legacy {
         // The scenario's own damping before issue 19 (the library's default step).
@@ -214,7 +214,7 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
     );
     surgery
         .validate(&body)
-        .map_err(|e| Failure::new(code::RUN, format!("surface after the run: {e}")))?;
+        .map_err(|e| Failure::new(Exit::Run, format!("surface after the run: {e}")))?;
     if let Some(dir) = &cli.frames {
         println!("  frames        {frames} written to {}", dir.display());
     }
@@ -283,7 +283,7 @@ fn write_frame(
     std::fs::create_dir_all(dir).map_err(|e| Failure::output(&dir.display().to_string(), e))?;
     let positions: Vec<Vec3> = body.positions().iter().map(|p| Vec3::from(*p)).collect();
     let surface = TriMesh::new(positions, surgery.boundary_faces(body))
-        .map_err(|e| Failure::new(code::RUN, format!("frame {step}: boundary surface: {e}")))?;
+        .map_err(|e| Failure::new(Exit::Run, format!("frame {step}: boundary surface: {e}")))?;
     let path = dir.join(format!("appendix_{step:04}.obj"));
     tissue_meshio::write_surface(&path, &surface)
         .map_err(|e| Failure::output(&path.display().to_string(), e))

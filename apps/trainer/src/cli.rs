@@ -42,19 +42,28 @@ dyn). With --frames DIR (created if missing): the organ's surface every --every 
 at the end, frame_STEP.vtk (with point field `displacement`, cm: from the shape as loaded during \
 the settling, from the settled shape afterwards) or frame_STEP.obj (--format), and with --png \
 frame_STEP.png (coloured by that displacement, the probe in grey). Each file is \
-written atomically.
+written atomically.";
 
-EXIT CODES:
-  0  success
-  2  bad command line
-  3  the organ file is missing, unreadable or of an unsupported type
-  4  the organ mesh is malformed or invalid
-  5  the surface (--surface) cannot be tetrahedralised (open, non-manifold, inside out, ...)
-  6  a parameter is out of range, or the first waypoint is not over the organ
-  7  the simulation diverged
-  8  an output could not be written
-  141  (unix, shown by the shell) stdout closed by its reader (| head): SIGPIPE ends the program \
-at its next write to stdout, silently";
+/// The text after the options in `--help`: the output and the exit codes (the table every
+/// tissue binary shares, with what each code means here).
+fn after_long_help() -> String {
+    use tissue_cli::Exit;
+    format!(
+        "{AFTER_LONG_HELP}\n\n{}",
+        Exit::help_section(&[
+            (Exit::Input, "the --organ or --surface file"),
+            (Exit::Mesh, "the organ's mesh"),
+            (
+                Exit::Meshing,
+                "--surface (open, non-manifold, inside out, ...)"
+            ),
+            (
+                Exit::Parameters,
+                "also the first waypoint not over the organ",
+            ),
+        ])
+    )
+}
 
 /// Which volume constraint the organ carries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -112,7 +121,7 @@ pub enum Scenario {
     allow_negative_numbers = true,
     about = ABOUT,
     long_about = LONG_ABOUT,
-    after_long_help = AFTER_LONG_HELP
+    after_long_help = after_long_help()
 )]
 pub struct Cli {
     /// A scripted scenario instead of the press-and-drag run: `appendix` (an appendix-like

@@ -127,7 +127,7 @@ fn main() -> ExitCode {
     match main_inner(&cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(failure) => {
-            let hint = if failure.code == failure::code::USAGE {
+            let hint = if failure.code == failure::Exit::Usage {
                 " (see trainer --help)"
             } else {
                 ""

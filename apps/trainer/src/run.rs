@@ -10,7 +10,7 @@ use tissue_pbd::{ContactSource, Pose, SoftBody, ToolShape, DYN_PER_NEWTON};
 use tissue_render::{draw_text, render, Camera, ColorScale, Image, Rgb, Surface, Viewport};
 
 use crate::cli::{Cli, FrameFormat};
-use crate::failure::{code, Failure};
+use crate::failure::{Exit, Failure};
 use crate::scene::{top_at, Scene};
 
 /// What the run measured.
@@ -65,7 +65,7 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
             let xz = scene.waypoints[0];
             let top = top_at(&scene.body, xz, scene.reach).ok_or_else(|| {
                 Failure::new(
-                    code::PARAMETERS,
+                    Exit::Parameters,
                     format!(
                         "the first --waypoint {},{} is not over the organ (no node within {:.1} cm); \
                          the organ is centred on x = z = 0 and about --size {} cm wide",
@@ -245,7 +245,7 @@ impl Frames {
             .collect();
         let surface = TriMesh::new(rest.clone(), triangles).map_err(|e| {
             Failure::new(
-                code::MESH,
+                Exit::Mesh,
                 format!("the organ's boundary is not a valid surface for the frames: {e}"),
             )
         })?;
@@ -293,7 +293,7 @@ impl Frames {
         let mesh = self
             .surface
             .with_positions(now)
-            .map_err(|e| Failure::new(code::RUN, format!("the surface became invalid: {e}")))?;
+            .map_err(|e| Failure::new(Exit::Run, format!("the surface became invalid: {e}")))?;
         let stem = self.dir.join(format!("frame_{step:05}"));
         let path = match self.format {
             FrameFormat::Vtk => stem.with_extension("vtk"),

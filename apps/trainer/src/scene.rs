@@ -7,7 +7,7 @@ use tissue_mesh::{tet_box, TetMesh};
 use tissue_pbd::{ContactParams, OrientedBox, Pose, SoftBody, ToolShape, VoxelCollider};
 
 use crate::cli::Cli;
-use crate::failure::{code, Failure};
+use crate::failure::{Exit, Failure};
 
 /// Where the organ came from.
 #[derive(Debug, Clone)]
@@ -72,7 +72,7 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
                 tissue_tetra::tetrahedralize(&surface, &tissue_tetra::TetraOptions::default())
                     .map_err(|e| {
                         Failure::new(
-                            code::MESHING,
+                            Exit::Meshing,
                             format!("{} cannot be tetrahedralised: {e}", p.display()),
                         )
                     })?;
@@ -85,24 +85,24 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
         (None, None, Some(n)) => (
             Source::Box(n),
             tet_box(n, n, n, Vec3::ONE)
-                .map_err(|e| Failure::new(code::PARAMETERS, format!("--box: {e}")))?,
+                .map_err(|e| Failure::new(Exit::Parameters, format!("--box: {e}")))?,
         ),
         (None, None, None) => {
             let bunny = tissue_scenes::ShippedOrgan::Bunny;
             let organ = tissue_scenes::Organ::shipped(bunny)
-                .map_err(|e| Failure::new(code::MESHING, format!("the shipped bunny: {e}")))?;
+                .map_err(|e| Failure::new(Exit::Meshing, format!("the shipped bunny: {e}")))?;
             (Source::Shipped(bunny), organ.mesh)
         }
     };
     if !(cli.size.is_finite() && cli.size > 0.0) {
         return Err(Failure::new(
-            code::PARAMETERS,
+            Exit::Parameters,
             format!("--size {} must be a positive length in cm", cli.size),
         ));
     }
     if !(cli.depth.is_finite() && cli.depth >= 0.0) {
         return Err(Failure::new(
-            code::PARAMETERS,
+            Exit::Parameters,
             format!("--depth {} must be ≥ 0 cm", cli.depth),
         ));
     }
@@ -137,7 +137,7 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
         0 => vec![[-0.25 * cli.size, 0.0], [0.25 * cli.size, 0.0]],
         1 => {
             return Err(Failure::new(
-                code::PARAMETERS,
+                Exit::Parameters,
                 "one --waypoint is not a path: give two or more",
             ))
         }
@@ -174,7 +174,7 @@ fn place(raw: &TetMesh, size: f32) -> Result<TetMesh, Failure> {
         .collect();
     TetMesh::new(positions, raw.tets().to_vec()).map_err(|e| {
         Failure::new(
-            code::MESH,
+            Exit::Mesh,
             format!("the organ scaled to --size {size} cm is not valid: {e}; use a larger --size"),
         )
     })

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use tissue_cli::Exit;
 
 fn run(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_trainer"))
@@ -193,7 +194,7 @@ fn gmsh_and_vtu_organs_run() {
     // An extension no reader knows is "unsupported", not a missing TetGen file.
     let out = run(&["--organ", "liver.xyz"]);
     let err = stderr(&out);
-    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert_eq!(out.status.code(), Some(Exit::Input.code().into()), "{err}");
     assert!(err.contains("unsupported") && err.contains(".vtu"), "{err}");
     assert!(!err.contains(".node:"), "{err}");
 }
@@ -227,10 +228,10 @@ fn vtk_frames_carry_the_displacement_field() {
 fn bad_input_gives_one_line_and_its_exit_code() {
     let dir = scratch("bad");
     let missing = dir.join("nothing_here.node");
-    let cases: Vec<(Vec<String>, i32, &str)> = vec![
+    let cases: Vec<(Vec<String>, Exit, &str)> = vec![
         (
             vec!["--organ".into(), missing.display().to_string()],
-            3,
+            Exit::Input,
             "cannot read the organ",
         ),
         (
@@ -238,12 +239,12 @@ fn bad_input_gives_one_line_and_its_exit_code() {
                 "--surface".into(),
                 dir.join("missing.obj").display().to_string(),
             ],
-            3,
+            Exit::Input,
             "cannot read",
         ),
         (
             vec!["--box".into(), "2".into(), "--dt".into(), "-1".into()],
-            6,
+            Exit::Parameters,
             "--dt",
         ),
         (
@@ -253,12 +254,12 @@ fn bad_input_gives_one_line_and_its_exit_code() {
                 "--tool-radius".into(),
                 "0".into(),
             ],
-            6,
+            Exit::Parameters,
             "--tool-radius",
         ),
         (
             vec!["--box".into(), "2".into(), "--cell".into(), "0".into()],
-            6,
+            Exit::Parameters,
             "--cell",
         ),
         (
@@ -272,13 +273,13 @@ fn bad_input_gives_one_line_and_its_exit_code() {
                 "--waypoint".into(),
                 "60,50".into(),
             ],
-            6,
+            Exit::Parameters,
             "not over the organ",
         ),
-        (vec!["--every".into(), "0".into()], 2, "--every"),
+        (vec!["--every".into(), "0".into()], Exit::Usage, "--every"),
         (
             vec!["--box".into(), "2".into(), "--waypoint".into(), "1".into()],
-            2,
+            Exit::Usage,
             "X,Z",
         ),
     ];
@@ -286,9 +287,13 @@ fn bad_input_gives_one_line_and_its_exit_code() {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let out = run(&args);
         let err = stderr(&out);
-        assert_eq!(out.status.code(), Some(code), "{args:?}: {err}");
+        assert_eq!(
+            out.status.code(),
+            Some(code.code().into()),
+            "{args:?}: {err}"
+        );
         assert!(err.contains(words), "{args:?}: {err}");
-        if code != 2 {
+        if code != Exit::Usage {
             assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
             assert!(err.starts_with("trainer: error: "), "{err}");
         }
@@ -297,11 +302,22 @@ fn bad_input_gives_one_line_and_its_exit_code() {
     let obj = dir.join("surface.obj");
     std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap_or_else(|e| panic!("{e}"));
     let out = run(&["--organ", obj.to_str().unwrap_or_default()]);
-    assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
-    // An open surface cannot be tetrahedralised: exit 5, naming a boundary edge.
+    assert_eq!(
+        out.status.code(),
+        Some(Exit::Input.code().into()),
+        "{}",
+        stderr(&out)
+    );
+    // An open surface cannot be tetrahedralised (its own code in the shared table, not
+    // insert's placement code), naming a boundary edge.
     let out = run(&["--surface", obj.to_str().unwrap_or_default()]);
     let err = stderr(&out);
-    assert_eq!(out.status.code(), Some(5), "{err}");
+    assert_eq!(
+        out.status.code(),
+        Some(Exit::Meshing.code().into()),
+        "{err}"
+    );
+    assert_ne!(Exit::Meshing, Exit::Placement);
     assert!(err.contains("cannot be tetrahedralised"), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     let _ = std::fs::remove_dir_all(&dir);

@@ -160,11 +160,11 @@ impl InsertionJob {
     /// The region radius the job uses (cm): [`InsertionJob::region_radius`] or the default.
     ///
     /// # Errors
-    /// Those of [`footprint_radius`] and [`default_radius`].
+    /// Those of [`default_radius`].
     pub fn radius(&self) -> Result<f64, ImplantError> {
         match self.region_radius {
             Some(r) => Ok(r),
-            None => default_radius(footprint_radius(&self.implant.shape)?),
+            None => default_radius(footprint_radius(&self.implant.shape)),
         }
     }
 }
@@ -204,13 +204,9 @@ pub struct PlanePressJob {
 /// The radius of the smallest circle around the implant's local origin that holds its base
 /// (cm): half the diameter of a round base, the centre-to-corner distance of a rectangle, half
 /// the centre-line length of a crescent (which bounds its tips).
-///
-/// # Errors
-/// [`ImplantError::InvalidParameter`] (`name` `"region_radius"`) for a shape this crate does not
-/// know (give [`InsertionJob::region_radius`] explicitly).
-pub fn footprint_radius(shape: &ImplantShape) -> Result<f64, ImplantError> {
+pub fn footprint_radius(shape: &ImplantShape) -> f64 {
     match *shape {
-        ImplantShape::Round { diameter } => Ok(0.5 * f64::from(diameter)),
+        ImplantShape::Round { diameter } => 0.5 * f64::from(diameter),
         ImplantShape::Rectangular {
             length,
             width,
@@ -219,14 +215,9 @@ pub fn footprint_radius(shape: &ImplantShape) -> Result<f64, ImplantError> {
             let r = f64::from(corner_radius);
             let x = (0.5 * f64::from(length) - r).max(0.0);
             let y = (0.5 * f64::from(width) - r).max(0.0);
-            Ok(x.hypot(y) + r)
+            x.hypot(y) + r
         }
-        ImplantShape::Crescent { length, .. } => Ok(0.5 * f64::from(length)),
-        _ => Err(ImplantError::InvalidParameter {
-            name: "region_radius",
-            value: f64::NAN,
-            expected: "an explicit region radius (cm) for this implant shape".into(),
-        }),
+        ImplantShape::Crescent { length, .. } => 0.5 * f64::from(length),
     }
 }
 

@@ -1,6 +1,8 @@
 //! # tissue-cli: what the tissue binaries share at the edge of the process
 //!
 //! ## Brief overview
+//! - [`Exit`]: the exit codes of every binary, one table (`insert`, `trainer`, `meshinfo`,
+//!   `meshgen` and `studio` all return them; [`Exit::help_section`] is their `--help`'s table).
 //! - [`reset_sigpipe`]: the first call in every binary's `main`. Rust's runtime starts programs
 //!   with SIGPIPE ignored, so a write to a pipe whose reader has gone (`meshinfo FILE | head`)
 //!   fails with `EPIPE` and `println!` panics with "failed printing to stdout: Broken pipe".
@@ -23,8 +25,10 @@
 //! println!("from here on, a closed pipe ends this program quietly");
 //! ```
 
+mod exit;
 mod sigpipe;
 #[cfg(all(unix, feature = "testing"))]
 pub mod testing;
 
+pub use crate::exit::Exit;
 pub use crate::sigpipe::reset_sigpipe;

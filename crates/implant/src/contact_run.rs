@@ -68,6 +68,12 @@ pub struct RunParams {
     pub settle_speed: f64,
 }
 
+impl RunParams {
+    /// The default [`RunParams::step_safety`]: the automatic step is this fraction of the
+    /// stability limit (why 0.8: see [`RunParams::default`]).
+    pub const DEFAULT_STEP_SAFETY: f32 = 0.8;
+}
+
 impl Default for RunParams {
     /// Automatic step at 0.8 of the stability limit (the Gershgorin bound overestimates the
     /// highest frequency; at 1.0 Table 2's 150 cm³ run chattered for 4 300 steps); damping
@@ -86,7 +92,7 @@ impl Default for RunParams {
     fn default() -> Self {
         RunParams {
             time_step: None,
-            step_safety: 0.8,
+            step_safety: RunParams::DEFAULT_STEP_SAFETY,
             damping_time: 1e-3,
             broad_phase: BroadPhase::BvhBvh,
             contact_distance: None,

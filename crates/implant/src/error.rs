@@ -102,6 +102,21 @@ pub enum ImplantError {
         /// The height that gave it (cm).
         height: f64,
     },
+    /// A surface of the scenario cannot be given its search hierarchy (a BVH over its
+    /// triangles, for closest points and rays): the hierarchy's own error, and which surface.
+    #[error("the {surface} cannot be searched: {source}")]
+    Search {
+        /// Which surface.
+        surface: SearchedSurface,
+        /// Why its hierarchy could not be built.
+        source: tissue_bvh::BvhError,
+    },
+    /// The region's triangles cancel out: it has no mean normal to press along.
+    #[error("the region's {triangles} triangles cancel out (no mean normal): select a patch that faces one way")]
+    NoMeanNormal {
+        /// Its triangle count.
+        triangles: usize,
+    },
     /// The mass–spring model refused its input or diverged.
     #[error("tissue model: {0}")]
     Model(#[from] tissue_mss::MssError),
@@ -190,4 +205,26 @@ pub enum ImplantError {
         /// The most accepted (cm): `RUNAWAY_FACTOR` × the dome height + 1 cm.
         limit: f64,
     },
+}
+
+/// The surfaces a scenario searches ([`ImplantError::Search`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum SearchedSurface {
+    /// The region's inner layer (layer 2), which the implant's base is placed onto.
+    RegionInnerLayer,
+    /// The implant's flat base, which the inner layer is checked against.
+    ImplantBase,
+    /// The remeshed simulation surface, which the region's vertices are bound to.
+    SimulationSurface,
+}
+
+impl std::fmt::Display for SearchedSurface {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            SearchedSurface::RegionInnerLayer => "region's inner layer",
+            SearchedSurface::ImplantBase => "implant's base",
+            SearchedSurface::SimulationSurface => "simulation surface",
+        })
+    }
 }

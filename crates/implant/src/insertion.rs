@@ -30,7 +30,7 @@ use crate::outcome::{replace_region, vertex_displacements, vertex_stretch};
 use crate::walk::{walk_on_surface, WalkEnd};
 use crate::{
     Implant, ImplantError, ImplantFrame, ImplantSpec, Layer, LayerParams, RegionSelection,
-    TissueLayers,
+    SearchedSurface, TissueLayers,
 };
 
 /// The implant's mechanics. Units: cm, g, s.
@@ -189,10 +189,9 @@ pub fn place_implant(
     let frame = ImplantFrame::new(centre, normal, tangent)?;
     let inner = layers.rest(Layer::Inner);
     let positions: Vec<Vec3A> = inner.positions().iter().map(|&p| p.into()).collect();
-    let searchable = |e: tissue_bvh::BvhError| ImplantError::InvalidParameter {
-        name: "region",
-        value: 0.0,
-        expected: format!("a region whose inner layer can be searched: {e}"),
+    let searchable = |source| ImplantError::Search {
+        surface: SearchedSurface::RegionInnerLayer,
+        source,
     };
     let triangles = Triangles::new(&positions, inner.triangles()).map_err(searchable)?;
     let bvh = Bvh::build(&triangles, &BuildOptions::default()).map_err(searchable)?;
@@ -295,10 +294,9 @@ fn base_clearance_shortfall(
         .copied()
         .filter(|t| t.iter().all(|v| base.contains(v)))
         .collect();
-    let unsearchable = |e: tissue_bvh::BvhError| ImplantError::InvalidParameter {
-        name: "implant",
-        value: 0.0,
-        expected: format!("a base that can be searched: {e}"),
+    let unsearchable = |source| ImplantError::Search {
+        surface: SearchedSurface::ImplantBase,
+        source,
     };
     let triangles = Triangles::new(&flat, &base_triangles).map_err(unsearchable)?;
     let bvh = Bvh::build(&triangles, &BuildOptions::default()).map_err(unsearchable)?;

@@ -442,19 +442,12 @@ impl TissueLayers {
             .chain(remap(Layer::Inner, inner_springs))
             .collect();
 
-        // Tributary areas: a third of each triangle to each of its vertices and edges.
+        // Tributary areas: a third of each triangle to each of its vertices.
         let areas = region.triangle_areas();
         let mut vertex_area = vec![0.0f64; n];
-        let mut edge_area = vec![0.0f64; topo.edges().len()];
-        for (t, (tri, edges)) in region
-            .triangles()
-            .iter()
-            .zip(topo.triangle_edges())
-            .enumerate()
-        {
-            for i in 0..3 {
-                vertex_area[tri[i] as usize] += areas[t] / 3.0;
-                edge_area[edges[i] as usize] += areas[t] / 3.0;
+        for (tri, &area) in region.triangles().iter().zip(&areas) {
+            for &v in tri {
+                vertex_area[v as usize] += area / 3.0;
             }
         }
         let vertical_k: Vec<f64> = vertex_area

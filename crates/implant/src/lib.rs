@@ -71,7 +71,7 @@ mod shape;
 mod walk;
 
 pub use contact_run::{ContactRun, RunParams, StepSummary};
-pub use error::ImplantError;
+pub use error::{ImplantError, SearchedSurface};
 pub use expansion::{
     expand, Band, BandOptions, ExpansionMonitor, ExpansionOutcome, ExpansionProgress,
     ExpansionRecord, ExpansionSetup, ExpansionStage, Percentiles, SampleParams, SampleResult,
@@ -100,4 +100,6 @@ pub use scan::{
     DEFAULT_MAX_HOLE, TABLE2_REGION_VERTICES,
 };
 pub use shape::{Implant, ImplantFrame, ImplantShape, ImplantSpec};
+/// The search hierarchy's error, carried by [`ImplantError::Search`].
+pub use tissue_bvh::BvhError;
 pub use walk::{walk_on_surface, WalkEnd};

@@ -226,10 +226,8 @@ pub fn plane_press(
 
     // Where the region is and which way it faces.
     let target = region.centroid();
-    let normal = mean_normal(region).ok_or_else(|| ImplantError::InvalidParameter {
-        name: "region",
-        value: 0.0,
-        expected: "a region whose triangles do not cancel out (no mean normal)".into(),
+    let normal = mean_normal(region).ok_or(ImplantError::NoMeanNormal {
+        triangles: region.triangle_count(),
     })?;
     let contact = params.run.contact_distance.unwrap_or_else(|| {
         params.run.contact_fraction * mean_edge_length(layers.rest(Layer::Inner))

@@ -44,7 +44,10 @@ use tissue_mesh::{volume_between, TriMesh};
 use tissue_remesh::{fill_holes, remesh, Hole, RemeshOptions, RemeshStats};
 
 use crate::adjacency::VertexNeighbours;
-use crate::{select_region_with, vertex_stretch, ImplantError, RegionOptions, RegionSelection};
+use crate::{
+    select_region_with, vertex_stretch, ImplantError, RegionOptions, RegionSelection,
+    SearchedSurface,
+};
 
 /// Region vertices per layer in Table 2's run (SPEC A.5: 2016 for both layers).
 pub const TABLE2_REGION_VERTICES: f64 = 1008.0;
@@ -381,10 +384,9 @@ fn depth_smoothing(depth: f64) -> f64 {
 /// Binds every vertex of `region` to its closest point on `sim` (pinned on the boundary).
 fn bind(region: &TriMesh, sim: &TriMesh) -> Result<Vec<Binding>, ImplantError> {
     let positions: Vec<Vec3A> = sim.positions().iter().map(|&p| p.into()).collect();
-    let searchable = |e: tissue_bvh::BvhError| ImplantError::InvalidParameter {
-        name: "sim_edge",
-        value: 0.0,
-        expected: format!("a simulation surface that can be searched: {e}"),
+    let searchable = |source| ImplantError::Search {
+        surface: SearchedSurface::SimulationSurface,
+        source,
     };
     let triangles = Triangles::new(&positions, sim.triangles()).map_err(searchable)?;
     let bvh = Bvh::build(&triangles, &BuildOptions::default()).map_err(searchable)?;

@@ -54,8 +54,11 @@ use outline::Grid;
 /// The base outline of a tissue expander, in its local frame (plan `z = 0`, centred at the
 /// origin). All dimensions in cm, each finite and within
 /// [`ImplantShape::MIN_DIMENSION`]`..=`[`ImplantShape::MAX_DIMENSION`].
+///
+/// The set of shapes is closed on purpose (not `#[non_exhaustive]`): every consumer (the
+/// report, the footprint radius, the front ends) matches all of them, so a new shape cannot be
+/// shown as another one or dropped; the compiler lists every place it must be handled.
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[non_exhaustive]
 pub enum ImplantShape {
     /// A circular base of `diameter`, centred at the origin.
     Round {

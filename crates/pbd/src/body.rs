@@ -7,8 +7,8 @@ use crate::colour::{colour_order, greedy_colours};
 use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
 use crate::partition::{bisection_order, spare_tree, Tree};
 use crate::{
-    CentroidVolumeConstraint, DistanceConstraint, Floor, Material, PbdError, StepSettings,
-    TetVolumeConstraint, VolumeConstraintKind,
+    AttachmentId, CentroidVolumeConstraint, DistanceConstraint, Floor, Material, PbdError,
+    StepSettings, TetVolumeConstraint, VolumeConstraintKind,
 };
 
 /// A tetrahedral soft body simulated by position-based dynamics.
@@ -34,6 +34,8 @@ use crate::{
 ///   with the per-constraint parameter of the current [`StepSettings`].
 #[derive(Debug, Clone)]
 pub struct SoftBody {
+    /// This body's identity ([`SoftBody::id`]).
+    id: BodyId,
     pub(crate) x: Vec<Vec3A>,
     pub(crate) p: Vec<Vec3A>,
     pub(crate) v: Vec<Vec3A>,
@@ -74,7 +76,7 @@ pub struct SoftBody {
     pub(crate) volume_lambda: Vec<F>,
 
     pub(crate) floor: Option<Floor>,
-    pub(crate) attachments: Vec<(u32, Vec3A)>,
+    pub(crate) attachments: crate::attachment::Attachments,
     /// Colliders, tools and this step's contacts (`contact.rs`).
     pub(crate) collision: crate::contact::ContactState,
     pub(crate) settings: StepSettings,
@@ -85,6 +87,30 @@ pub struct SoftBody {
     pub(crate) edits: crate::edit::Edits,
     /// The connected pieces and their volume constraints (`pieces.rs`).
     pub(crate) pieces: crate::pieces::Pieces,
+}
+
+/// The identity of a [`SoftBody`] ([`SoftBody::id`]): a process-unique number given at
+/// construction, kept by clones.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BodyId(u64);
+
+impl BodyId {
+    /// A number no body built before in this process has.
+    fn next() -> Self {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        BodyId(NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed))
+    }
+
+    /// The number.
+    pub fn get(self) -> u64 {
+        self.0
+    }
+}
+
+impl std::fmt::Display for BodyId {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "body #{}", self.0)
+    }
 }
 
 /// `order` of an empty solver slot.
@@ -397,6 +423,7 @@ impl SoftBody {
             .collect();
         let x: Vec<Vec3A> = positions.iter().map(|&p| p.into()).collect();
         let mut body = Self {
+            id: BodyId::next(),
             p: x.clone(),
             v: vec![Vec3A::ZERO; n],
             x,
@@ -421,7 +448,7 @@ impl SoftBody {
             tet_lanes: tl.lanes,
             volume_lambda,
             floor: None,
-            attachments: Vec::new(),
+            attachments: Default::default(),
             collision: Default::default(),
             settings: StepSettings::default(),
             step_count: 0,
@@ -611,7 +638,8 @@ impl SoftBody {
         Ok(())
     }
 
-    /// Frees a pinned or attached node again (its attachments are removed).
+    /// Frees a pinned or attached node again. Its attachments are removed and their ids become
+    /// stale; the ids of other attachments stay valid.
     ///
     /// # Errors
     /// [`PbdError::NodeOutOfRange`].
@@ -619,17 +647,17 @@ impl SoftBody {
         self.check_node("pin", node)?;
         let m = self.mass[node as usize];
         self.w[node as usize] = if m > 0.0 { 1.0 / m } else { 0.0 };
-        self.attachments.retain(|a| a.0 != node);
+        self.attachments.remove_node(node);
         Ok(())
     }
 
     /// Attaches a node to a kinematic point: the node becomes pinned and is moved to `target` at
     /// the start of every step (its velocity follows). Returns the attachment's id for
-    /// [`SoftBody::set_attachment_target`].
+    /// [`SoftBody::set_attachment_target`], valid until the node is freed ([`SoftBody::unpin`]).
     ///
     /// # Errors
     /// [`PbdError::NodeOutOfRange`], [`PbdError::NonFinite`].
-    pub fn attach(&mut self, node: u32, target: Vec3) -> Result<usize, PbdError> {
+    pub fn attach(&mut self, node: u32, target: Vec3) -> Result<AttachmentId, PbdError> {
         self.check_node("attachment", node)?;
         if !target.is_finite() {
             return Err(PbdError::NonFinite {
@@ -638,20 +666,20 @@ impl SoftBody {
             });
         }
         self.pin(node)?;
-        self.attachments.push((node, target.into()));
-        Ok(self.attachments.len() - 1)
+        Ok(self.attachments.insert(node, target.into()))
     }
 
     /// Moves an attachment's target; the node follows in the next step.
     ///
     /// # Errors
-    /// [`PbdError::NoSuchAttachment`], [`PbdError::NonFinite`].
-    pub fn set_attachment_target(&mut self, id: usize, target: Vec3) -> Result<(), PbdError> {
-        let count = self.attachments.len();
-        let a = self
-            .attachments
-            .get_mut(id)
-            .ok_or(PbdError::NoSuchAttachment { id, count })?;
+    /// [`PbdError::NoSuchAttachment`] (also for the id of a freed node's attachment),
+    /// [`PbdError::NonFinite`].
+    pub fn set_attachment_target(
+        &mut self,
+        id: AttachmentId,
+        target: Vec3,
+    ) -> Result<(), PbdError> {
+        let a = self.attachments.get_mut(id)?;
         if !target.is_finite() {
             return Err(PbdError::NonFinite {
                 node: a.0,
@@ -685,6 +713,14 @@ impl SoftBody {
         }
         self.floor = floor;
         Ok(())
+    }
+
+    /// This body's identity: unique in the process among bodies built by [`SoftBody::new`] or
+    /// [`SoftBody::from_tets`], even from the same mesh. A clone keeps it: a clone is a snapshot
+    /// of the same body, so that a body and the state kept beside it (e.g. a
+    /// `tissue_surgery::Surgery`) can be cloned together and go on together.
+    pub fn id(&self) -> BodyId {
+        self.id
     }
 
     /// Total mass (g), in `f64`.

@@ -544,7 +544,9 @@ impl SoftBody {
         Ok(())
     }
 
-    /// Switches off distance record `r`'s lanes in its tree batch.
+    /// Switches off the lanes of tree batch `batch` whose records are no longer in the tree
+    /// (moved to a dynamic set or removed): both nodes the same, rest length 0, the solver's
+    /// "off" parameter.
     fn switch_off_distance_lanes(&mut self, batch: usize) {
         let off = off(self.settings.solver);
         let b = &mut self.distance_batches[batch];

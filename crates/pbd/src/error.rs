@@ -53,12 +53,12 @@ pub enum PbdError {
         /// The node count.
         expected: usize,
     },
-    /// No attachment has this id.
-    #[error("attachment {id} does not exist (the body has {count})")]
+    /// No attachment has this id: it was never made on this body, or its node was freed.
+    #[error("attachment {id} does not exist or its node was freed (the body has {count} live attachments)")]
     NoSuchAttachment {
         /// The id given.
-        id: usize,
-        /// Number of attachments.
+        id: crate::AttachmentId,
+        /// Number of live attachments.
         count: usize,
     },
     /// A node became non-finite during a step: the step or the stiffness is too large, or the

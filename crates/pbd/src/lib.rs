@@ -79,7 +79,7 @@
 //!   iteration, no copies, no write-back). The root block's own constraints (about 3 % of the
 //!   bunny's) and the floor are the serial part of an iteration. Every node sees the same
 //!   projections, in the same order, on the same values as in the serial sweep, so **serial and
-//!   parallel are bit-identical, for any thread count** (`tests/parallel.rs`: 1, 2, 3 threads).
+//!   parallel are bit-identical, for any thread count** (`tests/it/parallel.rs`: 1, 2, 3 threads).
 //! - While the root's own constraints are projected, a second worker, if one is free, spins on a
 //!   flag instead of going to sleep, so that the next iteration's fork does not wait for a
 //!   thread to wake up (it yields to the OS after a few thousand spins). It touches no data.
@@ -92,7 +92,7 @@
 //!   an added constraint, the *dynamic batches* of the deepest block holding its nodes,
 //!   projected right after that block's own tree constraints (in parallel like them); only
 //!   constraints on nodes past the tree go to the *serial set*, projected after the tree, then
-//!   links such as sutures, last. Serial and parallel stay bit-identical (`tests/parallel.rs`
+//!   links such as sutures, last. Serial and parallel stay bit-identical (`tests/it/parallel.rs`
 //!   also runs cut bodies). No re-partition: after very many edits the dynamic batches grow.
 //! - Contacts are generated and projected serially, in a fixed order (colliders by id, then tools,
 //!   nodes in order within each), so they are deterministic and the same in parallel mode. Their
@@ -149,6 +149,7 @@
     clippy::print_stderr
 )]
 
+mod attachment;
 mod body;
 mod colour;
 mod constraint;
@@ -165,7 +166,8 @@ mod step;
 mod tool;
 mod voxel;
 
-pub use body::SoftBody;
+pub use attachment::AttachmentId;
+pub use body::{BodyId, SoftBody};
 pub use constraint::{
     CentroidVolumeConstraint, ConstraintKind, DistanceConstraint, Floor, TetVolumeConstraint,
 };

@@ -292,7 +292,7 @@ impl SoftBody {
                 *q = (self.x[o] + dt * self.v[o]).extend(w);
             }
         }
-        for &(node, target) in &self.attachments {
+        for (node, target) in self.attachments.iter() {
             let s = self.rank[node as usize] as usize;
             self.q[s] = target.extend(self.qw[s]);
         }

@@ -7,7 +7,7 @@
 
 use serde::Serialize;
 use tissue_app::AppError;
-use tissue_implant::ImplantError;
+use tissue_implant::{BvhError, ImplantError, SearchedSurface};
 use tissue_meshio::MeshIoError;
 
 /// What kind of thing went wrong: a front end maps it to an exit code or an HTTP status.
@@ -151,8 +151,10 @@ impl PlanError {
                 Some("sim_edge_cm"),
                 "; check the scan with meshinfo, or give another `sim_edge_cm`",
             ),
+            E::Search { surface, source } => search_kind(*surface, source),
+            E::NoMeanNormal { .. } => (K::Placement, Some("at"), " (`at`, `vertex`)"),
             E::InvalidParameter { name, .. } => match *name {
-                "point" | "max_distance" | "region" => (K::Placement, Some("at"), ""),
+                "point" | "max_distance" => (K::Placement, Some("at"), ""),
                 "radius" | "region_radius" => (K::Placement, Some("region_radius_cm"), ""),
                 "depth" => (K::Parameters, Some("depth_cm"), " (`depth_cm`)"),
                 "young" => (
@@ -239,6 +241,43 @@ impl PlanError {
     }
 }
 
+/// The kind, field and hint of a search hierarchy that could not be built, by the surface and
+/// the hierarchy's reason.
+fn search_kind(
+    surface: SearchedSurface,
+    source: &BvhError,
+) -> (ErrorKind, Option<&'static str>, &'static str) {
+    use ErrorKind as K;
+    match (surface, source) {
+        (
+            _,
+            BvhError::NonFiniteBounds { .. }
+            | BvhError::IndexOutOfRange { .. }
+            | BvhError::TooManyPrimitives { .. },
+        ) => (
+            K::Mesh,
+            Some("mesh"),
+            "; check the scan with meshinfo, or report this",
+        ),
+        (SearchedSurface::RegionInnerLayer, BvhError::Empty) => (
+            K::Placement,
+            Some("region_radius_cm"),
+            "; use a larger `region_radius_cm`",
+        ),
+        (SearchedSurface::ImplantBase, BvhError::Empty) => (
+            K::Parameters,
+            Some("volume_cm3"),
+            "; change the implant's size",
+        ),
+        (SearchedSurface::SimulationSurface, _) => (
+            K::Mesh,
+            Some("sim_edge_cm"),
+            "; check the scan with meshinfo, or give another `sim_edge_cm`",
+        ),
+        _ => (K::Run, None, "; report this"),
+    }
+}
+
 /// `s` with every run of white space (new lines included) made one space.
 fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
@@ -275,6 +314,67 @@ mod tests {
         };
         let p = PlanError::from_implant(&v);
         assert_eq!((p.kind, p.field), (ErrorKind::Parameters, Some("depth_cm")));
+    }
+
+    /// A search hierarchy that cannot be built is its own error, classified by its type
+    /// (issue 22: it was `InvalidParameter { name: "region" }`, classified by that string as a
+    /// placement at `at`).
+    #[test]
+    fn search_failures_are_classified_by_type() {
+        let non_finite = BvhError::NonFiniteBounds {
+            primitive: 3,
+            min: [f32::NAN; 3],
+            max: [0.0; 3],
+        };
+        let cases = [
+            (
+                SearchedSurface::RegionInnerLayer,
+                non_finite.clone(),
+                ErrorKind::Mesh,
+                Some("mesh"),
+            ),
+            (
+                SearchedSurface::RegionInnerLayer,
+                BvhError::Empty,
+                ErrorKind::Placement,
+                Some("region_radius_cm"),
+            ),
+            (
+                SearchedSurface::ImplantBase,
+                BvhError::Empty,
+                ErrorKind::Parameters,
+                Some("volume_cm3"),
+            ),
+            (
+                SearchedSurface::SimulationSurface,
+                BvhError::Empty,
+                ErrorKind::Mesh,
+                Some("sim_edge_cm"),
+            ),
+            (
+                SearchedSurface::ImplantBase,
+                BvhError::InvalidLeafSize { leaf_size: 0 },
+                ErrorKind::Run,
+                None,
+            ),
+        ];
+        for (surface, source, kind, field) in cases {
+            let e = ImplantError::Search {
+                surface,
+                source: source.clone(),
+            };
+            let p = PlanError::from_implant(&e);
+            assert_eq!((p.kind, p.field), (kind, field), "{e}");
+            assert!(p
+                .message
+                .contains(&format!("the {surface} cannot be searched")));
+            assert!(p.message.contains(&source.to_string()), "{}", p.message);
+            // Carried unchanged through the worker's error.
+            let app = PlanError::from_app(&AppError::Implant(e));
+            assert_eq!((app.kind, app.field), (kind, field));
+        }
+        let flat = PlanError::from_implant(&ImplantError::NoMeanNormal { triangles: 2 });
+        assert_eq!((flat.kind, flat.field), (ErrorKind::Placement, Some("at")));
     }
 
     #[test]

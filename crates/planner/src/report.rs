@@ -177,18 +177,11 @@ pub enum ShapeInputs {
     },
 }
 
-impl Inputs {
-    /// The inputs of `scenario`: the request as given and what it resolved to.
-    ///
-    /// # Errors
-    /// A shape whose region radius is unknown.
-    pub fn new(scenario: &Scenario) -> Result<Self, PlanError> {
-        let region_radius_cm = scenario.region_radius()?;
-        let sim_edge_cm = scenario.sim_edge()?;
-        let request = &scenario.request;
-        let job = &scenario.job;
-        let remeshed = matches!(job.sim, SimMesh::Remeshed(_));
-        let shape = match job.implant.shape {
+impl From<ImplantShape> for ShapeInputs {
+    /// The shape as built, every kind with its own sizes (the match is exhaustive: a new
+    /// [`ImplantShape`] must be given its own report entry).
+    fn from(shape: ImplantShape) -> Self {
+        match shape {
             ImplantShape::Round { diameter } => ShapeInputs::Round {
                 diameter_cm: diameter,
             },
@@ -210,14 +203,22 @@ impl Inputs {
                 width_cm: width,
                 bend_radius_cm: bend_radius,
             },
-            _ => {
-                return Err(PlanError::field(
-                    ErrorKind::Usage,
-                    "shape",
-                    "the report knows round, rectangular and crescent implants only",
-                ))
-            }
-        };
+        }
+    }
+}
+
+impl Inputs {
+    /// The inputs of `scenario`: the request as given and what it resolved to.
+    ///
+    /// # Errors
+    /// A shape whose region radius is unknown.
+    pub fn new(scenario: &Scenario) -> Result<Self, PlanError> {
+        let region_radius_cm = scenario.region_radius()?;
+        let sim_edge_cm = scenario.sim_edge()?;
+        let request = &scenario.request;
+        let job = &scenario.job;
+        let remeshed = matches!(job.sim, SimMesh::Remeshed(_));
+        let shape = ShapeInputs::from(job.implant.shape);
         Ok(Inputs {
             mesh: scenario.patient.label.clone(),
             mesh_generated: scenario.patient.generated,
@@ -592,6 +593,48 @@ pub fn sweep_rows(result: &SweepResult, max_steps: u64) -> Vec<(f64, Result<Swee
 mod tests {
     use super::*;
     use crate::{Patient, PlanRequest, Shipped};
+
+    /// Every implant shape is reported as itself with its own sizes (issue 22: a shape the
+    /// report did not know was written as a round one of 0 cm; the set of shapes is now closed
+    /// and the conversion exhaustive, so no shape can be reported as another).
+    #[test]
+    fn every_shape_is_reported_as_itself_with_its_sizes() -> Result<(), serde_json::Error> {
+        let cases = [
+            (
+                ImplantShape::Round { diameter: 6.5 },
+                serde_json::json!({ "kind": "round", "diameter_cm": 6.5 }),
+            ),
+            (
+                ImplantShape::Rectangular {
+                    length: 8.0,
+                    width: 4.5,
+                    corner_radius: 1.0,
+                },
+                serde_json::json!({
+                    "kind": "rectangular", "length_cm": 8.0, "width_cm": 4.5,
+                    "corner_radius_cm": 1.0
+                }),
+            ),
+            (
+                ImplantShape::Crescent {
+                    length: 9.0,
+                    width: 3.0,
+                    bend_radius: 6.0,
+                },
+                serde_json::json!({
+                    "kind": "crescent", "length_cm": 9.0, "width_cm": 3.0, "bend_radius_cm": 6.0
+                }),
+            ),
+        ];
+        for (shape, expected) in cases {
+            assert_eq!(
+                serde_json::to_value(ShapeInputs::from(shape))?,
+                expected,
+                "{shape:?}"
+            );
+        }
+        Ok(())
+    }
 
     #[test]
     fn a_single_report_carries_the_schema_the_tool_and_the_inputs() -> Result<(), PlanError> {

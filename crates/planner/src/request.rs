@@ -312,6 +312,12 @@ impl PlanRequest {
         })
     }
 
+    /// The fraction of the stability limit the automatic time step uses (`time_step_s` null):
+    /// the library's default, [`tissue_implant::RunParams::step_safety`].
+    pub fn automatic_step_safety(&self) -> f32 {
+        self.params().run.step_safety
+    }
+
     /// The library's parameters (its defaults for everything the request does not name).
     pub fn params(&self) -> InsertionParams {
         let mut params = InsertionParams::default();

@@ -76,7 +76,7 @@ pub struct TrainerEvent {
 #[derive(Debug, Clone)]
 struct Grab {
     /// (node, attachment id, the node's offset from the grabbed point).
-    nodes: Vec<(u32, usize, Vec3)>,
+    nodes: Vec<(u32, tissue_pbd::AttachmentId, Vec3)>,
     /// The force on the body's holders just before the grab (dyn): the pins' share, which the
     /// probe's force leaves out.
     baseline: Vec3,

@@ -7,15 +7,16 @@ pub enum SurgeryError {
     /// The soft body refused an edit (a bug in this crate if it happens) or a step.
     #[error("soft body: {0}")]
     Body(#[from] tissue_pbd::PbdError),
-    /// The body given is not the one this state was made for (its nodes or tets changed
-    /// behind this state's back).
-    #[error("the body has {got} {what} but the surgery state expects {expected}: pass the body the state was made with")]
+    /// The body given is not the one this state was made for: another body (its
+    /// [`tissue_pbd::SoftBody::id`] differs, even at the same size), or its nodes or tets changed
+    /// behind this state's back.
+    #[error("the body given is not the one this surgery state was made with ({what} {got}, expected {expected}): pass the body the state was made with")]
     BodyMismatch {
-        /// `"nodes"` or `"tets"`.
+        /// `"body id"` ([`tissue_pbd::BodyId::get`]), `"nodes"` or `"tets"`.
         what: &'static str,
-        /// Count in the body.
+        /// The body's id or count.
         got: usize,
-        /// Count this state expects.
+        /// The id or count this state expects.
         expected: usize,
     },
     /// A tool is of the wrong kind or a pose is not finite.

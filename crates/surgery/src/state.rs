@@ -37,6 +37,8 @@ pub struct Suture {
 /// - `rest[v]` is node `v`'s rest position, `depth[t]` how many splits made tet `t`.
 #[derive(Debug, Clone)]
 pub struct Surgery {
+    /// The body this state was made for ([`SoftBody::id`]).
+    pub(crate) body: tissue_pbd::BodyId,
     pub(crate) settings: SurgerySettings,
     pub(crate) neighbours: Vec<[u32; 4]>,
     pub(crate) node_tets: Vec<Vec<u32>>,
@@ -169,6 +171,7 @@ impl Surgery {
             .copied()
             .fold(f32::INFINITY, f32::min);
         let mut s = Self {
+            body: body.id(),
             settings,
             neighbours,
             node_tets,
@@ -210,7 +213,17 @@ impl Surgery {
         Ok(s)
     }
 
+    /// [`SurgeryError::BodyMismatch`] unless `body` is the body this state was made for (by
+    /// identity, so a body of the same size built from the same mesh is refused too; a clone
+    /// of it keeps its identity) with the nodes and tets this state knows.
     pub(crate) fn check_body(&self, body: &SoftBody) -> Result<(), SurgeryError> {
+        if body.id() != self.body {
+            return Err(SurgeryError::BodyMismatch {
+                what: "body id",
+                got: body.id().get() as usize,
+                expected: self.body.get() as usize,
+            });
+        }
         if body.node_count() != self.node_tets.len() {
             return Err(SurgeryError::BodyMismatch {
                 what: "nodes",

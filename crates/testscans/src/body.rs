@@ -92,7 +92,7 @@ const BODY_POINTS: [(&str, &str, f32, f32, f32); 4] = [
 /// armpits and the crotch.
 ///
 /// # Errors
-/// [`ScanError::Absent`] when the shared meshes are not there; [`ScanError::Io`] when the file
+/// [`ScanError::Absent`] when the fixture mesh is missing; [`ScanError::Io`] when the file
 /// cannot be read; [`ScanError::Unexpected`] if the file changed.
 pub fn closed_body() -> Result<Scan, ScanError> {
     let body = read_shared(BODY_FILE)?;
@@ -142,7 +142,7 @@ pub fn closed_body() -> Result<Scan, ScanError> {
 /// `radius` is the mean distance of the vertices from the axis (upper cut → elbow → wrist).
 ///
 /// # Errors
-/// [`ScanError::Absent`] when the shared meshes are not there; [`ScanError::Io`] when the file
+/// [`ScanError::Absent`] when the fixture mesh is missing; [`ScanError::Io`] when the file
 /// cannot be read; [`ScanError::Unexpected`] if the file changed.
 pub fn forearm_from_body() -> Result<Scan, ScanError> {
     let body = read_shared(BODY_FILE)?;

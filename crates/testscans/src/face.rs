@@ -83,7 +83,7 @@ const FACE_POINTS: [(&str, &str, [f32; 2], f32); 5] = [
 /// boundary (outer border or hole), not 6 cm.
 ///
 /// # Errors
-/// [`ScanError::Absent`] when the shared meshes are not there (skip the test);
+/// [`ScanError::Absent`] when the fixture mesh is missing;
 /// [`ScanError::Io`] when the file cannot be read; the others only if the file changed.
 pub fn noisy_face_scan(seed: u64) -> Result<Scan, ScanError> {
     let head = read_shared(HEAD_FILE)?;

@@ -12,11 +12,10 @@
 //!   [`subdivide_midpoint`], [`loop_subdivide`], [`add_normal_noise`], [`punch_hole`],
 //!   [`remove_triangles`].
 //!
-//! The face, arm and body are made from the public MakeHuman meshes (CC0) in
-//! `../shared/meshes` beside the repository ([`shared_meshes_dir`], found from this crate's
-//! manifest). When that folder is absent they return [`ScanError::Absent`], and a test skips
-//! with a message (`if e.is_absent()`). Everything is deterministic: the same seed gives the
-//! same bits.
+//! The face, arm and body are made from the public MakeHuman meshes (CC0) shipped in the
+//! repository's `fixtures/` ([`meshes_dir`], found from this crate's manifest). Should one be
+//! missing they return [`ScanError::Absent`]; the tests fail on it. Everything is
+//! deterministic: the same seed gives the same bits.
 //!
 //! ```
 //! let tube = tissue_testscans::tapered_tube(1)?;
@@ -55,5 +54,5 @@ pub use ops::{
     subdivide_midpoint, Trimmed,
 };
 pub use rng::Rng;
-pub use scan::{shared_meshes_dir, NamedPoint, PunchedHole, Scan, ScanError};
+pub use scan::{meshes_dir, NamedPoint, PunchedHole, Scan, ScanError};
 pub use tube::{tapered_tube, TUBE_LENGTH_CM, TUBE_RADIUS_END_CM, TUBE_RADIUS_START_CM};

@@ -1,4 +1,4 @@
-//! What every generator returns, the error type, and where the shared meshes are.
+//! What every generator returns, the error type, and where the fixture meshes are.
 
 use std::path::PathBuf;
 
@@ -59,14 +59,14 @@ pub struct PunchedHole {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ScanError {
-    /// The shared mesh a generator reads is not there (tests skip on this, see
-    /// [`ScanError::is_absent`]).
-    #[error("{}: the shared test meshes are absent (expected beside the repository, in ../shared/meshes)", .path.display())]
+    /// The fixture mesh a generator reads is not there ([`ScanError::is_absent`]); the meshes
+    /// ship in the repository's `fixtures/`, so this means a broken checkout.
+    #[error("{}: the fixture mesh is missing (it ships in the repository's fixtures/)", .path.display())]
     Absent {
         /// The file looked for.
         path: PathBuf,
     },
-    /// The shared mesh exists but could not be read.
+    /// The fixture mesh exists but could not be read.
     #[error(transparent)]
     Io(#[from] MeshIoError),
     /// A generated surface failed validation (a bug in the generator, or an extreme parameter).
@@ -84,25 +84,23 @@ pub enum ScanError {
 }
 
 impl ScanError {
-    /// `true` when the shared meshes are absent: a test should skip with a message.
+    /// `true` when the fixture mesh is missing.
     pub fn is_absent(&self) -> bool {
         matches!(self, ScanError::Absent { .. })
     }
 }
 
-/// The folder of the shared third-party meshes (`../shared/meshes` beside the repository),
-/// found from this crate's manifest, never from the working directory.
-pub fn shared_meshes_dir() -> PathBuf {
-    PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/meshes"
-    ))
+/// The folder of the third-party meshes the generators read (the repository's `fixtures/`,
+/// provenance and licences in its README), found from this crate's manifest, never from the
+/// working directory.
+pub fn meshes_dir() -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures"))
 }
 
-/// Reads a shared mesh by file name (through `tissue-meshio`, the crate that touches files);
+/// Reads a fixture mesh by file name (through `tissue-meshio`, the crate that touches files);
 /// [`ScanError::Absent`] when it is not there.
 pub(crate) fn read_shared(name: &str) -> Result<TriMesh, ScanError> {
-    let path = shared_meshes_dir().join(name);
+    let path = meshes_dir().join(name);
     match tissue_meshio::read_surface(&path) {
         Err(MeshIoError::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
             Err(ScanError::Absent { path })

@@ -9,8 +9,8 @@ use tissue_testscans::{
     closed_body, forearm_from_body, median_edge, noisy_face_scan, tapered_tube, Scan, ScanError,
 };
 
-/// Runs a generator, timing it; `None` (with a message) when the shared meshes are absent.
-fn generate(name: &str, make: impl Fn() -> Result<Scan, ScanError>) -> Option<Scan> {
+/// Runs a generator, timing it. Panics when it fails, a missing fixture mesh included.
+fn generate(name: &str, make: impl Fn() -> Result<Scan, ScanError>) -> Scan {
     let start = Instant::now();
     match make() {
         Ok(scan) => {
@@ -32,11 +32,7 @@ fn generate(name: &str, make: impl Fn() -> Result<Scan, ScanError>) -> Option<Sc
                     p.name, p.vertex, p.position, p.border_distance, scan.unit_name, p.what
                 );
             }
-            Some(scan)
-        }
-        Err(e) if e.is_absent() => {
-            eprintln!("skipping {name}: {e}");
-            None
+            scan
         }
         Err(e) => panic!("{name}: {e}"),
     }
@@ -98,9 +94,7 @@ fn outward_from_axis(m: &TriMesh, axis: impl Fn(DVec3) -> DVec3) -> (f64, usize)
 
 #[test]
 fn face_scan_is_a_noisy_holed_half_millimetre_disc() {
-    let Some(scan) = generate("face", || noisy_face_scan(1)) else {
-        return;
-    };
+    let scan = generate("face", || noisy_face_scan(1));
     check_common(&scan);
     let m = &scan.mesh;
     assert_eq!(scan.unit_name, "mm");
@@ -181,9 +175,7 @@ fn face_scan_is_a_noisy_holed_half_millimetre_disc() {
 
 #[test]
 fn tube_is_uneven_outward_and_open_at_both_ends() {
-    let Some(scan) = generate("tube", || tapered_tube(7)) else {
-        return;
-    };
+    let scan = generate("tube", || tapered_tube(7));
     check_common(&scan);
     let m = &scan.mesh;
     assert_eq!(m.topology().boundary_loops().len(), 2);
@@ -221,9 +213,7 @@ fn tube_is_uneven_outward_and_open_at_both_ends() {
 
 #[test]
 fn arm_is_an_open_refined_tube_with_two_cuts() {
-    let Some(scan) = generate("arm", forearm_from_body) else {
-        return;
-    };
+    let scan = generate("arm", forearm_from_body);
     check_common(&scan);
     let m = &scan.mesh;
     assert_eq!(scan.unit_name, "dm");
@@ -270,9 +260,7 @@ fn arm_is_an_open_refined_tube_with_two_cuts() {
 
 #[test]
 fn body_is_closed_outward_and_unmodified() {
-    let Some(scan) = generate("body", closed_body) else {
-        return;
-    };
+    let scan = generate("body", closed_body);
     check_common(&scan);
     let m = &scan.mesh;
     assert_eq!((m.vertex_count(), m.triangle_count()), (13_380, 26_756));

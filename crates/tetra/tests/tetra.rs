@@ -1,4 +1,4 @@
-//! The public API of tissue-tetra: generated surfaces, the shared bunny and liver, and every
+//! The public API of tissue-tetra: generated surfaces, the bunny and liver of `fixtures/`, and every
 //! error a user can cause.
 
 use std::path::PathBuf;
@@ -10,20 +10,9 @@ use tissue_tetra::{
     Tetrahedralization,
 };
 
-const MESHES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/meshes");
-
-/// A file of `../shared/meshes`, or `None` (with a message) when the folder is missing.
-fn shared(name: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(MESHES).join(name);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!(
-            "skipped: {} is missing (the shared meshes live in ../shared/meshes beside the repo)",
-            path.display()
-        );
-        None
-    }
+/// A file of the repository's `fixtures/` folder (the real meshes ship there).
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures")).join(name)
 }
 
 /// The checks every result must pass: surface vertices first and unchanged, every tet positive,
@@ -185,9 +174,7 @@ fn report_displays_its_figures() {
 
 #[test]
 fn bunny_gives_about_40k_tets_that_follow_its_surface() {
-    let Some(path) = shared("pbd_bunny_10k.obj") else {
-        return;
-    };
+    let path = fixture("bunny_10k.obj");
     let bunny = tissue_meshio::read_surface(&path).unwrap();
     assert_eq!(bunny.triangle_count(), 10_000);
     let start = std::time::Instant::now();
@@ -214,9 +201,7 @@ fn bunny_gives_about_40k_tets_that_follow_its_surface() {
 
 #[test]
 fn liver_is_closed_and_tetrahedralizes() {
-    let Some(path) = shared("sofa_liver2.obj") else {
-        return;
-    };
+    let path = fixture("liver_sofa.obj");
     let liver = tissue_meshio::read_surface(&path).unwrap();
     assert!(liver.is_closed());
     let result = tetrahedralize(&liver, &TetraOptions::default()).unwrap();
@@ -230,22 +215,16 @@ fn liver_is_closed_and_tetrahedralizes() {
 }
 
 #[test]
-fn tetgen_bunny_measures_as_a_constrained_mesh() {
-    // TetGen's -Y keeps the surface: nodes 0..5001 are the OBJ's vertices, every surface
-    // triangle a boundary face. This pins `QualityReport::measure` against a known answer.
-    let (Some(obj), Some(_)) = (shared("pbd_bunny_10k.obj"), shared("bunny_10k_tet42k.node"))
-    else {
-        return;
-    };
-    let bunny = tissue_meshio::read_surface(&obj).unwrap();
-    let data = tissue_meshio::read_tetgen(PathBuf::from(MESHES).join("bunny_10k_tet42k")).unwrap();
+fn tetgen_armadillo_measures_as_a_constrained_mesh() {
+    // A mesh by another tool (TetGen, the PositionBasedDynamics demos' armadillo): measured on
+    // its own, its boundary faces are its surface, all recovered, and enclose its volume.
+    let data = tissue_meshio::read_tetgen(fixture("armadillo_4k")).unwrap();
     let tetgen = tissue_mesh::TetMesh::new(data.positions, data.tets).unwrap();
-    let r = QualityReport::measure(&tetgen, &bunny);
-    eprintln!("TetGen -pq1.3Y bunny:\n{r}");
-    assert_eq!(r.tets, 42_117);
-    assert_eq!(r.surface_triangles_recovered, 10_000);
-    assert!((r.volume_ratio - 1.0).abs() < 1e-4);
     let own = QualityReport::of_mesh(&tetgen);
+    eprintln!("TetGen armadillo:\n{own}");
+    assert_eq!(own.tets, 3_717);
+    assert_eq!(own.nodes, 1_180);
+    assert_eq!(own.boundary_faces, 2_102);
     assert_eq!(own.surface_triangles_recovered, own.boundary_faces);
     assert!((own.volume_ratio - 1.0).abs() < 1e-9);
 }

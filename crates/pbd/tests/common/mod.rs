@@ -2,34 +2,25 @@
 #![allow(dead_code, clippy::print_stderr)]
 
 use glam::{DVec3, Vec3};
-use tissue_mesh::{tet_box, TetMesh};
+use tissue_mesh::TetMesh;
 use tissue_pbd::SoftBody;
 
-/// The bunny of `../shared/meshes` (≈ 1 unit tall, +y up, min y = 0), scaled ×10 to a 10 cm body,
-/// or `None` (with a message) when the shared folder is missing.
-pub fn bunny() -> Option<TetMesh> {
-    let stem = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/meshes/bunny_10k_tet42k"
-    );
-    if !std::path::Path::new(&format!("{stem}.node")).exists() {
-        eprintln!(
-            "SKIP bunny: {stem}.node not found (../shared/meshes is missing); using a tet_box"
-        );
-        return None;
-    }
-    let data = tissue_meshio::read_tetgen(stem).expect("bunny reads");
-    let positions = data.positions.iter().map(|p| *p * 10.0).collect();
-    Some(TetMesh::new(positions, data.tets).expect("bunny is valid"))
+/// A file of the repository's `fixtures/` folder.
+pub fn fixture(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures")).join(name)
 }
 
-/// A box standing on y = 0 when no bunny is available.
-pub fn bunny_or_box() -> TetMesh {
-    bunny().unwrap_or_else(|| {
-        let m = tet_box(20, 20, 20, Vec3::splat(10.0)).expect("box");
-        let (p, t) = m.into_parts();
-        TetMesh::new(p.iter().map(|p| *p + Vec3::new(0.0, 5.0, 0.0)).collect(), t).expect("box")
-    })
+/// The bunny of `fixtures/bunny_10k.obj` (≈ 1 unit tall, +y up, min y = 0), tetrahedralised
+/// by `tissue-tetra` (about 40k tets, 0.2 s) and scaled ×10 to a 10 cm body. Panics when the
+/// fixture is missing: it ships with the repository.
+pub fn bunny() -> TetMesh {
+    let surface =
+        tissue_meshio::read_surface(fixture("bunny_10k.obj")).expect("fixtures/bunny_10k.obj");
+    let tets = tissue_tetra::tetrahedralize(&surface, &tissue_tetra::TetraOptions::default())
+        .expect("the bunny tetrahedralises")
+        .mesh;
+    let (positions, tets) = tets.into_parts();
+    TetMesh::new(positions.iter().map(|p| *p * 10.0).collect(), tets).expect("bunny is valid")
 }
 
 /// SplitMix64.

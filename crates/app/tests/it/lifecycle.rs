@@ -1,6 +1,6 @@
 //! The handle's life: dropping it mid-run, a slow receiver.
 
-mod common;
+use crate::common;
 
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};

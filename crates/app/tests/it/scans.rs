@@ -5,8 +5,7 @@
 //! scan's own vertices and triangles, vertices outside the region unchanged bit for bit, the
 //! seam continuous.
 //!
-//! The scans are built by `tissue-testscans` from `../shared/meshes`; a test whose mesh is
-//! missing says so and passes.
+//! The scans are built by `tissue-testscans` from the MakeHuman meshes shipped in `fixtures/`.
 
 use std::ops::ControlFlow;
 
@@ -27,16 +26,9 @@ fn in_cm(scan: &Scan) -> TriMesh {
     scan.mesh.with_positions(cm).expect("scaled scan")
 }
 
-/// The scan, or `None` (with a message) when the shared meshes are absent.
-fn load(made: Result<Scan, ScanError>) -> Option<Scan> {
-    match made {
-        Ok(scan) => Some(scan),
-        Err(e) if e.is_absent() => {
-            eprintln!("SKIPPED: {e} (third-party test data, see ../shared/meshes/SOURCES.md)");
-            None
-        }
-        Err(e) => panic!("cannot build the test scan: {e}"),
-    }
+/// The scan. Panics when it cannot be made, a missing fixture mesh included.
+fn load(made: Result<Scan, ScanError>) -> Scan {
+    made.unwrap_or_else(|e| panic!("cannot build the test scan: {e}"))
 }
 
 fn point<'a>(scan: &'a Scan, name: &str) -> &'a NamedPoint {
@@ -174,9 +166,7 @@ fn run_and_check(job: &InsertionJob, what: &str) -> (PlannedInsertion, PatientAf
 
 #[test]
 fn expanders_wrap_a_tapered_tube_round_rectangular_and_crescent() {
-    let Some(scan) = load(tissue_testscans::tapered_tube(7)) else {
-        return;
-    };
+    let scan = load(tissue_testscans::tapered_tube(7));
     let patient = in_cm(&scan);
     let axis = Vec3::Y;
     for (name, shape, volume, tangent) in [
@@ -237,9 +227,7 @@ fn expanders_wrap_a_tapered_tube_round_rectangular_and_crescent() {
 
 #[test]
 fn a_noisy_holed_face_scan_in_mm_plans_at_the_default_depth() {
-    let Some(scan) = load(tissue_testscans::noisy_face_scan(1)) else {
-        return;
-    };
+    let scan = load(tissue_testscans::noisy_face_scan(1));
     let patient = in_cm(&scan);
     for (name, shape, volume) in [
         ("forehead", ImplantShape::Round { diameter: 2.5 }, 2.0),
@@ -261,9 +249,7 @@ fn a_noisy_holed_face_scan_in_mm_plans_at_the_default_depth() {
 
 #[test]
 fn a_region_over_the_scans_border_or_a_large_hole_is_refused_with_what_fits() {
-    let Some(scan) = load(tissue_testscans::noisy_face_scan(1)) else {
-        return;
-    };
+    let scan = load(tissue_testscans::noisy_face_scan(1));
     let patient = in_cm(&scan);
     let p = point(&scan, "forehead");
     let job = job(
@@ -298,9 +284,7 @@ fn a_region_over_the_scans_border_or_a_large_hole_is_refused_with_what_fits() {
 
 #[test]
 fn on_a_closed_body_the_region_is_cut_out_of_it() {
-    let Some(scan) = load(tissue_testscans::closed_body()) else {
-        return;
-    };
+    let scan = load(tissue_testscans::closed_body());
     let patient = in_cm(&scan);
     assert!(patient.is_closed());
     // The back, not the belly: from just below the navel a 7 cm expander's lower rim reaches
@@ -342,9 +326,7 @@ fn on_a_closed_body_the_region_is_cut_out_of_it() {
 
 #[test]
 fn a_forearm_in_dm_takes_round_and_rectangular_expanders() {
-    let Some(scan) = load(tissue_testscans::forearm_from_body()) else {
-        return;
-    };
+    let scan = load(tissue_testscans::forearm_from_body());
     let patient = in_cm(&scan);
     for (name, shape, volume) in [
         ("forearm_front", ImplantShape::Round { diameter: 4.0 }, 10.0),
@@ -367,9 +349,7 @@ fn a_forearm_in_dm_takes_round_and_rectangular_expanders() {
 
 #[test]
 fn halving_the_simulation_edge_changes_the_gain_by_less_than_five_percent() {
-    let Some(scan) = load(tissue_testscans::tapered_tube(7)) else {
-        return;
-    };
+    let scan = load(tissue_testscans::tapered_tube(7));
     let patient = in_cm(&scan);
     // The cheapest of the cases (every case's figures: docs/validation.md, scan_convergence).
     let p = point(&scan, "y12_other_side");

@@ -1,5 +1,5 @@
-//! Seeded random blade sweeps over the bunny (TetGen, 42k tets) and the liver (meshed by
-//! `tissue-tetra`): after every cut no panic, no non-finite value, the boundary closed, manifold
+//! Seeded random blade sweeps over the bunny and the liver of `fixtures/` (both meshed by
+//! `tissue-tetra`: the bunny about 40k tets): after every cut no panic, no non-finite value, the boundary closed, manifold
 //! and consistently oriented ([`Surgery::validate`]), no tet below the quality bound (every
 //! piece a split made at or above `MIN_RATIO`), and the body keeps stepping without
 //! divergence. The worst *current* volume ratio is reported, not asserted: under gravity and floor contact with K = 5 some of the input's slivers invert with
@@ -13,14 +13,19 @@ use tissue_mesh::TetMesh;
 use tissue_pbd::{Floor, Material, Pose, SoftBody, StepSettings, ToolShape};
 use tissue_surgery::{BladeSweep, Surgery, SurgerySettings, TipCounts};
 
-const BUNNY: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/meshes/bunny_10k_tet42k"
-);
-const LIVER: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/meshes/sofa_liver2.obj"
-);
+/// The bunny's surface (≈ 1 unit tall), shipped with the repository.
+const BUNNY: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/bunny_10k.obj");
+/// SOFA's liver surface, shipped with the repository.
+const LIVER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/liver_sofa.obj");
+
+/// The closed surface at `path`, tetrahedralised by `tissue-tetra`. Panics when the file is
+/// missing: the fixtures ship with the repository.
+fn tetrahedralised(path: &str) -> TetMesh {
+    let surface = tissue_meshio::read_surface(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    tissue_tetra::tetrahedralize(&surface, &tissue_tetra::TetraOptions::default())
+        .unwrap()
+        .mesh
+}
 
 /// Sessions (of 4 sweeps) in the runs with face separation only: the default (geometric cuts)
 /// runs the 1000 sweeps per mesh, the other mode a quarter, to keep the binary's time
@@ -233,11 +238,7 @@ fn random_sweeps_over_the_bunny_keep_the_body_valid_without_splits() {
 }
 
 fn bunny(split: bool) {
-    let Ok(mesh) = tissue_meshio::read_tets(BUNNY) else {
-        eprintln!("skipped: {BUNNY} not found (shared meshes missing)");
-        return;
-    };
-    let (p, t) = mesh.into_parts();
+    let (p, t) = tetrahedralised(BUNNY).into_parts();
     let mesh = TetMesh::new(p.iter().map(|p| *p * 10.0).collect(), t).unwrap();
     let start = Instant::now();
     let sessions = if split { 250 } else { SESSIONS_WITHOUT_SPLITS };
@@ -273,13 +274,7 @@ fn random_sweeps_over_the_liver_keep_the_body_valid_without_splits() {
 }
 
 fn liver(split: bool) {
-    let Ok(surface) = tissue_meshio::read_surface(LIVER) else {
-        eprintln!("skipped: {LIVER} not found (shared meshes missing)");
-        return;
-    };
-    let mesh = tissue_tetra::tetrahedralize(&surface, &tissue_tetra::TetraOptions::default())
-        .unwrap()
-        .mesh;
+    let mesh = tetrahedralised(LIVER);
     let start = Instant::now();
     let sessions = if split { 250 } else { SESSIONS_WITHOUT_SPLITS };
     let s = hammer(&mesh, 0x0001_1FE2, sessions, 4, 10, split);

@@ -107,9 +107,12 @@ fn bad_input_is_refused_naming_the_element() {
             ..
         })
     ));
+    // An id whose node was freed is refused.
+    let stale = body.attach(3, Vec3::ZERO).unwrap();
+    body.unpin(3).unwrap();
     assert!(matches!(
-        body.set_attachment_target(0, Vec3::ZERO),
-        Err(PbdError::NoSuchAttachment { id: 0, count: 0 })
+        body.set_attachment_target(stale, Vec3::ZERO),
+        Err(PbdError::NoSuchAttachment { id, count: 0 }) if id == stale
     ));
     assert!(matches!(
         body.set_velocities(&[Vec3::ZERO]),
@@ -138,4 +141,46 @@ fn pins_and_attachments_move_as_told() {
     );
     // Masses follow eq. (1): they sum to density × volume.
     assert!((body.total_mass() - mesh.volume()).abs() < 1e-4 * mesh.volume());
+}
+
+/// Freeing one attached node leaves the other attachments' ids pointing at their own nodes
+/// (issue 22: `unpin` used to remove with `retain`, shifting the later ids onto other nodes).
+#[test]
+fn unpinning_one_attachment_keeps_the_others_ids() {
+    let mesh = tet_box(4, 1, 1, Vec3::new(4.0, 1.0, 1.0)).unwrap();
+    let mut body = SoftBody::new(&mesh, &Material::default()).unwrap();
+    let (a, b, c) = (1u32, 4u32, 7u32);
+    let p = |n: u32| mesh.positions()[n as usize];
+    let id_a = body.attach(a, p(a)).unwrap();
+    let id_b = body.attach(b, p(b)).unwrap();
+    let id_c = body.attach(c, p(c)).unwrap();
+    body.unpin(a).unwrap();
+    // A new attachment may reuse A's slot, never A's id.
+    let id_d = body.attach(a, p(a)).unwrap();
+    assert_ne!(id_d, id_a);
+    let lift = Vec3::new(0.0, 0.5, 0.0);
+    body.set_attachment_target(id_b, p(b) + lift).unwrap();
+    body.step().unwrap();
+    let x = |n: u32| Vec3::from(body.positions()[n as usize]);
+    assert!(
+        (x(b) - (p(b) + lift)).length() < 1e-6,
+        "B's node moved to B's target"
+    );
+    assert!((x(c) - p(c)).length() < 1e-6, "C's node stayed");
+    assert!(
+        (x(a) - p(a)).length() < 1e-6,
+        "A's node, attached again, stayed"
+    );
+    // The stale id is refused; the others still work.
+    assert!(matches!(
+        body.set_attachment_target(id_a, Vec3::ZERO),
+        Err(PbdError::NoSuchAttachment { .. })
+    ));
+    body.set_attachment_target(id_c, p(c) + lift).unwrap();
+    body.set_attachment_target(id_d, p(a) + lift).unwrap();
+    body.step().unwrap();
+    let x = |n: u32| Vec3::from(body.positions()[n as usize]);
+    assert!((x(c) - (p(c) + lift)).length() < 1e-6);
+    assert!((x(a) - (p(a) + lift)).length() < 1e-6);
+    assert!((x(b) - (p(b) + lift)).length() < 1e-6);
 }

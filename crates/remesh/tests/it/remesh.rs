@@ -2,7 +2,7 @@
 //! (validity, topology, orientation, closeness to the input, edge lengths), smoothing, errors,
 //! determinism.
 
-mod common;
+use crate::common;
 
 use common::{assert_same_topology, fit, read_obj};
 use glam::Vec3;
@@ -114,12 +114,9 @@ fn closed_sphere_stays_closed() {
 fn makehuman_head_disc_is_refined() {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/meshes/makehuman_head_open.obj"
+        "/../../fixtures/makehuman_head_open.obj"
     );
-    let Some(head) = read_obj(path, 10.0) else {
-        println!("skipped: {path} not found");
-        return;
-    };
+    let head = read_obj(path, 10.0).unwrap_or_else(|| panic!("{path} cannot be read"));
     let (nose, _) = head
         .positions()
         .iter()

@@ -3,7 +3,7 @@
 //! ended inside one), rest volume conserved by every split, no tet below the quality bound.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use common::{check_quality, rest};
 

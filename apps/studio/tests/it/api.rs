@@ -348,3 +348,22 @@ async fn jobs_run_table2_in_band_cancel_refuse_a_second_and_end_with_the_tab() -
     server.abort();
     Ok(())
 }
+
+/// The binary's failures use the exit-code table every tissue binary shares: a port already
+/// taken is `Exit::Failure` (1), with one line naming the flag to change.
+#[test]
+fn a_taken_port_exits_with_the_shared_failure_code() -> Result<()> {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0")?;
+    let port = taken.local_addr()?.port().to_string();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_studio"))
+        .args(["--port", &port])
+        .output()?;
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        out.status.code(),
+        Some(tissue_cli::Exit::Failure.code().into()),
+        "{err}"
+    );
+    assert!(err.contains("--port"), "{err}");
+    Ok(())
+}

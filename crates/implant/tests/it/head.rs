@@ -1,19 +1,19 @@
-//! The insertion run on a real patient surface: the MakeHuman head patch of `../shared/meshes`
+//! The insertion run on a real patient surface: the MakeHuman head patch of `fixtures/`
 //! (open at the neck, decimetres, +Y up, +Z front), a round 7 cm expander of 50 cm³ at the top
 //! of the forehead, on the front hairline. The checks are the ones every run must pass (as in
 //! `insertion.rs` on the flat plane), here on a curved base.
 //!
-//! The mesh is third-party test data kept outside the repository (`SOURCES.md` there). When it is
-//! missing, the test says so and passes.
+//! The mesh is third-party test data (CC0) shipped in `fixtures/` (provenance in its README).
 //!
 //! # Why the top of the forehead and not the crown
 //! MakeHuman's scalp is coarse. Around the crown (the highest vertex) the 5.25 cm region has 44
 //! vertices, only 20 of them free, with edges of 1–4.3 cm (2.5 cm on average). A 2.3 cm dome
-//! under triangles that large squeezes the slab down to the thickness guard's floor
-//! (`min_thickness` × depth = 0.25 cm) and shears it. The skin then encloses only about 31 cm³
+//! under triangles that large squeezed the slab (then 1 cm deep) down to the thickness guard's
+//! floor (`min_thickness` × depth = 0.25 cm) and sheared it. The skin then enclosed only about 31 cm³
 //! over the 50 cm³ implant. The back and sides of the skull behave the same way (the guard
 //! engaged, layer 1 below layer 2 along layer 1's own normals).
-//! With the default 1 cm depth, most of the head folds the inward offset ([`TissueLayers::new`]
+//! With a 1 cm depth (the default when this test was written; it is 0.25 cm now), most of the
+//! head folds the inward offset ([`TissueLayers::new`]
 //! refuses): the face, ears and neck. Lower on the occiput the region builds, but the implant's
 //! base, bent onto the bumpy inner layer, gets obtuse triangles and negative Van Gelder stiffness.
 //! The top of the forehead, the vertex farthest along `(0, 1, 1)`, has the finest scalp-like
@@ -32,9 +32,9 @@ use tissue_implant::{
 use tissue_mesh::TriMesh;
 use tissue_mss::StopReason;
 
-/// `../shared/meshes/makehuman_head_open.obj` from the repository root.
+/// `fixtures/makehuman_head_open.obj`.
 fn head_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes/makehuman_head_open.obj")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/makehuman_head_open.obj")
 }
 
 /// The head in cm (the file is in decimetres).
@@ -47,14 +47,6 @@ fn read_head(path: &Path) -> TriMesh {
 #[test]
 fn a_round_expander_on_the_forehead_settles_and_keeps_every_invariant() {
     let path = head_path();
-    if !path.is_file() {
-        eprintln!(
-            "SKIPPED head insertion test: patient mesh {} not found (third-party test data \
-             kept outside the repository, see ../shared/meshes/SOURCES.md)",
-            path.display()
-        );
-        return;
-    }
     let patient = read_head(&path);
     assert_eq!(patient.vertex_count(), 4257);
 
@@ -100,7 +92,8 @@ fn a_round_expander_on_the_forehead_settles_and_keeps_every_invariant() {
         "normal at the forehead {normal}"
     );
 
-    // Default parameters throughout (depth 1 cm: the offset does not fold here).
+    // Default parameters throughout (depth 0.25 cm, `LayerParams::default`: the offset does not
+    // fold here).
     let params = InsertionParams::default();
     let layers = TissueLayers::new(region, &params.layers).unwrap();
     let spec = ImplantSpec::new(ImplantShape::Round { diameter }, volume);

@@ -39,7 +39,7 @@ fn a_body_moving_against_a_world_fixed_blade_is_cut_through_with_splits() {
             p.x > 3.7 && p.y > 0.9
         })
         .collect();
-    let grasp: Vec<(Vec3, usize)> = tip
+    let grasp: Vec<(Vec3, tissue_pbd::AttachmentId)> = tip
         .iter()
         .map(|&i| {
             let p = Vec3::from(body.positions()[i as usize]);

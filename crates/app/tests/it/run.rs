@@ -1,7 +1,7 @@
 //! Runs through the worker against the library called directly, set-up errors, sweeps and
 //! inverse searches, the plane press, host jobs and panics.
 
-mod common;
+use crate::common;
 
 use std::ops::ControlFlow;
 use std::time::Duration;

@@ -1,11 +1,11 @@
 //! Conservation, damping, volume and stiffness behaviour of the public API.
 #![allow(clippy::print_stderr, clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use std::time::Instant;
 
-use common::{bunny_or_box, non_rigid_energy, Rng};
+use common::{bunny, non_rigid_energy, Rng};
 use glam::Vec3;
 use tissue_mesh::tet_box;
 use tissue_pbd::{Floor, Material, SoftBody, Solver, StepSettings, VolumeConstraintKind};
@@ -164,7 +164,7 @@ fn rest_on_tray(
 
 #[test]
 fn volume_constraints_keep_a_resting_body_volume() {
-    let mesh = bunny_or_box();
+    let mesh = bunny();
     let steps = 150;
     let (centroid, tc) = rest_on_tray(&mesh, VolumeConstraintKind::Centroid, steps, 0.002, 10);
     let (classic, tv) = rest_on_tray(&mesh, VolumeConstraintKind::Classic, steps, 0.002, 10);

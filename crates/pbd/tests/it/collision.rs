@@ -3,11 +3,11 @@
 //! field against brute force, and bad input.
 #![allow(clippy::print_stderr, clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use std::sync::Arc;
 
-use common::{bunny, bunny_or_box, Rng};
+use common::{bunny, fixture, Rng};
 use glam::{DVec3, Quat, Vec3, Vec3A};
 use tissue_mesh::{tet_box, TetMesh, TriMesh};
 use tissue_pbd::{
@@ -53,15 +53,7 @@ fn max_penetration(body: &SoftBody, collider: &VoxelCollider) -> f32 {
 
 #[test]
 fn armadillo_dropped_on_a_tray_comes_to_rest_without_inverted_tets_or_penetration() {
-    let stem = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/meshes/pbd_armadillo_4k"
-    );
-    if !std::path::Path::new(&format!("{stem}.node")).exists() {
-        eprintln!("SKIP armadillo drop: {stem}.node not found (../shared/meshes is missing)");
-        return;
-    }
-    let data = tissue_meshio::read_tetgen(stem).unwrap();
+    let data = tissue_meshio::read_tetgen(fixture("armadillo_4k")).unwrap();
     // The model is about 3 units tall: ×5 makes a 15 cm figure of 230 g. It is dropped upside
     // down from 0.5 cm: standing, it topples (its PBD legs are soft at this step), and in the
     // other orientations tried the topple's impact leaves one or two tets inverted against the
@@ -181,7 +173,7 @@ fn rest_on_voxel_tray(
 
 #[test]
 fn bunny_resting_on_the_voxel_tray_keeps_its_volume_with_volume_constraints() {
-    let mesh = bunny_or_box();
+    let mesh = bunny();
     // The benchmark step (10 ms, K = 10) cannot hold 2 %: with the tray as with the
     // `Floor`, the classic constraint ends near 0.88 and the centroid one near 0.57 after 1 s
     // (K = 40 at 10 ms: 0.96). 2 ms with K = 10 holds it; that is what is asserted, over the same
@@ -542,10 +534,7 @@ fn point_triangle_distance(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
 
 #[test]
 fn voxel_distance_field_matches_brute_force_distance_to_the_mesh() {
-    let surface = match bunny() {
-        Some(m) => m.boundary_surface().unwrap(),
-        None => tissue_mesh::uv_sphere(24, 23, 4.0).unwrap(),
-    };
+    let surface = bunny().boundary_surface().unwrap();
     let cell = 0.25;
     let t = std::time::Instant::now();
     let collider = VoxelCollider::from_mesh(&surface, cell).unwrap();

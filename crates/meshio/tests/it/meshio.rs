@@ -1,5 +1,5 @@
 //! The public API of tissue-meshio: round trips, format details, error locations, atomic writes,
-//! and the real third-party meshes of `../shared/meshes`.
+//! and the real third-party meshes shipped in `fixtures/`.
 
 // Test code: a failed unwrap is a failed test; the skip notice goes to stderr.
 #![allow(clippy::unwrap_used, clippy::print_stderr)]
@@ -687,34 +687,22 @@ fn writes_leave_no_temporary_files_and_replace_whole() {
 
 // ------------------------------------------------------------------------------ real meshes
 
-fn shared_meshes() -> Option<PathBuf> {
-    let dir = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/meshes"
-    ));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "skipping: ../shared/meshes not found (looked in {})",
-            dir.display()
-        );
-        None
-    }
+/// The repository's `fixtures/` folder, where the real meshes the tests read are shipped.
+fn fixtures() -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures"))
 }
 
 #[test]
 fn real_surfaces_have_the_documented_counts_and_topology() {
-    let Some(dir) = shared_meshes() else { return };
-    // file, V, F, closed, χ, boundary loop edge counts (SOURCES.md).
+    let dir = fixtures();
+    // file, V, F, closed, χ, boundary loop edge counts (fixtures/README.md).
     type Case = (&'static str, usize, usize, bool, i64, &'static [usize]);
-    let cases: [Case; 6] = [
+    let cases: [Case; 5] = [
         ("makehuman_body_closed.obj", 13_380, 26_756, true, 2, &[]),
         ("makehuman_head_open.obj", 4_257, 8_470, false, 1, &[42]),
         ("makehuman_chest_open.obj", 4_921, 9_632, false, 1, &[208]),
-        ("pbd_bunny_10k.obj", 5_002, 10_000, true, 2, &[]),
-        ("sofa_liver2.obj", 1_170, 2_336, true, 2, &[]),
-        ("spot_triangulated.obj", 2_930, 5_856, true, 2, &[]),
+        ("bunny_10k.obj", 5_002, 10_000, true, 2, &[]),
+        ("liver_sofa.obj", 1_170, 2_336, true, 2, &[]),
     ];
     for (file, v, f, closed, chi, loops) in cases {
         let path = dir.join(file);
@@ -739,35 +727,19 @@ fn real_surfaces_have_the_documented_counts_and_topology() {
 }
 
 #[test]
-fn real_tet_meshes_have_the_documented_counts() {
-    let Some(dir) = shared_meshes() else { return };
-    // stem, nodes, tets, boundary triangles, interior nodes (None: not documented).
-    for (stem, nodes, tets, boundary, interior) in [
-        ("pbd_armadillo_4k", 1_180, 3_717, 2_102, Some(127)),
-        ("bunny_10k_tet42k", 9_217, 42_117, 10_000, None),
-    ] {
-        let data = read_tetgen(dir.join(format!("{stem}.node"))).unwrap();
-        assert_eq!(
-            (data.positions.len(), data.tets.len()),
-            (nodes, tets),
-            "{stem}"
-        );
-        // Validation checks what SOURCES.md says: all positive, no face in more than 2 tets.
-        let mesh = read_tets(dir.join(format!("{stem}.ele"))).unwrap_or_else(|e| panic!("{e}"));
-        let surface = mesh.boundary_surface().unwrap();
-        assert_eq!(surface.triangle_count(), boundary, "{stem}");
-        assert!(surface.is_closed(), "{stem}");
-        let unused = surface.unreferenced_vertices().len();
-        assert_eq!(surface.euler_characteristic() - unused as i64, 2, "{stem}");
-        if let Some(interior) = interior {
-            assert_eq!(unused, interior, "{stem}");
-        }
-    }
-    // "nodes 0–5001 are exactly that OBJ's vertices": only true if the OBJ reader keeps the
-    // file's vertex order.
-    let tets = read_tetgen(dir.join("bunny_10k_tet42k")).unwrap();
-    let surface = read_surface_data(dir.join("pbd_bunny_10k.obj")).unwrap();
-    assert_eq!(bits(&tets.positions[..5002]), bits(&surface.positions));
+fn real_tet_mesh_has_the_documented_counts() {
+    // The TetGen armadillo: nodes, tets, boundary triangles, interior nodes (fixtures/README.md).
+    let stem = fixtures().join("armadillo_4k");
+    let data = read_tetgen(&stem).unwrap();
+    assert_eq!((data.positions.len(), data.tets.len()), (1_180, 3_717));
+    // Validation checks what the provenance says: all positive, no face in more than 2 tets.
+    let mesh = read_tets(stem.with_extension("ele")).unwrap_or_else(|e| panic!("{e}"));
+    let surface = mesh.boundary_surface().unwrap();
+    assert_eq!(surface.triangle_count(), 2_102);
+    assert!(surface.is_closed());
+    let unused = surface.unreferenced_vertices().len();
+    assert_eq!(surface.euler_characteristic() - unused as i64, 2);
+    assert_eq!(unused, 127);
 }
 
 /// tobj (the design card's OBJ crate) as an oracle: on well-formed single-group files it must
@@ -781,14 +753,8 @@ fn obj_reader_agrees_with_tobj_on_well_formed_files() {
         write_obj(&path, &mesh).unwrap();
         files.push(path);
     }
-    if let Some(shared) = shared_meshes() {
-        for f in [
-            "makehuman_head_open.obj",
-            "sofa_liver2.obj",
-            "spot_triangulated.obj",
-        ] {
-            files.push(shared.join(f));
-        }
+    for f in ["makehuman_head_open.obj", "liver_sofa.obj", "bunny_10k.obj"] {
+        files.push(fixtures().join(f));
     }
     let options = tobj::LoadOptions {
         triangulate: true,

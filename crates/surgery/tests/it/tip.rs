@@ -3,7 +3,7 @@
 //! the opening on the top ends exactly at the tip; continued, it goes on from there.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use common::{check_quality, rest};
 

@@ -45,14 +45,15 @@ fn fixtures_match_generator() {
 }
 
 #[test]
-fn bad_parameters_exit_2_with_a_message() {
+fn bad_parameters_exit_with_the_shared_codes_and_a_message() {
+    use tissue_cli::Exit;
     let out_dir = scratch("bad");
     let out = Command::new(env!("CARGO_BIN_EXE_meshgen"))
         .args(["grid", "--n", "1", "--side", "1"])
         .arg(out_dir.join("x.obj"))
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(out.status.code(), Some(Exit::Parameters.code().into()));
     assert!(String::from_utf8_lossy(&out.stderr).contains("meshgen:"));
     assert!(!out_dir.join("x.obj").exists());
 
@@ -61,7 +62,7 @@ fn bad_parameters_exit_2_with_a_message() {
         .arg(out_dir.join("x.xyz"))
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(out.status.code(), Some(Exit::Usage.code().into()));
     assert!(String::from_utf8_lossy(&out.stderr).contains("x.xyz"));
     std::fs::remove_dir_all(&out_dir).ok();
 }

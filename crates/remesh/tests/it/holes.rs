@@ -1,7 +1,5 @@
 //! fill_holes on punched noisy surfaces, small and closed inputs, non-planar and long loops.
 
-mod common;
-
 use glam::Vec3;
 use tissue_mesh::TriMesh;
 use tissue_remesh::{fill_holes, scenes, MeshQuality, RemeshError};

@@ -2,7 +2,7 @@
 //! the surface along its length and leaves one piece.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use tissue_pbd::{Pose, SoftBody, StepSettings, ToolShape};
@@ -202,4 +202,57 @@ fn partial_incision(geometric: bool) {
     for _ in 0..10 {
         body.step().unwrap();
     }
+}
+
+/// A state refuses another body of the same size (issue 22: the check compared counts only),
+/// leaving both bodies untouched, and takes a clone of its own body (a snapshot of it).
+#[test]
+fn a_state_refuses_another_body_of_the_same_size() {
+    use tissue_surgery::SurgeryError;
+    let (mut body, mut surgery) = common::block(true);
+    let (mut other, _) = common::block(true);
+    assert_eq!(
+        (other.node_count(), other.tets().len()),
+        (body.node_count(), body.tets().len())
+    );
+    assert_ne!(other.id(), body.id());
+    let blade = ToolShape::Blade {
+        a: Vec3::new(0.0, 0.0, -5.0),
+        b: Vec3::new(0.0, 0.0, 5.0),
+        c: Vec3::new(0.0, 5.0, 0.0),
+        thickness: 0.01,
+    };
+    let sweep = BladeSweep::new(
+        &blade,
+        &Pose::from_translation(Vec3::new(0.3, 2.0, 0.0)),
+        &Pose::from_translation(Vec3::new(0.3, 0.5, 0.0)),
+    )
+    .unwrap();
+    let before = other.positions().to_vec();
+    let refused = surgery.cut(&mut other, &sweep);
+    assert!(
+        matches!(
+            refused,
+            Err(SurgeryError::BodyMismatch {
+                what: "body id",
+                ..
+            })
+        ),
+        "{refused:?}"
+    );
+    assert_eq!(other.positions(), &before[..]);
+    assert_eq!(other.tets().len(), body.tets().len());
+    assert!(matches!(
+        surgery.validate(&other),
+        Err(SurgeryError::BodyMismatch { .. })
+    ));
+    // Its own body, and a clone of the pair, are accepted.
+    let (mut snapshot, mut snapshot_surgery) = (body.clone(), surgery.clone());
+    assert!(!surgery.cut(&mut body, &sweep).unwrap().is_empty());
+    surgery.validate(&body).unwrap();
+    assert!(!snapshot_surgery
+        .cut(&mut snapshot, &sweep)
+        .unwrap()
+        .is_empty());
+    snapshot_surgery.validate(&snapshot).unwrap();
 }

@@ -1,0 +1,6 @@
+//! The integration tests of `tissue-studio` in one binary, a module per area (each module's own
+//! doc says what it covers). Tests that must be alone in their process (allocation
+//! counters, timing bounds) keep their own binaries beside `it/`.
+
+mod api;
+mod trainer;

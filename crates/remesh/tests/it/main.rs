@@ -1,0 +1,9 @@
+//! The integration tests of `tissue-remesh` in one binary, a module per area (each module's own
+//! doc says what it covers). Tests that must be alone in their process (allocation
+//! counters, timing bounds) keep their own binaries beside `it/`.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod holes;
+mod remesh;
