@@ -8,35 +8,11 @@
 #include <thread>
 #include <vector>
 
+#include "check.hpp"
 #include "tissue.h"
 
 namespace {
 
-int failures = 0;
-
-void check(bool ok, const std::string& what) {
-    if (!ok) {
-        std::fprintf(stderr, "FAILED: %s\n", what.c_str());
-        ++failures;
-    }
-}
-
-std::string last_error() {
-    std::string text(tissue_last_error(nullptr, 0), '\0');
-    if (!text.empty()) {
-        tissue_last_error(text.data(), text.size());
-        text.pop_back();
-    }
-    return text;
-}
-
-void ok(tissue_status s, const char* what) {
-    if (s != TISSUE_OK) {
-        std::fprintf(stderr, "FAILED: %s gave %d: %s\n", what, static_cast<int>(s),
-                     last_error().c_str());
-        std::exit(1);
-    }
-}
 
 // Frees a handle at the end of its scope.
 template <typename T, void (*Free)(T*)>
