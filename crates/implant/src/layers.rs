@@ -232,13 +232,11 @@ impl Default for LayerParams {
     /// and muscle, `E_a` = 0.2 MPa, which also sets layer 2's own in-plane springs. Slab springs
     /// of 2 MPa: stiffer than skin on purpose, since linear springs squeezed past zero length
     /// turn the slab inside out, and under the skin's tension over an expander a skin-stiff slab
-    /// did (found running Table 2). The thickness guard holds layer 1 at least a quarter of the
-    /// depth above layer 2.
+    /// does. The thickness guard holds layer 1 at least a quarter of the depth above layer 2.
     ///
-    /// With these, Table 2's runs land in all of the thesis's bands (docs/validation.md);
-    /// at a depth of 1 cm the skin encloses about `depth × (dome area − base area)` more than
-    /// the implant (1.4 × V), and with loose anchors (2 kPa) the ring around the expander rises
-    /// too (1.3 × V at 0.5 cm).
+    /// With these, Table 2's runs land in all of the thesis's bands (docs/validation.md). A
+    /// deeper layer 2 makes the skin enclose about `depth × (dome area − base area)` more than
+    /// the implant, and loose anchors let the ring around the expander rise too.
     fn default() -> Self {
         LayerParams {
             young: 2.0e6,
