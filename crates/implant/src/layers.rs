@@ -214,7 +214,7 @@ pub struct LayerParams {
     /// shape of layer 2.
     pub offset_reach: Option<f64>,
     /// Whether layer 1 resists bending as a plate of the skin's modulus and thickness,
-    /// `D = E t³ / (12 (1 − ν²))` ([`crate::bending`]). On by default: without it the
+    /// `D = E t³ / (12 (1 − ν²))` (module `bending`). On by default: without it the
     /// mass–spring skin, a membrane, folds into pleats one simulation edge wide where it is
     /// compressed. The thesis's model has none; the plane press (Table 1) turns it off to
     /// reproduce it.
@@ -313,7 +313,7 @@ pub struct TissueLayers {
     normals: Vec<Vec3>,
     /// The slab's shear stiffness `G·Aᵢ/depth` per region vertex.
     shear: Vec<f32>,
-    /// Layer 1's bending hinges ([`crate::bending`]).
+    /// Layer 1's bending hinges (module `bending`).
     hinges: Vec<crate::bending::Hinge>,
     /// Layer 2's current vertex normals (unnormalised), scratch of `add_slab_shear` and
     /// `hold_thickness`.
@@ -516,7 +516,7 @@ impl TissueLayers {
         crate::bending::add_forces(&self.hinges, position, force);
     }
 
-    /// The skin's bending energy at the current positions (g·cm²/s², [`crate::bending`]).
+    /// The skin's bending energy at the current positions (g·cm²/s², module `bending`).
     pub fn bending_energy(&self) -> f64 {
         crate::bending::energy(&self.hinges, self.system.particles().positions())
     }
