@@ -127,8 +127,7 @@ impl InsertionJob {
     /// `RunParams::damping_time`) are set for Table 2's 7 cm expander, and the end state does
     /// not depend on them (docs/validation.md); a region's waves cross it in a time that scales
     /// with its size, as the time step does with the edge. Scaled, a small expander's run
-    /// takes about Table 2's number of steps: the face scan's 2.5 cm round expander settles in
-    /// 461 steps instead of 1 000, its gain 0.14 % lower.
+    /// takes about Table 2's number of steps.
     ///
     /// # Errors
     /// Those of [`InsertionJob::radius`].

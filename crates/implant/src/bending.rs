@@ -12,15 +12,14 @@
 //! sheet's border; the usual `3|ē|²/(Ā₀ + Ā₁)` weight gives three times it on both). The force is
 //! `Fᵢ = −2 k_e (θ − θ̄) ∂θ/∂xᵢ`: conservative, zero for any rigid motion, and nothing in the
 //! plane. It gives the mass–spring skin what a membrane lacks: without it, a skin compressed
-//! beside an expander folds into pleats one simulation edge wide, so the area gain depended on
-//! the edge (+16.6 % from `h` to `h/2` on the face scan's forehead).
+//! beside an expander folds into pleats one simulation edge wide, so the area gain would depend
+//! on the simulation edge.
 
 use glam::Vec3A;
 
 /// `atan2(y, x)` to within 2·10⁻⁶ rad: a minimax polynomial for `atan` on [0, 1] (11th order)
-/// with the octant reductions. `f32::atan2` cost four fifths of the hinges' time (Table 2's
-/// run: +13.5 % with it, +3.6 % without). The rest angle goes through the same function, so a
-/// hinge at rest has no force.
+/// with the octant reductions, because `f32::atan2` would dominate the hinges' cost. The rest
+/// angle goes through the same function, so a hinge at rest has no force.
 fn atan2(y: f32, x: f32) -> f32 {
     const C: [f32; 6] = [
         0.999_977_26,

@@ -76,19 +76,16 @@ impl RunParams {
 
 impl Default for RunParams {
     /// Automatic step at 0.8 of the stability limit (the Gershgorin bound overestimates the
-    /// highest frequency; at 1.0 Table 2's 150 cm³ run chattered for 4 300 steps); damping
-    /// time 1 ms (the lowest modes of a skin region — layer 2 on its anchors, the expander's
-    /// dome — have periods of a few ms, so this is about critical for them: Table 2's results
-    /// agree within 0.1 % between 1 and 4 ms, and settle in 40 % of the steps at 1 ms); BVH vs
-    /// BVH; contacts from a tenth of an edge; inelastic contact with Coulomb friction 0.3
-    /// (silicone on tissue; frictionless, the tissue on the flank of Table 2's 150 cm³
-    /// expander chattered against its anchors and never settled), 8 Gauss–Seidel sweeps
-    /// warm-started from the last step's impulses (cold-started, with 4 or 2 sweeps the resting
-    /// contacts chatter and the 100–150 cm³ runs do not settle, and even with 8 a 175 cm³ run
-    /// hit the step limit; warm-started, 40–200 cm³ all settle in 295–415 steps); window 50
-    /// steps (1.6 ms on Table 2), tolerance 0.01, at most 20 000 steps (the thesis's runs took 2 800–3 300);
-    /// settled below a mean speed of 5 cm/s (resting contacts jitter at 1–3 cm/s, which the
-    /// thesis's ratio test alone never accepts).
+    /// highest frequency, and a step at the bound lets resting contacts chatter); damping time
+    /// 1 ms (the lowest modes of a skin region — layer 2 on its anchors, the expander's dome —
+    /// have periods of a few ms, so this is about critical for them); BVH vs BVH; contacts from
+    /// a tenth of an edge; inelastic contact with Coulomb friction 0.3 (silicone on tissue;
+    /// without friction tissue on an expander's flank slides against its anchors and never
+    /// settles), 8 Gauss–Seidel sweeps warm-started from the last step's impulses (so resting
+    /// contacts converge instead of chattering); window 50 steps, tolerance 0.01, at most
+    /// 20 000 steps (several times the thesis's runs); settled below a mean speed of 5 cm/s
+    /// (above the jitter of resting contacts, which the thesis's ratio test alone never
+    /// accepts). The measurements behind these values: docs/tuning-log.md.
     fn default() -> Self {
         RunParams {
             time_step: None,

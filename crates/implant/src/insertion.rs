@@ -51,8 +51,7 @@ pub struct ImplantParams {
     /// is derived so that a uniform inward move `δ` of every vertex would meet the pressure
     /// `3·k_v·T²·δ/A` (`T` triangles, area `A`), i.e. `k_v = K_r·A²/(3·T²·V)`. Eq. (5) holds
     /// area-weighted radial lengths, which a dome flattened on its top keeps while losing
-    /// volume (measured: 17 % of a 50 cm³ expander lost at `K_r` = 1 GPa without the fill's
-    /// pressure), so it gives the shape's response and the fill's pressure the volume.
+    /// volume, so it gives the shape's response and the fill's pressure the volume.
     pub radial_modulus: f64,
     /// Eq. (5)'s `C` in (0, 1): the weight of a particle's own radial change.
     pub volume_coupling: f64,
@@ -62,9 +61,8 @@ impl Default for ImplantParams {
     /// A silicone elastomer shell of `E` = 3 MPa (medical silicones are 1–10 MPa), `ν` = 0.45,
     /// 0.05 cm thick (expander shells are about 0.5 mm); saline fill of density 1 g/cm³ and a
     /// bulk modulus of 10 MPa — far below water's 2.2 GPa, whose breathing mode would set the
-    /// step, but it holds the volume within `p/K` (measured on Table 2's runs: 0.22–0.66 %
-    /// lost, against the 2 % allowed);
-    /// eq. (5) at a radial modulus of 10 MPa with `C` = 0.5.
+    /// step, but stiff enough to hold the volume within `p/K`, inside the 2 % the validation
+    /// allows; eq. (5) at a radial modulus of 10 MPa with `C` = 0.5.
     fn default() -> Self {
         ImplantParams {
             shell_young: 3.0e7,
@@ -131,12 +129,10 @@ pub struct InsertionParams {
 }
 
 impl Default for InsertionParams {
-    /// The defaults of each part; a 2.5 ms fill (the expander rises at up to 1 600 cm/s, and
-    /// the tissue, damped at 1 ms, follows it: Table 2's gains and volume differences agree
-    /// within 0.1 % with 5, 10 and 20 ms fills; at 1.5 ms they start to move); a pocket 0.3 cm wider than the base (surgeons
-    /// dissect the pocket a little beyond the expander's edge; the wider the pocket, the more
-    /// of the free tissue around the expander rises: 0.5 cm gives Table 2 volume differences
-    /// of 1.16–1.17 × V, 1 cm 1.15–1.25 × V).
+    /// The defaults of each part; a 2.5 ms fill: short, yet the tissue, damped at 1 ms,
+    /// follows the rising dome, so the end state is that of a slower fill; a pocket 0.3 cm
+    /// wider than the base (surgeons dissect the pocket a little beyond the expander's edge;
+    /// a wider pocket lets more of the free tissue around the expander rise).
     fn default() -> Self {
         InsertionParams {
             layers: LayerParams::default(),

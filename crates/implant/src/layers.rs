@@ -214,7 +214,7 @@ pub struct LayerParams {
     /// shape of layer 2.
     pub offset_reach: Option<f64>,
     /// Whether layer 1 resists bending as a plate of the skin's modulus and thickness,
-    /// `D = E t³ / (12 (1 − ν²))` ([`crate::bending`]). On by default: without it the
+    /// `D = E t³ / (12 (1 − ν²))` (module `bending`). On by default: without it the
     /// mass–spring skin, a membrane, folds into pleats one simulation edge wide where it is
     /// compressed. The thesis's model has none; the plane press (Table 1) turns it off to
     /// reproduce it.
@@ -232,13 +232,11 @@ impl Default for LayerParams {
     /// and muscle, `E_a` = 0.2 MPa, which also sets layer 2's own in-plane springs. Slab springs
     /// of 2 MPa: stiffer than skin on purpose, since linear springs squeezed past zero length
     /// turn the slab inside out, and under the skin's tension over an expander a skin-stiff slab
-    /// did (found running Table 2). The thickness guard holds layer 1 at least a quarter of the
-    /// depth above layer 2.
+    /// does. The thickness guard holds layer 1 at least a quarter of the depth above layer 2.
     ///
-    /// With these, Table 2's runs land in all of the thesis's bands (docs/validation.md);
-    /// at a depth of 1 cm the skin encloses about `depth × (dome area − base area)` more than
-    /// the implant (1.4 × V), and with loose anchors (2 kPa) the ring around the expander rises
-    /// too (1.3 × V at 0.5 cm).
+    /// With these, Table 2's runs land in all of the thesis's bands (docs/validation.md). A
+    /// deeper layer 2 makes the skin enclose about `depth × (dome area − base area)` more than
+    /// the implant, and loose anchors let the ring around the expander rise too.
     fn default() -> Self {
         LayerParams {
             young: 2.0e6,
@@ -315,7 +313,7 @@ pub struct TissueLayers {
     normals: Vec<Vec3>,
     /// The slab's shear stiffness `G·Aᵢ/depth` per region vertex.
     shear: Vec<f32>,
-    /// Layer 1's bending hinges ([`crate::bending`]).
+    /// Layer 1's bending hinges (module `bending`).
     hinges: Vec<crate::bending::Hinge>,
     /// Layer 2's current vertex normals (unnormalised), scratch of `add_slab_shear` and
     /// `hold_thickness`.
@@ -518,7 +516,7 @@ impl TissueLayers {
         crate::bending::add_forces(&self.hinges, position, force);
     }
 
-    /// The skin's bending energy at the current positions (g·cm²/s², [`crate::bending`]).
+    /// The skin's bending energy at the current positions (g·cm²/s², module `bending`).
     pub fn bending_energy(&self) -> f64 {
         crate::bending::energy(&self.hinges, self.system.particles().positions())
     }

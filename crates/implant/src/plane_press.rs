@@ -66,23 +66,18 @@ impl Default for PlanePressParams {
     ///
     /// The slab's thickness guard ([`LayerParams::min_thickness`], a numerical safeguard, not
     /// material) is off: the press squeezes the slab by about a third at the sphere's pole
-    /// (0.034 of 0.05 cm at 65²), so a guard at a quarter of the depth would never act. With
-    /// the diagonal springs the slab once had, the guard's position projection fed energy into
-    /// the slab at 257² and the run blew up; it has not been re-tested with the shear force
-    /// that replaced them.
+    /// (0.034 of 0.05 cm at 65²), so a guard at a quarter of the depth would never act.
     ///
     /// The skin's bending ([`LayerParams::skin_bending`]) is off: Table 1 reproduces the thesis's
     /// membrane, and at a sphere of 2.5 mm the skin's bending length `√(D / E t)` ≈ 0.65 mm is
-    /// not small (with it the 65² press's volume falls from 0.0567 to 0.0526 cm³, 15 % under the
-    /// thesis's).
+    /// not small, so bending would change the press's volume.
     ///
     /// The speed: the end state should not depend on it, so the sphere must be slow against the
     /// tissue's waves and its damping time. The run ends with the sphere, not with the tissue at
     /// rest, so whatever the impact at the start set ringing and has not yet died away is still
     /// in the result. The cost is `travel / (speed·h)` steps, and `h` shrinks with the edge
-    /// length (2.6 µs at 65², 1.3 µs at 129², 0.67 µs at 257²: 1 150, 2 266 and 4 508 steps).
-    /// Halving the speed changes the area after by 0.08 % and the volume by 0.24 % at 65²
-    /// (`--halving` in the example measures it); four times the speed changes it by 0.45 %.
+    /// length. 100 cm/s is slow enough that halving it changes the result by well under 1 %
+    /// (`--halving` in the example measures it).
     fn default() -> Self {
         PlanePressParams {
             sphere_radius: 0.25,

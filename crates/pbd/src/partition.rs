@@ -22,9 +22,8 @@
 
 use glam::Vec3;
 
-/// Nodes per leaf block at most: 20 KiB of positions, so a leaf's sweep runs in L1. (Bunny,
-/// serial, K = 10: 320 nodes 4.45 ms, 640 4.20, 1280 4.03, 2560 4.00; larger leaves mean fewer,
-/// fuller colours, smaller ones more blocks for more threads.)
+/// Nodes per leaf block at most: 20 KiB of positions, so a leaf's sweep runs in L1. Larger
+/// leaves mean fewer, fuller colours, smaller ones more blocks for more threads.
 pub(crate) const LEAF_NODES: usize = 1280;
 
 /// The solver slots of `n` nodes: the tree of [`Tree::for_nodes`] over the nodes, each leaf

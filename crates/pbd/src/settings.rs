@@ -139,9 +139,9 @@ impl Default for StepSettings {
 }
 
 impl StepSettings {
-    /// The trainer's scheme up to issue 19 (`trainer --scheme legacy`): one step of 10 ms per
-    /// frame, `K = 10` iterations, linearised PBD, rigid-mode damping 0.05. Loses up to 16 % of
-    /// the bunny's volume under the probe (docs/trainer.md); kept for comparison.
+    /// The trainer's former scheme (`trainer --scheme legacy`): one step of 10 ms per frame,
+    /// `K = 10` iterations, linearised PBD, rigid-mode damping 0.05. Kept as a baseline to
+    /// compare [`StepSettings::realtime`] against (docs/tuning-log.md).
     pub fn legacy() -> Self {
         Self {
             damping: 0.05,
@@ -153,8 +153,9 @@ impl StepSettings {
     /// studio at 60 steps/s and below: a 10 ms step as [`StepSettings::REALTIME_SUBSTEPS`]
     /// substeps of one iteration each (small steps, Macklin et al. 2019), linearised PBD (with
     /// [`Material::soft_tissue`]'s `k = 1` the same projection as XPBD with zero compliance, at
-    /// a cheaper kernel), rigid-mode damping 0.05 per step. Measured against
-    /// [`StepSettings::legacy`] in docs/trainer.md (volume drift and cost per step).
+    /// a cheaper kernel), rigid-mode damping 0.05 per step. Many small steps hold an organ's
+    /// volume under a tool far better than a few iterations of one large step, at about the same
+    /// cost per step.
     pub fn realtime() -> Self {
         Self {
             dt: 0.01,
