@@ -26,7 +26,7 @@
 //! seeded by its index, run in parallel (rayon): the band does not depend on the thread count.
 //!
 //! A sample is not a full mechanical run but a **surrogate** checked against full runs
-//! (`tests/expansion.rs`): the growth is integrated per triangle over the nominal run's own
+//! (`tests/it/expansion.rs`): the growth is integrated per triangle over the nominal run's own
 //! stretch history `θ(t)`, scaled per triangle by how the stretch changes with the expander's
 //! volume (a ladder of reference runs without growth, interpolated linearly in volume) and
 //! with the skin's stiffness (two reference runs at ×0.9 and ×1.1). The nominal run carries

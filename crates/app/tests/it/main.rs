@@ -5,6 +5,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod expansion;
 mod lifecycle;
 mod run;
 mod scans;

@@ -2,6 +2,7 @@
 //! doc says what it covers). Tests that must be alone in their process (allocation
 //! counters, timing bounds) keep their own binaries beside `it/`.
 
+mod expansion;
 mod head;
 mod insertion;
 mod layers;
