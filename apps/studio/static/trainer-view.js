@@ -227,9 +227,11 @@ export class TrainerView {
   nodesFrom(from) {
     if (!this.mesh || from >= this.vertices) return null;
     const p = this.mesh.geometry.attributes.position.array;
-    const c = new THREE.Vector3();
-    for (let i = 3 * from, end = 3 * this.vertices; i < end; i += 3) c.add(new THREE.Vector3(p[i], p[i + 1], p[i + 2]));
-    return c.divideScalar(this.vertices - from);
+    let x = 0, y = 0, z = 0;
+    for (let i = 3 * from, end = 3 * this.vertices; i < end; i += 3) {
+      x += p[i]; y += p[i + 1]; z += p[i + 2];
+    }
+    return new THREE.Vector3(x, y, z).divideScalar(this.vertices - from);
   }
 
   /**

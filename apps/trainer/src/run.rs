@@ -147,31 +147,20 @@ fn height(body: &SoftBody) -> f32 {
 /// The tets' `|V/V_rest − 1|`: median and 90th percentile; and `Σ|V − V_rest| / ΣV_rest`.
 fn tet_error(body: &SoftBody) -> [f64; 3] {
     let x = body.positions();
-    let mut e: Vec<f64> = body
-        .tets()
-        .iter()
-        .zip(body.tet_rest_volumes())
-        .map(|(t, &rest)| {
-            let [a, b, c, d] = t.map(|i| x[i as usize].as_dvec3());
-            ((b - a).cross(c - a).dot(d - a) / 6.0 / rest as f64 - 1.0).abs()
-        })
-        .collect();
+    // Per tet: |V/V_rest − 1| and |V − V_rest| (cm³), in one pass.
+    let (mut e, mut off) = (Vec::with_capacity(body.tets().len()), 0.0f64);
+    for (t, &rest) in body.tets().iter().zip(body.tet_rest_volumes()) {
+        let [a, b, c, d] = t.map(|i| x[i as usize].as_dvec3());
+        let dv = ((b - a).cross(c - a).dot(d - a) / 6.0 - rest as f64).abs();
+        e.push(dv / rest as f64);
+        off += dv;
+    }
     if e.is_empty() {
         return [0.0; 3];
     }
     e.sort_unstable_by(f64::total_cmp);
     let at = |q: f64| e[((e.len() - 1) as f64 * q).round() as usize];
-    let weighted: f64 = body
-        .tets()
-        .iter()
-        .zip(body.tet_rest_volumes())
-        .map(|(t, &rest)| {
-            let [a, b, c, d] = t.map(|i| x[i as usize].as_dvec3());
-            ((b - a).cross(c - a).dot(d - a) / 6.0 - rest as f64).abs()
-        })
-        .sum::<f64>()
-        / body.rest_volume();
-    [at(0.5), at(0.9), weighted]
+    [at(0.5), at(0.9), off / body.rest_volume()]
 }
 
 fn set_pose(body: &mut SoftBody, tool: usize, tip: Vec3) -> Result<(), Failure> {
