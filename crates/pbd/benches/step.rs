@@ -1,4 +1,4 @@
-//! One PBD step on the bunny of `../shared/meshes` (42k tets, scaled to 10 cm; a 20×20×20-cell
+//! One PBD step on the TetGen bunny of `fixtures/` (42k tets, scaled to 10 cm; a 20×20×20-cell
 //! tet box of 48k tets when the folder is missing): distance + volume constraints, 10 % of the
 //! nodes pinned, gravity, no contacts, dt = 10 ms. K = 1, 5, 10, 20 for both volume constraints,
 //! serial (`serial`) and parallel on a 2-thread pool (`par2`; same results). Throughput is in
@@ -8,26 +8,21 @@
 #![allow(missing_docs, clippy::print_stderr)]
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use glam::Vec3;
-use tissue_mesh::{tet_box, TetMesh};
+use tissue_mesh::TetMesh;
 use tissue_pbd::{Material, SoftBody, Solver, StepSettings, VolumeConstraintKind};
 
 fn mesh() -> TetMesh {
     let stem = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/meshes/bunny_10k_tet42k"
+        "/../../fixtures/bunny_10k_tet42k"
     );
-    match tissue_meshio::read_tetgen(stem) {
-        Ok(data) => TetMesh::new(
-            data.positions.iter().map(|p| *p * 10.0).collect(),
-            data.tets,
-        )
-        .expect("bunny"),
-        Err(e) => {
-            eprintln!("bunny not available ({e}); benchmarking a 20³-cell tet box instead");
-            tet_box(20, 20, 20, Vec3::splat(10.0)).expect("box")
-        }
-    }
+    let data = tissue_meshio::read_tetgen(stem)
+        .unwrap_or_else(|e| panic!("the bench's bunny {stem}.node/.ele: {e}"));
+    TetMesh::new(
+        data.positions.iter().map(|p| *p * 10.0).collect(),
+        data.tets,
+    )
+    .expect("bunny")
 }
 
 fn body(mesh: &TetMesh, volume: VolumeConstraintKind, iterations: u32, parallel: bool) -> SoftBody {

@@ -11,14 +11,12 @@ use tissue_surgery::{BladeSweep, Surgery, SurgerySettings};
 
 const BUNNY: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/meshes/bunny_10k_tet42k"
+    "/../../fixtures/bunny_10k_tet42k"
 );
 
 fn bench(c: &mut Criterion) {
-    let Ok(mesh) = tissue_meshio::read_tets(BUNNY) else {
-        eprintln!("skipped: {BUNNY} not found");
-        return;
-    };
+    let mesh = tissue_meshio::read_tets(BUNNY)
+        .unwrap_or_else(|e| panic!("the bench's bunny {BUNNY}.node/.ele: {e}"));
     let (p, t) = mesh.into_parts();
     let mesh = TetMesh::new(p.iter().map(|p| *p * 10.0).collect(), t).unwrap();
     let lo = mesh

@@ -22,7 +22,7 @@ use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
 
 const BUNNY: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/../../../shared/meshes/bunny_10k_tet42k"
+    "/../../fixtures/bunny_10k_tet42k"
 );
 
 /// Traverses of the bunny, each from the same settled state.
@@ -50,10 +50,8 @@ fn main() {
         .nth(2)
         .and_then(|s| s.parse().ok())
         .unwrap_or(1.0);
-    let Ok(mesh) = tissue_meshio::read_tets(BUNNY) else {
-        println!("{BUNNY} not found");
-        return;
-    };
+    let mesh = tissue_meshio::read_tets(BUNNY)
+        .unwrap_or_else(|e| panic!("the bunny {BUNNY}.node/.ele: {e}"));
     let (p, t) = mesh.into_parts();
     let mesh = TetMesh::new(p.iter().map(|p| *p * 10.0).collect(), t).unwrap();
     let lo = mesh

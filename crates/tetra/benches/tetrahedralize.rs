@@ -1,4 +1,4 @@
-//! `tetrahedralize` end to end on the bunny of `../shared/meshes` (10 000 triangles → about
+//! `tetrahedralize` end to end on the bunny of `fixtures/` (10 000 triangles → about
 //! 40 000 tets with the default options); a generated sphere of similar size when the folder is
 //! missing. Also the sphere at the default and at a finer spacing, to see how time scales.
 #![allow(missing_docs, clippy::print_stderr)]
@@ -10,15 +10,11 @@ use tissue_tetra::{tetrahedralize, TetraOptions};
 fn bunny() -> (TriMesh, &'static str) {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/meshes/pbd_bunny_10k.obj"
+        "/../../fixtures/bunny_10k.obj"
     );
-    match tissue_meshio::read_surface(path) {
-        Ok(mesh) => (mesh, "bunny_10k"),
-        Err(e) => {
-            eprintln!("bunny not available ({e}); benchmarking a 100×50 uv sphere instead");
-            (uv_sphere(100, 50, 1.0).expect("sphere"), "sphere_10k")
-        }
-    }
+    let mesh = tissue_meshio::read_surface(path)
+        .unwrap_or_else(|e| panic!("the bench's bunny {path}: {e}"));
+    (mesh, "bunny_10k")
 }
 
 fn bench(c: &mut Criterion) {
