@@ -227,7 +227,30 @@ async function main() {
     // Issue 19: the organ's volume held over the probe, the cut and the suture.
     check(Math.abs(r1.volumeDrift) <= 0.02, `volume drift after the probe, the cut and the suture: ${fmt(r1.volumeDrift * 100, 3)} % (|drift| ≤ 2 %)`);
 
-    // f. no script errors
+    // f. the demonstration: the appendix procedure of tissue-scenes, played in the session
+    await page.selectOption('#organ-select', 'appendix');
+    await page.waitForFunction(() => {
+      const t = window.tissueStudio.trainer;
+      return t.organ === 'appendix' && t.ready === true;
+    }, null, { timeout: 60000 });
+    const demoButton = page.getByRole('button', { name: 'Watch the demonstration' });
+    check(await demoButton.isEnabled(), 'the demonstration button is enabled once the appendix is shown');
+    await demoButton.click();
+    const started = await waitEvent(page, 'demo_started', 0, 10000);
+    check(started, `the demonstration starts${started ? ` (${started.text})` : ''}`);
+    const finished = await waitEvent(page, 'demo_finished', 0, 90000);
+    const demoEvents = await trainer(page, () => window.tissueStudio.trainer.events);
+    const count = (k) => demoEvents.filter((e) => e.kind === k).length;
+    const tip = demoEvents.filter((e) => e.kind === 'piece_detached')
+      .map((e) => parseFloat(String(e.text).split(', ').pop()))
+      .reduce((a, b) => Math.max(a, b), 0);
+    check(finished, `the demonstration ends (demo_finished at step ${finished?.step})`);
+    check(tip > 6 && tip < 11, `the demonstration cuts the tip off: ${fmt(tip)} cm³ (6–11)`);
+    check(count('suture_placed') === 3, `the demonstration places three stitches: ${count('suture_placed')}`);
+    await sleep(300);
+    await shot(page, 't5-demo.png');
+
+    // g. no script errors
     check(pageErrors.length === 0, 'no script errors in the page', pageErrors.join(' | '));
   } finally {
     await browser.close();

@@ -134,6 +134,9 @@ pub enum Command {
     },
     /// Back to the organ as loaded.
     Reset,
+    /// Back to the organ as loaded, then play its demonstration (tissue-scenes' scripted
+    /// scenario: the appendix procedure, or a probe pressed and dragged on a tray).
+    Demo,
     /// Pause or resume.
     Pause {
         /// Paused?
@@ -345,6 +348,17 @@ fn simulate(
                         next = Instant::now();
                     }),
                     None => Ok(()),
+                },
+                Command::Demo => match &live {
+                    Some(l) => Live::new(Arc::clone(&l.organ), &l.id).and_then(|mut fresh| {
+                        let _ = texts.send(fresh.scene_message());
+                        let started = fresh.session.play().map_err(|e| e.to_string())?;
+                        event(&started);
+                        live = Some(fresh);
+                        next = Instant::now();
+                        Ok(())
+                    }),
+                    None => Err("load an organ first".to_owned()),
                 },
                 Command::Pause { paused: p } => {
                     paused = p;

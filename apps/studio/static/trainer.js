@@ -247,6 +247,8 @@ function eventTitle(kind) {
     suture_removed: 'Suture removed',
     grabbed: 'Tissue grabbed',
     released: 'Tissue released',
+    demo_started: 'Demonstration started',
+    demo_finished: 'Demonstration finished',
   };
   if (titles[kind]) return titles[kind];
   const s = String(kind ?? 'event').replace(/_/g, ' ');
@@ -516,6 +518,7 @@ function updateControls() {
   pause.disabled = !hook.ready && !state.paused;
   $('step').disabled = !state.paused || !hook.scene;
   $('reset').disabled = !hook.scene;
+  $('demo').disabled = !hook.scene;
   renderHud();
 }
 
@@ -534,6 +537,13 @@ function reset() {
   socket.send({ type: 'reset' }).catch((e) => showError(e.message));
 }
 
+function demo() {
+  cancelGesture();
+  setNeedleFirst(null);
+  state.lastCut = null;
+  socket.send({ type: 'demo' }).catch((e) => showError(e.message));
+}
+
 function wire() {
   $('organ-select').addEventListener('change', (e) => {
     const id = e.target.value;
@@ -544,6 +554,7 @@ function wire() {
   $('pause').addEventListener('click', togglePause);
   $('step').addEventListener('click', () => socket.send({ type: 'step' }).catch((e) => showError(e.message)));
   $('reset').addEventListener('click', reset);
+  $('demo').addEventListener('click', demo);
   $('reset-view').addEventListener('click', () => view.fit());
   document.addEventListener('keydown', (ev) => {
     if (ev.ctrlKey || ev.metaKey || ev.altKey) return;

@@ -85,6 +85,23 @@ impl Failure {
         }
     }
 
+    /// A scene error (tissue-scenes): its mesh, meshing, solver and script failures mapped to
+    /// the table's codes.
+    pub fn from_scene(e: &tissue_scenes::SceneError) -> Self {
+        use tissue_scenes::SceneError;
+        match e {
+            SceneError::Read(e) => Failure::from_mesh_io(e),
+            SceneError::Pbd(e) => Failure::from_pbd(e),
+            SceneError::Meshing { .. } => Failure::new(Exit::Meshing, e.to_string()),
+            SceneError::Mesh { .. } | SceneError::TooLarge { .. } => {
+                Failure::new(Exit::Mesh, e.to_string())
+            }
+            SceneError::Size { .. } => Failure::new(Exit::Parameters, format!("{e} (--size)")),
+            SceneError::Tool(_) => Failure::new(Exit::Parameters, e.to_string()),
+            _ => Failure::new(Exit::Run, e.to_string()),
+        }
+    }
+
     /// Writing an output failed.
     pub fn output(what: &str, e: impl std::fmt::Display) -> Self {
         Failure::new(

@@ -6,12 +6,13 @@ use std::time::Instant;
 use glam::Vec3;
 use tissue_mesh::{Aabb, TriMesh};
 use tissue_meshio::{FieldValues, VertexField};
-use tissue_pbd::{ContactSource, Pose, SoftBody, ToolShape, DYN_PER_NEWTON};
+use tissue_pbd::{ContactSource, SoftBody, ToolShape, DYN_PER_NEWTON};
 use tissue_render::{draw_text, render, Camera, ColorScale, Image, Rgb, Surface, Viewport};
+use tissue_scenes::{SceneError, Script};
 
 use crate::cli::{Cli, FrameFormat};
 use crate::failure::{Exit, Failure};
-use crate::scene::{top_at, Scene};
+use crate::scene::Scene;
 
 /// What the run measured.
 pub struct Summary {
@@ -45,14 +46,12 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
         None => None,
     };
     let settle = cli.settle_steps as usize;
-    let (press, drag) = (cli.press_steps as usize, cli.drag_steps as usize);
-    let total = settle + press + drag;
+    let total = scene.script.steps();
+    let tool = scene.script.tool();
     let mut step_seconds = Vec::with_capacity(total);
     let rest = scene.body.rest_volume();
     let mut worst_drift = 0.0f64;
     let (mut largest_force, mut force) = (0.0f32, Vec3::ZERO);
-    let radius = scene.probe.radius();
-    let (mut start, mut end) = (Vec3::ZERO, Vec3::ZERO);
     let loaded_height = height(&scene.body);
     let mut settled_height = loaded_height;
     if let Some(f) = frames.as_mut() {
@@ -61,43 +60,29 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
     for step in 1..=total {
         if step == settle + 1 {
             settled_height = height(&scene.body);
-            // Over the first waypoint, from 0.5 cm above the top down to `depth` below it.
-            let xz = scene.waypoints[0];
-            let top = top_at(&scene.body, xz, scene.reach).ok_or_else(|| {
-                Failure::new(
-                    Exit::Parameters,
-                    format!(
-                        "the first --waypoint {},{} is not over the organ (no node within {:.1} cm); \
-                         the organ is centred on x = z = 0 and about --size {} cm wide",
-                        xz[0], xz[1], scene.reach, cli.size
-                    ),
-                )
-            })?;
             if let Some(f) = frames.as_mut() {
                 f.settled(scene);
             }
-            start = Vec3::new(xz[0], top + 0.5 + radius, xz[1]);
-            end = Vec3::new(xz[0], top - cli.depth + radius, xz[1]);
-            set_pose(&mut scene.body, scene.tool, start)?;
         }
-        if step > settle {
-            let tip = if step <= settle + press {
-                start.lerp(end, (step - settle) as f32 / press as f32)
-            } else {
-                along(
-                    &scene.waypoints,
-                    (step - settle - press) as f32 / drag as f32,
-                )
-                .map_or(end, |[x, z]| Vec3::new(x, end.y, z))
-            };
-            set_pose(&mut scene.body, scene.tool, tip)?;
-        }
+        scene
+            .script
+            .before_step(step, &mut scene.body)
+            .map_err(|e| match e {
+                SceneError::Tool(m) => Failure::new(
+                    Exit::Parameters,
+                    format!(
+                        "{m} (--waypoint; the organ is about --size {} cm wide)",
+                        cli.size
+                    ),
+                ),
+                e => Failure::from_scene(&e),
+            })?;
         let t = Instant::now();
         scene.body.step().map_err(|e| Failure::from_pbd(&e))?;
         step_seconds.push(t.elapsed().as_secs_f64());
         force = scene
             .body
-            .tool_force(scene.tool)
+            .tool_force(tool)
             .map_err(|e| Failure::from_pbd(&e))?
             / DYN_PER_NEWTON;
         largest_force = largest_force.max(force.length());
@@ -161,33 +146,6 @@ fn tet_error(body: &SoftBody) -> [f64; 3] {
     e.sort_unstable_by(f64::total_cmp);
     let at = |q: f64| e[((e.len() - 1) as f64 * q).round() as usize];
     [at(0.5), at(0.9), off / body.rest_volume()]
-}
-
-fn set_pose(body: &mut SoftBody, tool: usize, tip: Vec3) -> Result<(), Failure> {
-    body.set_tool_pose(tool, Pose::from_translation(tip))
-        .map_err(|e| Failure::from_pbd(&e))
-}
-
-/// The point at fraction `s ∈ [0, 1]` of the polyline's length.
-fn along(points: &[[f32; 2]], s: f32) -> Option<[f32; 2]> {
-    let seg = |w: &[[f32; 2]]| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
-    let length: f32 = points.windows(2).map(seg).sum();
-    if length <= 0.0 {
-        return points.first().copied();
-    }
-    let mut left = s.clamp(0.0, 1.0) * length;
-    for w in points.windows(2) {
-        let l = seg(w);
-        if left <= l && l > 0.0 {
-            let f = left / l;
-            return Some([
-                w[0][0] + f * (w[1][0] - w[0][0]),
-                w[0][1] + f * (w[1][1] - w[0][1]),
-            ]);
-        }
-        left -= l;
-    }
-    points.last().copied()
 }
 
 /// The frame writer: the organ's boundary surface (its own vertex numbering), the probe's mesh,
@@ -303,7 +261,7 @@ impl Frames {
         if self.png {
             let pose = scene
                 .body
-                .tool(scene.tool)
+                .tool(scene.script.tool())
                 .map_err(|e| Failure::from_pbd(&e))?
                 .pose();
             let probe = self

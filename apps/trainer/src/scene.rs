@@ -1,10 +1,12 @@
-//! The scene: the organ loaded, scaled and set on the tray, the body, and the probe's path.
+//! The scene: the organ loaded, scaled and set on the tray (tissue-scenes' `Organ`), the body,
+//! and the probe's press-and-drag script (tissue-scenes' `PressAndDrag`).
 
 use std::path::PathBuf;
 
 use glam::Vec3;
 use tissue_mesh::{tet_box, TetMesh};
-use tissue_pbd::{ContactParams, OrientedBox, Pose, SoftBody, ToolShape, VoxelCollider};
+use tissue_pbd::{ContactParams, Pose, SoftBody, ToolShape};
+use tissue_scenes::{Organ, PressAndDrag, PressPlan, ShippedOrgan, Tray};
 
 use crate::cli::Cli;
 use crate::failure::{Exit, Failure};
@@ -52,87 +54,78 @@ pub struct Scene {
     pub mesh: TetMesh,
     /// The body with the tray and the probe.
     pub body: SoftBody,
-    /// The probe's id in the body.
-    pub tool: usize,
     /// The probe's shape (tip at the local origin, axis +y).
     pub probe: ToolShape,
-    /// The drag path (x, z), at least two points.
-    pub waypoints: Vec<[f32; 2]>,
-    /// Horizontal radius within which [`top_at`] looks for nodes (cm): 1 cm, or the mean tet
-    /// edge length when that is longer.
-    pub reach: f32,
+    /// The press-and-drag script (tissue-scenes), its probe a tool of the body.
+    pub script: PressAndDrag,
 }
 
 /// Loads the organ, scales and places it, builds the body, the tray and the probe (parked above).
 pub fn build(cli: &Cli) -> Result<Scene, Failure> {
-    let (source, raw) = match (&cli.surface, &cli.organ, cli.box_cells) {
+    let scene = |e| Failure::from_scene(&e);
+    let (source, organ) = match (&cli.surface, &cli.organ, cli.box_cells) {
         (Some(p), _, _) => {
             let surface = tissue_meshio::read_surface(p).map_err(|e| Failure::from_mesh_io(&e))?;
-            let tets =
-                tissue_tetra::tetrahedralize(&surface, &tissue_tetra::TetraOptions::default())
-                    .map_err(|e| {
-                        Failure::new(
-                            Exit::Meshing,
-                            format!("{} cannot be tetrahedralised: {e}", p.display()),
-                        )
-                    })?;
-            (Source::Surface(p.clone(), Box::new(tets.report)), tets.mesh)
+            let organ = Organ::from_surface(&surface, &p.display().to_string()).map_err(scene)?;
+            let report = organ.quality.clone().ok_or_else(|| {
+                Failure::new(Exit::Meshing, format!("{}: no mesher report", p.display()))
+            })?;
+            (Source::Surface(p.clone(), Box::new(report)), organ)
         }
-        (None, Some(p), _) => (
-            Source::File(p.clone()),
-            tissue_meshio::read_tets(p).map_err(|e| Failure::from_mesh_io(&e))?,
-        ),
-        (None, None, Some(n)) => (
-            Source::Box(n),
-            tet_box(n, n, n, Vec3::ONE)
-                .map_err(|e| Failure::new(Exit::Parameters, format!("--box: {e}")))?,
-        ),
+        (None, Some(p), _) => {
+            let tets = tissue_meshio::read_tets(p).map_err(|e| Failure::from_mesh_io(&e))?;
+            let organ = Organ::from_tets(&tets, &p.display().to_string()).map_err(scene)?;
+            (Source::File(p.clone()), organ)
+        }
+        (None, None, Some(n)) => {
+            let tets = tet_box(n, n, n, Vec3::ONE)
+                .map_err(|e| Failure::new(Exit::Parameters, format!("--box: {e}")))?;
+            (
+                Source::Box(n),
+                Organ::from_tets(&tets, "--box").map_err(scene)?,
+            )
+        }
         (None, None, None) => {
-            let bunny = tissue_scenes::ShippedOrgan::Bunny;
-            let organ = tissue_scenes::Organ::shipped(bunny)
+            let bunny = ShippedOrgan::Bunny;
+            let organ = Organ::shipped(bunny)
                 .map_err(|e| Failure::new(Exit::Meshing, format!("the shipped bunny: {e}")))?;
-            (Source::Shipped(bunny), organ.mesh)
+            (Source::Shipped(bunny), organ)
         }
     };
-    if !(cli.size.is_finite() && cli.size > 0.0) {
-        return Err(Failure::new(
-            Exit::Parameters,
-            format!("--size {} must be a positive length in cm", cli.size),
-        ));
-    }
     if !(cli.depth.is_finite() && cli.depth >= 0.0) {
         return Err(Failure::new(
             Exit::Parameters,
             format!("--depth {} must be ≥ 0 cm", cli.depth),
         ));
     }
-    let mesh = place(&raw, cli.size)?;
+    let organ = organ.scaled_to(cli.size).map_err(|e| match e {
+        tissue_scenes::SceneError::Mesh { .. } => {
+            Failure::new(Exit::Mesh, format!("{e}; use a larger --size"))
+        }
+        e => Failure::from_scene(&e),
+    })?;
     let (material, settings) = cli.physics();
-    let pbd = |e| Failure::from_pbd(&e);
-    let mut body = SoftBody::new(&mesh, &material).map_err(pbd)?;
-    body.set_settings(settings).map_err(pbd)?;
     let contact = ContactParams {
         static_friction: cli.friction,
         kinetic_friction: cli.friction,
         ..ContactParams::default()
     };
-    let side = 3.0 * cli.size;
-    let tray = VoxelCollider::new(
-        &[tissue_pbd::ColliderShape::Box(OrientedBox::tray(
-            0.0, 0.0, 0.0, side, side, 2.0,
-        ))],
-        cli.cell,
-        cli.cell.max(contact.margin + contact.detection),
-    )
-    .map_err(pbd)?;
-    body.add_collider(tray, contact).map_err(pbd)?;
+    let tray = Tray {
+        side: 3.0 * cli.size,
+        cell: cli.cell,
+    };
+    let mut body = organ
+        .body(&material, settings, contact, tray)
+        .map_err(scene)?;
     let probe = ToolShape::Capsule {
         a: Vec3::ZERO,
         b: Vec3::new(0.0, cli.size, 0.0),
         radius: cli.tool_radius,
     };
     let parked = Pose::from_translation(Vec3::new(0.0, 3.0 * cli.size, 0.0));
-    let tool = body.add_tool(probe, parked, contact).map_err(pbd)?;
+    let tool = body
+        .add_tool(probe, parked, contact)
+        .map_err(|e| Failure::from_pbd(&e))?;
     let waypoints = match cli.waypoints.len() {
         0 => vec![[-0.25 * cli.size, 0.0], [0.25 * cli.size, 0.0]],
         1 => {
@@ -146,46 +139,21 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
     let edges = body.distance_constraints();
     let mean_edge =
         edges.iter().map(|c| c.rest_length as f64).sum::<f64>() / edges.len().max(1) as f64;
-    Ok(Scene {
-        reach: (mean_edge as f32).max(1.0),
-        source,
-        mesh,
-        body,
-        tool,
-        probe,
+    let plan = PressPlan {
+        settle: cli.settle_steps as usize,
+        press: cli.press_steps as usize,
+        drag: cli.drag_steps as usize,
+        depth: cli.depth,
         waypoints,
+        // 1 cm, or the mean tet edge length when that is longer.
+        reach: (mean_edge as f32).max(1.0),
+    };
+    let script = PressAndDrag::new(tool, cli.tool_radius, plan).map_err(scene)?;
+    Ok(Scene {
+        source,
+        mesh: organ.mesh,
+        body,
+        probe,
+        script,
     })
-}
-
-/// Scales the mesh so its largest extent is `size`, centres it on x = z = 0 and sets its lowest
-/// node on y = 0.
-fn place(raw: &TetMesh, size: f32) -> Result<TetMesh, Failure> {
-    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for &p in raw.positions() {
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    let scale = size / (hi - lo).max_element();
-    let centre = Vec3::new((lo.x + hi.x) * 0.5, lo.y, (lo.z + hi.z) * 0.5);
-    let positions = raw
-        .positions()
-        .iter()
-        .map(|&p| (p - centre) * scale)
-        .collect();
-    TetMesh::new(positions, raw.tets().to_vec()).map_err(|e| {
-        Failure::new(
-            Exit::Mesh,
-            format!("the organ scaled to --size {size} cm is not valid: {e}; use a larger --size"),
-        )
-    })
-}
-
-/// Height of the organ's top under the point (x, z): the highest node within `reach`
-/// horizontally.
-pub fn top_at(body: &SoftBody, xz: [f32; 2], reach: f32) -> Option<f32> {
-    body.positions()
-        .iter()
-        .filter(|p| (p.x - xz[0]).hypot(p.z - xz[1]) <= reach)
-        .map(|p| p.y)
-        .reduce(f32::max)
 }

@@ -318,7 +318,8 @@ fn bad_input_gives_one_line_and_its_exit_code() {
         "{err}"
     );
     assert_ne!(Exit::Meshing, Exit::Placement);
-    assert!(err.contains("cannot be tetrahedralised"), "{err}");
+    assert!(err.contains("cannot be filled with tetrahedra"), "{err}");
+    assert!(err.contains("edge [0, 1]"), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -40,6 +40,12 @@ pub enum SceneError {
         /// Its tetrahedra.
         tets: usize,
     },
+    /// An organ size that is not a positive length.
+    #[error("an organ size of {size} cm: give a positive length in cm")]
+    Size {
+        /// The size asked for (cm).
+        size: f32,
+    },
     /// The solver refused a parameter or diverged.
     #[error("the simulation: {0}")]
     Pbd(#[from] tissue_pbd::PbdError),

@@ -17,7 +17,14 @@
 //!   host poses ([`Session::add_tool`], [`Session::set_tool_pose`]: a probe's tip, a needle, a
 //!   blade) with each one's force model of the last step for a haptic loop
 //!   ([`Session::contact_force_model`], tissue-pbd's `ContactForceModel`, N), and a blade-sweep
-//!   cut at once ([`Session::cut_sweep`]).
+//!   cut at once ([`Session::cut_sweep`]); the organ's demonstration ([`Session::play`]).
+//! - [`script`]: scenarios written once and stepped by any host — [`AppendixProcedure`] (grasp
+//!   and lift the appendix's tip, incise near the base, cut the tip off, suture the incision)
+//!   and [`PressAndDrag`] (a probe pressed into an organ and dragged along waypoints), behind
+//!   the [`Script`] trait (`before_step`, the host's solver step, `after_step`). The headless
+//!   `trainer`, the studio's demonstration and the surgery crate's moving-body test run these.
+//! - [`Organ::body`]: an organ as a `tissue-pbd` body held as its [`Setting`] says (on a
+//!   [`Tray`], or the appendix's base pinned over the abdominal wall); [`Organ::scaled_to`].
 //!
 //! No threads, no I/O beyond parsing bytes; a front end owns the loop and the clock.
 //!
@@ -61,8 +68,10 @@
 
 mod error;
 mod organ;
+pub mod script;
 mod session;
 
 pub use error::SceneError;
-pub use organ::{Organ, Setting, ShippedOrgan, APPENDIX_BASE_X, MAX_TETS};
+pub use organ::{Organ, Setting, ShippedOrgan, Tray, APPENDIX_BASE_X, MAX_TETS};
+pub use script::{AppendixPlan, AppendixProcedure, PressAndDrag, PressPlan, Script, ScriptStep};
 pub use session::{Session, SessionOptions, TrainerEvent};

@@ -4,7 +4,11 @@
 
 use glam::Vec3;
 use tissue_mesh::{TetMesh, TriMesh};
-use tissue_tetra::{tetrahedralize, TetraOptions};
+use tissue_pbd::{
+    ColliderShape, ContactParams, Floor, Material, OrientedBox, SoftBody, StepSettings,
+    VoxelCollider,
+};
+use tissue_tetra::{tetrahedralize, QualityReport, TetraOptions};
 
 use crate::error::SceneError;
 
@@ -79,6 +83,30 @@ pub struct Organ {
     pub mesh: TetMesh,
     /// How it is held.
     pub setting: Setting,
+    /// The tet mesher's report when the organ was filled from a closed surface.
+    pub quality: Option<QualityReport>,
+}
+
+/// The tray an organ lies on ([`Setting::Tray`]): a square slab centred on x = z = 0 whose top
+/// is y = 0, as a static voxel collider.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tray {
+    /// Its side (cm).
+    pub side: f32,
+    /// The voxel cell of its collider (cm).
+    pub cell: f32,
+}
+
+impl Tray {
+    /// The tray for an organ of largest extent `extent` cm: three times as wide, cells of a
+    /// twentieth of the organ (0.2–1 cm).
+    pub fn for_extent(extent: f32) -> Tray {
+        let extent = extent.max(1.0);
+        Tray {
+            side: 3.0 * extent,
+            cell: (extent / 20.0).clamp(0.2, 1.0),
+        }
+    }
 }
 
 impl Organ {
@@ -101,6 +129,7 @@ impl Organ {
                     mesh: TetMesh::new(lifted, mesh.tets().to_vec())
                         .map_err(|e| SceneError::mesh(which.id(), e))?,
                     setting: Setting::Appendix,
+                    quality: None,
                 });
             }
         };
@@ -108,13 +137,14 @@ impl Organ {
         let data = tissue_meshio::parse_surface_data(bytes, &name).map_err(SceneError::Read)?;
         let surface =
             TriMesh::new(data.positions, data.triangles).map_err(|e| SceneError::mesh(&name, e))?;
-        let tets = fill(&surface, &name)?;
+        let (tets, quality) = fill(&surface, &name)?;
         let (lo, hi) = bounds(tets.positions());
         let scale = size / (hi - lo).max_element();
         Ok(Organ {
             label: which.label().to_owned(),
             mesh: place(&tets, scale, &name)?,
             setting: Setting::Tray,
+            quality: Some(quality),
         })
     }
 
@@ -132,26 +162,77 @@ impl Organ {
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase)
             .unwrap_or_default();
-        let tets = match ext.as_str() {
-            "obj" | "ply" | "stl" => {
-                let data =
-                    tissue_meshio::parse_surface_data(bytes, name).map_err(SceneError::Read)?;
-                let scaled: Vec<Vec3> = data.positions.iter().map(|&p| p * cm_per_unit).collect();
-                let surface =
-                    TriMesh::new(scaled, data.triangles).map_err(|e| SceneError::mesh(name, e))?;
-                fill(&surface, name)?
-            }
-            _ => {
-                let data = tissue_meshio::parse_tet_data(bytes, name).map_err(SceneError::Read)?;
-                let scaled: Vec<Vec3> = data.positions.iter().map(|&p| p * cm_per_unit).collect();
-                TetMesh::new(scaled, data.tets).map_err(|e| SceneError::mesh(name, e))?
-            }
-        };
+        if is_surface(&ext) {
+            let data = tissue_meshio::parse_surface_data(bytes, name).map_err(SceneError::Read)?;
+            let surface = scaled_surface(data.positions, data.triangles, cm_per_unit, name)?;
+            Organ::from_surface(&surface, name)
+        } else {
+            let data = tissue_meshio::parse_tet_data(bytes, name).map_err(SceneError::Read)?;
+            let scaled: Vec<Vec3> = data.positions.iter().map(|&p| p * cm_per_unit).collect();
+            let tets = TetMesh::new(scaled, data.tets).map_err(|e| SceneError::mesh(name, e))?;
+            Organ::from_tets(&tets, name)
+        }
+    }
+
+    /// The organ's largest extent (cm).
+    pub fn extent(&self) -> f32 {
+        let (lo, hi) = bounds(self.mesh.positions());
+        (hi - lo).max_element()
+    }
+
+    /// The same organ scaled so that its largest extent is `size` cm, placed again.
+    ///
+    /// # Errors
+    /// [`SceneError::Size`] when `size` is not a positive length; [`SceneError::Mesh`] when the
+    /// scaled mesh is no longer valid (a size so small that tets become flat in `f32`).
+    pub fn scaled_to(&self, size: f32) -> Result<Organ, SceneError> {
+        if !(size.is_finite() && size > 0.0) {
+            return Err(SceneError::Size { size });
+        }
+        let scale = size / self.extent();
+        let name = format!("{} at {size} cm", self.label);
         Ok(Organ {
-            label: name.to_owned(),
-            mesh: place(&tets, 1.0, name)?,
-            setting: Setting::Tray,
+            mesh: place(&self.mesh, scale, &name)?,
+            label: self.label.clone(),
+            setting: self.setting,
+            quality: self.quality.clone(),
         })
+    }
+
+    /// The organ as a body, held as its [`Setting`] says: on `tray` (a static voxel collider
+    /// with `contact`), or the appendix's base pinned over a floor at y = 0.
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] when the solver refuses the material, the step or the tray.
+    pub fn body(
+        &self,
+        material: &Material,
+        step: StepSettings,
+        contact: ContactParams,
+        tray: Tray,
+    ) -> Result<SoftBody, SceneError> {
+        let mut body = SoftBody::new(&self.mesh, material)?;
+        body.set_settings(step)?;
+        match self.setting {
+            Setting::Tray => {
+                let slab = OrientedBox::tray(0.0, 0.0, 0.0, tray.side, tray.side, 2.0);
+                let collider = VoxelCollider::new(
+                    &[ColliderShape::Box(slab)],
+                    tray.cell,
+                    tray.cell.max(contact.margin + contact.detection),
+                )?;
+                body.add_collider(collider, contact)?;
+            }
+            Setting::Appendix => {
+                body.set_floor(Some(Floor::y(0.0)))?;
+                for i in 0..body.node_count() as u32 {
+                    if body.positions()[i as usize].x < APPENDIX_BASE_X {
+                        body.pin(i)?;
+                    }
+                }
+            }
+        }
+        Ok(body)
     }
 }
 
@@ -162,11 +243,12 @@ impl Organ {
     /// # Errors
     /// [`SceneError::Meshing`] for a surface that cannot be filled, [`SceneError::TooLarge`].
     pub fn from_surface(surface: &TriMesh, name: &str) -> Result<Organ, SceneError> {
-        let tets = fill(surface, name)?;
+        let (tets, quality) = fill(surface, name)?;
         Ok(Organ {
             label: name.to_owned(),
             mesh: place(&tets, 1.0, name)?,
             setting: Setting::Tray,
+            quality: Some(quality),
         })
     }
 
@@ -179,19 +261,34 @@ impl Organ {
             label: name.to_owned(),
             mesh: place(tets, 1.0, name)?,
             setting: Setting::Tray,
+            quality: None,
         })
     }
 }
 
+fn is_surface(ext: &str) -> bool {
+    matches!(ext, "obj" | "ply" | "stl")
+}
+
+fn scaled_surface(
+    positions: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+    cm_per_unit: f32,
+    name: &str,
+) -> Result<TriMesh, SceneError> {
+    let scaled = positions.iter().map(|&p| p * cm_per_unit).collect();
+    TriMesh::new(scaled, triangles).map_err(|e| SceneError::mesh(name, e))
+}
+
 /// Fills a closed surface with tetrahedra, refusing more than [`MAX_TETS`].
-fn fill(surface: &TriMesh, name: &str) -> Result<TetMesh, SceneError> {
+fn fill(surface: &TriMesh, name: &str) -> Result<(TetMesh, QualityReport), SceneError> {
     let tets =
         tetrahedralize(surface, &TetraOptions::default()).map_err(|e| SceneError::Meshing {
             name: name.to_owned(),
             reason: e.to_string(),
         })?;
     check_size(&tets.mesh, name)?;
-    Ok(tets.mesh)
+    Ok((tets.mesh, tets.report))
 }
 
 fn check_size(mesh: &TetMesh, name: &str) -> Result<(), SceneError> {

@@ -8,13 +8,14 @@ use std::time::Instant;
 
 use glam::{Mat3, Quat, Vec3, Vec3A};
 use tissue_pbd::{
-    ColliderShape, ContactForceModel, ContactParams, Floor, Material, OrientedBox, Pose, SoftBody,
-    StepSettings, StiffnessEstimator, ToolShape, VoxelCollider, DYN_PER_NEWTON,
+    ContactForceModel, ContactParams, Material, Pose, SoftBody, StepSettings, StiffnessEstimator,
+    ToolShape, DYN_PER_NEWTON,
 };
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
 
 use crate::error::SceneError;
-use crate::organ::{Organ, Setting, APPENDIX_BASE_X};
+use crate::organ::{Organ, Setting, Tray};
+use crate::script::{AppendixPlan, AppendixProcedure, PressAndDrag, PressPlan, Script};
 
 /// How many recent step times the session keeps for its median and p99.
 const TIMES_KEPT: usize = 600;
@@ -84,6 +85,16 @@ struct Grab {
     target: Vec3,
 }
 
+/// A demonstration the session plays on its organ ([`Session::play`]): the scripted scenario
+/// of its setting, the same one the headless `trainer` runs.
+struct Playing {
+    script: Box<dyn Script + Send>,
+    /// The script's steps taken.
+    k: usize,
+    /// The probe's tool id when the demonstration presses one into the organ.
+    probe: Option<usize>,
+}
+
 /// A trainee's session on one organ.
 pub struct Session {
     label: String,
@@ -106,6 +117,8 @@ pub struct Session {
     /// Per contact tool ([`Session::add_tool`]): its force model after the last step and the
     /// stiffness estimate that feeds it.
     tools: Vec<(ContactForceModel, StiffnessEstimator)>,
+    /// The demonstration playing, if any.
+    playing: Option<Playing>,
 }
 
 impl std::fmt::Debug for Session {
@@ -126,35 +139,9 @@ impl Session {
     /// [`SceneError::Pbd`] / [`SceneError::Surgery`] if the body cannot be built.
     pub fn new(organ: &Organ, options: SessionOptions) -> Result<Session, SceneError> {
         let _span = tracing::info_span!("session_new", organ = %organ.label).entered();
-        let mut body = SoftBody::new(&organ.mesh, &options.material)?;
-        body.set_settings(options.step)?;
-        let (lo, hi) = organ.mesh.positions().iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        );
-        let extent = (hi - lo).max_element().max(1.0);
-        let tray_side = 3.0 * extent;
-        match organ.setting {
-            Setting::Tray => {
-                let cell = (extent / 20.0).clamp(0.2, 1.0);
-                let tray = VoxelCollider::new(
-                    &[ColliderShape::Box(OrientedBox::tray(
-                        0.0, 0.0, 0.0, tray_side, tray_side, 2.0,
-                    ))],
-                    cell,
-                    cell.max(options.contact.margin + options.contact.detection),
-                )?;
-                body.add_collider(tray, options.contact)?;
-            }
-            Setting::Appendix => {
-                body.set_floor(Some(Floor::y(0.0)))?;
-                for i in 0..body.node_count() as u32 {
-                    if body.positions()[i as usize].x < APPENDIX_BASE_X {
-                        body.pin(i)?;
-                    }
-                }
-            }
-        }
+        let tray = Tray::for_extent(organ.extent());
+        let body = organ.body(&options.material, options.step, options.contact, tray)?;
+        let tray_side = tray.side;
         let surgery = Surgery::new(&body, SurgerySettings::default())?;
         let surface = surgery.boundary_faces(&body);
         let depth = options.cut_depth;
@@ -181,6 +168,7 @@ impl Session {
             worst_drift: 0.0,
             tray_side,
             tools: Vec::new(),
+            playing: None,
             options,
             body,
             surgery,
@@ -262,9 +250,16 @@ impl Session {
         self.force
     }
 
-    /// The probe's tip: where the grabbed point is asked to be, or `None`.
+    /// The probe's tip: where the grabbed point is asked to be, or the demonstration's probe
+    /// while it is pressed in; `None` otherwise.
     pub fn tool_tip(&self) -> Option<Vec3> {
-        self.grab.as_ref().map(|g| g.target)
+        if let Some(g) = &self.grab {
+            return Some(g.target);
+        }
+        let probe = self.playing.as_ref()?.probe?;
+        let tip = self.body.tool(probe).ok()?.pose().translation;
+        // Parked above the organ until the press starts.
+        (tip.y < self.tray_side / 3.0 + 1.0).then_some(tip)
     }
 
     /// Takes one step: the probe's targets, the solver, one queued scalpel segment.
@@ -275,6 +270,10 @@ impl Session {
     pub fn step(&mut self) -> Result<Vec<TrainerEvent>, SceneError> {
         let start = Instant::now();
         let mut events = Vec::new();
+        if let Some(p) = &mut self.playing {
+            p.k += 1;
+            p.script.before_step(p.k, &mut self.body)?;
+        }
         if let Some(g) = &self.grab {
             for &(_, id, offset) in &g.nodes {
                 self.body.set_attachment_target(id, g.target + offset)?;
@@ -293,6 +292,7 @@ impl Session {
             let happened = self.surgery.cut(&mut self.body, &sweep)?;
             self.record(&happened, &mut events);
         }
+        self.play_after_step(&mut events)?;
         let drift = self.volume_drift().abs();
         if drift.is_finite() {
             self.worst_drift = self.worst_drift.max(drift);
@@ -357,6 +357,117 @@ impl Session {
         Ok(events)
     }
 
+    /// Starts the demonstration of the organ's setting, from the next step on: on the
+    /// appendix the procedure ([`AppendixProcedure`]: grasp and lift, incise, cut off, suture;
+    /// 200 steps), on a tray a probe pressed 1.5 cm into the organ's top and dragged across it
+    /// ([`PressAndDrag`]: 250 steps). It is meant for a fresh session (the procedure grasps the
+    /// appendix's tip where it lies). While it plays, the trainee's tools are refused; its
+    /// events come from [`Session::step`], the last one `demo_finished`.
+    ///
+    /// # Errors
+    /// [`SceneError::Tool`] when a demonstration is already playing or the organ does not
+    /// suit its setting's script; [`SceneError::Pbd`] when the solver refuses the probe.
+    pub fn play(&mut self) -> Result<TrainerEvent, SceneError> {
+        if self.playing.is_some() {
+            return Err(SceneError::Tool(
+                "a demonstration is already playing: wait for it to end or reset".to_owned(),
+            ));
+        }
+        self.release()?;
+        self.cuts.clear();
+        let (script, probe, text): (Box<dyn Script + Send>, _, _) = match self.setting {
+            Setting::Appendix => (
+                Box::new(AppendixProcedure::new(
+                    &mut self.body,
+                    AppendixPlan::default(),
+                )?),
+                None,
+                "demonstration: the appendix is grasped, incised, its tip cut off, the \
+                 incision sutured",
+            ),
+            Setting::Tray => {
+                let extent = self.tray_side / 3.0;
+                let radius = 0.4;
+                let shape = ToolShape::Capsule {
+                    a: Vec3::ZERO,
+                    b: Vec3::new(0.0, extent, 0.0),
+                    radius,
+                };
+                let parked = Pose::from_translation(Vec3::new(0.0, 3.0 * extent, 0.0));
+                let tool = self.add_tool(shape, parked)?;
+                let plan = PressPlan {
+                    settle: 50,
+                    press: 50,
+                    drag: 150,
+                    depth: 1.5,
+                    waypoints: vec![[-0.25 * extent, 0.0], [0.25 * extent, 0.0]],
+                    reach: 1.0,
+                };
+                (
+                    Box::new(PressAndDrag::new(tool, radius, plan)?),
+                    Some(tool),
+                    "demonstration: a probe presses 1.5 cm into the organ and drags across it",
+                )
+            }
+        };
+        self.playing = Some(Playing {
+            script,
+            k: 0,
+            probe,
+        });
+        Ok(TrainerEvent {
+            step: self.steps,
+            kind: "demo_started",
+            text: text.to_owned(),
+        })
+    }
+
+    /// Whether a demonstration is playing.
+    pub fn playing(&self) -> bool {
+        self.playing.is_some()
+    }
+
+    /// The demonstration's part of a step after the solver's: its cuts and sutures, the probe's
+    /// force, and its end.
+    fn play_after_step(&mut self, events: &mut Vec<TrainerEvent>) -> Result<(), SceneError> {
+        let Some(p) = &mut self.playing else {
+            return Ok(());
+        };
+        let out = p
+            .script
+            .after_step(p.k, &mut self.body, &mut self.surgery)?;
+        let finished = p.k >= p.script.steps();
+        if let Some(tool) = p.probe {
+            self.force = self.body.tool_force(tool)? / DYN_PER_NEWTON;
+            if finished {
+                // Parked well above the organ.
+                let up = Vec3::new(0.0, self.tray_side, 0.0);
+                self.body.set_tool_pose(tool, Pose::from_translation(up))?;
+            }
+        }
+        self.record(&out.events, events);
+        if finished {
+            self.playing = None;
+            self.force = Vec3::ZERO;
+            events.push(TrainerEvent {
+                step: self.steps,
+                kind: "demo_finished",
+                text: "demonstration finished: the organ is yours".to_owned(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Refuses a trainee's tool while a demonstration plays.
+    fn hands_off(&self) -> Result<(), SceneError> {
+        if self.playing.is_some() {
+            return Err(SceneError::Tool(
+                "a demonstration is playing: wait for it to end or reset".to_owned(),
+            ));
+        }
+        Ok(())
+    }
+
     /// The force of the tissue on the grabbed nodes (N).
     fn probe_force(&self) -> Vec3 {
         let Some(g) = &self.grab else {
@@ -390,6 +501,7 @@ impl Session {
     /// # Errors
     /// [`SceneError::Tool`] for a triangle out of range or a point that is not finite.
     pub fn grab(&mut self, point: Vec3, triangle: usize) -> Result<TrainerEvent, SceneError> {
+        self.hands_off()?;
         self.release()?;
         let corners = *self.surface.get(triangle).ok_or_else(|| {
             SceneError::Tool(format!(
@@ -471,6 +583,7 @@ impl Session {
     /// [`SceneError::Tool`] for fewer than two distinct points, a path along the view, or
     /// non-finite input.
     pub fn cut(&mut self, path: &[Vec3], view_dir: Vec3) -> Result<usize, SceneError> {
+        self.hands_off()?;
         let v = view_dir.normalize_or_zero();
         if v == Vec3::ZERO || path.iter().any(|p| !p.is_finite()) {
             return Err(SceneError::Tool(
@@ -525,6 +638,7 @@ impl Session {
     /// # Errors
     /// [`SceneError::Tool`] for non-finite or coincident points; [`SceneError::Surgery`].
     pub fn suture(&mut self, a: Vec3, b: Vec3) -> Result<TrainerEvent, SceneError> {
+        self.hands_off()?;
         if !(a.is_finite() && b.is_finite()) || a.distance(b) < 1e-3 {
             return Err(SceneError::Tool(
                 "click two different points, one on each side of the wound".to_owned(),

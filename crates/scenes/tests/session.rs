@@ -174,3 +174,92 @@ fn a_probe_pressed_into_the_appendix_is_pushed_back_and_its_model_meets_the_step
     assert!(off.length() < 0.1 * here.length(), "{off} against {here}");
     Ok(())
 }
+
+/// The studio's demonstration on the appendix is the trainer's procedure under the session's
+/// real-time physics: the tip comes off (about 7.8 cm³ at rest beyond x = 2.05), three stitches
+/// close the incision, the volume holds, and the trainee's tools wait until it ends.
+#[test]
+fn the_appendix_demonstration_cuts_the_tip_off_and_sutures_the_incision() -> Result {
+    let organ = Organ::shipped(ShippedOrgan::Appendix)?;
+    let mut session = Session::new(&organ, SessionOptions::default())?;
+    let started = session.play()?;
+    assert_eq!(started.kind, "demo_started");
+    assert!(session.play().is_err(), "a second demonstration is refused");
+    let p = top(&session, 0.0, 0.0);
+    let refused = session.cut(&[p, p + Vec3::Z], Vec3::NEG_Y);
+    assert!(refused.is_err(), "the scalpel waits for the demonstration");
+    let mut kinds: Vec<(&str, String)> = Vec::new();
+    let mut steps = 0;
+    while session.playing() {
+        for e in session.step()? {
+            kinds.push((e.kind, e.text));
+        }
+        steps += 1;
+        assert!(steps <= 200, "the demonstration did not end");
+    }
+    assert_eq!(steps, 200);
+    assert_eq!(kinds.last().map(|k| k.0), Some("demo_finished"));
+    let sutures = kinds.iter().filter(|k| k.0 == "suture_placed").count();
+    assert_eq!(sutures, 3, "{kinds:?}");
+    // The tip: the largest detached piece, from its event's text ("… tets, V cm³").
+    let largest = kinds
+        .iter()
+        .filter(|k| k.0 == "piece_detached")
+        .filter_map(|k| {
+            k.1.rsplit(", ")
+                .next()?
+                .trim_end_matches(" cm³")
+                .parse::<f64>()
+                .ok()
+        })
+        .fold(0.0f64, f64::max);
+    assert!(
+        (6.0..11.0).contains(&largest),
+        "tip {largest} cm³: {kinds:?}"
+    );
+    assert!(
+        session.worst_drift() < 0.02,
+        "drift {}",
+        session.worst_drift()
+    );
+    // The organ is the trainee's again.
+    let p = top(&session, -3.0, 0.0);
+    let (t, q) = surface_near(&session, p);
+    assert_eq!(session.grab(q, t)?.kind, "grabbed");
+    Ok(())
+}
+
+/// On a tray the demonstration presses a probe into the organ and drags it: the tissue pushes
+/// back on it while it is in (a force of the order of a tenth of a newton), and lets go after.
+#[test]
+fn the_tray_demonstration_presses_a_probe_in_and_parks_it_after() -> Result {
+    let organ = Organ::shipped(ShippedOrgan::Liver)?;
+    let mut session = Session::new(&organ, SessionOptions::default())?;
+    session.play()?;
+    let mut largest = 0.0f32;
+    let mut steps = 0;
+    while session.playing() {
+        session.step()?;
+        largest = largest.max(session.tool_force().length());
+        steps += 1;
+        assert!(steps <= 250, "the demonstration did not end");
+    }
+    assert_eq!(steps, 250);
+    assert!(largest > 0.01, "the probe met no resistance: {largest} N");
+    assert_eq!(session.tool_force(), Vec3::ZERO);
+    for _ in 0..5 {
+        session.step()?;
+    }
+    let probe = session
+        .body()
+        .contacts()
+        .iter()
+        .filter(|c| matches!(c.source, tissue_pbd::ContactSource::Tool(_)));
+    assert_eq!(probe.count(), 0, "the parked probe still touches the organ");
+    assert!(
+        session.worst_drift() < 0.02,
+        "drift {}",
+        session.worst_drift()
+    );
+    Ok(())
+}

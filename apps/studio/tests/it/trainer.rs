@@ -201,3 +201,72 @@ async fn the_appendix_streams_is_cut_and_sutured_and_one_session_runs_at_a_time(
     server.abort();
     Ok(())
 }
+
+/// The demonstration is tissue-scenes' appendix procedure played in the session: the trainee's
+/// tools wait, the tip comes off, three stitches are placed, and it ends.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_appendix_demonstration_plays_the_procedure_to_its_end() -> Result {
+    let studio = tissue_studio::Studio::new()?;
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await?;
+    let addr = listener.local_addr()?;
+    let app = tissue_studio::router(studio.clone());
+    let server = tokio::spawn(async move { axum::serve(listener, app).await });
+    let url = format!("ws://{addr}/api/trainer/ws");
+    let (mut tab, _) = tokio_tungstenite::connect_async(&url).await?;
+    send(&mut tab, json!({ "type": "demo" })).await?;
+    let refused = text_of(&mut tab, "failed", None).await;
+    assert!(refused.is_ok(), "a demonstration needs an organ first");
+    send(&mut tab, json!({ "type": "load", "organ": "appendix" })).await?;
+    text_of(&mut tab, "scene", None).await?;
+    send(&mut tab, json!({ "type": "demo" })).await?;
+    text_of(&mut tab, "scene", None).await?;
+    text_of(&mut tab, "event", Some(("kind", "demo_started"))).await?;
+    // The trainee's scalpel is refused while it plays.
+    send(
+        &mut tab,
+        json!({ "type": "cut", "path": [[0, 2, -1], [0, 2, 1]], "view_dir": [0, -1, 0] }),
+    )
+    .await?;
+    let (mut pieces, mut sutures, mut refused) = (Vec::new(), 0, 0);
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        assert!(Instant::now() < deadline, "the demonstration did not end");
+        let In::Text(v) = next(&mut tab).await? else {
+            continue;
+        };
+        if v["type"] == "failed" {
+            refused += 1;
+            continue;
+        }
+        if v["type"] != "event" {
+            continue;
+        }
+        match v["event"]["kind"].as_str() {
+            Some("piece_detached") => pieces.push(v["event"]["text"].to_string()),
+            Some("suture_placed") => sutures += 1,
+            Some("demo_finished") => break,
+            _ => {}
+        }
+    }
+    assert_eq!(refused, 1, "the cut during the demonstration is refused");
+    assert_eq!(sutures, 3);
+    // The tip (about 7.8 cm³ at rest) is among the pieces.
+    let volumes: Vec<f64> = pieces
+        .iter()
+        .filter_map(|t| {
+            t.trim_matches('"')
+                .rsplit(", ")
+                .next()?
+                .trim_end_matches(" cm³")
+                .parse()
+                .ok()
+        })
+        .collect();
+    assert!(
+        volumes.iter().any(|v| (6.0..11.0).contains(v)),
+        "pieces: {pieces:?}"
+    );
+    studio.shutdown();
+    server.abort();
+    Ok(())
+}
