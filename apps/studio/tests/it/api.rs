@@ -231,11 +231,7 @@ async fn send(socket: &mut Socket, value: Value) -> Result {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn jobs_run_table2_in_band_cancel_refuse_a_second_and_end_with_the_tab() -> Result {
-    let studio = tissue_studio::Studio::new()?;
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await?;
-    let addr = listener.local_addr()?;
-    let app = tissue_studio::router(studio.clone());
-    let server = tokio::spawn(async move { axum::serve(listener, app).await });
+    let (studio, addr, server) = crate::serve().await?;
     let client = tissue_studio::router(studio.clone());
     let (_, plane) = call(
         &client,

@@ -99,11 +99,7 @@ async fn send(socket: &mut Socket, v: Value) -> Result {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_appendix_streams_is_cut_and_sutured_and_one_session_runs_at_a_time() -> Result {
-    let studio = tissue_studio::Studio::new()?;
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await?;
-    let addr = listener.local_addr()?;
-    let app = tissue_studio::router(studio.clone());
-    let server = tokio::spawn(async move { axum::serve(listener, app).await });
+    let (studio, addr, server) = crate::serve().await?;
     let url = format!("ws://{addr}/api/trainer/ws");
     let (mut tab, _) = tokio_tungstenite::connect_async(&url).await?;
     send(&mut tab, json!({ "type": "load", "organ": "appendix" })).await?;
@@ -206,11 +202,7 @@ async fn the_appendix_streams_is_cut_and_sutured_and_one_session_runs_at_a_time(
 /// tools wait, the tip comes off, three stitches are placed, and it ends.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_appendix_demonstration_plays_the_procedure_to_its_end() -> Result {
-    let studio = tissue_studio::Studio::new()?;
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await?;
-    let addr = listener.local_addr()?;
-    let app = tissue_studio::router(studio.clone());
-    let server = tokio::spawn(async move { axum::serve(listener, app).await });
+    let (studio, addr, server) = crate::serve().await?;
     let url = format!("ws://{addr}/api/trainer/ws");
     let (mut tab, _) = tokio_tungstenite::connect_async(&url).await?;
     send(&mut tab, json!({ "type": "demo" })).await?;
