@@ -8,10 +8,7 @@ use tissue_mesh::{uv_sphere, TriMesh};
 use tissue_tetra::{tetrahedralize, TetraOptions};
 
 fn bunny() -> (TriMesh, &'static str) {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../fixtures/bunny_10k.obj"
-    );
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/bunny_10k.obj");
     let mesh = tissue_meshio::read_surface(path)
         .unwrap_or_else(|e| panic!("the bench's bunny {path}: {e}"));
     (mesh, "bunny_10k")
