@@ -193,10 +193,10 @@ impl Surgery {
         let mut faces = self.crossed_faces(body, plane, front, candidates);
         // Faces the blade crossed before but that had to stay glued (at the cut's front then):
         // retried now that the cut may have moved on.
-        let near = self.stamp;
+        let near = self.scratch.stamp;
         let mut far = Vec::new();
         for [t, j, u, k] in std::mem::take(&mut self.pending) {
-            if self.tet_mark[t as usize] != near && self.tet_mark[u as usize] != near {
+            if self.scratch.tet_mark[t as usize] != near && self.scratch.tet_mark[u as usize] != near {
                 // Far from this sweep: it waits for a blade nearby.
                 if self.neighbours[t as usize][j as usize] == u {
                     far.push([t, j, u, k]);
@@ -230,14 +230,14 @@ impl Surgery {
         // earlier wall and this one, on a body that moved between the sweeps) stays attached to
         // one side only — the side its centroid lies on — so that it does not bridge the cut.
         let mut crumbs: Vec<Vec<u32>> = Vec::new();
-        self.stamp = self.stamp.wrapping_add(1).max(1);
+        self.scratch.next_stamp();
         let big = self.next_group_stamp();
         for f in &faces {
             for t in [f.t, f.u] {
-                if self.tet_mark[t as usize] != self.stamp {
+                if self.scratch.tet_mark[t as usize] != self.scratch.stamp {
                     if let Some(group) = self.small_group(body, t, big) {
                         for &g in &group {
-                            self.tet_mark[g as usize] = self.stamp;
+                            self.scratch.tet_mark[g as usize] = self.scratch.stamp;
                         }
                         crumbs.push(group);
                     }
@@ -245,7 +245,7 @@ impl Surgery {
             }
         }
         if !crumbs.is_empty() {
-            let stamp = self.stamp;
+            let stamp = self.scratch.stamp;
             let side = tet_sides(body, plane);
             // Tet → its crumb.
             let mut crumb_of: HashMap<u32, usize> = HashMap::default();
@@ -282,7 +282,7 @@ impl Surgery {
                     Some(d > 0.0)
                 })
                 .collect();
-            let marks = std::mem::take(&mut self.tet_mark);
+            let marks = std::mem::take(&mut self.scratch.tet_mark);
             faces.retain(|f| {
                 let glue = if marks[f.t as usize] != stamp && marks[f.u as usize] != stamp {
                     false
@@ -299,7 +299,7 @@ impl Surgery {
                 }
                 !glue
             });
-            self.tet_mark = marks;
+            self.scratch.tet_mark = marks;
             if faces.is_empty() {
                 return Ok(Vec::new());
             }
@@ -310,18 +310,18 @@ impl Surgery {
         let mut plan = self.plan_split(body, &faces);
         let mut changed: Option<Vec<u32>> = None;
         let split = loop {
-            let mut entry = std::mem::take(&mut self.plan_entry);
+            let mut entry = std::mem::take(&mut self.scratch.plan_entry);
             entry.resize(body.node_count(), u32::MAX);
             for (i, p) in plan.iter().enumerate() {
                 entry[p.0 as usize] = i as u32;
             }
-            let mut seen = std::mem::take(&mut self.tet_seen);
+            let mut seen = std::mem::take(&mut self.scratch.tet_seen);
             let bad = self.defects(body, &faces, &plan, &entry, &mut seen, changed.as_deref());
-            self.tet_seen = seen;
+            self.scratch.tet_seen = seen;
             for p in &plan {
                 entry[p.0 as usize] = u32::MAX;
             }
-            self.plan_entry = entry;
+            self.scratch.plan_entry = entry;
             if bad.is_empty() {
                 break plan;
             }
@@ -371,17 +371,17 @@ impl Surgery {
         // Per tet, in scratch arrays stamped per call: the search that found it (`found`:
         // `call + search`), and the side of the current search that reached it (`mark`:
         // `base + side`, `base` fresh and even per search; older values are stale).
-        let mut found = std::mem::take(&mut self.found_by);
-        let mut mark = std::mem::take(&mut self.search_side);
+        let mut found = std::mem::take(&mut self.scratch.found_by);
+        let mut mark = std::mem::take(&mut self.scratch.search_side);
         found.resize(tets.len(), 0);
         mark.resize(tets.len(), 0);
-        if self.search_stamp > u32::MAX - 4 * (pairs.len() as u32 + 1) {
-            self.search_stamp = 0;
+        if self.scratch.search_stamp > u32::MAX - 4 * (pairs.len() as u32 + 1) {
+            self.scratch.search_stamp = 0;
             found.fill(0);
             mark.fill(0);
         }
-        let call = self.search_stamp + 1;
-        self.search_stamp += pairs.len() as u32 + 1;
+        let call = self.scratch.search_stamp + 1;
+        self.scratch.search_stamp += pairs.len() as u32 + 1;
         let mut connected = true;
         for (search, &(a, b)) in pairs.iter().enumerate() {
             let id = call + search as u32;
@@ -392,8 +392,8 @@ impl Surgery {
             if found_by(a).is_some_and(|s| found_by(b) == Some(s)) {
                 continue;
             }
-            self.search_stamp += 2;
-            let base = self.search_stamp & !1;
+            self.scratch.search_stamp += 2;
+            let base = self.scratch.search_stamp & !1;
             let mut side: [Vec<u32>; 2] = [vec![a], vec![b]];
             let mut head = [0usize; 2];
             mark[a as usize] = base;
@@ -425,8 +425,8 @@ impl Surgery {
                 found[t as usize] = id;
             }
         }
-        self.found_by = found;
-        self.search_side = mark;
+        self.scratch.found_by = found;
+        self.scratch.search_side = mark;
         connected
     }
 
@@ -440,30 +440,30 @@ impl Surgery {
         let rest = body.tet_rest_volumes();
         let limit = MIN_PIECE as f64 * self.median_rest_volume;
         let stamp = self.next_group_stamp();
-        if self.group_mark[t as usize] == big {
+        if self.scratch.group_mark[t as usize] == big {
             return None;
         }
         let mut group = vec![t];
-        self.group_mark[t as usize] = stamp;
+        self.scratch.group_mark[t as usize] = stamp;
         let mut volume = rest[t as usize] as f64;
         let mut i = 0;
         while i < group.len() {
             for &u in &self.neighbours[group[i] as usize] {
-                if u == NO_TET || self.group_mark[u as usize] == stamp {
+                if u == NO_TET || self.scratch.group_mark[u as usize] == stamp {
                     continue;
                 }
                 volume += rest[u as usize] as f64;
-                if self.group_mark[u as usize] == big
+                if self.scratch.group_mark[u as usize] == big
                     || (group.len() + 1 >= MIN_PIECE
                         && (volume >= limit || !self.settings.split_tets))
                     || group.len() >= 64 * MIN_PIECE
                 {
                     for &g in &group {
-                        self.group_mark[g as usize] = big;
+                        self.scratch.group_mark[g as usize] = big;
                     }
                     return None;
                 }
-                self.group_mark[u as usize] = stamp;
+                self.scratch.group_mark[u as usize] = stamp;
                 group.push(u);
             }
             i += 1;
@@ -473,12 +473,12 @@ impl Surgery {
 
     /// A fresh stamp for `group_mark` (sized to the tets).
     fn next_group_stamp(&mut self) -> u32 {
-        self.group_mark.resize(self.neighbours.len(), 0);
-        self.group_stamp = self.group_stamp.wrapping_add(1).max(1);
-        if self.group_stamp == 1 {
-            self.group_mark.fill(0);
+        self.scratch.group_mark.resize(self.neighbours.len(), 0);
+        self.scratch.group_stamp = self.scratch.group_stamp.wrapping_add(1).max(1);
+        if self.scratch.group_stamp == 1 {
+            self.scratch.group_mark.fill(0);
         }
-        self.group_stamp
+        self.scratch.group_stamp
     }
 
     /// The tets that straddle the plane of `plane` and meet the box of its polygon (sorted):
@@ -494,11 +494,10 @@ impl Surgery {
             }
         }
         let (origin, normal) = (plane.origin, plane.normal);
-        self.stamp = self.stamp.wrapping_add(1).max(1);
-        let stamp = self.stamp;
+        let stamp = self.scratch.next_stamp();
         let mut candidates = Vec::new();
         // Each node's signed distance, once: a tet's straddling test reads four of them.
-        let mut side = std::mem::take(&mut self.side);
+        let mut side = std::mem::take(&mut self.scratch.side);
         side.clear();
         side.extend(x.iter().map(|p| normal.dot(p.as_dvec3() - origin)));
         // A straddling tet has a node on the plane or on its positive side, within that node's
@@ -506,7 +505,7 @@ impl Surgery {
         // nodes' tets are looked at. Their tets are gathered first and their nodes loaded in a
         // loop of independent loads, apart from the tests that branch on them: the body's
         // arrays are out of cache after a step, and the misses then overlap.
-        let mut near_tets = std::mem::take(&mut self.near_tets);
+        let mut near_tets = std::mem::take(&mut self.scratch.near_tets);
         near_tets.clear();
         for (v, (p, &d)) in x.iter().zip(&side).enumerate() {
             let reach = self.node_reach[v] as f64;
@@ -519,17 +518,17 @@ impl Surgery {
             }
             near_tets.extend_from_slice(&self.node_tets[v]);
         }
-        let mut near_nodes = std::mem::take(&mut self.near_nodes);
+        let mut near_nodes = std::mem::take(&mut self.scratch.near_nodes);
         near_nodes.clear();
         near_nodes.extend(near_tets.iter().map(|&t| tets[t as usize]));
         for (&t, tet) in near_tets.iter().zip(&near_nodes) {
             let d = tet.map(|i| side[i as usize]);
             if !(d.iter().any(|&d| d >= 0.0) && d.iter().any(|&d| d <= 0.0))
-                || self.tet_mark[t as usize] == stamp
+                || self.scratch.tet_mark[t as usize] == stamp
             {
                 continue;
             }
-            self.tet_mark[t as usize] = stamp;
+            self.scratch.tet_mark[t as usize] = stamp;
             let q = tet.map(|i| x[i as usize].as_dvec3());
             let (tlo, thi) = (
                 q[0].min(q[1]).min(q[2].min(q[3])),
@@ -539,9 +538,9 @@ impl Surgery {
                 candidates.push(t);
             }
         }
-        self.near_tets = near_tets;
-        self.near_nodes = near_nodes;
-        self.side = side;
+        self.scratch.near_tets = near_tets;
+        self.scratch.near_nodes = near_nodes;
+        self.scratch.side = side;
         candidates.sort_unstable();
         candidates
     }
@@ -566,10 +565,9 @@ impl Surgery {
                 * 0.25
         };
         // Candidates get a second mark so that each pair of candidates is tested once.
-        self.stamp = self.stamp.wrapping_add(1).max(1);
-        let stamp = self.stamp;
+        let stamp = self.scratch.next_stamp();
         for &t in candidates {
-            self.tet_mark[t as usize] = stamp;
+            self.scratch.tet_mark[t as usize] = stamp;
         }
         let in_front = |t: u32| front.binary_search(&t).is_ok();
         // All eight triangles lie in the end pose's plane: a centroid segment crosses the cut
@@ -584,7 +582,7 @@ impl Surgery {
             let dt = normal.dot(ct - origin);
             for j in 0..4 {
                 let u = self.neighbours[t as usize][j];
-                if u == NO_TET || (u < t && self.tet_mark[u as usize] == stamp) || in_front(u) {
+                if u == NO_TET || (u < t && self.scratch.tet_mark[u as usize] == stamp) || in_front(u) {
                     continue;
                 }
                 let cu = centroid(u);
@@ -656,7 +654,7 @@ impl Surgery {
             .collect();
         // Each star tet's index in the star, by tet (a scratch array: entries of other tets
         // are stale, so a hit is checked against the star).
-        let mut slot = std::mem::take(&mut self.star_slot);
+        let mut slot = std::mem::take(&mut self.scratch.star_slot);
         slot.resize(self.neighbours.len(), u32::MAX);
         for (i, &t) in star.iter().enumerate() {
             slot[t as usize] = i as u32;
@@ -686,7 +684,7 @@ impl Surgery {
             }
             count += 1;
         }
-        self.star_slot = slot;
+        self.scratch.star_slot = slot;
         (v, star, comp, count)
     }
 

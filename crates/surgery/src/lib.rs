@@ -128,6 +128,7 @@ mod split;
 mod state;
 mod suture;
 mod tip;
+mod workspace;
 
 pub use cut::{BladeSweep, MIN_PIECE};
 pub use error::SurgeryError;

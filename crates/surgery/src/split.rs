@@ -258,7 +258,7 @@ impl Surgery {
         let pos = |body: &SoftBody, v: u32| body.positions()[v as usize].as_dvec3();
         // Signed distances of the nodes from the plane: those `straddling_tets` left in
         // `side` (the same expression), recomputed if it did not run for this body.
-        let mut dist = std::mem::take(&mut self.side);
+        let mut dist = std::mem::take(&mut self.scratch.side);
         if dist.len() != body.node_count() {
             dist.clear();
             dist.extend(body.positions().iter().map(|p| n.dot(p.as_dvec3() - o)));
@@ -447,7 +447,7 @@ impl Surgery {
                 }
             }
         }
-        self.side = dist;
+        self.scratch.side = dist;
         // 3. Split edges (valid ones), the tets around them bisected (see `bisect`); a tet
         // whose pieces would fall below the quality bound or not tile it in rest space gives
         // up its split edges, and the rest is planned again until nothing fails.
@@ -789,7 +789,7 @@ impl Surgery {
         let added = (out.end_tet - out.first_tet) as usize;
         self.neighbours
             .extend(std::iter::repeat_n([NO_TET; 4], added));
-        self.tet_mark.extend(std::iter::repeat_n(0, added));
+        self.scratch.tet_mark.extend(std::iter::repeat_n(0, added));
         for &(idx, k) in &made {
             if idx >= out.first_tet {
                 let c = self.tet_component[plan[k].0 as usize];

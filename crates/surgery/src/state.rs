@@ -8,6 +8,7 @@ use tissue_mesh::{NO_TET, TET_FACES};
 use tissue_pbd::{ConstraintSlot, SoftBody};
 
 use crate::geometry::radius_ratio;
+use crate::workspace::CutScratch;
 use crate::{SurgeryError, SurgerySettings};
 
 /// A suture: a link constraint between two nodes on the two sides of a wound.
@@ -72,30 +73,8 @@ pub struct Surgery {
     /// Crossing points (parameter from the smaller node) of edges that a sweep covered but
     /// could not split yet, by sorted edge: a later sweep counts them as inside its polygon.
     pub(crate) covered: HashMap<[u32; 2], f64>,
-    /// Scratch marks per tet and node (stamped with `stamp`), reused by every cut.
-    pub(crate) tet_mark: Vec<u32>,
-    pub(crate) stamp: u32,
-    /// Scratch: each node's signed distance from the current blade's plane (cm).
-    pub(crate) side: Vec<f64>,
-    /// Scratch of the straddling search: the tets of the nodes near the plane, their nodes.
-    pub(crate) near_tets: Vec<u32>,
-    pub(crate) near_nodes: Vec<[u32; 4]>,
-    /// Scratch marks per tet for the crumb searches, stamped with `group_stamp`.
-    pub(crate) group_mark: Vec<u32>,
-    pub(crate) group_stamp: u32,
-    /// Scratch of the manifold guard: per node, its entry in the split plan (`u32::MAX` when
-    /// it has none; reset after each use).
-    pub(crate) plan_entry: Vec<u32>,
-    /// Scratch of a node's split plan: per tet, its index in the node's star (stale for
-    /// other tets).
-    pub(crate) star_slot: Vec<u32>,
-    /// Scratch of the manifold guard: per tet, all `false` between uses.
-    pub(crate) tet_seen: Vec<bool>,
-    /// Scratch of the connectivity proof after a cut (`Surgery::still_connected`): per tet,
-    /// the search that found it and the side that reached it, stamped from `search_stamp`.
-    pub(crate) found_by: Vec<u32>,
-    pub(crate) search_side: Vec<u32>,
-    pub(crate) search_stamp: u32,
+    /// The cut pipeline's scratch buffers (module `workspace`): no state between cuts.
+    pub(crate) scratch: CutScratch,
     /// How the cuts so far ended on the surface (see [`Surgery::tip_counts`]).
     pub(crate) tip_counts: crate::TipCounts,
 }
@@ -194,19 +173,7 @@ impl Surgery {
                 v.get(v.len() / 2).copied().unwrap_or(0.0) as f64
             },
             covered: HashMap::default(),
-            tet_mark: vec![0; tets.len()],
-            stamp: 0,
-            side: Vec::new(),
-            near_tets: Vec::new(),
-            near_nodes: Vec::new(),
-            group_mark: Vec::new(),
-            group_stamp: 0,
-            plan_entry: Vec::new(),
-            star_slot: Vec::new(),
-            tet_seen: Vec::new(),
-            found_by: Vec::new(),
-            search_side: Vec::new(),
-            search_stamp: 0,
+            scratch: CutScratch::new(tets.len()),
             tip_counts: crate::TipCounts::default(),
         };
         s.count_components(body);

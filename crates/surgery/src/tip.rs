@@ -151,7 +151,7 @@ impl Surgery {
     ) -> Result<Vec<[u32; 2]>, SurgeryError> {
         let (o, n) = (plane.origin, plane.normal);
         let (new_lo, new_hi) = (out.first_node, out.end_node);
-        let (side, reach) = (&self.side, &self.node_reach);
+        let (side, reach) = (&self.scratch.side, &self.node_reach);
         // On the plane: the first split's new nodes, and nodes snapped or lying on it (within
         // rounding: nodes made on it by an earlier sweep are a few ulps off).
         let on_plane = |v: u32| {
@@ -371,7 +371,7 @@ impl Surgery {
         }
         let mut counts = self.tip_counts;
         let n_rest = self.rest.len();
-        let dist = &self.side;
+        let dist = &self.scratch.side;
         let sign = |v: u32| -> i8 {
             match dist.get(v as usize) {
                 Some(&d) if d > 0.0 => 1,
@@ -658,7 +658,7 @@ impl Surgery {
                 return false;
             };
             let on_plane = (y as usize) >= self.rest.len()
-                || self.side.get(y as usize).is_some_and(|&d| d == 0.0);
+                || self.scratch.side.get(y as usize).is_some_and(|&d| d == 0.0);
             if !on_plane {
                 return false;
             }
@@ -687,7 +687,7 @@ impl Surgery {
     ) -> bool {
         let n_rest = self.rest.len();
         let on_plane =
-            |v: u32| (v as usize) >= n_rest || self.side.get(v as usize).is_some_and(|&d| d == 0.0);
+            |v: u32| (v as usize) >= n_rest || self.scratch.side.get(v as usize).is_some_and(|&d| d == 0.0);
         let front = |p: &[u32; 4]| {
             (0..4).any(|i| {
                 (i + 1..4).any(|k| edges.get(&sorted2(p[i], p[k])).is_some_and(|c| !c.inside))
