@@ -36,6 +36,8 @@ pub(crate) struct CutScratch {
     pub found_by: Vec<u32>,
     pub search_side: Vec<u32>,
     pub search_stamp: u32,
+    /// Applying a split: the plan's pieces with its new nodes numbered.
+    pub pieces: Vec<[u32; 4]>,
 }
 
 impl CutScratch {
