@@ -40,6 +40,10 @@
 //!    edge on the plane is split again at the tip and the tets around it bisected once more
 //!    (the fallback). Either way the tets beyond the tip join the front, so the opening on the
 //!    surface ends at the tip.
+//!
+//! The plan (steps 1–4, and the four-way tips) is made completely before anything is applied:
+//! a [`SplitPlan`] (module `plan`), whose new nodes are typed [`NewNode`]s until
+//! [`Surgery::apply_split`] (module `apply`) appends them to the body.
 
 use glam::{DVec3, Vec3};
 use tissue_pbd::SoftBody;

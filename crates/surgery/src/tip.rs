@@ -1019,13 +1019,27 @@ mod tests {
         bisect(tet, &split, &mut pieces);
         let y = split_face(&mut pieces, [a, e, c], p).expect("a piece holds A E C");
         let ctx = format!("tet {tet:?} f {f:?}: {pieces:?}");
+        check_tiling_and_tip_wall(&x, &pieces, [e, p, y], value, &ctx);
+        check_face_in_four(&x, &pieces, [a, e, c], p, &ctx);
+        check_only_front_straddles(&pieces, f, [a, c, p, y], &ctx);
+    }
+
+    /// The pieces tile the unit tet (volume 1/6 × 6), none flat or inverted; `E`, `P`, `Y`
+    /// lie on the plane (`value` zero) and `E P Y` is a face of two pieces.
+    fn check_tiling_and_tip_wall(
+        x: &[DVec3],
+        pieces: &[[u32; 4]],
+        [e, p, y]: [u32; 3],
+        value: impl Fn(DVec3) -> f64,
+        ctx: &str,
+    ) {
         // Tiling, orientation.
         let volume: f64 = pieces
             .iter()
             .map(|t| six_volume(t.map(|i| x[i as usize])))
             .sum();
         assert!((volume - 1.0).abs() < 1e-12, "{ctx}: volume {volume}");
-        for t in &pieces {
+        for t in pieces {
             assert!(six_volume(t.map(|i| x[i as usize])) > 1e-6, "{ctx}: {t:?}");
         }
         // E, P, Y on the plane, and the wall E P Y a face of two pieces.
@@ -1040,10 +1054,21 @@ mod tests {
             .filter(|t| [e, p, y].iter().all(|v| t.contains(v)))
             .count();
         assert_eq!(wall, 2, "{ctx}");
+    }
+
+    /// The face `A B C` (z = 0) is in 4 triangles tiling it, `P` joined to exactly `A`, `E`,
+    /// `C`.
+    fn check_face_in_four(
+        x: &[DVec3],
+        pieces: &[[u32; 4]],
+        [a, e, c]: [u32; 3],
+        p: u32,
+        ctx: &str,
+    ) {
         // The face A B C (opposite D, base position 3: z = 0) in 4 triangles tiling it.
         let on_face = |v: u32| x[v as usize].z.abs() < 1e-12;
         let mut triangles: Vec<[u32; 3]> = Vec::new();
-        for t in &pieces {
+        for t in pieces {
             for j in 0..4 {
                 let tri = face_nodes(t, j);
                 if tri.iter().all(|&v| on_face(v)) {
@@ -1072,10 +1097,20 @@ mod tests {
         let mut want = vec![a, e, c];
         want.sort_unstable();
         assert_eq!(joined, want, "{ctx}");
+    }
+
+    /// Only pieces on the unsplit edge `A C` hold nodes of both sides (`f`: the nodes' signs),
+    /// at most two, one of them `(A, P, C, Y)`.
+    fn check_only_front_straddles(
+        pieces: &[[u32; 4]],
+        f: [f64; 4],
+        [a, c, p, y]: [u32; 4],
+        ctx: &str,
+    ) {
         // Only pieces on the unsplit edge A C straddle (the front, `tets_around(A C)`): (A, P,
         // C, Y) and, for some orders where D is on A's side, a second one (A, F, C, G).
         let mut straddling = 0;
-        for t in &pieces {
+        for t in pieces {
             let sides: Vec<f64> = t
                 .iter()
                 .filter(|&&v| v < 4)
