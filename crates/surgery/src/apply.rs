@@ -19,6 +19,15 @@ struct Piece {
     parent: usize,
 }
 
+/// A face of a piece (or of a whole neighbour of a split tet) waiting for its match: the
+/// tet, its local face, and the tet it came from (its parent, or itself when whole).
+#[derive(Debug, Clone, Copy)]
+struct HalfFace {
+    tet: u32,
+    face: u8,
+    parent: u32,
+}
+
 /// The split tets as they were before the split, by position in the plan.
 struct Parents {
     tets: Vec<[u32; 4]>,
@@ -244,13 +253,13 @@ impl Surgery {
         parents: &Parents,
         made: &[Piece],
     ) {
-        // Unmatched faces so far: sorted nodes → (tet, face, its parent).
-        let mut faces: HashMap<[u32; 3], (u32, u8, u32)> = HashMap::default();
-        let mut link = |s: &mut Self, key: [u32; 3], me: (u32, u8, u32)| match faces.remove(&key) {
-            Some((u, k, pu)) => {
-                if pu == me.2 || parents.were_neighbours(me.2, pu) {
-                    s.neighbours[me.0 as usize][me.1 as usize] = u;
-                    s.neighbours[u as usize][k as usize] = me.0;
+        // Faces not matched yet, by sorted nodes.
+        let mut faces: HashMap<[u32; 3], HalfFace> = HashMap::default();
+        let mut link = |s: &mut Self, key: [u32; 3], me: HalfFace| match faces.remove(&key) {
+            Some(other) => {
+                if other.parent == me.parent || parents.were_neighbours(me.parent, other.parent) {
+                    s.neighbours[me.tet as usize][me.face as usize] = other.tet;
+                    s.neighbours[other.tet as usize][other.face as usize] = me.tet;
                 }
             }
             None => {
@@ -263,7 +272,15 @@ impl Surgery {
             for j in 0..4 {
                 let mut key = face_nodes(&tet, j);
                 key.sort_unstable();
-                link(self, key, (m.tet, j as u8, plan.tets[m.parent].tet));
+                link(
+                    self,
+                    key,
+                    HalfFace {
+                        tet: m.tet,
+                        face: j as u8,
+                        parent: plan.tets[m.parent].tet,
+                    },
+                );
             }
         }
         for (k, nb) in parents.neighbours.iter().enumerate() {
@@ -277,7 +294,15 @@ impl Surgery {
                         self.neighbours[u as usize][j] = NO_TET;
                         let mut key = face_nodes(&tet, j);
                         key.sort_unstable();
-                        link(self, key, (u, j as u8, u));
+                        link(
+                            self,
+                            key,
+                            HalfFace {
+                                tet: u,
+                                face: j as u8,
+                                parent: u,
+                            },
+                        );
                     }
                 }
             }

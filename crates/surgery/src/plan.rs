@@ -123,3 +123,28 @@ impl SplitPlan {
         NewNode((self.edges.len() + k) as u32)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// New nodes resolve past the body's nodes in plan order; body nodes stay themselves.
+    #[test]
+    fn new_nodes_resolve_in_plan_order() {
+        assert_eq!(NodeRef::from(7).resolve(100), 7);
+        assert_eq!(NodeRef::from(NewNode(0)).resolve(100), 100);
+        assert_eq!(NodeRef::from(NewNode(3)).resolve(100), 103);
+        let plan = SplitPlan {
+            edges: vec![
+                SplitEdge {
+                    ends: [0, 1],
+                    s: 0.5,
+                };
+                2
+            ],
+            ..SplitPlan::default()
+        };
+        assert_eq!(plan.tip_node(0), NewNode(2));
+        assert_eq!(plan.new_node_count(), 2);
+    }
+}
