@@ -13,6 +13,7 @@
 //! `parallel`: `StepSettings::parallel` on, on rayon's global pool; default serial).
 #![allow(clippy::unwrap_used, clippy::print_stdout)]
 
+use std::hash::{DefaultHasher, Hash, Hasher};
 use std::time::Instant;
 
 use glam::{Quat, Vec3};
@@ -38,6 +39,23 @@ fn stats(name: &str, v: &mut [f64]) {
         q(0.99) * 1e3,
         q(1.0) * 1e3
     );
+}
+
+/// A hash of the body and the surgery state (positions, rest positions, velocities bit for
+/// bit, tets, adjacency, origins, pieces): equal outputs of two builds mean the same cut.
+fn fingerprint(body: &SoftBody, surgery: &Surgery) -> u64 {
+    let mut h = DefaultHasher::new();
+    for field in [body.positions(), body.rest_positions(), body.velocities()] {
+        for p in field {
+            p.to_array().map(f32::to_bits).hash(&mut h);
+        }
+    }
+    body.tets().hash(&mut h);
+    surgery.neighbours().hash(&mut h);
+    surgery.origins().hash(&mut h);
+    surgery.tet_components().hash(&mut h);
+    surgery.cut_faces().hash(&mut h);
+    h.finish()
 }
 
 fn main() {
@@ -155,6 +173,7 @@ fn main() {
         }
     }
     surgery.validate(&body).unwrap();
+    let cut_fingerprint = fingerprint(&body, &surgery);
     let mut after = Vec::new();
     for _ in 0..100 {
         let t = Instant::now();
@@ -217,6 +236,10 @@ fn main() {
         opened[opened.len() - 1],
         split[split.len() / 2],
         split[split.len() - 1]
+    );
+    println!(
+        "fingerprint: after the cut {cut_fingerprint:016x}, after 100 more steps {:016x}",
+        fingerprint(&body, &surgery)
     );
     let tips = surgery.tip_counts();
     println!(

@@ -67,6 +67,14 @@
 //! joined by steps along tet faces; thin slabs between two such walls can come off as small
 //! pieces. A tet stretched to more than 1.5 × its longest rest edge may be missed by a sweep.
 //!
+//! ## Code layout
+//! One cut runs as named phases (`docs/surgery.md`, "Code map"): the straddling search and
+//! the face separation (module `cut`), the split's plan (`split`, with the four-way tips of
+//! `tip`) as an explicit plan (`plan`: `SplitPlan`, pieces over `NodeRef`s, the nodes the plan
+//! creates typed as `NewNode`s), its application (`apply`), the fallback tips (`tip`), the
+//! manifold guard (`guard`) and the commit (`commit`). Scratch buffers live in a workspace
+//! (`workspace::CutScratch`), apart from the persistent state.
+//!
 //! ## Suturing
 //! No change of geometry: the needle's axis is intersected with the boundary faces; the first
 //! face it leaves the body through and the next it enters through are the two sides of the
@@ -119,15 +127,20 @@
     clippy::print_stderr
 )]
 
+mod apply;
+mod commit;
 mod cut;
 mod error;
 mod event;
 mod geometry;
+mod guard;
+mod plan;
 mod settings;
 mod split;
 mod state;
 mod suture;
 mod tip;
+mod workspace;
 
 pub use cut::{BladeSweep, MIN_PIECE};
 pub use error::SurgeryError;

@@ -40,15 +40,19 @@
 //!    edge on the plane is split again at the tip and the tets around it bisected once more
 //!    (the fallback). Either way the tets beyond the tip join the front, so the opening on the
 //!    surface ends at the tip.
+//!
+//! The plan (steps 1–4, and the four-way tips) is made completely before anything is applied:
+//! a [`SplitPlan`] (module `plan`), whose new nodes are typed [`NewNode`]s until
+//! [`Surgery::apply_split`] (module `apply`) appends them to the body.
 
 use glam::{DVec3, Vec3};
-use tissue_mesh::NO_TET;
-use tissue_pbd::{DistanceConstraint, SoftBody};
+use tissue_pbd::SoftBody;
 
 use crate::geometry::radius_ratio;
 use crate::geometry::FxMap as HashMap;
+use crate::plan::{EdgeCut, NewNode, NodeRef, SplitEdge, SplitPlan, TetSplit};
 use crate::state::face_nodes;
-use crate::tip::split_face;
+use crate::tip::{split_face, FourWayTip};
 use crate::{SplitTriangle, Surgery, SurgeryError};
 
 /// A node closer to the blade's plane than this fraction of its shortest rest edge is snapped
@@ -172,11 +176,16 @@ pub(crate) fn sorted2(a: u32, b: u32) -> [u32; 2] {
 /// order of its own edges, which is global, two tets sharing a face split it alike (no
 /// hanging node); replacing an end of an edge by a point strictly inside it keeps the
 /// orientation. Once every crossing edge of `t` is split, no piece holds nodes of both sides.
-pub(crate) fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32; 4]>) {
+pub(crate) fn bisect<N: Copy + PartialEq + From<u32>>(
+    t: [N; 4],
+    split: &[([u32; 2], N)],
+    out: &mut Vec<[N; 4]>,
+) {
     for (k, (e, m)) in split.iter().enumerate() {
+        let (e0, e1) = (N::from(e[0]), N::from(e[1]));
         if let (Some(i), Some(j)) = (
-            t.iter().position(|&v| v == e[0]),
-            t.iter().position(|&v| v == e[1]),
+            t.iter().position(|&v| v == e0),
+            t.iter().position(|&v| v == e1),
         ) {
             let (mut lo, mut hi) = (t, t);
             lo[j] = *m;
@@ -194,43 +203,25 @@ pub(crate) fn bisect(t: [u32; 4], split: &[([u32; 2], u32)], out: &mut Vec<[u32;
 pub(crate) fn split_edges_of(
     tet: [u32; 4],
     edges: &HashMap<[u32; 2], EdgeCut>,
-    local: &mut Vec<([u32; 2], u32)>,
+    local: &mut Vec<([u32; 2], NodeRef)>,
 ) {
     local.clear();
     for a in 0..4 {
         for b in a + 1..4 {
             let e = sorted2(tet[a], tet[b]);
-            if let Some(c) = edges.get(&e).filter(|c| c.valid) {
-                local.push((e, c.node));
+            if let Some(node) = edges.get(&e).filter(|c| c.valid).and_then(|c| c.node) {
+                local.push((e, NodeRef::New(node)));
             }
         }
     }
     local.sort_unstable();
 }
 
-/// A planned split edge: its ends, the crossing parameter from the first, its new node.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct EdgeCut {
-    pub s: f64,
-    /// The crossing point is in this sweep's polygon or was in an earlier sweep's at about the
-    /// same place along the edge.
-    pub inside: bool,
-    pub valid: bool,
-    pub node: u32,
-}
-
-/// A new node inside a boundary triangle (a four-way tip, module `tip`): the weighted sum of
-/// three existing nodes (weights positive, summing to 1), in current, previous and rest
-/// position and velocity.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct FacePoint {
-    pub nodes: [u32; 3],
-    pub weights: [f64; 3],
-}
-
 impl Surgery {
-    /// Steps 1–4 of the module docs for one sweep; `candidates` are the tets that straddle the
-    /// plane near the polygon (sorted).
+    /// Steps 1–4 of the module docs for one sweep, as phases: snap the nodes near the plane,
+    /// find the tets a wall blocks and the crossing edges, plan the split (quality rounds, then
+    /// the four-way tips), apply it, then the fallback tips. `candidates` are the tets that
+    /// straddle the plane near the polygon (sorted).
     pub(crate) fn split_along(
         &mut self,
         body: &mut SoftBody,
@@ -255,58 +246,73 @@ impl Surgery {
             .collect();
         nodes.sort_unstable();
         nodes.dedup();
-        let pos = |body: &SoftBody, v: u32| body.positions()[v as usize].as_dvec3();
         // Signed distances of the nodes from the plane: those `straddling_tets` left in
         // `side` (the same expression), recomputed if it did not run for this body.
-        let mut dist = std::mem::take(&mut self.side);
+        let mut dist = std::mem::take(&mut self.scratch.side);
         if dist.len() != body.node_count() {
             dist.clear();
             dist.extend(body.positions().iter().map(|p| n.dot(p.as_dvec3() - o)));
         }
-        // 1. Snapping.
+        let near = self.snap_nodes(body, plane, &nodes, &mut dist, &mut out.snapped)?;
+        let blocked = self.blocked_by_walls(body, plane, candidates);
+        let mut edges = self.crossing_edges(body, plane, candidates, &dist, &near);
+        self.scratch.side = dist;
+        let first = body.node_count() as u32;
+        let plan = self.plan_tets(body, plane, &mut edges, &blocked)?;
+        let first_tip = first + plan.edges.len() as u32;
+        out.four_way = first_tip..first_tip + plan.tips.len() as u32;
+        self.remember_covered(&edges);
+        let outside: Vec<[u32; 2]> = edges
+            .iter()
+            .filter(|(_, c)| !c.inside)
+            .map(|(e, _)| *e)
+            .collect();
+        if !plan.tets.is_empty() {
+            self.apply_split(body, &plan, &mut out)?;
+        }
+        for (k, tip) in plan.tips.iter().enumerate() {
+            let e = edges
+                .get(&tip.ab)
+                .filter(|c| c.valid)
+                .and_then(|c| c.node)
+                .map_or(u32::MAX, |e| NodeRef::New(e).resolve(first));
+            self.open_tip_wall(body, tip, e, first_tip + k as u32);
+        }
+        // The tips on the surface (module `tip`): the edges beyond them join the front.
+        let beyond = self.split_tips(body, plane, candidates, &mut out)?;
+        // The front: tets (after the split) on a crossing edge outside the polygon.
+        out.front = self.tets_around_edges(body.tets(), &[outside, beyond].concat());
+        Ok(out)
+    }
+
+    /// Step 1, snapping: each of `nodes` (sorted) closer to the plane than [`SNAP_FRACTION`]
+    /// of its shortest rest edge moves onto it (current, previous and rest position) when every
+    /// tet around it allows it ([`Surgery::snap_keeps_quality`]); its tets' rest shapes, its
+    /// edges' rest lengths and the masses are then rebuilt. Returns the nodes that were close
+    /// but could not be snapped (sorted): no edge at them is split. `dist` (the nodes' signed
+    /// distances) is kept up to date; `snapped` gets the snapped nodes.
+    fn snap_nodes(
+        &mut self,
+        body: &mut SoftBody,
+        plane: &CutPlane<'_>,
+        nodes: &[u32],
+        dist: &mut [f64],
+        snapped: &mut Vec<u32>,
+    ) -> Result<Vec<u32>, SurgeryError> {
+        let n = plane.normal;
         let mut near: Vec<u32> = Vec::new();
         let mut reshaped: Vec<u32> = Vec::new();
-        for &v in &nodes {
+        for &v in nodes {
             let d = dist[v as usize];
             // `node_reach` is 1.5 × the longest rest edge: far nodes are skipped cheaply.
             if d == 0.0 || d.abs() >= SNAP_FRACTION * self.node_reach[v as usize] as f64 / 1.5 {
                 continue;
             }
-            let star = &self.node_tets[v as usize];
-            let tets = body.tets();
-            // Not snapped when some rest edge at `v` is shorter than |d| / SNAP_FRACTION.
-            let (rv, limit) = (self.rest[v as usize], d.abs() / SNAP_FRACTION);
-            let short_edge = star.iter().any(|&t| {
-                tets[t as usize]
-                    .iter()
-                    .any(|&u| u != v && rv.distance(self.rest[u as usize]) <= limit)
-            });
-            if short_edge {
+            if self.has_short_edge(body, v, d) {
                 continue;
             }
-            let x = pos(body, v);
-            let free = body.inverse_masses()[v as usize] > 0.0;
-            let target = x - d * n;
             let moved_rest = self.rest[v as usize] - d * n;
-            let ok = free
-                && plane.contains(target)
-                && star.iter().all(|&t| {
-                    let tet = tets[t as usize];
-                    let before = tet.map(|u| self.rest[u as usize]);
-                    let after = tet.map(|u| {
-                        if u == v {
-                            moved_rest
-                        } else {
-                            self.rest[u as usize]
-                        }
-                    });
-                    let now = tet.map(|u| if u == v { target } else { pos(body, u) });
-                    let vol = six_volume(after) / 6.0;
-                    six_volume(now) > 0.0
-                        && vol >= self.volume_floor()
-                        && radius_ratio(after) >= MIN_RATIO.min(radius_ratio(before))
-                });
-            if !ok {
+            if !self.snap_keeps_quality(body, plane, v, d, moved_rest) {
                 near.push(v);
                 continue;
             }
@@ -320,53 +326,111 @@ impl Surgery {
             body.set_rest_position(v, moved_rest.as_vec3())?;
             self.rest[v as usize] = moved_rest;
             dist[v as usize] = 0.0;
-            out.snapped.push(v);
+            snapped.push(v);
             reshaped.extend_from_slice(&self.node_tets[v as usize]);
         }
-        if !out.snapped.is_empty() {
-            reshaped.sort_unstable();
-            reshaped.dedup();
-            for &t in &reshaped {
-                let tet = body.tets()[t as usize];
-                body.reshape_tet(t as usize, tet, tet.map(|u| self.rest[u as usize]))?;
-            }
-            let mut edges: Vec<[u32; 2]> = Vec::new();
-            for &v in &out.snapped {
-                for &t in &self.node_tets[v as usize] {
-                    for &u in &body.tets()[t as usize] {
-                        if u != v {
-                            edges.push(sorted2(u, v));
-                        }
+        if !snapped.is_empty() {
+            self.reshape_snapped(body, snapped, reshaped)?;
+        }
+        near.sort_unstable();
+        Ok(near)
+    }
+
+    /// Whether some rest edge at node `v` is shorter than `|d| / SNAP_FRACTION` (`d` its
+    /// distance from the plane): such a node is not snapped (nor counted as near).
+    fn has_short_edge(&self, body: &SoftBody, v: u32, d: f64) -> bool {
+        let tets = body.tets();
+        let (rv, limit) = (self.rest[v as usize], d.abs() / SNAP_FRACTION);
+        self.node_tets[v as usize].iter().any(|&t| {
+            tets[t as usize]
+                .iter()
+                .any(|&u| u != v && rv.distance(self.rest[u as usize]) <= limit)
+        })
+    }
+
+    /// Whether node `v` (at distance `d` from the plane, `moved_rest` its rest position on
+    /// it) may snap: it is free, its projection lies in the polygon, and every tet around it
+    /// keeps a positive current volume, a rest volume at or above the floor and a radius ratio
+    /// at or above `min(MIN_RATIO, its ratio before)`.
+    fn snap_keeps_quality(
+        &self,
+        body: &SoftBody,
+        plane: &CutPlane<'_>,
+        v: u32,
+        d: f64,
+        moved_rest: DVec3,
+    ) -> bool {
+        let pos = |v: u32| body.positions()[v as usize].as_dvec3();
+        let tets = body.tets();
+        let target = pos(v) - d * plane.normal;
+        let free = body.inverse_masses()[v as usize] > 0.0;
+        free && plane.contains(target)
+            && self.node_tets[v as usize].iter().all(|&t| {
+                let tet = tets[t as usize];
+                let before = tet.map(|u| self.rest[u as usize]);
+                let after = tet.map(|u| {
+                    if u == v {
+                        moved_rest
+                    } else {
+                        self.rest[u as usize]
+                    }
+                });
+                let now = tet.map(|u| if u == v { target } else { pos(u) });
+                let vol = six_volume(after) / 6.0;
+                six_volume(now) > 0.0
+                    && vol >= self.volume_floor()
+                    && radius_ratio(after) >= MIN_RATIO.min(radius_ratio(before))
+            })
+    }
+
+    /// After snapping: the rest shapes of the `reshaped` tets (the snapped nodes' tets, with
+    /// repeats), the rest lengths of the snapped nodes' edges and their tets' nodes' masses.
+    fn reshape_snapped(
+        &mut self,
+        body: &mut SoftBody,
+        snapped: &[u32],
+        mut reshaped: Vec<u32>,
+    ) -> Result<(), SurgeryError> {
+        reshaped.sort_unstable();
+        reshaped.dedup();
+        for &t in &reshaped {
+            let tet = body.tets()[t as usize];
+            body.reshape_tet(t as usize, tet, tet.map(|u| self.rest[u as usize]))?;
+        }
+        let mut edges: Vec<[u32; 2]> = Vec::new();
+        for &v in snapped {
+            for &t in &self.node_tets[v as usize] {
+                for &u in &body.tets()[t as usize] {
+                    if u != v {
+                        edges.push(sorted2(u, v));
                     }
                 }
             }
-            edges.sort_unstable();
-            edges.dedup();
-            for e in edges {
-                if let Some(&c) = self.edge_constraint.get(&e) {
-                    let l = self.rest[e[0] as usize].distance(self.rest[e[1] as usize]);
-                    body.reset_distance_constraint(c as usize, e, l as f32)?;
-                }
-            }
-            self.rebuild_masses(body, &reshaped)?;
         }
-        near.sort_unstable();
-        let is_near = |v: u32| near.binary_search(&v).is_ok();
-        let sign = |v: u32| -> i8 {
-            let d = dist[v as usize];
-            if d > 0.0 {
-                1
-            } else if d < 0.0 {
-                -1
-            } else {
-                0
+        edges.sort_unstable();
+        edges.dedup();
+        for e in edges {
+            if let Some(&c) = self.edge_constraint.get(&e) {
+                let l = self.rest[e[0] as usize].distance(self.rest[e[1] as usize]);
+                body.reset_distance_constraint(c as usize, e, l as f32)?;
             }
-        };
-        // Tets at a node of a cut wall nearly parallel to the blade: the blade runs in or next
-        // to a gap already opened (the tissue moved a little since the sweep that cut it);
-        // splitting them again would shave a thin slab off the wall, and the slab, glued to
-        // both sides, would bridge the cut. They are not split: their faces open as where a
-        // split is refused, so the new wall steps onto the old one within one tet.
+        }
+        self.rebuild_masses(body, &reshaped)
+    }
+
+    /// Tets at a node of a cut wall nearly parallel to the blade (sorted): the blade runs in
+    /// or next to a gap already opened (the tissue moved a little since the sweep that cut
+    /// it); splitting them again would shave a thin slab off the wall, and the slab, glued to
+    /// both sides, would bridge the cut. They are not split: their faces open as where a split
+    /// is refused, so the new wall steps onto the old one within one tet.
+    fn blocked_by_walls(
+        &self,
+        body: &SoftBody,
+        plane: &CutPlane<'_>,
+        candidates: &[u32],
+    ) -> Vec<u32> {
+        let (o, n) = (plane.origin, plane.normal);
+        let pos = |v: u32| body.positions()[v as usize].as_dvec3();
         let mut blocked: Vec<u32> = Vec::new();
         let walls = candidates.iter().flat_map(|&t| {
             let bits = self.wall[t as usize];
@@ -375,7 +439,7 @@ impl Surgery {
                 .map(move |j| (t, j))
         });
         for (t, j) in walls {
-            let f = face_nodes(&body.tets()[t as usize], j as usize).map(|v| pos(body, v));
+            let f = face_nodes(&body.tets()[t as usize], j as usize).map(pos);
             let normal = (f[1] - f[0]).cross(f[2] - f[0]).normalize_or_zero();
             if normal.dot(n).abs() > WALL_PARALLEL {
                 blocked.push(t);
@@ -391,7 +455,36 @@ impl Surgery {
         }
         blocked.sort_unstable();
         blocked.dedup();
-        // 2. Crossing edges.
+        blocked
+    }
+
+    /// Step 2, the crossing edges of the `candidates`: each edge with ends strictly on both
+    /// sides (signs of `dist`), its crossing point inside the polygon (within [`FRONT_SNAP`] of
+    /// its length, or covered by an earlier sweep) and valid when neither end is `near`
+    /// (sorted). Then a tet whose centroid lies over the polygon is cut whole: its crossing
+    /// points outside the polygon count as inside (the cut's end snaps to the tet's far side),
+    /// so a body that moved between sweeps does not leave partly covered tets behind for good.
+    fn crossing_edges(
+        &self,
+        body: &SoftBody,
+        plane: &CutPlane<'_>,
+        candidates: &[u32],
+        dist: &[f64],
+        near: &[u32],
+    ) -> HashMap<[u32; 2], EdgeCut> {
+        let (o, n) = (plane.origin, plane.normal);
+        let pos = |v: u32| body.positions()[v as usize].as_dvec3();
+        let is_near = |v: u32| near.binary_search(&v).is_ok();
+        let sign = |v: u32| -> i8 {
+            let d = dist[v as usize];
+            if d > 0.0 {
+                1
+            } else if d < 0.0 {
+                -1
+            } else {
+                0
+            }
+        };
         let mut edges: HashMap<[u32; 2], EdgeCut> = HashMap::default();
         let mut crossed: Vec<u32> = Vec::new();
         for &t in candidates {
@@ -408,7 +501,7 @@ impl Surgery {
                     edges.entry(e).or_insert_with(|| {
                         let (d0, d1) = (dist[e[0] as usize], dist[e[1] as usize]);
                         let s = d0 / (d0 - d1);
-                        let (x0, x1) = (pos(body, e[0]), pos(body, e[1]));
+                        let (x0, x1) = (pos(e[0]), pos(e[1]));
                         let reach = FRONT_SNAP * x0.distance(x1);
                         let inside = plane.distance(x0 + (x1 - x0) * s) <= reach
                             || self
@@ -419,7 +512,7 @@ impl Surgery {
                             s,
                             inside,
                             valid: inside && !is_near(e[0]) && !is_near(e[1]),
-                            node: u32::MAX,
+                            node: None,
                         }
                     });
                 }
@@ -428,12 +521,9 @@ impl Surgery {
                 crossed.push(t);
             }
         }
-        // A tet whose centroid lies over the polygon is cut whole: its crossing points outside
-        // the polygon count as inside (the cut's end snaps to the tet's far side), so a body
-        // that moved between sweeps does not leave partly covered tets behind for good.
         for &t in &crossed {
             let tet = body.tets()[t as usize];
-            let c = tet.iter().map(|&v| pos(body, v)).sum::<DVec3>() * 0.25;
+            let c = tet.iter().map(|&v| pos(v)).sum::<DVec3>() * 0.25;
             if !plane.contains(c - n * n.dot(c - o)) {
                 continue;
             }
@@ -447,65 +537,104 @@ impl Surgery {
                 }
             }
         }
-        self.side = dist;
-        // 3. Split edges (valid ones), the tets around them bisected (see `bisect`); a tet
-        // whose pieces would fall below the quality bound or not tile it in rest space gives
-        // up its split edges, and the rest is planned again until nothing fails.
-        let first = body.node_count() as u32;
-        // The quality of a tet's pieces depends on which of its edges are split and on rest
-        // positions, not on the new nodes' numbers: tets are judged with a placeholder node
-        // per candidate edge (`u32::MAX − i`, never a node of the body), and after a round of
-        // failures only the tets around the edges given up are judged again. The numbers and
-        // the pieces are made once the plan holds.
+        edges
+    }
+
+    /// Steps 3–4, the plan: the valid crossing edges get new nodes, the tets around them are
+    /// judged until none fails the quality bound ([`Surgery::quality_rounds`]), the four-way
+    /// tips are planned on the result (module `tip`), and the pieces are made.
+    ///
+    /// The quality of a tet's pieces depends on which of its edges are split and on rest
+    /// positions, not on the new nodes' numbers: while judging, the new node of candidate edge
+    /// `i` is `NewNode(i)` (then the tips'); the final plan numbers only the edges kept.
+    fn plan_tets(
+        &mut self,
+        body: &SoftBody,
+        plane: &CutPlane<'_>,
+        edges: &mut HashMap<[u32; 2], EdgeCut>,
+        blocked: &[u32],
+    ) -> Result<SplitPlan, SurgeryError> {
         let mut candidate_edges: Vec<[u32; 2]> = edges
             .iter()
             .filter(|(_, c)| c.valid)
             .map(|(e, _)| *e)
             .collect();
         candidate_edges.sort_unstable();
-        let mut placeholder_rest: Vec<DVec3> = Vec::with_capacity(candidate_edges.len());
+        let mut candidate_rest: Vec<DVec3> = Vec::with_capacity(candidate_edges.len());
         for (i, e) in candidate_edges.iter().enumerate() {
             let c = edges.get_mut(e).ok_or(SurgeryError::Defect {
                 element: "edge",
                 index: e[0] as usize,
                 what: "split edge lost its record",
             })?;
-            c.node = u32::MAX - i as u32;
+            c.node = Some(NewNode(i as u32));
             let (r0, r1) = (self.rest[e[0] as usize], self.rest[e[1] as usize]);
-            placeholder_rest.push(r0 + (r1 - r0) * c.s);
+            candidate_rest.push(r0 + (r1 - r0) * c.s);
         }
-        let rest_of = |v: u32| -> DVec3 {
-            if v as usize >= self.rest.len() {
-                placeholder_rest[(u32::MAX - v) as usize]
-            } else {
-                self.rest[v as usize]
+        let mut affected =
+            self.quality_rounds(body, edges, &candidate_edges, &candidate_rest, blocked);
+        let tips = self.plan_four_way_tips(
+            body,
+            plane,
+            &mut affected,
+            edges,
+            &candidate_edges,
+            &candidate_rest,
+        );
+        self.final_plan(
+            body,
+            edges,
+            &candidate_edges,
+            &candidate_rest,
+            &affected,
+            tips,
+        )
+    }
+
+    /// The quality rounds of the plan: each tet around a candidate edge is bisected under the
+    /// valid edges (new nodes `NewNode(i)` for `candidate_edges[i]`, at `candidate_rest[i]`);
+    /// a tet whose pieces would fall below the bound or not tile it in rest space, that is at
+    /// [`MAX_SPLIT_DEPTH`] or `blocked`, gives up its split edges, and the tets around the edges
+    /// given up are judged again until none fails. Returns the tets still split (sorted).
+    fn quality_rounds(
+        &self,
+        body: &SoftBody,
+        edges: &mut HashMap<[u32; 2], EdgeCut>,
+        candidate_edges: &[[u32; 2]],
+        candidate_rest: &[DVec3],
+        blocked: &[u32],
+    ) -> Vec<u32> {
+        let rest_of = |v: NodeRef| -> DVec3 {
+            match v {
+                NodeRef::Body(v) => self.rest[v as usize],
+                NodeRef::New(NewNode(i)) => candidate_rest[i as usize],
             }
         };
-        let mut local: Vec<([u32; 2], u32)> = Vec::new();
-        let mut scratch: Vec<[u32; 4]> = Vec::new();
+        let mut local: Vec<([u32; 2], NodeRef)> = Vec::new();
+        let mut scratch: Vec<[NodeRef; 4]> = Vec::new();
         // Whether tet `t`'s pieces under the valid edges meet the bound; `local` is left with
         // its valid edges.
         let mut judge = |t: u32, edges: &HashMap<[u32; 2], EdgeCut>, local: &mut Vec<_>| {
             let tet = body.tets()[t as usize];
             split_edges_of(tet, edges, local);
             scratch.clear();
-            bisect(tet, local, &mut scratch);
-            self.pieces_meet_bound(tet, &scratch, rest_of)
+            bisect(tet.map(NodeRef::Body), local, &mut scratch);
+            self.pieces_meet_bound(tet.map(NodeRef::Body), &scratch, rest_of)
                 && (local.is_empty()
                     || (self.depth[t as usize] < MAX_SPLIT_DEPTH
                         && blocked.binary_search(&t).is_err()))
         };
-        let mut affected = self.tets_around_edges(body.tets(), &candidate_edges);
+        let mut affected = self.tets_around_edges(body.tets(), candidate_edges);
         let mut to_judge = affected.clone();
         loop {
             let mut failed: Vec<[u32; 2]> = Vec::new();
             for &t in &to_judge {
-                if !judge(t, &edges, &mut local) {
+                if !judge(t, edges, &mut local) {
                     failed.extend(local.iter().map(|l| l.0));
                 }
             }
             if failed.is_empty() {
-                break;
+                return affected;
             }
             failed.sort_unstable();
             failed.dedup();
@@ -517,95 +646,80 @@ impl Surgery {
             // Judged again: the tets around the edges given up that still split an edge.
             to_judge = self.tets_around_edges(body.tets(), &failed);
             let mut has_valid = |t: u32| {
-                split_edges_of(body.tets()[t as usize], &edges, &mut local);
+                split_edges_of(body.tets()[t as usize], edges, &mut local);
                 !local.is_empty()
             };
             to_judge.retain(|&t| has_valid(t));
             affected.retain(|&t| has_valid(t));
         }
-        // 4. The four-way tips (module `tip`): triangles where the polygon's boundary crosses
-        // the surface, their far crossing edge dropped and the tip planned inside them.
-        let tips = self.plan_four_way_tips(
-            body,
-            plane,
-            &mut affected,
-            &mut edges,
-            &candidate_edges,
-            &placeholder_rest,
-        );
-        // The plan: new nodes numbered in the order of the split edges, then the tips, each
-        // affected tet's pieces with them.
-        let mut order: Vec<[u32; 2]> = Vec::new();
-        let mut new_rest: Vec<DVec3> = Vec::new();
+    }
+
+    /// The plan once the edges and tips hold: the split edges still valid get their new nodes
+    /// in order (`NewNode(0..)`), the tips' points after them, and each `affected` tet its
+    /// pieces (a four-way tip's piece on `A E C` split at its point, module `tip`).
+    fn final_plan(
+        &self,
+        body: &SoftBody,
+        edges: &mut HashMap<[u32; 2], EdgeCut>,
+        candidate_edges: &[[u32; 2]],
+        candidate_rest: &[DVec3],
+        affected: &[u32],
+        tips: Vec<FourWayTip>,
+    ) -> Result<SplitPlan, SurgeryError> {
+        let mut plan = SplitPlan::default();
         for (i, e) in candidate_edges.iter().enumerate() {
             if let Some(c) = edges.get_mut(e).filter(|c| c.valid) {
-                c.node = first + order.len() as u32;
-                order.push(*e);
-                new_rest.push(placeholder_rest[i]);
+                c.node = Some(NewNode(plan.edges.len() as u32));
+                plan.edges.push(SplitEdge { ends: *e, s: c.s });
+                plan.new_rest.push(candidate_rest[i]);
             }
         }
-        let first_tip = first + order.len() as u32;
-        let points: Vec<FacePoint> = tips.iter().map(|tip| tip.point).collect();
-        for p in &points {
-            new_rest.push(
-                (0..3)
-                    .map(|k| self.rest[p.nodes[k] as usize] * p.weights[k])
-                    .sum(),
-            );
+        for tip in &tips {
+            plan.new_rest.push(tip.point.rest(&self.rest));
         }
-        let mut pieces: Vec<[u32; 4]> = Vec::new();
-        let mut plan: Vec<(u32, std::ops::Range<usize>)> = Vec::with_capacity(affected.len());
-        for &t in &affected {
+        plan.tips = tips;
+        plan.tets.reserve(affected.len());
+        let mut local: Vec<([u32; 2], NodeRef)> = Vec::new();
+        for &t in affected {
             let tet = body.tets()[t as usize];
-            split_edges_of(tet, &edges, &mut local);
-            let start = pieces.len();
-            bisect(tet, &local, &mut pieces);
-            for (k, tip) in tips.iter().enumerate().filter(|(_, tip)| tip.tet == t) {
-                let e = edges.get(&tip.ab).map_or(u32::MAX, |c| c.node);
-                let mut own = pieces.split_off(start);
-                if split_face(&mut own, [tip.a, e, tip.c], first_tip + k as u32).is_none() {
+            split_edges_of(tet, edges, &mut local);
+            let start = plan.pieces.len();
+            bisect(tet.map(NodeRef::Body), &local, &mut plan.pieces);
+            for (k, tip) in plan.tips.iter().enumerate().filter(|(_, tip)| tip.tet == t) {
+                let e = edges.get(&tip.ab).filter(|c| c.valid).and_then(|c| c.node);
+                let mut own = plan.pieces.split_off(start);
+                let face = e.map(|e| [tip.a.into(), e.into(), tip.c.into()]);
+                let p = NodeRef::New(plan.tip_node(k));
+                if face.and_then(|f| split_face(&mut own, f, p)).is_none() {
                     return Err(SurgeryError::Defect {
                         element: "tet",
                         index: t as usize,
                         what: "a four-way tip's face is in none of its pieces",
                     });
                 }
-                pieces.append(&mut own);
+                plan.pieces.append(&mut own);
             }
-            plan.push((t, start..pieces.len()));
+            plan.tets.push(TetSplit {
+                tet: t,
+                pieces: start..plan.pieces.len(),
+            });
         }
-        out.four_way = first_tip..first_tip + points.len() as u32;
-        // Crossing points this sweep covered on edges it did not split: a later sweep in about
-        // the same place finds them covered (a cut continued over many steps).
+        Ok(plan)
+    }
+
+    /// Crossing points this sweep covered on edges it did not split: a later sweep in about
+    /// the same place finds them covered (a cut continued over many steps).
+    fn remember_covered(&mut self, edges: &HashMap<[u32; 2], EdgeCut>) {
         if self.covered.len() > COVERED_CAP {
             self.covered.clear();
         }
-        for (e, c) in &edges {
+        for (e, c) in edges {
             if c.inside && !c.valid {
                 self.covered.insert(*e, c.s);
             } else if c.valid {
                 self.covered.remove(e);
             }
         }
-        let outside: Vec<[u32; 2]> = edges
-            .iter()
-            .filter(|(_, c)| !c.inside)
-            .map(|(e, _)| *e)
-            .collect();
-        if !plan.is_empty() {
-            self.apply_split(
-                body, &edges, &order, &new_rest, &points, &plan, &pieces, &mut out,
-            )?;
-        }
-        for (k, tip) in tips.iter().enumerate() {
-            let e = edges.get(&tip.ab).map_or(u32::MAX, |c| c.node);
-            self.open_tip_wall(body, tip, e, first_tip + k as u32);
-        }
-        // The tips on the surface (module `tip`): the edges beyond them join the front.
-        let beyond = self.split_tips(body, plane, candidates, &mut out)?;
-        // The front: tets (after the split) on a crossing edge outside the polygon.
-        out.front = self.tets_around_edges(body.tets(), &[outside, beyond].concat());
-        Ok(out)
     }
 
     /// Smallest rest volume a cut may create (cm³): [`MIN_VOLUME_FRACTION`] of the input's.
@@ -622,11 +736,11 @@ impl Surgery {
     /// Whether the `pieces` of `tet` (rest corners by `rest_of`) meet a split's bound: each
     /// piece's rest volume ≥ [`Surgery::piece_floor`] and radius ratio ≥ [`MIN_RATIO`], and
     /// together they tile the tet in rest space (volumes summing to its own within 10⁻⁹).
-    pub(crate) fn pieces_meet_bound(
+    pub(crate) fn pieces_meet_bound<N: Copy>(
         &self,
-        tet: [u32; 4],
-        pieces: &[[u32; 4]],
-        rest_of: impl Fn(u32) -> DVec3,
+        tet: [N; 4],
+        pieces: &[[N; 4]],
+        rest_of: impl Fn(N) -> DVec3,
     ) -> bool {
         let parent = six_volume(tet.map(&rest_of));
         let mut sum = 0.0;
@@ -681,291 +795,6 @@ impl Surgery {
         }
         Ok(())
     }
-
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn apply_split(
-        &mut self,
-        body: &mut SoftBody,
-        edges: &HashMap<[u32; 2], EdgeCut>,
-        order: &[[u32; 2]],
-        new_rest: &[DVec3],
-        points: &[FacePoint],
-        plan: &[(u32, std::ops::Range<usize>)],
-        pieces: &[[u32; 4]],
-        out: &mut SplitOutcome,
-    ) -> Result<(), SurgeryError> {
-        // New nodes, one per split edge and then one per face point, copied from a free
-        // support node (so a pinned one does not pin it), then interpolated.
-        let w = body.inverse_masses();
-        let free_of = |nodes: &[u32]| {
-            nodes
-                .iter()
-                .copied()
-                .find(|&v| w[v as usize] > 0.0)
-                .unwrap_or(nodes[0])
-        };
-        let sources: Vec<u32> = order
-            .iter()
-            .map(|e| free_of(e))
-            .chain(points.iter().map(|p| free_of(&p.nodes)))
-            .collect();
-        let first = body.duplicate_nodes(&sources)?;
-        // Each new node as a weighted sum of existing nodes.
-        let weighted: Vec<([u32; 3], [f64; 3])> = order
-            .iter()
-            .map(|e| {
-                let s = edges[e].s;
-                ([e[0], e[1], e[1]], [1.0 - s, s, 0.0])
-            })
-            .chain(points.iter().map(|p| (p.nodes, p.weights)))
-            .collect();
-        for (k, (nodes, weights)) in weighted.iter().enumerate() {
-            let v = first + k as u32;
-            // Edge nodes as `a + (b − a) s` in `f32`; face points as the weighted sum in `f64`.
-            let sum = |field: &[glam::Vec3A]| {
-                if k < order.len() {
-                    let (a, b) = (field[nodes[0] as usize], field[nodes[1] as usize]);
-                    return Vec3::from(a + (b - a) * weights[1] as f32);
-                }
-                let mut acc = DVec3::ZERO;
-                for (&u, &wu) in nodes.iter().zip(weights) {
-                    acc += field[u as usize].as_dvec3() * wu;
-                }
-                acc.as_vec3()
-            };
-            let (x, p, vel) = (
-                sum(body.positions()),
-                sum(body.previous_positions()),
-                sum(body.velocities()),
-            );
-            body.set_node_state(v, x, p, vel)?;
-            body.set_rest_position(v, new_rest[k].as_vec3())?;
-            self.rest.push(new_rest[k]);
-            self.origin.push(v);
-            let reach = nodes
-                .iter()
-                .map(|&u| self.node_reach[u as usize])
-                .fold(0.0f32, f32::max);
-            self.node_reach.push(reach);
-            self.node_tets.push(Vec::new());
-        }
-        out.first_node = first;
-        out.end_node = first + weighted.len() as u32;
-        // The existing nodes a new node lies between (on their edge or triangle).
-        let support_of =
-            |v: u32| -> Option<[u32; 3]> { (v >= first).then(|| weighted[(v - first) as usize].0) };
-        // Templates for new distance constraints: a constraint of each split tet's edges.
-        let template = |s: &Self, body: &SoftBody, tet: [u32; 4]| -> Option<DistanceConstraint> {
-            (0..4)
-                .flat_map(|a| (a + 1..4).map(move |b| (a, b)))
-                .find_map(|(a, b)| s.edge_constraint.get(&sorted2(tet[a], tet[b])))
-                .map(|&c| body.distance_constraints()[c as usize])
-        };
-        // Tets: the record of the split tet keeps the first piece, the others are appended.
-        let old_tets: Vec<[u32; 4]> = plan.iter().map(|(t, _)| body.tets()[*t as usize]).collect();
-        let old_neighbours: Vec<[u32; 4]> = plan
-            .iter()
-            .map(|(t, _)| self.neighbours[*t as usize])
-            .collect();
-        let templates: Vec<Option<DistanceConstraint>> =
-            old_tets.iter().map(|&t| template(self, body, t)).collect();
-        out.first_tet = body.tets().len() as u32;
-        // (piece tet index, parent position in plan)
-        let mut made: Vec<(u32, usize)> = Vec::with_capacity(pieces.len());
-        for (k, (t, range)) in plan.iter().enumerate() {
-            for (i, p) in pieces[range.clone()].iter().enumerate() {
-                let rest = p.map(|v| self.rest[v as usize]);
-                let idx = if i == 0 {
-                    body.reshape_tet(*t as usize, *p, rest)?;
-                    *t
-                } else {
-                    body.add_tet(*t as usize, *p, rest)? as u32
-                };
-                made.push((idx, k));
-            }
-            out.split.push(*t);
-        }
-        out.end_tet = body.tets().len() as u32;
-        let added = (out.end_tet - out.first_tet) as usize;
-        self.neighbours
-            .extend(std::iter::repeat_n([NO_TET; 4], added));
-        self.tet_mark.extend(std::iter::repeat_n(0, added));
-        for &(idx, k) in &made {
-            if idx >= out.first_tet {
-                let c = self.tet_component[plan[k].0 as usize];
-                self.tet_component.push(c);
-            }
-        }
-        // Node → tets.
-        for (k, (t, _)) in plan.iter().enumerate() {
-            for &v in &old_tets[k] {
-                self.node_tets[v as usize].retain(|u| u != t);
-            }
-        }
-        for &(idx, _) in &made {
-            for &v in &body.tets()[idx as usize] {
-                self.node_tets[v as usize].push(idx);
-            }
-        }
-        // Adjacency: pieces of one tet, or of two tets that were neighbours, sharing a face;
-        // whole neighbours across an unsplit face.
-        let parent_of: HashMap<u32, usize> =
-            plan.iter().enumerate().map(|(k, (t, _))| (*t, k)).collect();
-        let mut faces: HashMap<[u32; 3], (u32, u8, u32)> = HashMap::default();
-        let mut link = |s: &mut Self, key: [u32; 3], me: (u32, u8, u32)| match faces.remove(&key) {
-            Some((u, k, pu)) => {
-                let legit =
-                    pu == me.2 || old_neighbours_contains(&old_neighbours, &parent_of, me.2, pu);
-                if legit {
-                    s.neighbours[me.0 as usize][me.1 as usize] = u;
-                    s.neighbours[u as usize][k as usize] = me.0;
-                }
-            }
-            None => {
-                faces.insert(key, me);
-            }
-        };
-        for &(idx, k) in &made {
-            self.neighbours[idx as usize] = [NO_TET; 4];
-            let tet = body.tets()[idx as usize];
-            for j in 0..4 {
-                let mut key = face_nodes(&tet, j);
-                key.sort_unstable();
-                link(self, key, (idx, j as u8, plan[k].0));
-            }
-        }
-        for (k, nb) in old_neighbours.iter().enumerate() {
-            for &u in nb {
-                if u == NO_TET || parent_of.contains_key(&u) {
-                    continue;
-                }
-                let tet = body.tets()[u as usize];
-                for j in 0..4 {
-                    if self.neighbours[u as usize][j] == plan[k].0 {
-                        self.neighbours[u as usize][j] = NO_TET;
-                        let mut key = face_nodes(&tet, j);
-                        key.sort_unstable();
-                        link(self, key, (u, j as u8, u));
-                    }
-                }
-            }
-        }
-        // Which face of its parent a piece's face lies on.
-        let on_parent_face = |parent: [u32; 4], f: [u32; 3]| -> Option<usize> {
-            let mut support = [false; 4];
-            for v in f {
-                let ends = support_of(v).unwrap_or([v, v, v]);
-                for e in ends {
-                    let i = parent.iter().position(|&p| p == e)?;
-                    support[i] = true;
-                }
-            }
-            let missing: Vec<usize> = (0..4).filter(|&i| !support[i]).collect();
-            (missing.len() == 1).then(|| missing[0])
-        };
-        // Cut walls and the surface: faces of pieces on a boundary face of their parent.
-        // The split tets' wall bits, before their records (now their first pieces) lose them.
-        let parent_wall: Vec<u8> = plan.iter().map(|(t, _)| self.wall[*t as usize]).collect();
-        self.wall.resize(body.tets().len(), 0);
-        if parent_wall.iter().any(|&b| b != 0) {
-            for (t, _) in plan {
-                self.wall[*t as usize] = 0;
-            }
-            let wall = &self.wall;
-            self.cut_faces
-                .retain(|&(t, j)| wall[t as usize] >> j & 1 == 1);
-        }
-        let split_set = |t: u32| parent_of.contains_key(&t);
-        let mut surface: HashMap<(usize, usize), Vec<[u32; 3]>> = HashMap::default();
-        for &(idx, k) in &made {
-            let tet = body.tets()[idx as usize];
-            for j in 0..4 {
-                if self.neighbours[idx as usize][j] != NO_TET {
-                    continue;
-                }
-                let f = face_nodes(&tet, j);
-                if let Some(pj) = on_parent_face(old_tets[k], f) {
-                    if old_neighbours[k][pj] == NO_TET {
-                        if parent_wall[k] >> pj & 1 == 1 {
-                            self.cut_faces.push((idx, j as u8));
-                            self.wall[idx as usize] |= 1 << j;
-                        }
-                        surface.entry((k, pj)).or_default().push(f);
-                    }
-                }
-            }
-        }
-        let mut keys: Vec<(usize, usize)> = surface.keys().copied().collect();
-        keys.sort_unstable();
-        for key in keys {
-            if let Some(p) = surface.remove(&key) {
-                if p.len() > 1 {
-                    out.surface.push(SplitTriangle {
-                        original: face_nodes(&old_tets[key.0], key.1),
-                        pieces: p,
-                    });
-                }
-            }
-        }
-        self.pending
-            .retain(|p| !split_set(p[0]) && !split_set(p[2]));
-        // Distance constraints: a split edge's moves onto its first half, new edges get one.
-        for (k, e) in order.iter().enumerate() {
-            let m = first + k as u32;
-            if let Some(c) = self.edge_constraint.remove(e) {
-                let l = self.rest[e[0] as usize].distance(self.rest[m as usize]);
-                body.reset_distance_constraint(c as usize, [e[0], m], l as f32)?;
-                self.edge_constraint.insert(sorted2(e[0], m), c);
-            }
-        }
-        for &(idx, k) in &made {
-            let Some(record) = templates[k] else {
-                continue;
-            };
-            let tet = body.tets()[idx as usize];
-            for a in 0..4 {
-                for b in a + 1..4 {
-                    let e = sorted2(tet[a], tet[b]);
-                    if self.edge_constraint.contains_key(&e) {
-                        continue;
-                    }
-                    let l = self.rest[e[0] as usize].distance(self.rest[e[1] as usize]);
-                    let c = body.add_distance_constraint(DistanceConstraint {
-                        nodes: e,
-                        rest_length: l as f32,
-                        ..record
-                    })?;
-                    self.edge_constraint.insert(e, c as u32);
-                }
-            }
-        }
-        let touched: Vec<u32> = made.iter().map(|m| m.0).collect();
-        self.rebuild_masses(body, &touched)?;
-        let parent_depth: Vec<u8> = plan.iter().map(|(t, _)| self.depth[*t as usize]).collect();
-        self.depth.resize(body.tets().len(), 0);
-        for &(idx, k) in &made {
-            self.depth[idx as usize] = parent_depth[k].saturating_add(1);
-        }
-        tracing::debug!(
-            split = plan.len(),
-            pieces = pieces.len(),
-            nodes = order.len(),
-            snapped = out.snapped.len(),
-            "tets split"
-        );
-        Ok(())
-    }
-}
-
-/// Whether split tets `a` and `b` (by index) were face neighbours before the split.
-fn old_neighbours_contains(
-    old: &[[u32; 4]],
-    parent_of: &HashMap<u32, usize>,
-    a: u32,
-    b: u32,
-) -> bool {
-    parent_of.get(&a).is_some_and(|&k| old[k].contains(&b))
-        || parent_of.get(&b).is_some_and(|&k| old[k].contains(&a))
 }
 
 #[cfg(test)]

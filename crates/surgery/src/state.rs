@@ -8,6 +8,7 @@ use tissue_mesh::{NO_TET, TET_FACES};
 use tissue_pbd::{ConstraintSlot, SoftBody};
 
 use crate::geometry::radius_ratio;
+use crate::workspace::CutScratch;
 use crate::{SurgeryError, SurgerySettings};
 
 /// A suture: a link constraint between two nodes on the two sides of a wound.
@@ -50,7 +51,7 @@ pub struct Surgery {
     pub(crate) wall: Vec<u8>,
     /// Faces crossed by the blade but kept glued (they would have made the surface
     /// non-manifold at the cut's front): (tet, face, neighbour, its face), retried next cut.
-    pub(crate) pending: Vec<[u32; 4]>,
+    pub(crate) pending: Vec<FacePair>,
     pub(crate) sutures: Vec<Option<Suture>>,
     /// Piece label of each tet (see [`Surgery::tet_components`]).
     pub(crate) tet_component: Vec<u32>,
@@ -72,32 +73,19 @@ pub struct Surgery {
     /// Crossing points (parameter from the smaller node) of edges that a sweep covered but
     /// could not split yet, by sorted edge: a later sweep counts them as inside its polygon.
     pub(crate) covered: HashMap<[u32; 2], f64>,
-    /// Scratch marks per tet and node (stamped with `stamp`), reused by every cut.
-    pub(crate) tet_mark: Vec<u32>,
-    pub(crate) stamp: u32,
-    /// Scratch: each node's signed distance from the current blade's plane (cm).
-    pub(crate) side: Vec<f64>,
-    /// Scratch of the straddling search: the tets of the nodes near the plane, their nodes.
-    pub(crate) near_tets: Vec<u32>,
-    pub(crate) near_nodes: Vec<[u32; 4]>,
-    /// Scratch marks per tet for the crumb searches, stamped with `group_stamp`.
-    pub(crate) group_mark: Vec<u32>,
-    pub(crate) group_stamp: u32,
-    /// Scratch of the manifold guard: per node, its entry in the split plan (`u32::MAX` when
-    /// it has none; reset after each use).
-    pub(crate) plan_entry: Vec<u32>,
-    /// Scratch of a node's split plan: per tet, its index in the node's star (stale for
-    /// other tets).
-    pub(crate) star_slot: Vec<u32>,
-    /// Scratch of the manifold guard: per tet, all `false` between uses.
-    pub(crate) tet_seen: Vec<bool>,
-    /// Scratch of the connectivity proof after a cut (`Surgery::still_connected`): per tet,
-    /// the search that found it and the side that reached it, stamped from `search_stamp`.
-    pub(crate) found_by: Vec<u32>,
-    pub(crate) search_side: Vec<u32>,
-    pub(crate) search_stamp: u32,
+    /// The cut pipeline's scratch buffers (module `workspace`): no state between cuts.
+    pub(crate) scratch: CutScratch,
     /// How the cuts so far ended on the surface (see [`Surgery::tip_counts`]).
     pub(crate) tip_counts: crate::TipCounts,
+}
+
+/// An interior face seen from both sides: face `j` of tet `t` against face `k` of tet `u`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct FacePair {
+    pub t: u32,
+    pub j: u8,
+    pub u: u32,
+    pub k: u8,
 }
 
 /// The face of tet `t` opposite local node `j`, wound outward.
@@ -110,6 +98,48 @@ fn sorted3(mut f: [u32; 3]) -> [u32; 3] {
     f
 }
 
+/// Tet adjacency across faces (`NO_TET` on the boundary) of `tets`, by matching faces.
+fn face_adjacency(tets: &[[u32; 4]]) -> Vec<[u32; 4]> {
+    let mut faces: HashMap<[u32; 3], (u32, u8)> =
+        HashMap::with_capacity_and_hasher(tets.len() * 2, Default::default());
+    let mut neighbours = vec![[NO_TET; 4]; tets.len()];
+    for (t, tet) in tets.iter().enumerate() {
+        for j in 0..4 {
+            let key = sorted3(face_nodes(tet, j));
+            if let Some((u, k)) = faces.remove(&key) {
+                neighbours[t][j] = u;
+                neighbours[u as usize][k as usize] = t as u32;
+            } else {
+                faces.insert(key, (t as u32, j as u8));
+            }
+        }
+    }
+    neighbours
+}
+
+/// Per node, 1.5 × its longest edge (current positions), and the smallest radius ratio of
+/// the body's tets.
+fn reach_and_quality(body: &SoftBody) -> (Vec<f32>, f64) {
+    let x = body.positions();
+    let tets = body.tets();
+    let mut node_reach = vec![0.0f32; body.node_count()];
+    let mut min_ratio = f64::INFINITY;
+    for tet in tets {
+        let p = tet.map(|i| x[i as usize].as_dvec3());
+        for a in 0..4 {
+            for b in a + 1..4 {
+                let l = p[a].distance(p[b]) as f32;
+                for k in [a, b] {
+                    let r = &mut node_reach[tet[k] as usize];
+                    *r = r.max(1.5 * l);
+                }
+            }
+        }
+        min_ratio = min_ratio.min(radius_ratio(p));
+    }
+    (node_reach, min_ratio)
+}
+
 impl Surgery {
     /// The state for `body` as it is (uncut, or as built): face adjacency, edges, quality.
     ///
@@ -119,20 +149,7 @@ impl Surgery {
         settings.validate()?;
         let tets = body.tets();
         let n = body.node_count();
-        let mut faces: HashMap<[u32; 3], (u32, u8)> =
-            HashMap::with_capacity_and_hasher(tets.len() * 2, Default::default());
-        let mut neighbours = vec![[NO_TET; 4]; tets.len()];
-        for (t, tet) in tets.iter().enumerate() {
-            for j in 0..4 {
-                let key = sorted3(face_nodes(tet, j));
-                if let Some((u, k)) = faces.remove(&key) {
-                    neighbours[t][j] = u;
-                    neighbours[u as usize][k as usize] = t as u32;
-                } else {
-                    faces.insert(key, (t as u32, j as u8));
-                }
-            }
-        }
+        let neighbours = face_adjacency(tets);
         let mut node_tets = vec![Vec::new(); n];
         for (t, tet) in tets.iter().enumerate() {
             for &v in tet {
@@ -149,22 +166,7 @@ impl Surgery {
                 edge_constraint.insert([a.min(b), a.max(b)], c as u32);
             }
         }
-        let x = body.positions();
-        let mut node_reach = vec![0.0f32; n];
-        let mut min_ratio = f64::INFINITY;
-        for tet in tets {
-            let p = tet.map(|i| x[i as usize].as_dvec3());
-            for a in 0..4 {
-                for b in a + 1..4 {
-                    let l = p[a].distance(p[b]) as f32;
-                    for k in [a, b] {
-                        let r = &mut node_reach[tet[k] as usize];
-                        *r = r.max(1.5 * l);
-                    }
-                }
-            }
-            min_ratio = min_ratio.min(radius_ratio(p));
-        }
+        let (node_reach, min_ratio) = reach_and_quality(body);
         let min_rest_volume = body
             .tet_rest_volumes()
             .iter()
@@ -194,19 +196,7 @@ impl Surgery {
                 v.get(v.len() / 2).copied().unwrap_or(0.0) as f64
             },
             covered: HashMap::default(),
-            tet_mark: vec![0; tets.len()],
-            stamp: 0,
-            side: Vec::new(),
-            near_tets: Vec::new(),
-            near_nodes: Vec::new(),
-            group_mark: Vec::new(),
-            group_stamp: 0,
-            plan_entry: Vec::new(),
-            star_slot: Vec::new(),
-            tet_seen: Vec::new(),
-            found_by: Vec::new(),
-            search_side: Vec::new(),
-            search_stamp: 0,
+            scratch: CutScratch::new(tets.len()),
             tip_counts: crate::TipCounts::default(),
         };
         s.count_components(body);
@@ -364,14 +354,17 @@ impl Surgery {
     /// [`SurgeryError::Defect`] naming the first defect found, or a body mismatch.
     pub fn validate(&self, body: &SoftBody) -> Result<(), SurgeryError> {
         self.check_body(body)?;
+        self.check_adjacency(body)?;
+        self.check_node_lists(body)?;
+        self.check_boundary(body)?;
+        self.check_tets(body)?;
+        self.check_pieces(body)?;
+        self.check_constraints(body)
+    }
+
+    /// [`Surgery::validate`]: adjacency symmetric, neighbours sharing the face's nodes.
+    fn check_adjacency(&self, body: &SoftBody) -> Result<(), SurgeryError> {
         let tets = body.tets();
-        let defect = |element, index: usize, what| {
-            Err(SurgeryError::Defect {
-                element,
-                index,
-                what,
-            })
-        };
         for (t, nb) in self.neighbours.iter().enumerate() {
             for (j, &u) in nb.iter().enumerate() {
                 if u == NO_TET {
@@ -388,6 +381,12 @@ impl Surgery {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// [`Surgery::validate`]: node → tet lists right and complete, per-node arrays alike.
+    fn check_node_lists(&self, body: &SoftBody) -> Result<(), SurgeryError> {
+        let tets = body.tets();
         for (v, list) in self.node_tets.iter().enumerate() {
             if list
                 .iter()
@@ -409,7 +408,12 @@ impl Surgery {
         if self.node_tets.iter().map(Vec::len).sum::<usize>() != 4 * tets.len() {
             return defect("node", 0, "node → tet lists miss tets");
         }
-        // Boundary: directed edges must pair up exactly.
+        Ok(())
+    }
+
+    /// [`Surgery::validate`]: the boundary's directed edges pair up exactly, no double face,
+    /// and the boundary faces around each vertex make one fan.
+    fn check_boundary(&self, body: &SoftBody) -> Result<(), SurgeryError> {
         let faces = self.boundary_faces(body);
         let mut directed: HashMap<[u32; 2], u32> =
             HashMap::with_capacity_and_hasher(faces.len() * 3, Default::default());
@@ -459,9 +463,14 @@ impl Surgery {
                 "boundary faces around the vertex do not form one fan (pinched)",
             );
         }
+        Ok(())
+    }
+
+    /// [`Surgery::validate`]: every tet at or above the quality bound, with finite nodes.
+    fn check_tets(&self, body: &SoftBody) -> Result<(), SurgeryError> {
         let x = body.positions();
         let rest = body.tet_rest_volumes();
-        for (t, tet) in tets.iter().enumerate() {
+        for (t, tet) in body.tets().iter().enumerate() {
             if (rest[t] as f64) < self.volume_floor() {
                 return defect("tet", t, "rest volume below the quality bound");
             }
@@ -474,7 +483,12 @@ impl Surgery {
                 return defect("tet", t, "non-finite node position");
             }
         }
-        // Pieces: tets sharing a node carry one label, and there are as many labels as pieces.
+        Ok(())
+    }
+
+    /// [`Surgery::validate`]: tets sharing a node carry one label, and there are as many
+    /// labels as pieces.
+    fn check_pieces(&self, body: &SoftBody) -> Result<(), SurgeryError> {
         for (v, list) in self.node_tets.iter().enumerate() {
             if let Some(&first) = list.first() {
                 let l = self.tet_component[first as usize];
@@ -498,6 +512,11 @@ impl Surgery {
                 "the piece count is wrong (index: actual × 1000 + counted)",
             );
         }
+        Ok(())
+    }
+
+    /// [`Surgery::validate`]: every edge's distance constraint live and on its edge.
+    fn check_constraints(&self, body: &SoftBody) -> Result<(), SurgeryError> {
         for (&[a, b], &c) in &self.edge_constraint {
             let d = body.distance_constraints()[c as usize];
             let [p, q] = d.nodes;
@@ -513,6 +532,15 @@ impl Surgery {
         }
         Ok(())
     }
+}
+
+/// A [`SurgeryError::Defect`] found by [`Surgery::validate`].
+fn defect(element: &'static str, index: usize, what: &'static str) -> Result<(), SurgeryError> {
+    Err(SurgeryError::Defect {
+        element,
+        index,
+        what,
+    })
 }
 
 /// The vertices of `around` — (vertex, link edge `(b, c)`), one entry per boundary face at

@@ -9,6 +9,32 @@ use crate::geometry::segment_triangle;
 use crate::state::face_nodes;
 use crate::{Surgery, SurgeryError, SurgeryEvent, Suture};
 
+/// Where the needle's axis crosses a boundary face: its parameter along the axis, whether it
+/// leaves the body there, the face's nodes and the crossing point.
+struct Crossing {
+    s: f64,
+    leaving: bool,
+    face: [u32; 3],
+    point: DVec3,
+}
+
+/// The closest pair of distinct nodes, one from each crossed face, to the two crossings (the
+/// faces may share a node at the wound's end).
+fn wound_nodes(body: &SoftBody, near: &Crossing, far: &Crossing) -> Option<[u32; 2]> {
+    let x = body.positions();
+    let dist = |n: u32, at: DVec3| x[n as usize].as_dvec3().distance(at);
+    let mut best: Option<(f64, u32, u32)> = None;
+    for &a in &near.face {
+        for &b in &far.face {
+            let d = dist(a, near.point) + dist(b, far.point);
+            if a != b && best.is_none_or(|(e, _, _)| d < e) {
+                best = Some((d, a, b));
+            }
+        }
+    }
+    best.map(|(_, a, b)| [a, b])
+}
+
 impl Surgery {
     /// Places a suture where a needle ([`ToolShape::Capsule`] at `pose`, its axis `a → b`) passes
     /// through the body: along the axis, the first boundary face where it leaves the body and
@@ -57,13 +83,39 @@ impl Surgery {
                 reason: "the needle's ends must be finite",
             });
         }
-        let (p, q) = (from.as_dvec3(), to.as_dvec3());
+        let hits = self.needle_crossings(body, from.as_dvec3(), to.as_dvec3());
+        // The wound: the needle leaves the body through one wall and enters it again through
+        // the other. Walls that were pressed into each other (nothing keeps a wound's walls
+        // apart: there is no self-collision) are crossed the other way round, into the far
+        // wall before out of the near one; that overlap is the wound too.
+        let Some(w) = hits
+            .windows(2)
+            .find(|w| w[0].leaving && !w[1].leaving)
+            .or_else(|| hits.windows(2).find(|w| !w[0].leaving && w[1].leaving))
+        else {
+            return Ok(None);
+        };
+        let Some([na, nb]) = wound_nodes(body, &w[0], &w[1]) else {
+            return Ok(None);
+        };
+        if self
+            .sutures
+            .iter()
+            .flatten()
+            .any(|s| s.nodes == [na, nb] || s.nodes == [nb, na])
+        {
+            return Ok(None);
+        }
+        self.place_suture(body, [na, nb]).map(Some)
+    }
+
+    /// The boundary faces the needle's axis `p → q` crosses, in order along it.
+    fn needle_crossings(&self, body: &SoftBody, p: DVec3, q: DVec3) -> Vec<Crossing> {
         let d = q - p;
         let x = body.positions();
         let tets = body.tets();
         let (lo, hi) = (p.min(q), p.max(q));
-        // Crossings of boundary faces: (t along the needle, leaving?, face nodes, point).
-        let mut hits: Vec<(f64, bool, [u32; 3], DVec3)> = Vec::new();
+        let mut hits: Vec<Crossing> = Vec::new();
         for (t, nb) in self.neighbours.iter().enumerate() {
             for (j, &u) in nb.iter().enumerate() {
                 if u != NO_TET {
@@ -77,53 +129,36 @@ impl Surgery {
                 }
                 if let Some(s) = segment_triangle(p, q, c) {
                     let normal = (c[1] - c[0]).cross(c[2] - c[0]);
-                    hits.push((s, normal.dot(d) > 0.0, f, p + s * d));
+                    hits.push(Crossing {
+                        s,
+                        leaving: normal.dot(d) > 0.0,
+                        face: f,
+                        point: p + s * d,
+                    });
                 }
             }
         }
-        hits.sort_by(|a, b| a.0.total_cmp(&b.0));
-        // The wound: the needle leaves the body through one wall and enters it again through
-        // the other. Walls that were pressed into each other (nothing keeps a wound's walls
-        // apart: there is no self-collision) are crossed the other way round, into the far
-        // wall before out of the near one; that overlap is the wound too.
-        let Some(w) = hits
-            .windows(2)
-            .find(|w| w[0].1 && !w[1].1)
-            .or_else(|| hits.windows(2).find(|w| !w[0].1 && w[1].1))
-        else {
-            return Ok(None);
-        };
-        // The closest pair of distinct nodes, one from each face, to the two crossings (the
-        // faces may share a node at the wound's end).
-        let dist = |n: u32, at: DVec3| x[n as usize].as_dvec3().distance(at);
-        let mut best: Option<(f64, u32, u32)> = None;
-        for &a in &w[0].2 {
-            for &b in &w[1].2 {
-                let d = dist(a, w[0].3) + dist(b, w[1].3);
-                if a != b && best.is_none_or(|(e, _, _)| d < e) {
-                    best = Some((d, a, b));
-                }
-            }
-        }
-        let Some((_, na, nb)) = best else {
-            return Ok(None);
-        };
-        if self
-            .sutures
-            .iter()
-            .flatten()
-            .any(|s| s.nodes == [na, nb] || s.nodes == [nb, na])
-        {
-            return Ok(None);
-        }
-        let gap = x[na as usize].distance(x[nb as usize]);
+        hits.sort_by(|a, b| a.s.total_cmp(&b.s));
+        hits
+    }
+
+    /// Links nodes `na`, `nb` by a suture with the settings' rest length and stiffness
+    /// (bad nodes are refused by the body).
+    fn place_suture(
+        &mut self,
+        body: &mut SoftBody,
+        [na, nb]: [u32; 2],
+    ) -> Result<SurgeryEvent, SurgeryError> {
         let s = self.settings;
+        // Refuses bad nodes before they are read.
         let constraint = body.add_link_constraint(DistanceConstraint {
             nodes: [na, nb],
             rest_length: s.suture_rest_length,
             stiffness: s.suture_stiffness,
             compliance: s.suture_compliance,
         })?;
+        let x = body.positions();
+        let gap = x[na as usize].distance(x[nb as usize]);
         let id = self.sutures.len();
         self.sutures.push(Some(Suture {
             nodes: [na, nb],
@@ -131,11 +166,11 @@ impl Surgery {
             initial_gap: gap,
         }));
         tracing::debug!(suture = id, a = na, b = nb, gap, "suture placed");
-        Ok(Some(SurgeryEvent::SuturePlaced {
+        Ok(SurgeryEvent::SuturePlaced {
             suture: id,
             nodes: [na, nb],
             constraint,
-        }))
+        })
     }
 
     /// Links two given nodes directly (a host that picked them itself).
@@ -149,26 +184,7 @@ impl Surgery {
     ) -> Result<SurgeryEvent, SurgeryError> {
         let _span = tracing::debug_span!("suture").entered();
         self.check_body(body)?;
-        let s = self.settings;
-        let constraint = body.add_link_constraint(DistanceConstraint {
-            nodes,
-            rest_length: s.suture_rest_length,
-            stiffness: s.suture_stiffness,
-            compliance: s.suture_compliance,
-        })?;
-        let x = body.positions();
-        let gap = x[nodes[0] as usize].distance(x[nodes[1] as usize]);
-        let id = self.sutures.len();
-        self.sutures.push(Some(Suture {
-            nodes,
-            constraint,
-            initial_gap: gap,
-        }));
-        Ok(SurgeryEvent::SuturePlaced {
-            suture: id,
-            nodes,
-            constraint,
-        })
+        self.place_suture(body, nodes)
     }
 
     /// Removes a suture: its link constraint is removed from the body.

@@ -61,9 +61,10 @@ use tissue_mesh::NO_TET;
 use tissue_pbd::SoftBody;
 
 use crate::geometry::FxMap as HashMap;
+use crate::plan::{EdgeCut, FacePoint, NewNode, NodeRef, SplitEdge, SplitPlan, TetSplit};
 use crate::split::MAX_SPLIT_DEPTH;
-use crate::split::{bisect, sorted2, split_edges_of, CutPlane, EdgeCut, FacePoint, SplitOutcome};
-use crate::state::face_nodes;
+use crate::split::{bisect, sorted2, split_edges_of, CutPlane, SplitOutcome};
+use crate::state::{face_nodes, FacePair};
 use crate::{SplitTriangle, Surgery, SurgeryError};
 
 /// A four-way tip is inserted only where each of its barycentric coordinates in the triangle
@@ -116,13 +117,17 @@ pub(crate) struct FourWayTip {
 /// volume being the piece's times `p`'s barycentric coordinate there). The first replaces the
 /// piece in place, the others are appended. Returns `y`, or `None` when no piece holds the
 /// face (nothing changed).
-pub(crate) fn split_face(pieces: &mut Vec<[u32; 4]>, face: [u32; 3], p: u32) -> Option<u32> {
+pub(crate) fn split_face<N: Copy + PartialEq>(
+    pieces: &mut Vec<[N; 4]>,
+    face: [N; 3],
+    p: N,
+) -> Option<N> {
     let i = pieces
         .iter()
         .position(|t| face.iter().all(|v| t.contains(v)))?;
     let piece = pieces[i];
     let y = *piece.iter().find(|v| !face.contains(v))?;
-    let with_p = |v: u32| piece.map(|u| if u == v { p } else { u });
+    let with_p = |v: N| piece.map(|u| if u == v { p } else { u });
     pieces[i] = with_p(face[2]);
     pieces.push(with_p(face[0]));
     pieces.push(with_p(face[1]));
@@ -149,19 +154,61 @@ impl Surgery {
         candidates: &[u32],
         out: &mut SplitOutcome,
     ) -> Result<Vec<[u32; 2]>, SurgeryError> {
-        let (o, n) = (plane.origin, plane.normal);
+        let on = self.crossed_edges_on_plane(body, candidates, out);
+        if on.is_empty() {
+            return Ok(Vec::new());
+        }
+        let (mut edges, outer) = self.tip_edges(body, plane, on);
+        if edges.is_empty() {
+            return Ok(Vec::new());
+        }
+        let first = body.node_count() as u32;
+        let Some(plan) = self.plan_tip_split(body, &mut edges) else {
+            return Ok(Vec::new());
+        };
+        tracing::debug!(
+            tips = plan.edges.len(),
+            tets = plan.tets.len(),
+            "tips split"
+        );
+        let mut second = SplitOutcome::default();
+        self.apply_split(body, &plan, &mut second)?;
+        self.tip_counts.fallback += plan.edges.len() as u64;
+        // Merge into the first split's outcome: nodes and tets were appended right after its.
+        out.end_node = second.end_node;
+        out.end_tet = second.end_tet;
+        for t in second.split {
+            if t < out.first_tet && !out.split.contains(&t) {
+                out.split.push(t);
+            }
+        }
+        merge_surface(&mut out.surface, second.surface);
+        Ok(plan
+            .edges
+            .iter()
+            .enumerate()
+            .map(|(k, e)| sorted2(first + k as u32, outer[&e.ends]))
+            .collect())
+    }
+
+    /// The edges on the plane of the crossed boundary triangles: boundary faces of the
+    /// `candidates` and of the first split's pieces with exactly two nodes on the plane (the
+    /// first split's new nodes, and nodes snapped or lying on it within rounding: nodes made
+    /// on it by an earlier sweep are a few ulps off), except a four-way tip's (sorted).
+    fn crossed_edges_on_plane(
+        &self,
+        body: &SoftBody,
+        candidates: &[u32],
+        out: &SplitOutcome,
+    ) -> Vec<[u32; 2]> {
         let (new_lo, new_hi) = (out.first_node, out.end_node);
-        let (side, reach) = (&self.side, &self.node_reach);
-        // On the plane: the first split's new nodes, and nodes snapped or lying on it (within
-        // rounding: nodes made on it by an earlier sweep are a few ulps off).
+        let (side, reach) = (&self.scratch.side, &self.node_reach);
         let on_plane = |v: u32| {
             (new_lo..new_hi).contains(&v)
                 || side
                     .get(v as usize)
                     .is_some_and(|&d| d.abs() <= ON_PLANE * reach[v as usize] as f64)
         };
-        let pos = |body: &SoftBody, v: u32| body.positions()[v as usize].as_dvec3();
-        // Boundary triangles with exactly two nodes on the plane: their edge on it.
         let mut on: Vec<[u32; 2]> = Vec::new();
         let tets = body.tets();
         for t in candidates.iter().copied().chain(out.first_tet..out.end_tet) {
@@ -177,46 +224,48 @@ impl Surgery {
                 }
             }
         }
-        if on.is_empty() {
-            return Ok(Vec::new());
-        }
         on.sort_unstable();
         on.dedup();
-        let side_of = |body: &SoftBody, t: u32| {
+        on
+    }
+
+    /// The edges of `on` that get a tip: one end in the polygon and the other outside, the
+    /// tip (where the edge leaves the polygon, by bisection) at least [`TIP_MARGIN`] from
+    /// either end, tets around it on both sides of the plane. Returns them as split edges
+    /// (the tip's parameter from the smaller node), and each one's end outside the polygon.
+    fn tip_edges(
+        &self,
+        body: &SoftBody,
+        plane: &CutPlane<'_>,
+        on: Vec<[u32; 2]>,
+    ) -> (HashMap<[u32; 2], EdgeCut>, HashMap<[u32; 2], u32>) {
+        let (o, n) = (plane.origin, plane.normal);
+        let pos = |v: u32| body.positions()[v as usize].as_dvec3();
+        let side_of = |t: u32| {
             let c = body.tets()[t as usize]
                 .iter()
-                .map(|&v| pos(body, v))
+                .map(|&v| pos(v))
                 .sum::<DVec3>()
                 * 0.25;
             n.dot(c - o)
         };
-        // Edge → (parameter of the tip from e[0], the end outside the polygon).
         let mut edges: HashMap<[u32; 2], EdgeCut> = HashMap::default();
         let mut outer: HashMap<[u32; 2], u32> = HashMap::default();
         for e in on {
-            let (x0, x1) = (pos(body, e[0]), pos(body, e[1]));
+            let (x0, x1) = (pos(e[0]), pos(e[1]));
             let (in0, in1) = (plane.contains(x0), plane.contains(x1));
             if in0 == in1 {
                 continue;
             }
-            let (mut lo, mut hi) = (0.0f64, 1.0f64);
-            // `lo` inside, `hi` outside (parameters from the inside end).
+            // `a` inside, `b` outside (parameters from the inside end).
             let (a, b) = if in0 { (x0, x1) } else { (x1, x0) };
-            for _ in 0..40 {
-                let mid = 0.5 * (lo + hi);
-                if plane.contains(a + (b - a) * mid) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            let t = 0.5 * (lo + hi);
+            let t = polygon_exit(plane, a, b);
             if !(TIP_MARGIN..=1.0 - TIP_MARGIN).contains(&t) {
                 continue;
             }
             let (mut plus, mut minus) = (false, false);
             for u in self.tets_around(body.tets(), &e) {
-                let d = side_of(body, u);
+                let d = side_of(u);
                 plus |= d > 0.0;
                 minus |= d < 0.0;
             }
@@ -230,64 +279,73 @@ impl Surgery {
                     s,
                     inside: true,
                     valid: true,
-                    node: u32::MAX,
+                    node: None,
                 },
             );
             outer.insert(e, if in0 { e[1] } else { e[0] });
         }
-        if edges.is_empty() {
-            return Ok(Vec::new());
-        }
-        // Plan as the first split does (see `split_along`): a tet whose pieces fail the bound
-        // gives up its tip edges, and the rest is planned again.
-        let first = body.node_count() as u32;
-        let mut pieces: Vec<[u32; 4]> = Vec::new();
-        let mut plan: Vec<(u32, std::ops::Range<usize>)> = Vec::new();
-        let mut new_rest: Vec<DVec3> = Vec::new();
+        (edges, outer)
+    }
+
+    /// The tip split's plan, as the first split plans (see `split_along`): a tet whose pieces
+    /// fail the bound gives up its tip edges, and the rest is planned again. `None` when no
+    /// edge is left.
+    fn plan_tip_split(
+        &self,
+        body: &SoftBody,
+        edges: &mut HashMap<[u32; 2], EdgeCut>,
+    ) -> Option<SplitPlan> {
+        let mut plan = SplitPlan::default();
         let mut order: Vec<[u32; 2]> = Vec::new();
-        let mut local: Vec<([u32; 2], u32)> = Vec::new();
+        let mut local: Vec<([u32; 2], NodeRef)> = Vec::new();
         loop {
             order.clear();
             order.extend(edges.iter().filter(|(_, c)| c.valid).map(|(e, _)| *e));
             order.sort_unstable();
             if order.is_empty() {
-                return Ok(Vec::new());
+                return None;
             }
-            new_rest.clear();
+            plan.edges.clear();
+            plan.new_rest.clear();
             for (k, e) in order.iter().enumerate() {
                 if let Some(c) = edges.get_mut(e) {
-                    c.node = first + k as u32;
+                    c.node = Some(NewNode(k as u32));
                     let (r0, r1) = (self.rest[e[0] as usize], self.rest[e[1] as usize]);
-                    new_rest.push(r0 + (r1 - r0) * c.s);
+                    plan.new_rest.push(r0 + (r1 - r0) * c.s);
+                    plan.edges.push(SplitEdge { ends: *e, s: c.s });
                 }
             }
             let affected = self.tets_around_edges(body.tets(), &order);
-            let rest_of = |v: u32| -> DVec3 {
-                if v >= first {
-                    new_rest[(v - first) as usize]
-                } else {
-                    self.rest[v as usize]
+            let new_rest = &plan.new_rest;
+            let rest_of = |v: NodeRef| -> DVec3 {
+                match v {
+                    NodeRef::Body(v) => self.rest[v as usize],
+                    NodeRef::New(NewNode(k)) => new_rest[k as usize],
                 }
             };
-            pieces.clear();
-            plan.clear();
+            plan.pieces.clear();
+            plan.tets.clear();
             let mut failed: Vec<[u32; 2]> = Vec::new();
             for &t in &affected {
                 let tet = body.tets()[t as usize];
-                split_edges_of(tet, &edges, &mut local);
-                let start = pieces.len();
-                bisect(tet, &local, &mut pieces);
-                let good = self.pieces_meet_bound(tet, &pieces[start..], rest_of)
-                    && self.depth[t as usize] < MAX_SPLIT_DEPTH;
+                split_edges_of(tet, edges, &mut local);
+                let start = plan.pieces.len();
+                bisect(tet.map(NodeRef::Body), &local, &mut plan.pieces);
+                let good =
+                    self.pieces_meet_bound(tet.map(NodeRef::Body), &plan.pieces[start..], rest_of)
+                        && self.depth[t as usize] < MAX_SPLIT_DEPTH;
                 if good {
-                    plan.push((t, start..pieces.len()));
+                    plan.tets.push(TetSplit {
+                        tet: t,
+                        pieces: start..plan.pieces.len(),
+                    });
                 } else {
-                    pieces.truncate(start);
+                    plan.pieces.truncate(start);
                     failed.extend(local.iter().map(|l| l.0));
                 }
             }
             if failed.is_empty() {
-                break;
+                return Some(plan);
             }
             for e in failed {
                 if let Some(c) = edges.get_mut(&e) {
@@ -295,34 +353,22 @@ impl Surgery {
                 }
             }
         }
-        tracing::debug!(tips = order.len(), tets = plan.len(), "tips split");
-        let mut second = SplitOutcome::default();
-        self.apply_split(
-            body,
-            &edges,
-            &order,
-            &new_rest,
-            &[],
-            &plan,
-            &pieces,
-            &mut second,
-        )?;
-        self.tip_counts.fallback += order.len() as u64;
-        // Merge into the first split's outcome: nodes and tets were appended right after its.
-        out.end_node = second.end_node;
-        out.end_tet = second.end_tet;
-        for t in second.split {
-            if t < out.first_tet && !out.split.contains(&t) {
-                out.split.push(t);
-            }
-        }
-        merge_surface(&mut out.surface, second.surface);
-        Ok(order
-            .iter()
-            .enumerate()
-            .map(|(k, e)| sorted2(first + k as u32, outer[e]))
-            .collect())
     }
+}
+
+/// Where the segment `a → b` (`a` in the polygon of `plane`, `b` outside) leaves the polygon:
+/// its parameter along the segment, by 40 bisections on [`CutPlane::contains`].
+fn polygon_exit(plane: &CutPlane<'_>, a: DVec3, b: DVec3) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if plane.contains(a + (b - a) * mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// Boundary triangles split again by the tip split: a first-split piece is replaced by its
@@ -348,14 +394,101 @@ fn merge_surface(first: &mut Vec<SplitTriangle>, second: Vec<SplitTriangle>) {
     }
 }
 
+/// A boundary triangle `A B C` that may get a four-way tip (module docs): of tet `tet`, `A`
+/// alone on its side, `A B` and `A C` split, `E` on `A B` in the polygon and `E2` on `A C`
+/// outside it. Ordered by `A C` first, so that the triangles at one edge `A C` are together.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+struct TipCandidate {
+    ac: [u32; 2],
+    tet: u32,
+    a: u32,
+    b: u32,
+    c: u32,
+}
+
+/// Why the four-way candidates at one edge `A C` were refused (see [`TipCounts`]).
+#[derive(Debug, Clone, Copy)]
+enum Refusal {
+    Neighbour,
+    Margin,
+    Needed,
+    Unsplit,
+    Quality,
+}
+
+impl Refusal {
+    /// Counts `triangles` candidates refused for this reason.
+    fn count(self, counts: &mut TipCounts, triangles: u64) {
+        let n = match self {
+            Refusal::Neighbour => &mut counts.refused_neighbour,
+            Refusal::Margin => &mut counts.refused_margin,
+            Refusal::Needed => &mut counts.refused_needed,
+            Refusal::Unsplit => &mut counts.refused_unsplit,
+            Refusal::Quality => &mut counts.refused_quality,
+        };
+        *n += triangles;
+    }
+}
+
+/// What the four-way planning reads of one sweep: the body (current positions), the plane,
+/// the nodes' signed distances from it, and the current positions of the candidate edges'
+/// crossing points (the new nodes `NewNode(i)` of the plan being judged).
+struct TipSweep<'a, 'p> {
+    body: &'a SoftBody,
+    plane: &'a CutPlane<'p>,
+    side: &'a [f64],
+    crossings: Vec<DVec3>,
+}
+
+impl TipSweep<'_, '_> {
+    /// Current position of a node of the plan (`NaN` for a tip's point).
+    fn point(&self, v: NodeRef) -> DVec3 {
+        match v {
+            NodeRef::Body(v) => self.body.positions()[v as usize].as_dvec3(),
+            NodeRef::New(NewNode(i)) => self
+                .crossings
+                .get(i as usize)
+                .copied()
+                .unwrap_or(DVec3::NAN),
+        }
+    }
+
+    /// The side of the plane node `v` is on (0: on it).
+    fn sign(&self, v: u32) -> i8 {
+        match self.side.get(v as usize) {
+            Some(&d) if d > 0.0 => 1,
+            Some(&d) if d < 0.0 => -1,
+            _ => 0,
+        }
+    }
+
+    /// Whether a node of the plan lies on the plane: a new node, or a node exactly on it.
+    fn on_plane(&self, v: NodeRef) -> bool {
+        match v {
+            NodeRef::New(_) => true,
+            NodeRef::Body(v) => self.side.get(v as usize).is_some_and(|&d| d == 0.0),
+        }
+    }
+}
+
+/// The split edge's node of `edges` at `e`, if it is split.
+fn split_node(edges: &HashMap<[u32; 2], EdgeCut>, e: [u32; 2]) -> Option<NodeRef> {
+    edges
+        .get(&e)
+        .filter(|c| c.valid)
+        .and_then(|c| c.node)
+        .map(NodeRef::New)
+}
+
 impl Surgery {
     /// The four-way tips of one sweep (module docs), planned on the first split's plan before
-    /// it is applied: `edges` holds the split edges after the quality rounds, the new nodes as
-    /// placeholders (`u32::MAX − i` for `candidate_edges[i]`, rest positions in
-    /// `placeholder_rest`), and `affected` the tets to split. For each accepted tip the edge
-    /// `A C` is dropped from `edges` (not valid, and not inside: the tets around it join the
-    /// cut's front), and tets left with no split edge are removed from `affected`. A candidate
-    /// refused keeps `A C` (the tip pass may then split the triangle into 5).
+    /// it is applied: `edges` holds the split edges after the quality rounds, the new node of
+    /// `candidate_edges[i]` being `NewNode(i)` (rest position `candidate_rest[i]`, tip `k`'s
+    /// point `NewNode(candidate_edges.len() + k)`), and `affected` the tets to split. For each
+    /// accepted tip the edge `A C` is dropped from `edges` (not valid, and not inside: the tets
+    /// around it join the cut's front), and tets left with no split edge are removed from
+    /// `affected`. A candidate refused keeps `A C` (the tip pass may then split the triangle
+    /// into 5).
     pub(crate) fn plan_four_way_tips(
         &mut self,
         body: &SoftBody,
@@ -363,217 +496,46 @@ impl Surgery {
         affected: &mut Vec<u32>,
         edges: &mut HashMap<[u32; 2], EdgeCut>,
         candidate_edges: &[[u32; 2]],
-        placeholder_rest: &[DVec3],
+        candidate_rest: &[DVec3],
     ) -> Vec<FourWayTip> {
         let mut tips: Vec<FourWayTip> = Vec::new();
         if !self.settings.four_way_tips || affected.is_empty() {
             return tips;
         }
         let mut counts = self.tip_counts;
-        let n_rest = self.rest.len();
-        let dist = &self.side;
-        let sign = |v: u32| -> i8 {
-            match dist.get(v as usize) {
-                Some(&d) if d > 0.0 => 1,
-                Some(&d) if d < 0.0 => -1,
-                _ => 0,
-            }
-        };
         let pos = |v: u32| body.positions()[v as usize].as_dvec3();
-        // Current positions of the placeholders (the crossing points).
-        let placeholder_pos: Vec<DVec3> = candidate_edges
-            .iter()
-            .map(|e| {
-                let s = edges.get(e).map_or(0.0, |c| c.s);
-                pos(e[0]) + (pos(e[1]) - pos(e[0])) * s
-            })
-            .collect();
-        let point_of = |v: u32| -> DVec3 {
-            if (v as usize) < n_rest {
-                pos(v)
-            } else {
-                placeholder_pos
-                    .get((u32::MAX - v) as usize)
-                    .copied()
-                    .unwrap_or(DVec3::NAN)
-            }
+        let sweep = TipSweep {
+            body,
+            plane,
+            side: &self.scratch.side,
+            crossings: candidate_edges
+                .iter()
+                .map(|e| {
+                    let s = edges.get(e).map_or(0.0, |c| c.s);
+                    pos(e[0]) + (pos(e[1]) - pos(e[0])) * s
+                })
+                .collect(),
         };
-        // Boundary triangles A B C of tets to split, A alone on its side, A B and A C split,
-        // exactly one of the two crossing points in the polygon (A B's, after renaming):
-        // (A C, tet, A, B, C).
-        let mut found: Vec<([u32; 2], u32, u32, u32, u32)> = Vec::new();
-        for &t in affected.iter() {
-            let nb = self.neighbours[t as usize];
-            if !nb.contains(&NO_TET) {
-                continue;
-            }
-            let tet = body.tets()[t as usize];
-            for j in (0..4).filter(|&j| nb[j] == NO_TET) {
-                let f = face_nodes(&tet, j);
-                let sf = f.map(sign);
-                if sf.contains(&0) {
-                    continue;
-                }
-                let Some(i) =
-                    (0..3).find(|&i| sf[i] != sf[(i + 1) % 3] && sf[i] != sf[(i + 2) % 3])
-                else {
-                    continue;
-                };
-                let (a, u, w) = (f[i], f[(i + 1) % 3], f[(i + 2) % 3]);
-                let node = |x: u32| {
-                    edges
-                        .get(&sorted2(a, x))
-                        .filter(|c| c.valid)
-                        .map(|c| c.node)
-                };
-                let (Some(nu), Some(nw)) = (node(u), node(w)) else {
-                    continue;
-                };
-                let (iu, iw) = (plane.contains(point_of(nu)), plane.contains(point_of(nw)));
-                if iu == iw {
-                    continue;
-                }
-                let (b, c) = if iu { (u, w) } else { (w, u) };
-                found.push((sorted2(a, c), t, a, b, c));
-            }
-        }
+        let found = self.four_way_candidates(&sweep, affected, edges);
         if found.is_empty() {
             return tips;
         }
-        found.sort_unstable();
-        let mut local: Vec<([u32; 2], u32)> = Vec::new();
-        let mut scratch: Vec<[u32; 4]> = Vec::new();
-        for group in found.chunk_by(|x, y| x.0 == y.0) {
-            let ac = group[0].0;
+        let mut local: Vec<([u32; 2], NodeRef)> = Vec::new();
+        let mut scratch: Vec<[NodeRef; 4]> = Vec::new();
+        for group in found.chunk_by(|x, y| x.ac == y.ac) {
             let triangles = group.len() as u64;
-            let ring: Vec<u32> = self.tets_around(body.tets(), &ac).collect();
-            // Any other boundary triangle `A C X` at A C (dropping A C leaves it unsplit along
-            // it) must not want a tip: `X` off the plane, and its other crossing point, if
-            // split, outside the polygon (so both are: the triangle is beyond the tip).
-            let beyond = |f: [u32; 3]| {
-                let Some(&x) = f.iter().find(|v| !ac.contains(v)) else {
-                    return false;
-                };
-                if sign(x) == 0 {
-                    return false;
-                }
-                let other = if sign(x) == sign(ac[0]) { ac[1] } else { ac[0] };
-                edges
-                    .get(&sorted2(x, other))
-                    .filter(|c| c.valid)
-                    .is_none_or(|c| !plane.contains(point_of(c.node)))
-            };
-            let only_candidates = ring.iter().all(|&u| {
-                let tet = body.tets()[u as usize];
-                (0..4).all(|j| {
-                    let f = face_nodes(&tet, j);
-                    self.neighbours[u as usize][j] != NO_TET
-                        || !(f.contains(&ac[0]) && f.contains(&ac[1]))
-                        || group.iter().any(|g| g.1 == u && f.contains(&g.3))
-                        || beyond(f)
-                })
-            });
-            if !only_candidates {
-                counts.refused_neighbour += triangles;
-                continue;
-            }
-            // The tips: where the polygon's boundary crosses E–E2.
-            let mut planned: Vec<FourWayTip> = Vec::new();
-            let mut e_nodes: Vec<u32> = Vec::new();
-            let mut e2_node = u32::MAX;
-            for &(_, t, a, b, c) in group {
-                let ab = sorted2(a, b);
-                let (Some(ce), Some(ce2)) = (edges.get(&ab), edges.get(&ac)) else {
-                    break;
-                };
-                // Parameters from A along A B and A C.
-                let from_a = |e: [u32; 2], s: f64| if e[0] == a { s } else { 1.0 - s };
-                let (sb, sc) = (from_a(ab, ce.s), from_a(ac, ce2.s));
-                let (x_e, x_e2) = (point_of(ce.node), point_of(ce2.node));
-                let (mut lo, mut hi) = (0.0f64, 1.0f64);
-                for _ in 0..40 {
-                    let mid = 0.5 * (lo + hi);
-                    if plane.contains(x_e + (x_e2 - x_e) * mid) {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                let s = 0.5 * (lo + hi);
-                // Barycentric coordinates of P in A E C.
-                let bary = [s * (1.0 - sc), 1.0 - s, s * sc];
-                if bary.iter().any(|&w| w.is_nan() || w < FACE_TIP_MARGIN) {
-                    break;
-                }
-                e_nodes.push(ce.node);
-                e2_node = ce2.node;
-                planned.push(FourWayTip {
-                    tet: t,
-                    a,
-                    c,
-                    ab,
-                    point: FacePoint {
-                        nodes: [a, b, c],
-                        weights: [
-                            (1.0 - s) * (1.0 - sb) + s * (1.0 - sc),
-                            (1.0 - s) * sb,
-                            s * sc,
-                        ],
-                    },
-                });
-            }
-            if planned.len() != group.len() {
-                counts.refused_margin += triangles;
-                continue;
-            }
-            if self.crossing_needed(body, plane, &ring, ac, e2_node, &e_nodes, edges, &point_of) {
-                counts.refused_needed += triangles;
-                continue;
-            }
-            // Dropped tentatively; the tets around A C judged again with the tips.
-            let base = tips.len();
-            tips.extend(planned);
-            if let Some(c) = edges.get_mut(&ac) {
-                c.valid = false;
-            }
-            // `Some(true)`: a piece below the bound; `Some(false)`: no piece on `A E C` ending
-            // on the plane.
-            let mut failure: Option<bool> = None;
-            for &u in &ring {
-                if !self.four_way_pieces(
-                    body,
-                    u,
-                    edges,
-                    &tips,
-                    candidate_edges.len(),
-                    &mut local,
-                    &mut scratch,
-                ) {
-                    failure = Some(false);
-                    break;
-                }
-                let tet = body.tets()[u as usize];
-                let rest_of = |v: u32| -> DVec3 { self.rest_with_tips(v, placeholder_rest, &tips) };
-                if !self.pieces_meet_bound(tet, &scratch, rest_of) {
-                    failure = Some(true);
-                    break;
-                }
-            }
-            let good = failure.is_none();
-            if let Some(c) = edges.get_mut(&ac) {
-                c.valid = !good;
-                c.inside = !good;
-            }
-            match failure {
-                None => counts.four_way += triangles,
-                Some(quality) => {
-                    tips.truncate(base);
-                    if quality {
-                        counts.refused_quality += triangles;
-                    } else {
-                        counts.refused_unsplit += triangles;
-                    }
-                }
+            let taken = self.four_way_group(
+                &sweep,
+                group,
+                edges,
+                &mut tips,
+                candidate_rest,
+                &mut local,
+                &mut scratch,
+            );
+            match taken {
+                Ok(()) => counts.four_way += triangles,
+                Err(refusal) => refusal.count(&mut counts, triangles),
             }
         }
         if !tips.is_empty() {
@@ -584,6 +546,156 @@ impl Surgery {
         }
         self.tip_counts = counts;
         tips
+    }
+
+    /// The candidates (sorted): boundary triangles `A B C` of the `affected` tets, `A` alone on
+    /// its side, `A B` and `A C` split, exactly one of the two crossing points in the polygon
+    /// (`A B`'s, after renaming).
+    fn four_way_candidates(
+        &self,
+        sweep: &TipSweep<'_, '_>,
+        affected: &[u32],
+        edges: &HashMap<[u32; 2], EdgeCut>,
+    ) -> Vec<TipCandidate> {
+        let mut found: Vec<TipCandidate> = Vec::new();
+        for &t in affected {
+            let nb = self.neighbours[t as usize];
+            if !nb.contains(&NO_TET) {
+                continue;
+            }
+            let tet = sweep.body.tets()[t as usize];
+            for j in (0..4).filter(|&j| nb[j] == NO_TET) {
+                let f = face_nodes(&tet, j);
+                let sf = f.map(|v| sweep.sign(v));
+                if sf.contains(&0) {
+                    continue;
+                }
+                let Some(i) =
+                    (0..3).find(|&i| sf[i] != sf[(i + 1) % 3] && sf[i] != sf[(i + 2) % 3])
+                else {
+                    continue;
+                };
+                let (a, u, w) = (f[i], f[(i + 1) % 3], f[(i + 2) % 3]);
+                let (Some(nu), Some(nw)) = (
+                    split_node(edges, sorted2(a, u)),
+                    split_node(edges, sorted2(a, w)),
+                ) else {
+                    continue;
+                };
+                let inside = |v: NodeRef| sweep.plane.contains(sweep.point(v));
+                let (iu, iw) = (inside(nu), inside(nw));
+                if iu == iw {
+                    continue;
+                }
+                let (b, c) = if iu { (u, w) } else { (w, u) };
+                found.push(TipCandidate {
+                    ac: sorted2(a, c),
+                    tet: t,
+                    a,
+                    b,
+                    c,
+                });
+            }
+        }
+        found.sort_unstable();
+        found
+    }
+
+    /// Judges the candidates at one edge `A C` (`group`, sharing it): taken (their tips
+    /// appended to `tips`, `A C` dropped from `edges`) or refused, and why. The tets around
+    /// `A C` are judged with the tips planned and `A C` dropped; `local` and `scratch` are
+    /// scratch.
+    #[allow(clippy::too_many_arguments)]
+    fn four_way_group(
+        &self,
+        sweep: &TipSweep<'_, '_>,
+        group: &[TipCandidate],
+        edges: &mut HashMap<[u32; 2], EdgeCut>,
+        tips: &mut Vec<FourWayTip>,
+        candidate_rest: &[DVec3],
+        local: &mut Vec<([u32; 2], NodeRef)>,
+        scratch: &mut Vec<[NodeRef; 4]>,
+    ) -> Result<(), Refusal> {
+        let ac = group[0].ac;
+        let ring: Vec<u32> = self.tets_around(sweep.body.tets(), &ac).collect();
+        if !self.only_candidates_at(sweep, group, &ring, edges) {
+            return Err(Refusal::Neighbour);
+        }
+        let (planned, e_nodes, e2) = tip_points(sweep, group, edges).ok_or(Refusal::Margin)?;
+        if self.crossing_needed(sweep, &ring, ac, e2, &e_nodes, edges) {
+            return Err(Refusal::Needed);
+        }
+        // Dropped tentatively; the tets around A C judged again with the tips.
+        let base = tips.len();
+        tips.extend(planned);
+        if let Some(c) = edges.get_mut(&ac) {
+            c.valid = false;
+        }
+        let n_edges = sweep.crossings.len();
+        let mut failure: Option<Refusal> = None;
+        for &u in &ring {
+            if !self.four_way_pieces(sweep, u, edges, tips, n_edges, local, scratch) {
+                failure = Some(Refusal::Unsplit);
+                break;
+            }
+            let tet = sweep.body.tets()[u as usize].map(NodeRef::Body);
+            let rest_of = |v: NodeRef| -> DVec3 { self.rest_with_tips(v, candidate_rest, tips) };
+            if !self.pieces_meet_bound(tet, scratch, rest_of) {
+                failure = Some(Refusal::Quality);
+                break;
+            }
+        }
+        let good = failure.is_none();
+        if let Some(c) = edges.get_mut(&ac) {
+            c.valid = !good;
+            c.inside = !good;
+        }
+        match failure {
+            None => Ok(()),
+            Some(refusal) => {
+                tips.truncate(base);
+                Err(refusal)
+            }
+        }
+    }
+
+    /// Whether every other boundary triangle `A C X` at `A C` (dropping `A C` leaves it
+    /// unsplit along it) is one of the `group` or does not want a tip: `X` off the plane, and
+    /// its other crossing point, if split, outside the polygon (so both are: the triangle is
+    /// beyond the tip). `ring`: the tets around `A C`.
+    fn only_candidates_at(
+        &self,
+        sweep: &TipSweep<'_, '_>,
+        group: &[TipCandidate],
+        ring: &[u32],
+        edges: &HashMap<[u32; 2], EdgeCut>,
+    ) -> bool {
+        let ac = group[0].ac;
+        let beyond = |f: [u32; 3]| {
+            let Some(&x) = f.iter().find(|v| !ac.contains(v)) else {
+                return false;
+            };
+            if sweep.sign(x) == 0 {
+                return false;
+            }
+            let other = if sweep.sign(x) == sweep.sign(ac[0]) {
+                ac[1]
+            } else {
+                ac[0]
+            };
+            split_node(edges, sorted2(x, other))
+                .is_none_or(|v| !sweep.plane.contains(sweep.point(v)))
+        };
+        ring.iter().all(|&u| {
+            let tet = sweep.body.tets()[u as usize];
+            (0..4).all(|j| {
+                let f = face_nodes(&tet, j);
+                self.neighbours[u as usize][j] != NO_TET
+                    || !(f.contains(&ac[0]) && f.contains(&ac[1]))
+                    || group.iter().any(|g| g.tet == u && f.contains(&g.b))
+                    || beyond(f)
+            })
+        })
     }
 
     /// Queues the wall face `E P Y` of an applied four-way tip (node `p`, `E` node `e`) to
@@ -606,60 +718,58 @@ impl Surgery {
         };
         if let (Some((t, j)), Some((u, k))) = (side(tip.a), side(tip.c)) {
             if self.neighbours[t as usize][j] == u && self.neighbours[u as usize][k] == t {
-                self.pending.push([t, j as u32, u, k as u32]);
+                self.pending.push(FacePair {
+                    t,
+                    j: j as u8,
+                    u,
+                    k: k as u8,
+                });
             }
         }
     }
 
-    /// Rest position of node `v`, a placeholder of the split plan (`u32::MAX − i`: a split
-    /// edge's node for `i` below `placeholder_rest.len()`, then the tips' points in order) or
-    /// a node of the body.
-    fn rest_with_tips(&self, v: u32, placeholder_rest: &[DVec3], tips: &[FourWayTip]) -> DVec3 {
-        if (v as usize) < self.rest.len() {
-            return self.rest[v as usize];
-        }
-        let i = (u32::MAX - v) as usize;
-        if let Some(&r) = placeholder_rest.get(i) {
+    /// Rest position of node `v` of the plan being judged: a node of the body, a candidate
+    /// edge's node (`NewNode(i)`, `i` below `candidate_rest.len()`), or a tip's point (the
+    /// tips' new nodes follow the edges').
+    fn rest_with_tips(&self, v: NodeRef, candidate_rest: &[DVec3], tips: &[FourWayTip]) -> DVec3 {
+        let i = match v {
+            NodeRef::Body(v) => return self.rest[v as usize],
+            NodeRef::New(NewNode(i)) => i as usize,
+        };
+        if let Some(&r) = candidate_rest.get(i) {
             return r;
         }
-        tips.get(i - placeholder_rest.len())
-            .map_or(DVec3::NAN, |tip| {
-                let p = tip.point;
-                (0..3)
-                    .map(|k| self.rest[p.nodes[k] as usize] * p.weights[k])
-                    .sum()
-            })
+        tips.get(i - candidate_rest.len())
+            .map_or(DVec3::NAN, |tip| tip.point.rest(&self.rest))
     }
 
     /// The pieces of tet `u` (into `scratch`) under the valid `edges` and the planned `tips`
-    /// (tip `k`'s point is placeholder `u32::MAX − (n_edges + k)`); `false` when a tip's face
-    /// is in no piece or its piece's fourth node is off the plane.
+    /// (tip `k`'s point is `NewNode(n_edges + k)`); `false` when a tip's face is in no piece
+    /// or its piece's fourth node is off the plane.
     #[allow(clippy::too_many_arguments)]
     fn four_way_pieces(
         &self,
-        body: &SoftBody,
+        sweep: &TipSweep<'_, '_>,
         u: u32,
         edges: &HashMap<[u32; 2], EdgeCut>,
         tips: &[FourWayTip],
         n_edges: usize,
-        local: &mut Vec<([u32; 2], u32)>,
-        scratch: &mut Vec<[u32; 4]>,
+        local: &mut Vec<([u32; 2], NodeRef)>,
+        scratch: &mut Vec<[NodeRef; 4]>,
     ) -> bool {
-        let tet = body.tets()[u as usize];
+        let tet = sweep.body.tets()[u as usize];
         split_edges_of(tet, edges, local);
         scratch.clear();
-        bisect(tet, local, scratch);
+        bisect(tet.map(NodeRef::Body), local, scratch);
         for (k, tip) in tips.iter().enumerate().filter(|(_, tip)| tip.tet == u) {
-            let Some(e) = edges.get(&tip.ab).filter(|c| c.valid).map(|c| c.node) else {
+            let Some(e) = split_node(edges, tip.ab) else {
                 return false;
             };
-            let p = u32::MAX - (n_edges + k) as u32;
-            let Some(y) = split_face(scratch, [tip.a, e, tip.c], p) else {
+            let p = NodeRef::New(NewNode((n_edges + k) as u32));
+            let Some(y) = split_face(scratch, [tip.a.into(), e, tip.c.into()], p) else {
                 return false;
             };
-            let on_plane = (y as usize) >= self.rest.len()
-                || self.side.get(y as usize).is_some_and(|&d| d == 0.0);
-            if !on_plane {
+            if !sweep.on_plane(y) {
                 return false;
             }
         }
@@ -673,71 +783,50 @@ impl Surgery {
     /// two pieces at the cut's front (holding both ends of a crossing edge outside the
     /// polygon), and the segment between their centroids crossing the polygon. Such a face is
     /// part of the cut inside the polygon: `A C` is then not dropped.
-    #[allow(clippy::too_many_arguments)]
     fn crossing_needed(
         &self,
-        body: &SoftBody,
-        plane: &CutPlane<'_>,
+        sweep: &TipSweep<'_, '_>,
         ring: &[u32],
         ac: [u32; 2],
-        e2: u32,
-        e_nodes: &[u32],
+        e2: NodeRef,
+        e_nodes: &[NodeRef],
         edges: &HashMap<[u32; 2], EdgeCut>,
-        point_of: &dyn Fn(u32) -> DVec3,
     ) -> bool {
-        let n_rest = self.rest.len();
-        let on_plane =
-            |v: u32| (v as usize) >= n_rest || self.side.get(v as usize).is_some_and(|&d| d == 0.0);
-        let front = |p: &[u32; 4]| {
+        let front = |p: &[NodeRef; 4]| {
             (0..4).any(|i| {
-                (i + 1..4).any(|k| edges.get(&sorted2(p[i], p[k])).is_some_and(|c| !c.inside))
+                (i + 1..4).any(|k| match (p[i], p[k]) {
+                    (NodeRef::Body(x), NodeRef::Body(y)) => {
+                        edges.get(&sorted2(x, y)).is_some_and(|c| !c.inside)
+                    }
+                    _ => false,
+                })
             })
         };
-        let centroid = |p: &[u32; 4]| p.iter().map(|&v| point_of(v)).sum::<DVec3>() * 0.25;
-        let (o, n) = (plane.origin, plane.normal);
-        // The faces on the plane between two of `pieces` (sorted nodes, the two pieces).
-        let on_plane_faces = |pieces: &[[u32; 4]], out: &mut Vec<([u32; 3], usize, usize)>| {
-            out.clear();
-            for (i, p) in pieces.iter().enumerate() {
-                for (k, q) in pieces.iter().enumerate().skip(i + 1) {
-                    let mut shared = [0u32; 3];
-                    let mut m = 0;
-                    for v in p.iter().copied().filter(|v| q.contains(v)) {
-                        if m < 3 {
-                            shared[m] = v;
-                        }
-                        m += 1;
-                    }
-                    if m == 3 && shared.iter().all(|&v| on_plane(v)) {
-                        shared.sort_unstable();
-                        out.push((shared, i, k));
-                    }
-                }
-            }
-        };
-        let mut local: Vec<([u32; 2], u32)> = Vec::new();
-        let mut pieces: Vec<[u32; 4]> = Vec::new();
-        let mut without: Vec<[u32; 4]> = Vec::new();
+        let centroid = |p: &[NodeRef; 4]| p.iter().map(|&v| sweep.point(v)).sum::<DVec3>() * 0.25;
+        let (plane, o, n) = (sweep.plane, sweep.plane.origin, sweep.plane.normal);
+        let mut local: Vec<([u32; 2], NodeRef)> = Vec::new();
+        let mut pieces: Vec<[NodeRef; 4]> = Vec::new();
+        let mut without: Vec<[NodeRef; 4]> = Vec::new();
         let (mut faces, mut kept) = (Vec::new(), Vec::new());
         for &u in ring {
-            let tet = body.tets()[u as usize];
+            let tet = sweep.body.tets()[u as usize];
             split_edges_of(tet, edges, &mut local);
             pieces.clear();
-            bisect(tet, &local, &mut pieces);
-            on_plane_faces(&pieces, &mut faces);
+            bisect(tet.map(NodeRef::Body), &local, &mut pieces);
+            on_plane_faces(sweep, &pieces, &mut faces);
             if faces.is_empty() {
                 continue;
             }
             local.retain(|l| l.0 != ac);
             without.clear();
-            bisect(tet, &local, &mut without);
-            on_plane_faces(&without, &mut kept);
-            for &(f, i, k) in &faces {
-                let at_tip = f.contains(&e2) && f.iter().any(|v| e_nodes.contains(v));
-                if at_tip || kept.iter().any(|g| g.0 == f) {
+            bisect(tet.map(NodeRef::Body), &local, &mut without);
+            on_plane_faces(sweep, &without, &mut kept);
+            for f in &faces {
+                let at_tip = f.nodes.contains(&e2) && f.nodes.iter().any(|v| e_nodes.contains(v));
+                if at_tip || kept.iter().any(|g| g.nodes == f.nodes) {
                     continue;
                 }
-                let (p, q) = (&pieces[i], &pieces[k]);
+                let (p, q) = (&pieces[f.i], &pieces[f.k]);
                 if front(p) || front(q) {
                     continue;
                 }
@@ -752,6 +841,88 @@ impl Surgery {
             }
         }
         false
+    }
+}
+
+/// The tips of the candidates at one edge `A C` (all of `group`), where the polygon's
+/// boundary crosses `E–E2`, with the nodes `E` of the group and `E2`; `None` when a tip lies
+/// within [`FACE_TIP_MARGIN`] (barycentric) of a side of its `A E C`.
+fn tip_points(
+    sweep: &TipSweep<'_, '_>,
+    group: &[TipCandidate],
+    edges: &HashMap<[u32; 2], EdgeCut>,
+) -> Option<(Vec<FourWayTip>, Vec<NodeRef>, NodeRef)> {
+    let mut planned: Vec<FourWayTip> = Vec::new();
+    let mut e_nodes: Vec<NodeRef> = Vec::new();
+    let mut e2_node = None;
+    for g in group {
+        let (a, b, c, ac) = (g.a, g.b, g.c, g.ac);
+        let ab = sorted2(a, b);
+        let (Some(ce), Some(ce2)) = (edges.get(&ab), edges.get(&ac)) else {
+            return None;
+        };
+        let (Some(e), Some(e2)) = (ce.node, ce2.node) else {
+            return None;
+        };
+        let (e, e2) = (NodeRef::New(e), NodeRef::New(e2));
+        // Parameters from A along A B and A C.
+        let from_a = |e: [u32; 2], s: f64| if e[0] == a { s } else { 1.0 - s };
+        let (sb, sc) = (from_a(ab, ce.s), from_a(ac, ce2.s));
+        let s = polygon_exit(sweep.plane, sweep.point(e), sweep.point(e2));
+        // Barycentric coordinates of P in A E C.
+        let bary = [s * (1.0 - sc), 1.0 - s, s * sc];
+        if bary.iter().any(|&w| w.is_nan() || w < FACE_TIP_MARGIN) {
+            return None;
+        }
+        e_nodes.push(e);
+        e2_node = Some(e2);
+        planned.push(FourWayTip {
+            tet: g.tet,
+            a,
+            c,
+            ab,
+            point: FacePoint {
+                nodes: [a, b, c],
+                weights: [
+                    (1.0 - s) * (1.0 - sb) + s * (1.0 - sc),
+                    (1.0 - s) * sb,
+                    s * sc,
+                ],
+            },
+        });
+    }
+    Some((planned, e_nodes, e2_node?))
+}
+
+/// A face on the plane shared by pieces `i` and `k` (its nodes sorted).
+struct PlaneFace {
+    nodes: [NodeRef; 3],
+    i: usize,
+    k: usize,
+}
+
+/// The faces on the plane between two of `pieces`, into `out` (cleared first).
+fn on_plane_faces(sweep: &TipSweep<'_, '_>, pieces: &[[NodeRef; 4]], out: &mut Vec<PlaneFace>) {
+    out.clear();
+    for (i, p) in pieces.iter().enumerate() {
+        for (k, q) in pieces.iter().enumerate().skip(i + 1) {
+            let mut shared = [NodeRef::Body(0); 3];
+            let mut m = 0;
+            for v in p.iter().copied().filter(|v| q.contains(v)) {
+                if m < 3 {
+                    shared[m] = v;
+                }
+                m += 1;
+            }
+            if m == 3 && shared.iter().all(|&v| sweep.on_plane(v)) {
+                shared.sort_unstable();
+                out.push(PlaneFace {
+                    nodes: shared,
+                    i,
+                    k,
+                });
+            }
+        }
     }
 }
 
@@ -848,13 +1019,27 @@ mod tests {
         bisect(tet, &split, &mut pieces);
         let y = split_face(&mut pieces, [a, e, c], p).expect("a piece holds A E C");
         let ctx = format!("tet {tet:?} f {f:?}: {pieces:?}");
+        check_tiling_and_tip_wall(&x, &pieces, [e, p, y], value, &ctx);
+        check_face_in_four(&x, &pieces, [a, e, c], p, &ctx);
+        check_only_front_straddles(&pieces, f, [a, c, p, y], &ctx);
+    }
+
+    /// The pieces tile the unit tet (volume 1/6 × 6), none flat or inverted; `E`, `P`, `Y`
+    /// lie on the plane (`value` zero) and `E P Y` is a face of two pieces.
+    fn check_tiling_and_tip_wall(
+        x: &[DVec3],
+        pieces: &[[u32; 4]],
+        [e, p, y]: [u32; 3],
+        value: impl Fn(DVec3) -> f64,
+        ctx: &str,
+    ) {
         // Tiling, orientation.
         let volume: f64 = pieces
             .iter()
             .map(|t| six_volume(t.map(|i| x[i as usize])))
             .sum();
         assert!((volume - 1.0).abs() < 1e-12, "{ctx}: volume {volume}");
-        for t in &pieces {
+        for t in pieces {
             assert!(six_volume(t.map(|i| x[i as usize])) > 1e-6, "{ctx}: {t:?}");
         }
         // E, P, Y on the plane, and the wall E P Y a face of two pieces.
@@ -869,10 +1054,21 @@ mod tests {
             .filter(|t| [e, p, y].iter().all(|v| t.contains(v)))
             .count();
         assert_eq!(wall, 2, "{ctx}");
+    }
+
+    /// The face `A B C` (z = 0) is in 4 triangles tiling it, `P` joined to exactly `A`, `E`,
+    /// `C`.
+    fn check_face_in_four(
+        x: &[DVec3],
+        pieces: &[[u32; 4]],
+        [a, e, c]: [u32; 3],
+        p: u32,
+        ctx: &str,
+    ) {
         // The face A B C (opposite D, base position 3: z = 0) in 4 triangles tiling it.
         let on_face = |v: u32| x[v as usize].z.abs() < 1e-12;
         let mut triangles: Vec<[u32; 3]> = Vec::new();
-        for t in &pieces {
+        for t in pieces {
             for j in 0..4 {
                 let tri = face_nodes(t, j);
                 if tri.iter().all(|&v| on_face(v)) {
@@ -901,10 +1097,20 @@ mod tests {
         let mut want = vec![a, e, c];
         want.sort_unstable();
         assert_eq!(joined, want, "{ctx}");
+    }
+
+    /// Only pieces on the unsplit edge `A C` hold nodes of both sides (`f`: the nodes' signs),
+    /// at most two, one of them `(A, P, C, Y)`.
+    fn check_only_front_straddles(
+        pieces: &[[u32; 4]],
+        f: [f64; 4],
+        [a, c, p, y]: [u32; 4],
+        ctx: &str,
+    ) {
         // Only pieces on the unsplit edge A C straddle (the front, `tets_around(A C)`): (A, P,
         // C, Y) and, for some orders where D is on A's side, a second one (A, F, C, G).
         let mut straddling = 0;
-        for t in &pieces {
+        for t in pieces {
             let sides: Vec<f64> = t
                 .iter()
                 .filter(|&&v| v < 4)

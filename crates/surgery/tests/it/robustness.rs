@@ -6,6 +6,7 @@
 //! or without cutting (the solver's business, not the cut's).
 #![allow(clippy::unwrap_used)]
 
+use std::hash::{DefaultHasher, Hash, Hasher};
 use std::time::Instant;
 
 use glam::{Quat, Vec3};
@@ -63,6 +64,21 @@ struct Stats {
     split_cuts: usize,
     /// The tips of all bodies (four-way, five-way fallback, four-way candidates refused).
     tips: TipCounts,
+    /// A hash of every body (positions bit for bit, tets, adjacency, pieces) before it is
+    /// replaced by a fresh one and at the end: equal in two builds means the same cuts.
+    fingerprint: DefaultHasher,
+}
+
+/// Adds `body` and `surgery` to the fingerprint.
+fn fingerprint(h: &mut DefaultHasher, body: &SoftBody, surgery: &Surgery) {
+    for p in body.positions().iter().chain(body.rest_positions()) {
+        p.to_array().map(f32::to_bits).hash(h);
+    }
+    body.tets().hash(h);
+    surgery.neighbours().hash(h);
+    surgery.origins().hash(h);
+    surgery.tet_components().hash(h);
+    surgery.cut_faces().hash(h);
 }
 
 fn add_tips(sum: &mut TipCounts, t: TipCounts) {
@@ -119,6 +135,7 @@ fn hammer(
         most_tets: 0,
         split_cuts: 0,
         tips: TipCounts::default(),
+        fingerprint: DefaultHasher::new(),
     };
     let (mut body, mut surgery) = (fresh.clone(), fresh_surgery.clone());
     // Parallel stepping (bit-identical to serial, tests/parallel.rs in tissue-pbd), for time.
@@ -133,6 +150,7 @@ fn hammer(
     for session in 0..sessions {
         if session % if split { 2 } else { 5 } == 0 {
             add_tips(&mut stats.tips, surgery.tip_counts());
+            fingerprint(&mut stats.fingerprint, &body, &surgery);
             (body, surgery) = (fresh.clone(), fresh_surgery.clone());
             body.set_settings(settings).unwrap();
             body.set_floor(Some(Floor::y(lo.y - 0.5))).unwrap();
@@ -208,6 +226,7 @@ fn hammer(
         }
     }
     add_tips(&mut stats.tips, surgery.tip_counts());
+    fingerprint(&mut stats.fingerprint, &body, &surgery);
     stats
 }
 
@@ -225,6 +244,7 @@ fn report(name: &str, s: &Stats, seconds: f64) {
         "  {name}: tips split into 4: {}, on the crack line (fallback): {}; four-way candidates refused: {} margin, {} neighbour, {} unsplit, {} needed, {} quality",
         t.four_way, t.fallback, t.refused_margin, t.refused_neighbour, t.refused_unsplit, t.refused_needed, t.refused_quality
     );
+    eprintln!("  {name}: fingerprint {:016x}", s.fingerprint.finish());
 }
 
 #[test]
