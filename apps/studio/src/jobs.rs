@@ -10,8 +10,7 @@ use serde::Deserialize;
 use serde_json::{json, Value};
 use tissue_planner::report::{self, Inputs, RunResult};
 use tissue_planner::{
-    default_gain_tolerance, ErrorKind, Event, Handle, Job, Outcome, PatientResult, PlanError,
-    PlanRequest,
+    ErrorKind, Event, Handle, Job, JobKind, JobSpec, Outcome, PatientResult, PlanError, PlannedJob,
 };
 use tokio::sync::mpsc;
 
@@ -38,37 +37,9 @@ enum ClientMessage {
 #[derive(Debug, Deserialize)]
 struct RunMessage {
     patient: String,
-    #[serde(default)]
-    mode: Mode,
-    #[serde(default)]
-    request: PlanRequest,
-    #[serde(default)]
-    volumes_cm3: Vec<f64>,
-    target_gain_cm2: Option<f64>,
-    bracket_cm3: Option<(f64, f64)>,
-    gain_tolerance_cm2: Option<f64>,
-}
-
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-enum Mode {
-    #[default]
-    Single,
-    Sweep,
-    TargetGain,
-    /// Expansion over weeks (issue 21): the request's `expand_weeks` and its companions.
-    Expansion,
-}
-
-impl Mode {
-    fn name(self) -> &'static str {
-        match self {
-            Mode::Single => "single",
-            Mode::Sweep => "sweep",
-            Mode::TargetGain => "target-gain",
-            Mode::Expansion => "expansion",
-        }
-    }
+    /// What to run: the planner's job JSON, the same as the C ABI's.
+    #[serde(flatten)]
+    spec: JobSpec,
 }
 
 /// Serves one tab's socket until it closes or the server stops; its job is cancelled then.
@@ -141,7 +112,7 @@ fn start(
              or cancel it; one job runs at a time because each uses every core"
         ),
     })?;
-    let _ = tx.send(json!({ "type": "accepted", "job": id, "mode": run.mode.name() }));
+    let _ = tx.send(json!({ "type": "accepted", "job": id, "mode": run.spec.mode.name() }));
     let owner = studio.clone();
     let job = running.clone();
     let spawned = std::thread::Builder::new()
@@ -195,44 +166,10 @@ fn run_job(
     run: RunMessage,
     tx: &mpsc::UnboundedSender<Value>,
 ) -> Result<Value, End> {
-    let scenario = scenario(studio, &run.patient, run.request)?;
+    let scenario = scenario(studio, &run.patient, run.spec.request.clone())?;
     let inputs = Inputs::new(&scenario)?;
     let max_steps = scenario.job.params.run.stop.max_steps;
-    let mut search = None;
-    let mut expansion = None;
-    let (job, runs) = match run.mode {
-        Mode::Expansion => {
-            let job = scenario.expansion_job()?.ok_or_else(|| {
-                PlanError::field(
-                    ErrorKind::Usage,
-                    "expand_weeks",
-                    "an expansion needs `expand_weeks` in the request",
-                )
-            })?;
-            expansion = Some(job.clone());
-            (Job::Expansion(Box::new(job)), 1)
-        }
-        Mode::Single => (Job::Insertion(scenario.job.clone()), 1),
-        Mode::Sweep => (
-            Job::Sweep(scenario.sweep_job(&run.volumes_cm3)?),
-            run.volumes_cm3.len(),
-        ),
-        Mode::TargetGain => {
-            let target = run.target_gain_cm2.ok_or_else(|| {
-                PlanError::field(
-                    ErrorKind::Usage,
-                    "target_gain_cm2",
-                    "a search needs `target_gain_cm2`",
-                )
-            })?;
-            let tolerance = run
-                .gain_tolerance_cm2
-                .unwrap_or_else(default_gain_tolerance);
-            let job = scenario.inverse_job(target, run.bracket_cm3, tolerance)?;
-            search = Some((target, job.bracket));
-            (Job::Inverse(job), 0)
-        }
-    };
+    let PlannedJob { job, runs, kind } = run.spec.plan(&scenario)?;
     let outcome = drive(job, running, runs, tx)?;
     let dir = studio
         .job_dir(&running.id)
@@ -274,9 +211,12 @@ fn run_job(
             json!({ "type": "finished", "job": running.id, "report": report, "fields": null, "warnings": warnings })
         }
         Outcome::Expansion(planned) => {
-            let job = expansion.ok_or_else(|| {
-                PlanError::new(ErrorKind::Run, "an expansion result without its job")
-            })?;
+            let JobKind::Expansion(job) = kind else {
+                return Err(End::Failed(PlanError::new(
+                    ErrorKind::Run,
+                    "an expansion result without its job",
+                )));
+            };
             let r = report::expansion(TOOL, inputs, &scenario.request, &job, &planned);
             let png = r.chart((1200, 600))?;
             let report = serde_json::to_value(&r)
@@ -291,7 +231,12 @@ fn run_job(
             json!({ "type": "finished", "job": running.id, "report": report, "fields": null })
         }
         Outcome::Inverse(found) => {
-            let (target, bracket) = search.unwrap_or_default();
+            let JobKind::TargetGain { target, bracket } = kind else {
+                return Err(End::Failed(PlanError::new(
+                    ErrorKind::Run,
+                    "a search result without its target",
+                )));
+            };
             let report =
                 serde_json::to_value(report::inverse(TOOL, inputs, target, bracket, &found))
                     .map_err(|e| PlanError::new(ErrorKind::Output, e.to_string()))?;

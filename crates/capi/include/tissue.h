@@ -544,12 +544,13 @@ enum tissue_status tissue_inverse_start(const struct tissue_patient *patient,
 // Starts a job described in JSON: every field of the planner's request, with its units in its
 // names, as `insert --report` and the studio take it (`docs/c-api.md`):
 //
-// `{"mode": "single" | "sweep" | "target-gain", "request": {"vertex": 2277, "volume_cm3": 50,
-// "sim_edge_cm": 0.3, ...}, "volumes_cm3": [..], "target_gain_cm2": 30, "bracket_cm3": [lo, hi],
-// "gain_tolerance_cm2": 0.5}`
+// `{"mode": "single" | "sweep" | "target-gain" | "expansion", "request": {"vertex": 2277,
+// "volume_cm3": 50, "sim_edge_cm": 0.3, ...}, "volumes_cm3": [..], "target_gain_cm2": 30,
+// "bracket_cm3": [lo, hi], "gain_tolerance_cm2": 0.5}` (tissue-planner's `JobSpec`)
 //
 // Every member is optional (`{}` is Table 2's single run on the Table 2 plane); unknown members
-// are refused.
+// are refused. An expansion (`"mode": "expansion"` with `"expand_weeks"` in the request) gives
+// its weeks, flap and band in `tissue_job_report_json` only.
 //
 // Errors: `TISSUE_USAGE` for JSON that does not parse (the parser's message, with its line and
 // column), and as `tissue_plan_start`.
@@ -608,7 +609,7 @@ void tissue_job_free(struct tissue_job *job);
 // A finished single insertion's numbers (the report's fields).
 //
 // Errors: `TISSUE_NOT_READY` while it runs; how it ended when it did not finish;
-// `TISSUE_INVALID_ARGUMENT` for a sweep or search.
+// `TISSUE_INVALID_ARGUMENT` for a sweep, a search or an expansion.
 //
 // Thread safety: any thread.
 enum tissue_status tissue_job_result(const struct tissue_job *job,

@@ -9,11 +9,10 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use serde::Deserialize;
 use tissue_planner::report::{self, Inputs, RunResult};
 use tissue_planner::{
-    default_gain_tolerance, ErrorKind, Event, Handle, Job, Outcome, Patient, PatientResult,
-    PlanError, PlanRequest, Scenario, Shape, Shipped, Unit,
+    Event, Handle, Job, JobKind, JobMode, JobSpec, Outcome, Patient, PatientResult, PlanError,
+    PlanRequest, PlannedJob, Scenario, Shape, Shipped, Unit,
 };
 
 use crate::ffi::{
@@ -254,12 +253,6 @@ struct JobShared {
     ended: Condvar,
 }
 
-enum Mode {
-    Single,
-    Sweep,
-    Inverse { target: f64, bracket: (f64, f64) },
-}
-
 enum Finished {
     Single {
         result: Box<RunResult>,
@@ -267,6 +260,8 @@ enum Finished {
     },
     Sweep(Vec<(f64, Result<RunResult, Error>)>),
     Inverse(tissue_inverse_result),
+    /// An expansion over weeks: its figures are in the report's JSON.
+    Expansion,
 }
 
 struct Done {
@@ -467,62 +462,12 @@ fn request(o: &tissue_plan_options) -> Result<PlanRequest, Error> {
     Ok(r)
 }
 
-/// The JSON a job can be started from (the studio's run message without its patient).
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct JobJson {
-    #[serde(default)]
-    mode: JsonMode,
-    #[serde(default)]
-    request: PlanRequest,
-    #[serde(default)]
-    volumes_cm3: Vec<f64>,
-    target_gain_cm2: Option<f64>,
-    bracket_cm3: Option<(f64, f64)>,
-    gain_tolerance_cm2: Option<f64>,
-}
-
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-enum JsonMode {
-    #[default]
-    Single,
-    Sweep,
-    TargetGain,
-}
-
-/// Places the request on the patient and starts the job (the checks run here, on the caller's
-/// thread, so a bad request fails at once).
-fn start(
-    patient: &tissue_patient,
-    request: PlanRequest,
-    mode: JsonMode,
-    volumes: &[f64],
-    search: (Option<f64>, Option<(f64, f64)>, Option<f64>),
-) -> Result<tissue_job, Error> {
-    let scenario = Scenario::new(patient.patient.clone(), request)?;
+/// Places the spec's request on the patient and starts its job (the checks run here, on the
+/// caller's thread, so a bad request fails at once).
+fn start(patient: &tissue_patient, spec: JobSpec) -> Result<tissue_job, Error> {
+    let scenario = Scenario::new(patient.patient.clone(), spec.request.clone())?;
     let inputs = Inputs::new(&scenario)?;
-    let (job, mode, runs) = match mode {
-        JsonMode::Single => (Job::Insertion(scenario.job.clone()), Mode::Single, 1),
-        JsonMode::Sweep => (
-            Job::Sweep(scenario.sweep_job(volumes)?),
-            Mode::Sweep,
-            volumes.len(),
-        ),
-        JsonMode::TargetGain => {
-            let target = search.0.ok_or_else(|| {
-                Error::from(PlanError::field(
-                    ErrorKind::Usage,
-                    "target_gain_cm2",
-                    "a search needs `target_gain_cm2`",
-                ))
-            })?;
-            let tolerance = search.2.unwrap_or_else(default_gain_tolerance);
-            let job = scenario.inverse_job(target, search.1, tolerance)?;
-            let bracket = job.bracket;
-            (Job::Inverse(job), Mode::Inverse { target, bracket }, 0)
-        }
-    };
+    let PlannedJob { job, runs, kind } = spec.plan(&scenario)?;
     let max_steps = scenario.job.params.run.stop.max_steps;
     let shared = Arc::new(JobShared {
         cancel: AtomicBool::new(false),
@@ -541,7 +486,7 @@ fn start(
     let theirs = Arc::clone(&shared);
     let driver = std::thread::Builder::new()
         .name("tissue-capi-job".into())
-        .spawn(move || drive(&theirs, job, &scenario, inputs, &mode))
+        .spawn(move || drive(&theirs, job, &scenario, inputs, &kind))
         .map_err(|e| {
             Error::new(
                 tissue_status::TISSUE_RUN,
@@ -555,7 +500,7 @@ fn start(
 }
 
 /// The driver thread: runs `job` on tissue-app's worker, keeps the progress, builds the result.
-fn drive(shared: &JobShared, job: Job, scenario: &Scenario, inputs: Inputs, mode: &Mode) {
+fn drive(shared: &JobShared, job: Job, scenario: &Scenario, inputs: Inputs, kind: &JobKind) {
     let started = Instant::now();
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         let mut handle = Handle::start(job);
@@ -582,7 +527,7 @@ fn drive(shared: &JobShared, job: Job, scenario: &Scenario, inputs: Inputs, mode
                 Event::Failed(e) => break Err(Error::from(PlanError::from_app(&e))),
             }
         };
-        outcome.and_then(|o| finish(o, scenario, inputs, mode))
+        outcome.and_then(|o| finish(o, scenario, inputs, kind))
     }))
     .unwrap_or_else(|_| {
         Err(Error::new(
@@ -621,11 +566,11 @@ fn finish(
     outcome: Outcome,
     scenario: &Scenario,
     inputs: Inputs,
-    mode: &Mode,
+    kind: &JobKind,
 ) -> Result<Done, Error> {
     let max_steps = scenario.job.params.run.stop.max_steps;
-    match (outcome, mode) {
-        (Outcome::Insertion(planned), Mode::Single) => {
+    match (outcome, kind) {
+        (Outcome::Insertion(planned), JobKind::Single) => {
             let patient = PatientResult::new(scenario, &planned)?;
             let result = RunResult::of(&planned, patient.scan.as_ref(), max_steps);
             let report = json(&report::single(TOOL, inputs, result.clone()))?;
@@ -637,7 +582,7 @@ fn finish(
                 report,
             })
         }
-        (Outcome::Sweep(sweep), Mode::Sweep) => {
+        (Outcome::Sweep(sweep), JobKind::Sweep) => {
             let mut rows = Vec::new();
             let mut all = Vec::new();
             for (volume, row) in report::sweep_rows(&sweep, max_steps) {
@@ -655,7 +600,14 @@ fn finish(
                 report,
             })
         }
-        (Outcome::Inverse(found), Mode::Inverse { target, bracket }) => {
+        (Outcome::Expansion(planned), JobKind::Expansion(job)) => {
+            let r = report::expansion(TOOL, inputs, &scenario.request, job, &planned);
+            Ok(Done {
+                finished: Finished::Expansion,
+                report: json(&r)?,
+            })
+        }
+        (Outcome::Inverse(found), JobKind::TargetGain { target, bracket }) => {
             let answer = tissue_inverse_result {
                 target_gain_cm2: *target,
                 bracket_low_cm3: bracket.0,
@@ -695,13 +647,11 @@ pub extern "C" fn tissue_plan_start(
     guard(|| {
         // SAFETY: the header's contract.
         let (patient, options) = unsafe { (get(patient, "patient")?, get(options, "options")?) };
-        let job = start(
-            patient,
-            request(options)?,
-            JsonMode::Single,
-            &[],
-            (None, None, None),
-        )?;
+        let spec = JobSpec {
+            request: request(options)?,
+            ..JobSpec::default()
+        };
+        let job = start(patient, spec)?;
         // SAFETY: `out` is NULL or valid.
         unsafe { put(out, "out", into_handle(job)) }
     })
@@ -731,13 +681,13 @@ pub extern "C" fn tissue_sweep_start(
                 slice(volumes_cm3, count, "volumes_cm3")?,
             )
         };
-        let job = start(
-            patient,
-            request(options)?,
-            JsonMode::Sweep,
-            volumes,
-            (None, None, None),
-        )?;
+        let spec = JobSpec {
+            mode: JobMode::Sweep,
+            request: request(options)?,
+            volumes_cm3: volumes.to_vec(),
+            ..JobSpec::default()
+        };
+        let job = start(patient, spec)?;
         // SAFETY: `out` is NULL or valid.
         unsafe { put(out, "out", into_handle(job)) }
     })
@@ -768,13 +718,15 @@ pub extern "C" fn tissue_inverse_start(
         let bracket = (bracket_low_cm3 != 0.0 || bracket_high_cm3 != 0.0)
             .then_some((bracket_low_cm3, bracket_high_cm3));
         let tolerance = (gain_tolerance_cm2 != 0.0).then_some(gain_tolerance_cm2);
-        let job = start(
-            patient,
-            request(options)?,
-            JsonMode::TargetGain,
-            &[],
-            (Some(target_gain_cm2), bracket, tolerance),
-        )?;
+        let spec = JobSpec {
+            mode: JobMode::TargetGain,
+            request: request(options)?,
+            target_gain_cm2: Some(target_gain_cm2),
+            bracket_cm3: bracket,
+            gain_tolerance_cm2: tolerance,
+            ..JobSpec::default()
+        };
+        let job = start(patient, spec)?;
         // SAFETY: `out` is NULL or valid.
         unsafe { put(out, "out", into_handle(job)) }
     })
@@ -783,12 +735,13 @@ pub extern "C" fn tissue_inverse_start(
 /// Starts a job described in JSON: every field of the planner's request, with its units in its
 /// names, as `insert --report` and the studio take it (`docs/c-api.md`):
 ///
-/// `{"mode": "single" | "sweep" | "target-gain", "request": {"vertex": 2277, "volume_cm3": 50,
-/// "sim_edge_cm": 0.3, ...}, "volumes_cm3": [..], "target_gain_cm2": 30, "bracket_cm3": [lo, hi],
-/// "gain_tolerance_cm2": 0.5}`
+/// `{"mode": "single" | "sweep" | "target-gain" | "expansion", "request": {"vertex": 2277,
+/// "volume_cm3": 50, "sim_edge_cm": 0.3, ...}, "volumes_cm3": [..], "target_gain_cm2": 30,
+/// "bracket_cm3": [lo, hi], "gain_tolerance_cm2": 0.5}` (tissue-planner's `JobSpec`)
 ///
 /// Every member is optional (`{}` is Table 2's single run on the Table 2 plane); unknown members
-/// are refused.
+/// are refused. An expansion (`"mode": "expansion"` with `"expand_weeks"` in the request) gives
+/// its weeks, flap and band in `tissue_job_report_json` only.
 ///
 /// Errors: `TISSUE_USAGE` for JSON that does not parse (the parser's message, with its line and
 /// column), and as `tissue_plan_start`.
@@ -803,23 +756,13 @@ pub extern "C" fn tissue_job_start_json(
     guard(|| {
         // SAFETY: the header's contract.
         let (patient, source) = unsafe { (get(patient, "patient")?, text(job_json, "job_json")?) };
-        let parsed: JobJson = serde_json::from_str(source).map_err(|e| {
+        let spec: JobSpec = serde_json::from_str(source).map_err(|e| {
             Error::new(
                 tissue_status::TISSUE_USAGE,
                 format!("the job's JSON does not parse: {e}"),
             )
         })?;
-        let job = start(
-            patient,
-            parsed.request,
-            parsed.mode,
-            &parsed.volumes_cm3,
-            (
-                parsed.target_gain_cm2,
-                parsed.bracket_cm3,
-                parsed.gain_tolerance_cm2,
-            ),
-        )?;
+        let job = start(patient, spec)?;
         // SAFETY: `out` is NULL or valid.
         unsafe { put(out, "out", into_handle(job)) }
     })
@@ -1029,13 +972,13 @@ fn numbers(r: &RunResult) -> tissue_plan_result {
 }
 
 fn not_single() -> Error {
-    Error::invalid("this job is not a single insertion: read a sweep with tissue_job_sweep_row, a search with tissue_job_inverse_result")
+    Error::invalid("this job is not a single insertion: read a sweep with tissue_job_sweep_row, a search with tissue_job_inverse_result, an expansion from tissue_job_report_json")
 }
 
 /// A finished single insertion's numbers (the report's fields).
 ///
 /// Errors: `TISSUE_NOT_READY` while it runs; how it ended when it did not finish;
-/// `TISSUE_INVALID_ARGUMENT` for a sweep or search.
+/// `TISSUE_INVALID_ARGUMENT` for a sweep, a search or an expansion.
 ///
 /// Thread safety: any thread.
 #[no_mangle]

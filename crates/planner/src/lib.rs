@@ -18,6 +18,9 @@
 //!   with its fields (displacement, stretch, in-region), as mesh files and a picture.
 //! - **The report** ([`report`]): the JSON contract, with [`report::SCHEMA_VERSION`]; field
 //!   names are only ever added.
+//! - **What to run** ([`JobSpec`]): a single run, a sweep, the inverse search or an expansion
+//!   over weeks, as one JSON shape (the studio's run message, the C ABI's job JSON), planned on
+//!   a [`Scenario`] into the worker's job ([`JobSpec::plan`]).
 //! - **Errors** ([`PlanError`]): a kind ([`ErrorKind`]: a front end's exit code or HTTP status),
 //!   the request field at fault, and one sentence that says what to change.
 //!
@@ -46,6 +49,7 @@
 )]
 
 mod error;
+mod job;
 mod patient;
 pub mod report;
 mod request;
@@ -54,6 +58,7 @@ mod scenario;
 mod units;
 
 pub use error::{ErrorKind, PlanError};
+pub use job::{JobKind, JobMode, JobSpec, PlannedJob};
 pub use patient::{
     BoxSummary, DefectSummary, LoopSummary, MeshSummary, Patient, Shipped, TABLE2_SIDE_CM,
     TABLE2_VERTICES_PER_SIDE,

@@ -133,6 +133,27 @@ int main() {
         check(report.find("\"rotation_deg\": 30.0") != std::string::npos, "inputs kept");
     }
 
+    // The same JSON as the studio's: an expansion over weeks, its figures in the report.
+    {
+        Job job;
+        ok(tissue_job_start_json(plane.p,
+                                 R"({"mode": "expansion", "request": {"volume_cm3": 40,
+                                     "expand_weeks": 1, "band_samples": 0}})",
+                                 &job.p),
+           "expansion json");
+        ok(tissue_job_wait(job.p, -1.0), "expansion wait");
+        tissue_plan_result r{};
+        check(tissue_job_result(job.p, &r) != TISSUE_OK, "an expansion is not a single run");
+        size_t length = 0;
+        check(tissue_job_report_json(job.p, nullptr, 0, &length) == TISSUE_BUFFER_TOO_SMALL,
+              "expansion query");
+        std::string report(length, '\0');
+        ok(tissue_job_report_json(job.p, report.data(), report.size(), &length),
+           "expansion report");
+        check(report.find("\"mode\": \"expansion\"") != std::string::npos, "expansion mode");
+        check(report.find("\"flap_area_cm2\"") != std::string::npos, "the flap at removal");
+    }
+
     std::printf("%d failures\n", failures);
     return failures == 0 ? 0 : 1;
 }
