@@ -34,12 +34,26 @@ enum ClientMessage {
     Cancel,
 }
 
-#[derive(Debug, Deserialize)]
+/// A run: the patient's id and what to run, tissue-planner's [`JobSpec`] (the C ABI's job JSON),
+/// whose unknown members are refused (serde's `flatten` would let them through).
+#[derive(Debug)]
 struct RunMessage {
     patient: String,
-    /// What to run: the planner's job JSON, the same as the C ABI's.
-    #[serde(flatten)]
     spec: JobSpec,
+}
+
+impl<'de> Deserialize<'de> for RunMessage {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let mut members = serde_json::Map::<String, Value>::deserialize(d)?;
+        let Some(Value::String(patient)) = members.remove("patient") else {
+            return Err(D::Error::custom(
+                "a run needs `patient`: the id an upload or a shipped patient returned",
+            ));
+        };
+        let spec = JobSpec::deserialize(Value::Object(members)).map_err(D::Error::custom)?;
+        Ok(RunMessage { patient, spec })
+    }
 }
 
 /// Serves one tab's socket until it closes or the server stops; its job is cancelled then.

@@ -241,6 +241,21 @@ async fn jobs_run_table2_in_band_cancel_refuse_a_second_and_end_with_the_tab() -
     let patient = plane["patient"].clone();
     let (mut tab, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/api/ws")).await?;
 
+    // A member the job JSON does not have is refused, as the C ABI refuses it.
+    send(
+        &mut tab,
+        json!({ "type": "run", "patient": patient, "mode": "single", "volume": 50 }),
+    )
+    .await?;
+    let refused = until(&mut tab, &["refused"]).await?;
+    assert_eq!(refused["error"]["kind"], "usage", "{refused}");
+    assert!(
+        refused["error"]["message"]
+            .as_str()
+            .is_some_and(|m| m.contains("volume")),
+        "{refused}"
+    );
+
     // Table 2, in full: the gain in the thesis's band (34.98 cm² measured, band ±2.5).
     send(
         &mut tab,
