@@ -351,8 +351,8 @@ fn simulate(
                 },
                 Command::Demo => match &live {
                     Some(l) => Live::new(Arc::clone(&l.organ), &l.id).and_then(|mut fresh| {
-                        let _ = texts.send(fresh.scene_message());
                         let started = fresh.session.play().map_err(|e| e.to_string())?;
+                        let _ = texts.send(fresh.scene_message());
                         event(&started);
                         live = Some(fresh);
                         next = Instant::now();

@@ -119,6 +119,8 @@ pub struct Session {
     tools: Vec<(ContactForceModel, StiffnessEstimator)>,
     /// The demonstration playing, if any.
     playing: Option<Playing>,
+    /// The tray demonstration's probe, once added (a contact tool; parked between plays).
+    demo_probe: Option<usize>,
 }
 
 impl std::fmt::Debug for Session {
@@ -169,6 +171,7 @@ impl Session {
             tray_side,
             tools: Vec::new(),
             playing: None,
+            demo_probe: None,
             options,
             body,
             surgery,
@@ -394,7 +397,14 @@ impl Session {
                     radius,
                 };
                 let parked = Pose::from_translation(Vec3::new(0.0, 3.0 * extent, 0.0));
-                let tool = self.add_tool(shape, parked)?;
+                let tool = match self.demo_probe {
+                    Some(tool) => {
+                        self.set_tool_pose(tool, parked)?;
+                        tool
+                    }
+                    None => self.add_tool(shape, parked)?,
+                };
+                self.demo_probe = Some(tool);
                 let plan = PressPlan {
                     settle: 50,
                     press: 50,

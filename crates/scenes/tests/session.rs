@@ -261,5 +261,8 @@ fn the_tray_demonstration_presses_a_probe_in_and_parks_it_after() -> Result {
         "drift {}",
         session.worst_drift()
     );
+    // Played again, the same probe comes back: no second tool.
+    session.play()?;
+    assert_eq!(session.tool_count(), 1);
     Ok(())
 }
