@@ -357,11 +357,6 @@ impl PressAndDrag {
     pub fn tool(&self) -> usize {
         self.tool
     }
-
-    /// Whether step `k` is one with the probe at work (pressing or dragging).
-    pub fn probing(&self, k: usize) -> bool {
-        k > self.plan.settle
-    }
 }
 
 impl Script for PressAndDrag {
