@@ -2,11 +2,11 @@
 //! socket ([`crate::jobs`]).
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
-use axum::body::Bytes;
-use axum::extract::rejection::BytesRejection;
-use axum::extract::{DefaultBodyLimit, Path, Query, State, WebSocketUpgrade};
-use axum::http::{header, StatusCode};
+use axum::body::{Body, Bytes};
+use axum::extract::{Path, Query, State, WebSocketUpgrade};
+use axum::http::{header, HeaderMap, StatusCode};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
@@ -15,33 +15,37 @@ use serde_json::json;
 use tissue_planner::{ErrorKind, Patient, PlanError, PlanRequest, Scenario, Shipped, Unit};
 use tissue_scenes::{Organ, ShippedOrgan};
 
+use crate::access::{self, Access};
 use crate::assets;
+use crate::serve::BodyTimeout;
 use crate::state::{Studio, UPLOAD_LIMIT};
 
-/// The studio's routes over `studio`.
-pub fn router(studio: Studio) -> Router {
+/// The largest WebSocket message or frame either socket takes (the page's largest, a scalpel
+/// path, is a few kB).
+pub const MESSAGE_LIMIT: usize = 1024 * 1024;
+
+/// The studio's routes over `studio`, for the clients `access` lets in: every request passes
+/// [`access::guard`] (Host, Origin, token) and every response gets the security headers.
+pub fn router(studio: Studio, access: Access) -> Router {
     Router::new()
         .route("/", get(|| async { assets::serve("index.html") }))
         .route("/planner", get(|| async { assets::serve("planner.html") }))
         .route("/trainer", get(|| async { assets::serve("trainer.html") }))
-        .route(
-            "/api/organs",
-            get(organs)
-                .post(upload_organ)
-                .layer(DefaultBodyLimit::max(UPLOAD_LIMIT)),
-        )
+        .route("/api/organs", get(organs).post(upload_organ))
         .route("/api/trainer/ws", get(trainer_socket))
         .route("/static/{*path}", get(static_file))
         .route("/api/meshes", get(meshes))
-        .route(
-            "/api/patients",
-            post(upload).layer(DefaultBodyLimit::max(UPLOAD_LIMIT)),
-        )
+        .route("/api/patients", post(upload))
         .route("/api/preview", post(preview))
         .route("/api/results/{job}/{file}", get(download))
         .route("/api/ws", get(socket))
         .fallback(|| async { ApiError::new(StatusCode::NOT_FOUND, "not_found", "no such page") })
         .with_state(studio)
+        .layer(axum::middleware::from_fn_with_state(
+            Arc::new(access),
+            access::guard,
+        ))
+        .layer(axum::middleware::from_fn(access::headers))
 }
 
 /// An error as the page shows it: `{"error": {kind, field, message}}` with an HTTP status.
@@ -55,7 +59,7 @@ pub struct ApiError {
 #[derive(Debug, Clone, Serialize)]
 pub struct ErrorBody {
     /// `usage`, `input`, `mesh`, `placement`, `parameters`, `run`, `output`, `cancelled`,
-    /// `busy`, `too_large`, `not_found`.
+    /// `busy`, `too_large`, `not_found`, `timeout`, `forbidden`, `unauthorized`.
     pub kind: String,
     /// The request field at fault.
     pub field: Option<&'static str>,
@@ -105,7 +109,8 @@ pub fn label_of(field: &str) -> Option<&'static str> {
 }
 
 impl ApiError {
-    fn new(status: StatusCode, kind: &str, message: impl Into<String>) -> ApiError {
+    /// An error of `kind` with `status`.
+    pub fn new(status: StatusCode, kind: &str, message: impl Into<String>) -> ApiError {
         ApiError {
             status,
             body: ErrorBody {
@@ -146,10 +151,11 @@ async fn organs() -> Json<Vec<serde_json::Value>> {
 async fn upload_organ(
     State(studio): State<Studio>,
     Query(query): Query<HashMap<String, String>>,
-    body: Result<Bytes, BytesRejection>,
+    headers: HeaderMap,
+    body: Body,
 ) -> Result<Json<serde_json::Value>, ApiError> {
     let (name, unit) = name_and_unit(&query)?;
-    let bytes = body.map_err(|e| too_large_or(&name, &e))?;
+    let (bytes, _slot) = read_upload(&studio, &headers, body, &name).await?;
     let organ = blocking(move || {
         Organ::from_bytes(&bytes, &name, unit.cm_per_unit())
             .map_err(|e| ApiError::new(StatusCode::BAD_REQUEST, "mesh", e.to_string()))
@@ -184,24 +190,95 @@ fn name_and_unit(query: &HashMap<String, String>) -> Result<(String, Unit), ApiE
     Ok((name, unit))
 }
 
-fn too_large_or(name: &str, e: &BytesRejection) -> ApiError {
-    if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-        ApiError::new(
-            StatusCode::PAYLOAD_TOO_LARGE,
-            "too_large",
+/// An upload's bytes, read once its content type is the page's and a place among
+/// [`crate::Limits::uploads`] is free (the place is held until the returned permit drops, so
+/// the parsing counts too). Bounded by [`UPLOAD_LIMIT`] and the body's deadlines.
+async fn read_upload(
+    studio: &Studio,
+    headers: &HeaderMap,
+    body: Body,
+    name: &str,
+) -> Result<(Bytes, tokio::sync::OwnedSemaphorePermit), ApiError> {
+    let kind = headers
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .unwrap_or("");
+    if !kind
+        .trim()
+        .to_ascii_lowercase()
+        .starts_with("application/octet-stream")
+    {
+        return Err(ApiError::new(
+            StatusCode::UNSUPPORTED_MEDIA_TYPE,
+            "usage",
             format!(
-                "{name} is larger than the upload limit of {} MiB; decimate the scan or \
-                 crop it to the region of interest",
-                UPLOAD_LIMIT / (1024 * 1024)
+                "an upload is sent as application/octet-stream (as the studio's page does), not \
+                 {kind:?}"
+            ),
+        ));
+    }
+    let declared = headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.parse::<u64>().ok());
+    if declared.is_some_and(|n| n > UPLOAD_LIMIT as u64) {
+        return Err(too_large(name));
+    }
+    let slot = studio.upload_slot().ok_or_else(|| {
+        ApiError::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            "busy",
+            format!(
+                "{} uploads are being read already: try again when one has finished",
+                studio.limits().uploads
             ),
         )
-    } else {
-        ApiError::new(StatusCode::BAD_REQUEST, "input", format!("{name}: {e}"))
+    })?;
+    let bytes = axum::body::to_bytes(body, UPLOAD_LIMIT)
+        .await
+        .map_err(|e| body_error(name, &e))?;
+    Ok((bytes, slot))
+}
+
+fn too_large(name: &str) -> ApiError {
+    ApiError::new(
+        StatusCode::PAYLOAD_TOO_LARGE,
+        "too_large",
+        format!(
+            "{name} is larger than the upload limit of {} MiB; decimate the scan or crop it to \
+             the region of interest",
+            UPLOAD_LIMIT / (1024 * 1024)
+        ),
+    )
+}
+
+/// A body that could not be read: too large (413), too slow (408), or broken off (400).
+fn body_error(name: &str, e: &axum::Error) -> ApiError {
+    let mut source: Option<&(dyn std::error::Error + 'static)> = Some(e);
+    while let Some(s) = source {
+        if let Some(t) = s.downcast_ref::<BodyTimeout>() {
+            return ApiError::new(
+                StatusCode::REQUEST_TIMEOUT,
+                "timeout",
+                format!("{name}: {t}; send it again"),
+            );
+        }
+        if s.is::<http_body_util::LengthLimitError>() {
+            return too_large(name);
+        }
+        source = s.source();
     }
+    ApiError::new(
+        StatusCode::BAD_REQUEST,
+        "input",
+        format!("{name}: the upload broke off ({e}); send it again"),
+    )
 }
 
 async fn trainer_socket(State(studio): State<Studio>, ws: WebSocketUpgrade) -> Response {
-    ws.on_upgrade(move |socket| crate::trainer::serve_socket(studio, socket))
+    ws.max_message_size(MESSAGE_LIMIT)
+        .max_frame_size(MESSAGE_LIMIT)
+        .on_upgrade(move |socket| crate::trainer::serve_socket(studio, socket))
 }
 
 async fn static_file(Path(path): Path<String>) -> Response {
@@ -246,8 +323,10 @@ async fn blocking<T: Send + 'static>(
 async fn upload(
     State(studio): State<Studio>,
     Query(query): Query<HashMap<String, String>>,
-    body: Result<Bytes, BytesRejection>,
+    headers: HeaderMap,
+    body: Body,
 ) -> Result<Json<serde_json::Value>, ApiError> {
+    let mut _slot = None;
     let source = if let Some(id) = query.get("shipped") {
         let shipped = Shipped::from_id(id).ok_or_else(|| {
             ApiError::new(
@@ -259,7 +338,8 @@ async fn upload(
         Source::Shipped(shipped)
     } else {
         let (name, unit) = name_and_unit(&query)?;
-        let bytes = body.map_err(|e| too_large_or(&name, &e))?;
+        let (bytes, slot) = read_upload(&studio, &headers, body, &name).await?;
+        _slot = Some(slot);
         if bytes.is_empty() {
             return Err(ApiError::new(
                 StatusCode::BAD_REQUEST,
@@ -438,5 +518,7 @@ async fn download(
 }
 
 async fn socket(State(studio): State<Studio>, ws: WebSocketUpgrade) -> Response {
-    ws.on_upgrade(move |socket| crate::jobs::serve_socket(studio, socket))
+    ws.max_message_size(MESSAGE_LIMIT)
+        .max_frame_size(MESSAGE_LIMIT)
+        .on_upgrade(move |socket| crate::jobs::serve_socket(studio, socket))
 }

@@ -15,6 +15,7 @@ use tissue_planner::{
 use tokio::sync::mpsc;
 
 use crate::api::{scenario, ErrorBody};
+use crate::serve::send_within;
 use crate::state::{Running, Studio};
 
 /// The report's `tool`.
@@ -56,11 +57,41 @@ impl<'de> Deserialize<'de> for RunMessage {
     }
 }
 
+/// The job a tab owns. It is set when the tab's run is accepted and cleared only by *that* job's
+/// terminal message: a tab's next run can be accepted (the server frees its one job slot as the
+/// previous job ends) before the previous job's terminal message has been sent on, and clearing
+/// on any terminal message left the new job with no owner (nobody could cancel it, and closing
+/// the tab did not either).
+#[derive(Debug, Default)]
+struct Owned(Option<Running>);
+
+impl Owned {
+    /// The tab's run `job` was accepted.
+    fn started(&mut self, job: Running) {
+        self.0 = Some(job);
+    }
+
+    /// A terminal message of job `id` went out: the tab owns nothing if that was its job.
+    fn ended(&mut self, id: &str) {
+        if self.0.as_ref().is_some_and(|r| r.id == id) {
+            self.0 = None;
+        }
+    }
+
+    /// Cancels the tab's job, if it has one.
+    fn cancel(&self) {
+        if let Some(r) = &self.0 {
+            r.cancel.store(true, Ordering::Relaxed);
+        }
+    }
+}
+
 /// Serves one tab's socket until it closes or the server stops; its job is cancelled then.
 pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
     let (tx, mut rx) = mpsc::unbounded_channel::<Value>();
     let mut shutdown = studio.on_shutdown();
-    let mut mine: Option<Running> = None;
+    let send_timeout = studio.limits().send_timeout;
+    let mut mine = Owned::default();
     loop {
         tokio::select! {
             incoming = socket.recv() => {
@@ -70,14 +101,10 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
                     Some(Ok(_)) => continue,
                 };
                 match serde_json::from_str::<ClientMessage>(&text) {
-                    Ok(ClientMessage::Cancel) => {
-                        if let Some(r) = &mine {
-                            r.cancel.store(true, Ordering::Relaxed);
-                        }
-                    }
+                    Ok(ClientMessage::Cancel) => mine.cancel(),
                     Ok(ClientMessage::Run(run)) => {
                         match start(&studio, *run, tx.clone()) {
-                            Ok(r) => mine = Some(r),
+                            Ok(r) => mine.started(r),
                             Err(body) => {
                                 let _ = tx.send(json!({ "type": "refused", "error": body }));
                             }
@@ -94,21 +121,21 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
                 }
             }
             Some(out) = rx.recv() => {
-                let terminal = out["type"] != "progress" && out["type"] != "accepted";
-                if socket.send(Message::Text(out.to_string().into())).await.is_err() {
+                let terminal = matches!(out["type"].as_str(), Some("finished" | "failed" | "cancelled"));
+                if !send_within(&mut socket, Message::Text(out.to_string().into()), send_timeout).await {
                     break;
                 }
-                if terminal && out["type"] != "refused" {
-                    mine = None;
+                if terminal {
+                    if let Some(id) = out["job"].as_str() {
+                        mine.ended(id);
+                    }
                 }
             }
             _ = shutdown.changed() => break,
         }
     }
     // The tab is gone (or the server stops): its job is cancelled.
-    if let Some(r) = mine {
-        r.cancel.store(true, Ordering::Relaxed);
-    }
+    mine.cancel();
 }
 
 /// Starts `run` on a thread of its own, unless a job runs.
@@ -309,5 +336,39 @@ fn drive(
             Event::Cancelled { steps } => return Err(End::Cancelled(steps)),
             Event::Failed(e) => return Err(End::Failed(PlanError::from_app(&e))),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+
+    use super::*;
+
+    fn job(id: &str) -> Running {
+        Running {
+            id: id.to_owned(),
+            cancel: Arc::new(AtomicBool::new(false)),
+        }
+    }
+
+    /// The orphan-job race of the security probe: run A ends, the tab's next run B is accepted,
+    /// and only then does A's terminal message go out. The tab must still own B.
+    #[test]
+    fn a_terminal_message_clears_only_its_own_job() {
+        let (a, b) = (job("ja"), job("jb"));
+        let mut mine = Owned::default();
+        mine.started(a.clone());
+        mine.started(b.clone());
+        mine.ended("ja");
+        mine.cancel();
+        assert!(
+            b.cancel.load(Ordering::Relaxed),
+            "closing the tab cancels B"
+        );
+        assert!(!a.cancel.load(Ordering::Relaxed));
+        mine.ended("jb");
+        assert!(mine.0.is_none(), "nothing owned after B's end");
     }
 }

@@ -3,7 +3,12 @@
 //! The server behind `studio`: an axum router ([`router`]) over a [`Studio`] (the patients
 //! loaded, the finished jobs' files, the one running job), the page's static files embedded in
 //! the binary ([`assets`]), and the planning done by tissue-planner on tissue-app's worker — the
-//! same code as `insert`. The binary (`main.rs`) only parses flags, binds and serves.
+//! same code as `insert`. [`serve`] runs it on a listener with time limits and a stop that always
+//! ends; [`Access`] says who may use it (Host, Origin, token). The binary (`main.rs`) only parses
+//! flags, binds, and turns signals into the stop.
+//!
+//! `apps/studio/SECURITY.md` is the threat model: who attacks a server holding patient scans, and
+//! which defence here stops what.
 //!
 //! The HTTP API, the WebSocket messages and the JSON are in `apps/studio/API.md`.
 //!
@@ -17,10 +22,15 @@
 //!   how far. Previews (the set-up without the run) are not jobs and are always answered.
 //! - **Closing the tab cancels its job**: a job belongs to its WebSocket; when the socket closes
 //!   the job is cancelled (within one simulation step).
-//! - **Limits.** Uploads up to [`UPLOAD_LIMIT`] bytes; at most [`KEPT`] patients and [`KEPT`]
-//!   finished jobs are kept, the oldest dropped first (their files deleted).
-//! - **Files.** The server writes only in its temporary folder ([`Studio::temp_dir`]), which it
-//!   removes when it stops.
+//! - **Only its own page.** Every request must name this server in `Host`; WebSocket upgrades and
+//!   POSTs from another origin are refused; off loopback, every request needs the token
+//!   ([`Access`]). Ids of patients, jobs and organs are 128 random bits.
+//! - **Limits.** Uploads up to [`UPLOAD_LIMIT`] bytes, [`Limits::uploads`] at a time, sent as
+//!   `application/octet-stream`; header, body and send timeouts ([`Limits`]); at most [`KEPT`]
+//!   patients and [`KEPT`] finished jobs are kept, the oldest dropped first (their files
+//!   deleted).
+//! - **Files.** The server writes only in its temporary folder ([`Studio::temp_dir`], mode 0700,
+//!   made afresh), which it removes when it stops.
 //! - **No panics on input.** Every user error is a JSON `{"error": {kind, field, message}}`.
 //!
 //! ## Example: the API without a browser
@@ -31,11 +41,25 @@
 //!
 //! # tokio::runtime::Runtime::new()?.block_on(async {
 //! let studio = tissue_studio::Studio::new()?;
-//! let app = tissue_studio::router(studio.clone());
+//! let app = tissue_studio::router(studio.clone(), tissue_studio::Access::loopback(8000));
 //! let response = app
-//!     .oneshot(Request::post("/api/patients?shipped=table2").body(Body::empty())?)
+//!     .clone()
+//!     .oneshot(
+//!         Request::post("/api/patients?shipped=table2")
+//!             .header("host", "127.0.0.1:8000")
+//!             .body(Body::empty())?,
+//!     )
 //!     .await?;
 //! assert_eq!(response.status(), StatusCode::OK);
+//! // A page at another address (DNS rebinding) is not served.
+//! let rebound = app
+//!     .oneshot(
+//!         Request::get("/api/meshes")
+//!             .header("host", "rebind.evil.example:8000")
+//!             .body(Body::empty())?,
+//!     )
+//!     .await?;
+//! assert_eq!(rebound.status(), StatusCode::MISDIRECTED_REQUEST);
 //! studio.shutdown();
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! # })?;
@@ -50,11 +74,15 @@
     clippy::print_stderr
 )]
 
+mod access;
 mod api;
 pub mod assets;
 mod jobs;
+mod serve;
 mod state;
 pub mod trainer;
 
+pub use access::{content_security_policy, Access};
 pub use api::router;
-pub use state::{Studio, KEPT, UPLOAD_LIMIT};
+pub use serve::{serve, BodyTimeout};
+pub use state::{Limits, Studio, KEPT, UPLOAD_LIMIT};

@@ -1,27 +1,39 @@
-//! `studio`: the planner in a browser. Serves the page and its API on localhost (see
-//! `apps/studio/API.md`); everything else is in the library (tissue-studio).
+//! `studio`: the planner and the trainer in a browser. Serves the page and its API (see
+//! `apps/studio/API.md`) on this computer, or with a token to others; everything else is in the
+//! library (tissue-studio). `apps/studio/SECURITY.md` is the threat model.
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::process::ExitCode;
+use std::time::Duration;
 
 use clap::Parser;
 use tissue_cli::Exit;
 
-/// Plan a tissue-expander insertion in the browser: pick the patient, place and size the
-/// implant, run and see the result. Serves on 127.0.0.1 (this computer only) unless --host is
-/// given, and prints the address to open.
+/// Plan a tissue-expander insertion and train surgery in the browser. Serves on 127.0.0.1 (this
+/// computer only) unless --host is given, and prints the address to open. Off loopback every
+/// request needs the random token printed in that address; TLS belongs to a reverse proxy (see
+/// the README).
 #[derive(Debug, Parser)]
 #[command(name = "studio", version, after_long_help = Exit::help_section(&[
     (Exit::Output, "the temporary folder cannot be made"),
     (Exit::Failure, "the server cannot start or listen (another --port?) or stopped"),
 ]))]
 struct Cli {
-    /// The address to listen on; another than 127.0.0.1 lets other computers reach the studio.
+    /// The address to listen on. Another than loopback lets other computers reach the studio:
+    /// it then makes a token that every request needs, printed in its address line.
     #[arg(long, default_value_t = IpAddr::V4(Ipv4Addr::LOCALHOST))]
     host: IpAddr,
     /// The port; 0 picks a free one.
     #[arg(long, default_value_t = 8000)]
     port: u16,
+    /// A host name a reverse proxy passes on in `Host` (`studio.clinic.example`), besides
+    /// 127.0.0.1, localhost and [::1]; repeatable. Implies the token.
+    #[arg(long = "allowed-host", value_name = "NAME")]
+    allowed_hosts: Vec<String>,
+    /// Require the token on loopback too: on a computer other people log in to, where they could
+    /// reach 127.0.0.1.
+    #[arg(long)]
+    require_token: bool,
 }
 
 fn main() -> ExitCode {
@@ -41,7 +53,10 @@ fn main() -> ExitCode {
             return Exit::Failure.into();
         }
     };
-    match runtime.block_on(serve(SocketAddr::new(cli.host, cli.port))) {
+    let result = runtime.block_on(run(cli));
+    // Tasks still blocked (a peer that stopped reading) do not hold the process.
+    runtime.shutdown_timeout(Duration::from_millis(500));
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err((exit, message)) => {
             eprintln!("studio: error: {message}");
@@ -50,14 +65,9 @@ fn main() -> ExitCode {
     }
 }
 
-/// Serves until Ctrl-C; a failure is its exit code and message.
-async fn serve(addr: SocketAddr) -> Result<(), (Exit, String)> {
-    let studio = tissue_studio::Studio::new().map_err(|e| {
-        (
-            Exit::Output,
-            format!("cannot make the temporary folder: {e}"),
-        )
-    })?;
+/// Serves until Ctrl-C or SIGTERM; a failure is its exit code and message.
+async fn run(cli: Cli) -> Result<(), (Exit, String)> {
+    let addr = SocketAddr::new(cli.host, cli.port);
     let listener = tokio::net::TcpListener::bind(addr).await.map_err(|e| {
         (
             Exit::Failure,
@@ -67,16 +77,56 @@ async fn serve(addr: SocketAddr) -> Result<(), (Exit, String)> {
     let local = listener
         .local_addr()
         .map_err(|e| (Exit::Failure, format!("cannot read the address: {e}")))?;
-    println!("studio: http://{local}/");
-    let app = tissue_studio::router(studio.clone());
+    let access = tissue_studio::Access::new(local, cli.allowed_hosts, cli.require_token)
+        .map_err(|e| (Exit::Failure, format!("cannot make the access token: {e}")))?;
+    let studio = tissue_studio::Studio::new().map_err(|e| {
+        (
+            Exit::Output,
+            format!("cannot make the temporary folder: {e}"),
+        )
+    })?;
+    if !local.ip().is_loopback() {
+        eprintln!(
+            "studio: warning: listening on {local}, reachable from other computers: every \
+             request needs the token in the address below; the connection is not encrypted, so \
+             put a TLS reverse proxy in front of it (README: \"Serving to other computers\")"
+        );
+    }
+    println!("studio: {}", access.address());
     let stopping = studio.clone();
-    let served = axum::serve(listener, app)
-        .with_graceful_shutdown(async move {
-            let _ = tokio::signal::ctrl_c().await;
-            // Sockets close and the running job is cancelled, so that the server can stop.
+    tissue_studio::serve(listener, studio, access, async move {
+        stop_signal().await;
+        // A second Ctrl-C or SIGTERM while the first stop waits: out now, the folder removed.
+        tokio::spawn(async move {
+            stop_signal().await;
             stopping.shutdown();
-        })
-        .await;
-    studio.shutdown();
-    served.map_err(|e| (Exit::Failure, format!("the server stopped: {e}")))
+            eprintln!("studio: stopped at once (second signal)");
+            std::process::exit(130);
+        });
+    })
+    .await;
+    Ok(())
+}
+
+/// Ctrl-C (SIGINT) or SIGTERM (what systemd, docker and `kill` send).
+async fn stop_signal() {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{signal, SignalKind};
+        match signal(SignalKind::terminate()) {
+            Ok(mut term) => {
+                tokio::select! {
+                    _ = tokio::signal::ctrl_c() => {}
+                    _ = term.recv() => {}
+                }
+            }
+            Err(_) => {
+                let _ = tokio::signal::ctrl_c().await;
+            }
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = tokio::signal::ctrl_c().await;
+    }
 }

@@ -1,19 +1,57 @@
-//! What the server holds: the patients loaded, the finished jobs, the running job, and its
-//! temporary folder.
+//! What the server holds: the patients loaded, the finished jobs, the running job, its limits
+//! and its temporary folder.
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::Duration;
 
 use tissue_planner::Patient;
-use tokio::sync::watch;
+use tokio::sync::{watch, OwnedSemaphorePermit, Semaphore};
 
 /// Largest upload, bytes (64 MiB: a 160k-triangle scan as text OBJ is about 10 MiB).
 pub const UPLOAD_LIMIT: usize = 64 * 1024 * 1024;
 
 /// How many patients and how many finished jobs are kept (oldest dropped first).
 pub const KEPT: usize = 8;
+
+/// The server's limits on time and concurrency (see `serve.rs`); [`Limits::default`] is what
+/// `studio` runs with.
+#[derive(Debug, Clone)]
+pub struct Limits {
+    /// A request's headers (and the wait for the next request on a kept-alive connection) must
+    /// arrive within this: 30 s.
+    pub header_timeout: Duration,
+    /// A body that sends no byte for this long is dropped: 30 s.
+    pub body_idle: Duration,
+    /// A body still unfinished after this long is dropped: 10 min (64 MiB at 110 kB/s).
+    pub body_total: Duration,
+    /// Uploads read at once (each holds up to [`UPLOAD_LIMIT`] bytes); more are refused with
+    /// 503 until one ends: 2.
+    pub uploads: usize,
+    /// Connections served at once (more wait in the kernel's backlog): 256.
+    pub max_connections: usize,
+    /// A WebSocket send that the peer does not take within this closes the socket (a tab that
+    /// stopped reading): 10 s.
+    pub send_timeout: Duration,
+    /// After a stop, open connections get this long to finish: 3 s.
+    pub shutdown_grace: Duration,
+}
+
+impl Default for Limits {
+    fn default() -> Limits {
+        Limits {
+            header_timeout: Duration::from_secs(30),
+            body_idle: Duration::from_secs(30),
+            body_total: Duration::from_secs(600),
+            uploads: 2,
+            max_connections: 256,
+            send_timeout: Duration::from_secs(10),
+            shutdown_grace: Duration::from_secs(3),
+        }
+    }
+}
 
 /// A job that finished: its folder of downloads.
 #[derive(Debug)]
@@ -45,31 +83,53 @@ struct Inner {
 pub struct Studio {
     organs: Arc<crate::trainer::Organs>,
     inner: Arc<Mutex<Inner>>,
-    next: Arc<AtomicU64>,
     temp: Arc<PathBuf>,
     shutdown: watch::Sender<bool>,
+    limits: Arc<Limits>,
+    uploads: Arc<Semaphore>,
 }
 
 impl Studio {
-    /// A studio with a new temporary folder.
+    /// A studio with the default [`Limits`] and a new temporary folder.
     ///
     /// # Errors
     /// The folder cannot be made.
     pub fn new() -> std::io::Result<Studio> {
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.subsec_nanos());
-        let temp =
-            std::env::temp_dir().join(format!("tissue-studio-{}-{nanos:09}", std::process::id()));
-        std::fs::create_dir_all(&temp)?;
+        Studio::with_limits(Limits::default())
+    }
+
+    /// A studio with `limits` and a new temporary folder: `$TMPDIR/tissue-studio-RANDOM`, made
+    /// afresh (never an existing one) with mode 0700, so other users of the computer cannot list
+    /// or read the patients' files in it.
+    ///
+    /// # Errors
+    /// The folder cannot be made.
+    pub fn with_limits(limits: Limits) -> std::io::Result<Studio> {
+        let name = crate::access::random_hex(12).map_err(std::io::Error::other)?;
+        let temp = std::env::temp_dir().join(format!("tissue-studio-{name}"));
+        let mut builder = std::fs::DirBuilder::new();
+        #[cfg(unix)]
+        std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
+        builder.create(&temp)?;
         let (shutdown, _) = watch::channel(false);
         Ok(Studio {
             organs: Arc::default(),
             inner: Arc::default(),
-            next: Arc::new(AtomicU64::new(1)),
             temp: Arc::new(temp),
             shutdown,
+            uploads: Arc::new(Semaphore::new(limits.uploads.max(1))),
+            limits: Arc::new(limits),
         })
+    }
+
+    /// The limits it runs with.
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+
+    /// A place for one upload, or `None` when [`Limits::uploads`] are being read.
+    pub fn upload_slot(&self) -> Option<OwnedSemaphorePermit> {
+        Arc::clone(&self.uploads).try_acquire_owned().ok()
     }
 
     fn lock(&self) -> MutexGuard<'_, Inner> {
@@ -83,9 +143,10 @@ impl Studio {
         Arc::clone(&self.organs)
     }
 
-    /// A new id with `prefix` (`p1`, `j2`, …).
+    /// A new id: `prefix` and 128 random bits in hex (`p3f…`, `j9c…`), so that an id cannot be
+    /// guessed from another (sequential ids let any client enumerate the patients and results).
     pub fn id(&self, prefix: &str) -> String {
-        format!("{prefix}{}", self.next.fetch_add(1, Ordering::Relaxed))
+        new_id(prefix)
     }
 
     /// The temporary folder: everything the server writes is in it.
@@ -146,7 +207,7 @@ impl Studio {
     /// It cannot be made.
     pub fn job_dir(&self, id: &str) -> std::io::Result<PathBuf> {
         let dir = self.temp.join(id);
-        std::fs::create_dir_all(&dir)?;
+        std::fs::create_dir(&dir)?;
         Ok(dir)
     }
 
@@ -178,6 +239,11 @@ impl Studio {
         self.shutdown.subscribe()
     }
 
+    /// Whether the server is stopping.
+    pub fn is_stopping(&self) -> bool {
+        *self.shutdown.borrow()
+    }
+
     /// Stops: cancels the running job, tells every socket to close, and removes the temporary
     /// folder.
     pub fn shutdown(&self) {
@@ -186,5 +252,23 @@ impl Studio {
         }
         self.shutdown.send_replace(true);
         let _ = std::fs::remove_dir_all(self.temp.as_path());
+    }
+}
+
+/// `prefix` and 128 random bits in hex; if the system's generator fails (it does not on the
+/// systems we run on), a mix of the clock and a counter, still unique in the process.
+pub fn new_id(prefix: &str) -> String {
+    match crate::access::random_hex(16) {
+        Ok(hex) => format!("{prefix}{hex}"),
+        Err(_) => {
+            static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+            let nanos = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos());
+            format!(
+                "{prefix}{nanos:x}{:x}",
+                NEXT.fetch_add(1, Ordering::Relaxed)
+            )
+        }
     }
 }

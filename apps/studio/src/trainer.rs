@@ -2,7 +2,7 @@
 //! native simulation thread stepping at a fixed rate, publishing only its newest surface frame,
 //! which the socket task sends as a binary WebSocket frame (see `API.md`).
 
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -13,6 +13,7 @@ use serde_json::{json, Value};
 use tissue_scenes::{Organ, Session, SessionOptions, ShippedOrgan, TrainerEvent};
 use tokio::sync::{mpsc, watch};
 
+use crate::serve::send_within;
 use crate::state::Studio;
 
 /// Steps per second of the simulation thread.
@@ -20,6 +21,10 @@ pub const STEPS_PER_SECOND: f64 = 60.0;
 
 /// How often stats go to the page.
 const STATS_EVERY: Duration = Duration::from_millis(250);
+
+/// Commands waiting for the simulation thread; a page that sends more between two steps is told
+/// to slow down (the page sends a drag per animation frame).
+pub const COMMAND_QUEUE: usize = 256;
 
 /// The frame's magic number, "TSF1" little-endian.
 pub const FRAME_MAGIC: u32 = 0x3146_5354;
@@ -151,13 +156,12 @@ pub enum Command {
 pub struct Organs {
     uploads: Mutex<Vec<(String, Arc<Organ>)>>,
     busy: AtomicBool,
-    next: AtomicU64,
 }
 
 impl Organs {
     /// Keeps an upload; its id.
     pub fn add(&self, organ: Organ) -> String {
-        let id = format!("u{}", self.next.fetch_add(1, Ordering::Relaxed) + 1);
+        let id = crate::state::new_id("u");
         let mut list = self.uploads.lock().unwrap_or_else(|p| p.into_inner());
         list.push((id.clone(), Arc::new(organ)));
         if list.len() > crate::state::KEPT {
@@ -188,15 +192,21 @@ fn error_json(kind: &str, message: impl Into<String>) -> Value {
 /// Serves one tab's trainer socket: one session at a time on the server.
 pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
     let organs = studio.organs();
+    let send_timeout = studio.limits().send_timeout;
     if organs.busy.swap(true, Ordering::AcqRel) {
         let refused = json!({ "type": "refused", "error": error_json(
             "busy",
             "a trainer session runs in another tab on this server: close it first (one session \
              runs at a time, so that it keeps its 60 steps per second)") });
-        let _ = socket.send(Message::Text(refused.to_string().into())).await;
+        let _ = send_within(
+            &mut socket,
+            Message::Text(refused.to_string().into()),
+            send_timeout,
+        )
+        .await;
         return;
     }
-    let (commands, command_rx) = std::sync::mpsc::channel::<Command>();
+    let (commands, command_rx) = std::sync::mpsc::sync_channel::<Command>(COMMAND_QUEUE);
     let (frames_tx, mut frames) = watch::channel::<Option<Arc<Frame>>>(None);
     let (stats_tx, stats) = watch::channel(Stats::default());
     let (texts_tx, mut texts) = mpsc::unbounded_channel::<Value>();
@@ -232,18 +242,23 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
                         Some(Ok(Message::Close(_)) | Err(_)) | None => break,
                         Some(Ok(_)) => continue,
                     };
-                    match serde_json::from_str::<Command>(&text) {
-                        Ok(c) => {
-                            if commands.send(c).is_err() {
-                                break;
-                            }
-                        }
-                        Err(e) => {
-                            let m = json!({ "type": "refused", "error": error_json(
-                                "usage", format!("the page sent a message the server does not know: {e}")) });
-                            if socket.send(Message::Text(m.to_string().into())).await.is_err() {
-                                break;
-                            }
+                    let refusal = match serde_json::from_str::<Command>(&text) {
+                        Ok(c) => match commands.try_send(c) {
+                            Ok(()) => None,
+                            Err(std::sync::mpsc::TrySendError::Full(_)) => Some(error_json(
+                                "busy",
+                                format!("more than {COMMAND_QUEUE} commands are waiting for the \
+                                         simulation: this one was dropped"),
+                            )),
+                            Err(std::sync::mpsc::TrySendError::Disconnected(_)) => break,
+                        },
+                        Err(e) => Some(error_json(
+                            "usage", format!("the page sent a message the server does not know: {e}"))),
+                    };
+                    if let Some(error) = refusal {
+                        let m = json!({ "type": "refused", "error": error });
+                        if !send_within(&mut socket, Message::Text(m.to_string().into()), send_timeout).await {
+                            break;
                         }
                     }
                 }
@@ -255,7 +270,7 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
                     if let Some(frame) = frame {
                         let with_indices = frame.surface.0 != sent_version;
                         let bytes = frame.encode(with_indices);
-                        if socket.send(Message::Binary(bytes.into())).await.is_err() {
+                        if !send_within(&mut socket, Message::Binary(bytes.into()), send_timeout).await {
                             break;
                         }
                         sent_version = frame.surface.0;
@@ -267,7 +282,7 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
                         // A new organ: its first frame carries the index buffer.
                         sent_version = 0;
                     }
-                    if socket.send(Message::Text(text.to_string().into())).await.is_err() {
+                    if !send_within(&mut socket, Message::Text(text.to_string().into()), send_timeout).await {
                         break;
                     }
                 }
@@ -285,7 +300,7 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
                         "volume_drift": s.volume_drift, "nodes": s.nodes, "tets": s.tets,
                         "paused": s.paused, "force_n": s.force_n,
                     });
-                    if socket.send(Message::Text(m.to_string().into())).await.is_err() {
+                    if !send_within(&mut socket, Message::Text(m.to_string().into()), send_timeout).await {
                         break;
                     }
                 }
@@ -312,7 +327,7 @@ fn simulate(
 ) {
     let _span = tracing::info_span!("studio_trainer").entered();
     let period = Duration::from_secs_f64(1.0 / STEPS_PER_SECOND);
-    let mut live: Option<Live> = None;
+    let mut desk = Desk::default();
     let mut paused = false;
     let mut number = 0u32;
     let mut next = Instant::now();
@@ -333,52 +348,37 @@ fn simulate(
                 Err(std::sync::mpsc::TryRecvError::Disconnected) => return,
             };
             let result = match command {
-                Command::Load { organ } => organs
-                    .get(&organ)
-                    .and_then(|o| Live::new(o, &organ))
-                    .map(|l| {
-                        let _ = texts.send(l.scene_message());
-                        live = Some(l);
-                        next = Instant::now();
-                    }),
-                Command::Reset => match &live {
-                    Some(l) => Live::new(Arc::clone(&l.organ), &l.id).map(|fresh| {
-                        let _ = texts.send(fresh.scene_message());
-                        live = Some(fresh);
-                        next = Instant::now();
-                    }),
-                    None => Ok(()),
-                },
-                Command::Demo => match &live {
-                    Some(l) => Live::new(Arc::clone(&l.organ), &l.id).and_then(|mut fresh| {
-                        let started = fresh.session.play().map_err(|e| e.to_string())?;
-                        let _ = texts.send(fresh.scene_message());
-                        event(&started);
-                        live = Some(fresh);
-                        next = Instant::now();
-                        Ok(())
-                    }),
-                    None => Err("load an organ first".to_owned()),
-                },
+                Command::Load { organ } => organs.get(&organ).and_then(|o| desk.load(o, &organ)),
+                Command::Reset => desk.reset(),
+                Command::Demo => desk.demo().map(|(scene, started)| {
+                    let _ = texts.send(scene);
+                    event(&started);
+                    None
+                }),
                 Command::Pause { paused: p } => {
                     paused = p;
-                    Ok(())
+                    Ok(None)
                 }
                 Command::Step => {
                     single = true;
-                    Ok(())
+                    Ok(None)
                 }
-                Command::Tool { .. } => Ok(()),
-                other => match &mut live {
-                    Some(l) => l.apply(other, &event),
-                    None => Err("load an organ first".to_owned()),
+                Command::Tool { .. } => Ok(None),
+                other => match &mut desk.live {
+                    Some(l) => l.apply(other, &event).map(|()| None),
+                    None => Err(desk.not_live()),
                 },
             };
-            if let Err(message) = result {
-                fail("run", message);
+            match result {
+                Ok(Some(scene)) => {
+                    let _ = texts.send(scene);
+                    next = Instant::now();
+                }
+                Ok(None) => {}
+                Err(message) => fail("run", message),
             }
         }
-        if let Some(l) = &mut live {
+        if let Some(l) = &mut desk.live {
             if !paused || single {
                 match l.session.step() {
                     Ok(events) => events.iter().for_each(event),
@@ -387,7 +387,7 @@ fn simulate(
                             "run",
                             format!("the simulation failed: {e}; press Reset to start again"),
                         );
-                        live = None;
+                        desk.diverged();
                         continue;
                     }
                 }
@@ -424,20 +424,74 @@ fn simulate(
     }
 }
 
+/// The organ loaded and its live session. The organ outlives a session that failed, so that
+/// Reset (and the demonstration) rebuild it: the failure message tells the user to press Reset.
+#[derive(Default)]
+struct Desk {
+    /// The organ and its id, from the last `load`.
+    loaded: Option<(Arc<Organ>, String)>,
+    /// Its session; `None` before a load and after a failed step.
+    live: Option<Live>,
+}
+
+impl Desk {
+    /// Starts a session on `organ`; the `scene` message.
+    fn load(&mut self, organ: Arc<Organ>, id: &str) -> Result<Option<Value>, String> {
+        let live = Live::new(&organ, id)?;
+        let scene = live.scene_message();
+        self.loaded = Some((organ, id.to_owned()));
+        self.live = Some(live);
+        Ok(Some(scene))
+    }
+
+    /// The loaded organ's session afresh (also after a failure); nothing before a load.
+    fn reset(&mut self) -> Result<Option<Value>, String> {
+        match self.loaded.clone() {
+            Some((organ, id)) => self.load(organ, &id),
+            None => Ok(None),
+        }
+    }
+
+    /// The loaded organ afresh with its demonstration playing: the `scene` message and the
+    /// demonstration's first event.
+    fn demo(&mut self) -> Result<(Value, TrainerEvent), String> {
+        let Some((organ, id)) = self.loaded.clone() else {
+            return Err(self.not_live());
+        };
+        let mut fresh = Live::new(&organ, &id)?;
+        let started = fresh.session.play().map_err(|e| e.to_string())?;
+        let scene = fresh.scene_message();
+        self.live = Some(fresh);
+        Ok((scene, started))
+    }
+
+    /// A step failed: the session is dropped, the organ kept for Reset.
+    fn diverged(&mut self) {
+        self.live = None;
+    }
+
+    /// Why a tool cannot act now.
+    fn not_live(&self) -> String {
+        if self.loaded.is_some() {
+            "the simulation stopped after a failure: press Reset to start again".to_owned()
+        } else {
+            "load an organ first".to_owned()
+        }
+    }
+}
+
 /// A live session and what the frames need.
 struct Live {
     id: String,
-    organ: Arc<Organ>,
     session: Session,
     surface: Arc<(u64, Vec<u32>)>,
 }
 
 impl Live {
-    fn new(organ: Arc<Organ>, id: &str) -> Result<Live, String> {
-        let session = Session::new(&organ, SessionOptions::default()).map_err(|e| e.to_string())?;
+    fn new(organ: &Organ, id: &str) -> Result<Live, String> {
+        let session = Session::new(organ, SessionOptions::default()).map_err(|e| e.to_string())?;
         Ok(Live {
             id: id.to_owned(),
-            organ,
             surface: Arc::new((0, Vec::new())),
             session,
         })
@@ -492,5 +546,41 @@ impl Live {
             tip,
             surface: Arc::clone(&self.surface),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The probe's "Reset does nothing after a divergence": the failed session is dropped, and
+    /// Reset rebuilds it from the organ it was loaded with, at step 0.
+    #[test]
+    fn reset_rebuilds_a_session_that_failed() {
+        let organ = Arc::new(Organ::shipped(ShippedOrgan::Appendix).unwrap());
+        let mut desk = Desk::default();
+        assert_eq!(
+            desk.reset().unwrap(),
+            None,
+            "nothing to reset before a load"
+        );
+        assert_eq!(desk.not_live(), "load an organ first");
+        desk.load(Arc::clone(&organ), "appendix").unwrap();
+        for _ in 0..3 {
+            desk.live.as_mut().unwrap().session.step().unwrap();
+        }
+        desk.diverged();
+        assert!(desk.live.is_none());
+        assert!(desk.not_live().contains("press Reset"));
+        let scene = desk.reset().unwrap().expect("a scene after Reset");
+        assert_eq!(scene["organ"], "appendix");
+        let live = desk.live.as_mut().expect("a live session after Reset");
+        assert_eq!(live.session.steps(), 0);
+        live.session.step().unwrap();
+        assert_eq!(live.session.steps(), 1);
+        // The demonstration too starts again from the kept organ.
+        desk.diverged();
+        assert!(desk.demo().is_ok());
+        assert!(desk.live.is_some());
     }
 }

@@ -30,7 +30,7 @@ fn post_json(uri: &str, body: &Value) -> Result<Request<Body>> {
 #[tokio::test]
 async fn patients_load_summarise_and_refuse_broken_or_oversize_files() -> Result {
     let studio = tissue_studio::Studio::new()?;
-    let app = tissue_studio::router(studio.clone());
+    let app = crate::app(&studio);
 
     let (status, meshes) = call(&app, Request::get("/api/meshes").body(Body::empty())?).await?;
     assert_eq!(status, StatusCode::OK);
@@ -75,6 +75,7 @@ async fn patients_load_summarise_and_refuse_broken_or_oversize_files() -> Result
     let (status, broken) = call(
         &app,
         Request::post("/api/patients?name=broken.obj&unit=mm")
+            .header("content-type", "application/octet-stream")
             .body(Body::from("v 0 0 0\nf 1 2 3\n"))?,
     )
     .await?;
@@ -92,7 +93,10 @@ async fn patients_load_summarise_and_refuse_broken_or_oversize_files() -> Result
         ("/api/patients?name=scan.obj&unit=inch", "v 0 0 0", "usage"),
         ("/api/patients?name=scan.obj&unit=mm", "", "input"),
     ] {
-        let (status, e) = call(&app, Request::post(uri).body(Body::from(body))?).await?;
+        let request = Request::post(uri)
+            .header("content-type", "application/octet-stream")
+            .body(Body::from(body))?;
+        let (status, e) = call(&app, request).await?;
         assert_eq!(status, StatusCode::BAD_REQUEST, "{uri}");
         assert_eq!(e["error"]["kind"], kind, "{uri}: {e}");
     }
@@ -101,7 +105,9 @@ async fn patients_load_summarise_and_refuse_broken_or_oversize_files() -> Result
     let big = vec![b' '; tissue_studio::UPLOAD_LIMIT + 1];
     let (status, e) = call(
         &app,
-        Request::post("/api/patients?name=big.obj&unit=mm").body(Body::from(big))?,
+        Request::post("/api/patients?name=big.obj&unit=mm")
+            .header("content-type", "application/octet-stream")
+            .body(Body::from(big))?,
     )
     .await?;
     assert_eq!(status, StatusCode::PAYLOAD_TOO_LARGE);
@@ -122,7 +128,7 @@ async fn patients_load_summarise_and_refuse_broken_or_oversize_files() -> Result
 #[tokio::test]
 async fn the_preview_draws_the_runs_region_and_refuses_the_border_before_run() -> Result {
     let studio = tissue_studio::Studio::new()?;
-    let app = tissue_studio::router(studio.clone());
+    let app = crate::app(&studio);
     let (_, plane) = call(
         &app,
         Request::post("/api/patients?shipped=table2").body(Body::empty())?,
@@ -232,7 +238,7 @@ async fn send(socket: &mut Socket, value: Value) -> Result {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn jobs_run_table2_in_band_cancel_refuse_a_second_and_end_with_the_tab() -> Result {
     let (studio, addr, server) = crate::serve().await?;
-    let client = tissue_studio::router(studio.clone());
+    let client = crate::app(&studio);
     let (_, plane) = call(
         &client,
         Request::post("/api/patients?shipped=table2").body(Body::empty())?,
