@@ -32,11 +32,11 @@ export function check(cond, what, detail = '') {
   throw new Error(`check failed: ${what}`);
 }
 
-function startServer() {
+function startServer(args) {
   const bin = process.env.STUDIO_BIN || path.resolve(here, '../../../target/release/studio');
   // A path to an existing file is the binary; otherwise the value is split into a command line.
   const argv = fs.existsSync(bin) ? [bin] : bin.split(/\s+/).filter(Boolean);
-  const proc = spawn(argv[0], [...argv.slice(1), '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
+  const proc = spawn(argv[0], [...argv.slice(1), '--port', '0', ...args], { stdio: ['ignore', 'pipe', 'inherit'] });
   const exited = new Promise((resolve) => proc.on('exit', (code, signal) => resolve({ code, signal })));
   const url = new Promise((resolve, reject) => {
     let buf = '';
@@ -50,7 +50,7 @@ function startServer() {
     proc.stdout.on('data', (chunk) => {
       if (found) return; // keep draining
       buf += chunk;
-      const m = buf.match(/^studio: (http:\/\/127\.0\.0\.1:\d+\/)\s*$/m);
+      const m = buf.match(/^studio: (http:\/\/127\.0\.0\.1:\d+\/(?:\?token=[0-9a-f]+)?)\s*$/m);
       if (m) {
         found = true;
         clearTimeout(timer);
@@ -69,15 +69,18 @@ export async function shot(page, name) {
 
 let server = null;
 
-/** The server's base URL (ending in "/"): STUDIO_URL, or a studio started here. */
-export async function serverUrl() {
+/**
+ * The server's base URL (ending in "/"): STUDIO_URL, or a studio started here with `args`
+ * (e.g. ['--require-token']: then the address line carries `?token=…`, returned as it is).
+ */
+export async function serverUrl(args = []) {
   fs.mkdirSync(shots, { recursive: true });
   let base = process.env.STUDIO_URL;
   if (!base) {
-    server = startServer();
+    server = startServer(args);
     base = await server.url;
   }
-  if (!base.endsWith('/')) base += '/';
+  if (!base.endsWith('/') && !base.includes('?')) base += '/';
   console.log(`# studio at ${base}`);
   return base;
 }
@@ -98,12 +101,22 @@ export function launchBrowser() {
  * into the returned array.
  */
 export async function newPage(browser, viewport = { width: 1400, height: 900 }) {
-  const page = await browser.newPage({ viewport });
+  // A context of its own (cookies, storage), in which a test may open more pages.
+  const context = await browser.newContext({ viewport });
+  const page = await context.newPage();
   const pageErrors = [];
   page.on('pageerror', (e) => pageErrors.push(String(e)));
   page.on('console', (m) => {
     // Failed requests are checked where they matter (e.g. a broken upload answers 400 on purpose).
+    // A Content-Security-Policy violation is a console error too, so every test checks the
+    // server's policy against the page it serves.
     if (m.type() === 'error' && !/Failed to load resource/.test(m.text())) pageErrors.push(`console: ${m.text()}`);
+  });
+  // The violations themselves, also those the console does not show.
+  await page.addInitScript(() => {
+    document.addEventListener('securitypolicyviolation', (e) => {
+      console.error(`CSP violation: ${e.violatedDirective} ${e.blockedURI}`);
+    });
   });
   return { page, pageErrors };
 }

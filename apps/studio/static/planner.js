@@ -899,7 +899,9 @@ function expansionChart(report) {
   series.forEach((s, i) => {
     const pts = days.filter((d) => Number.isFinite(d[s.key])).map((d) => `${X(d.day)},${Y(d[s.key])}`);
     add('polyline', { points: pts.join(' '), fill: 'none', stroke: s.color, 'stroke-width': 2, class: 'expansion-line' });
-    add('text', { x: m.l + 8, y: m.t + 12 + 13 * i, class: 'tick', style: `fill: ${s.color}` }, s.label);
+    // The colour as SVG's own attribute: a style attribute is inline style, which the server's
+    // Content-Security-Policy refuses.
+    add('text', { x: m.l + 8, y: m.t + 12 + 13 * i, class: 'legend', fill: s.color }, s.label);
   });
   if (band) {
     add('line', { x1: X(removal), x2: X(removal), y1: Y(band.p5), y2: Y(band.p95), stroke: '#c83c28', 'stroke-width': 2, class: 'expansion-band' });
