@@ -416,10 +416,21 @@ pub fn scenario(
     let p = studio.patient(patient).ok_or_else(|| {
         PlanError::new(
             ErrorKind::Usage,
-            format!("no patient {patient:?} on the server (it keeps the last few): load it again"),
+            format!(
+                "no patient {:?} on the server (it keeps the last few): load it again",
+                shorten(patient)
+            ),
         )
     })?;
     Scenario::new(Patient::clone(&p), request)
+}
+
+/// `text` cut to 40 characters (an id echoed back in a message: a client may send megabytes).
+fn shorten(text: &str) -> String {
+    match text.char_indices().nth(40) {
+        Some((i, _)) => format!("{}…", &text[..i]),
+        None => text.to_owned(),
+    }
 }
 
 async fn preview(
@@ -518,7 +529,21 @@ async fn download(
 }
 
 async fn socket(State(studio): State<Studio>, ws: WebSocketUpgrade) -> Response {
+    let Some(slot) = studio.socket_slot() else {
+        return ApiError::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            "busy",
+            format!(
+                "{} job sockets are open on this server: close some of its tabs",
+                crate::state::JOB_SOCKETS
+            ),
+        )
+        .into_response();
+    };
     ws.max_message_size(MESSAGE_LIMIT)
         .max_frame_size(MESSAGE_LIMIT)
-        .on_upgrade(move |socket| crate::jobs::serve_socket(studio, socket))
+        .on_upgrade(move |socket| async move {
+            crate::jobs::serve_socket(studio, socket).await;
+            drop(slot);
+        })
 }

@@ -85,4 +85,4 @@ pub mod trainer;
 pub use access::{content_security_policy, Access};
 pub use api::router;
 pub use serve::{serve, BodyTimeout};
-pub use state::{Limits, Studio, KEPT, UPLOAD_LIMIT};
+pub use state::{Limits, Studio, JOB_SOCKETS, KEPT, UPLOAD_LIMIT};

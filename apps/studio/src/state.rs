@@ -13,6 +13,9 @@ use tokio::sync::{watch, OwnedSemaphorePermit, Semaphore};
 /// Largest upload, bytes (64 MiB: a 160k-triangle scan as text OBJ is about 10 MiB).
 pub const UPLOAD_LIMIT: usize = 64 * 1024 * 1024;
 
+/// Job sockets (planner tabs) open at once; more are refused with 503.
+pub const JOB_SOCKETS: usize = 64;
+
 /// How many patients and how many finished jobs are kept (oldest dropped first).
 pub const KEPT: usize = 8;
 
@@ -87,6 +90,7 @@ pub struct Studio {
     shutdown: watch::Sender<bool>,
     limits: Arc<Limits>,
     uploads: Arc<Semaphore>,
+    sockets: Arc<Semaphore>,
 }
 
 impl Studio {
@@ -118,8 +122,14 @@ impl Studio {
             temp: Arc::new(temp),
             shutdown,
             uploads: Arc::new(Semaphore::new(limits.uploads.max(1))),
+            sockets: Arc::new(Semaphore::new(JOB_SOCKETS)),
             limits: Arc::new(limits),
         })
+    }
+
+    /// A place for one job socket, or `None` when [`JOB_SOCKETS`] are open.
+    pub fn socket_slot(&self) -> Option<OwnedSemaphorePermit> {
+        Arc::clone(&self.sockets).try_acquire_owned().ok()
     }
 
     /// The limits it runs with.

@@ -239,6 +239,57 @@ async fn sockets_from_another_origin_or_host_are_refused() -> Result {
     Ok(())
 }
 
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn job_sockets_are_counted_and_a_long_id_is_not_echoed_whole() -> Result {
+    let (studio, addr, server) = crate::serve().await?;
+    let url = format!("ws://{addr}/api/ws");
+    let mut open = Vec::new();
+    for _ in 0..tissue_studio::JOB_SOCKETS {
+        open.push(tokio_tungstenite::connect_async(&url).await?.0);
+    }
+    match tokio_tungstenite::connect_async(&url).await {
+        Err(tokio_tungstenite::tungstenite::Error::Http(r)) => assert_eq!(r.status(), 503),
+        other => panic!(
+            "socket {} opened: {other:?}",
+            tissue_studio::JOB_SOCKETS + 1
+        ),
+    }
+    // A tab closes: its place is free again.
+    let mut tab = open.pop().ok_or("no socket")?;
+    tab.close(None).await?;
+    drop(tab);
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let mut tab = loop {
+        if let Ok((t, _)) = tokio_tungstenite::connect_async(&url).await {
+            break t;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the closed socket's place stays taken"
+        );
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    };
+    // A 500 kB patient id comes back cut to a few dozen characters.
+    let run = json!({ "type": "run", "patient": "x".repeat(500_000), "request": {} });
+    tab.send(Message::Text(run.to_string().into())).await?;
+    let failed = loop {
+        let m = tokio::time::timeout(Duration::from_secs(30), tab.next())
+            .await?
+            .ok_or("the socket closed")??;
+        if let Message::Text(t) = m {
+            let v: Value = serde_json::from_str(&t)?;
+            if v["type"] == "failed" {
+                break v;
+            }
+        }
+    };
+    let message = failed["error"]["message"].as_str().unwrap_or("");
+    assert!(message.len() < 200, "{} bytes", message.len());
+    studio.shutdown();
+    server.abort();
+    Ok(())
+}
+
 #[tokio::test]
 async fn off_loopback_every_request_needs_the_token() -> Result {
     let studio = tissue_studio::Studio::new()?;
