@@ -1,0 +1,150 @@
+//! What reading a hostile file costs in memory: a counting global allocator records the peak of
+//! live heap bytes while a reader runs, and each reader must stay far below what the file
+//! claims. The bombs are in `support/bombs.rs` (the `it` binary checks their errors).
+//!
+//! A binary of its own, because the global allocator counts every allocation of the process;
+//! the tests take a lock so that only one of them measures at a time.
+//!
+//! The one place in the crate with `unsafe`: the counting allocator must implement the `unsafe`
+//! trait `GlobalAlloc`. It only forwards to `System`.
+#![allow(unsafe_code, clippy::unwrap_used)]
+
+#[path = "support/bombs.rs"]
+mod bombs;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Mutex, MutexGuard};
+
+/// Counts live heap bytes and their peak, on every thread.
+struct Counting;
+static LIVE: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+fn grew(bytes: usize) {
+    let now = LIVE.fetch_add(bytes, Ordering::Relaxed) + bytes;
+    PEAK.fetch_max(now, Ordering::Relaxed);
+}
+
+// SAFETY: forwards to the system allocator unchanged; only counts.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        grew(layout.size());
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        grew(layout.size());
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        // Counted as if the old and the new block were both live for a moment, as they are
+        // when the system allocator has to move the data.
+        grew(new_size);
+        // SAFETY: same contract as the caller's.
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+        p
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// One test at a time: each holds this from its start, also while it builds its inputs, since
+/// the counters see the allocations of every thread.
+static MEASURING: Mutex<()> = Mutex::new(());
+
+fn alone() -> MutexGuard<'static, ()> {
+    MEASURING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The peak of live heap bytes while `f` runs, above what was live when it started.
+fn peak_of<T>(f: impl FnOnce() -> T) -> (T, usize) {
+    let base = LIVE.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    let out = f();
+    (out, PEAK.load(Ordering::Relaxed).saturating_sub(base))
+}
+
+const MIB: usize = 1 << 20;
+/// What any of these reads may take: a few times the largest input, nowhere near the hundreds
+/// of MiB the bombs claim.
+const LIMIT: usize = 16 * MIB;
+
+#[test]
+fn vtu_bombs_are_refused_before_they_are_decompressed() {
+    let _alone = alone();
+    let mut report = Vec::new();
+    for bomb in bombs::bombs() {
+        let (result, peak) = peak_of(|| tissue_meshio::parse_vtu(&bomb.bytes, "bomb.vtu"));
+        report.push(format!(
+            "{:>8} KiB file, peak {:>9} KiB: {} ({})",
+            bomb.bytes.len() >> 10,
+            peak >> 10,
+            bomb.name,
+            match &result {
+                Ok(_) => "read".to_string(),
+                Err(e) => e.to_string(),
+            }
+        ));
+        match (&bomb.refused_with, &result) {
+            (None, Ok(d)) => assert_eq!(d.tets.len(), 1, "{}", bomb.name),
+            (Some(_), Err(_)) => {}
+            _ => panic!("{}: {:?}", bomb.name, result.map(|d| d.tets.len())),
+        }
+        assert!(
+            peak < LIMIT,
+            "{}: peak {} KiB\n{}",
+            bomb.name,
+            peak >> 10,
+            report.join("\n")
+        );
+    }
+    // Shown with --nocapture: the measurements behind the report of issue 29.
+    eprintln!("{}", report.join("\n"));
+}
+
+/// Reads `input` with `read` and checks that the peak stays below `limit` bytes; returns what
+/// `read` gave, for the caller's checks, and prints the peak.
+fn bounded<T>(what: &str, input: &[u8], limit: usize, read: impl FnOnce(&[u8]) -> T) -> T {
+    let (out, peak) = peak_of(|| read(input));
+    eprintln!(
+        "{what}: {} KiB input, peak {} KiB",
+        input.len() >> 10,
+        peak >> 10
+    );
+    assert!(
+        peak < limit,
+        "{what}: peak {} KiB, limit {} KiB",
+        peak >> 10,
+        limit >> 10
+    );
+    out
+}
+
+#[test]
+fn a_legitimate_compressed_vtu_reads_in_a_few_times_its_decoded_size() {
+    let _alone = alone();
+    let n = 30;
+    let (points, tets) = bombs::tet_grid(n);
+    // What the reader decodes, at 8 bytes a value: 3 per point, 6 per tetrahedron.
+    let decoded = 8 * (3 * points.len() + 6 * tets.len());
+    for encoding in [bombs::Encoding::AppendedRaw, bombs::Encoding::InlineBase64] {
+        let bytes = bombs::grid_vtu(n, true, encoding);
+        let d = bounded(
+            &format!("VTU, {} tets, zlib, {encoding:?}", tets.len()),
+            &bytes,
+            3 * decoded,
+            |b| tissue_meshio::parse_vtu(b, "grid.vtu"),
+        )
+        .unwrap();
+        assert_eq!(d.tets.len(), tets.len());
+    }
+}
