@@ -96,4 +96,4 @@ pub use vtk::{
     parse_vtk, read_vtk, write_vtk, write_vtk_tets, FieldValues, PointField, PointValues,
     VertexField, VtkData, VtkMesh,
 };
-pub use vtu::{parse_vtu, read_vtu, MAX_INFLATED, MAX_INFLATION_RATIO};
+pub use vtu::{parse_vtu, read_vtu, MAX_DEPTH, MAX_INFLATED, MAX_INFLATION_RATIO};

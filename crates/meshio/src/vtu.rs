@@ -43,6 +43,9 @@
 //!   are never decoded, inflated or copied.
 //! - Compressed blocks: each block's declared size must be within zlib's ratio of its
 //!   compressed size (1100:1), and each block inflates at most its declared size.
+//! - XML: elements nested more than [`MAX_DEPTH`] deep are refused; lines are counted as the
+//!   parser goes and attributes are looked up without quick-xml's duplicate check (both were
+//!   quadratic in the number of elements or attributes).
 
 use std::borrow::Cow;
 use std::cell::Cell;
@@ -84,6 +87,11 @@ pub const MAX_INFLATION_RATIO: u64 = 64;
 /// What any file may decode to, however small: 1 MiB.
 const MIN_INFLATION_BUDGET: u64 = 1 << 20;
 
+/// How deep XML elements may nest: a `.vtu` needs 7 levels (`VTKFile`, `UnstructuredGrid`,
+/// `Piece`, `PointData`, `DataArray`, `InformationKey`, `Value`); anything near this bound is
+/// not a `.vtu` file, and each level costs memory.
+pub const MAX_DEPTH: usize = 64;
+
 /// The decoding budget of a file of `len` bytes (see [`MAX_INFLATION_RATIO`]).
 fn inflation_limit(len: usize) -> u64 {
     // `clamp` cannot panic: its bounds are in order (checked at compile time below).
@@ -102,7 +110,7 @@ const _: () = assert!(MIN_INFLATION_BUDGET <= MAX_INFLATED);
 /// size is refused before it is decompressed, with an error naming the array. The arrays of a
 /// file may decode to at most [`MAX_INFLATION_RATIO`] times the file's size (but at least
 /// 1 MiB), and never to more than [`MAX_INFLATED`], counting 8 bytes a value; point and cell
-/// data are never decoded.
+/// data are never decoded. Elements may nest at most [`MAX_DEPTH`] deep.
 pub fn read_vtu(path: impl AsRef<Path>) -> Result<TetData, MeshIoError> {
     let path = path.as_ref();
     let _span = tracing::debug_span!("read_vtu", path = %path.display()).entered();
@@ -320,15 +328,17 @@ struct Array {
     line: usize,
 }
 
+/// A `<Piece>`. The arrays are boxed so that a file of many empty pieces costs about as much
+/// memory as its text.
 #[derive(Debug, Default)]
 struct Piece {
     points: usize,
     cells: usize,
     line: usize,
-    positions: Option<Array>,
-    connectivity: Option<Array>,
-    offsets: Option<Array>,
-    types: Option<Array>,
+    positions: Option<Box<Array>>,
+    connectivity: Option<Box<Array>>,
+    offsets: Option<Box<Array>>,
+    types: Option<Box<Array>>,
 }
 
 struct Doc {
@@ -420,8 +430,14 @@ fn find_appended(bytes: &[u8], path: &Path) -> Result<Option<Appended>, MeshIoEr
     }))
 }
 
+/// The value of attribute `key` (the first, if the tag repeats it).
+///
+/// Without quick-xml's duplicate check: a tag of N attributes, most of them repeating the last
+/// new name, makes that check scan every earlier name for each, N² in all.
 fn attr<'a>(e: &'a BytesStart<'_>, key: &str) -> Option<Cow<'a, str>> {
-    e.attributes()
+    let mut attributes = e.attributes();
+    attributes.with_checks(false);
+    attributes
         .flatten()
         .find(|a| a.key.as_ref() == key.as_bytes())
         .map(|a| match a.value {
@@ -439,8 +455,38 @@ enum Role {
     Types,
 }
 
+/// The lines of offsets that only grow, counted as they go: finding each element's line by
+/// counting from the start of the file would take time quadratic in the number of elements.
+struct LineCounter<'a> {
+    text: &'a [u8],
+    /// The offset counted up to, and its line.
+    pos: usize,
+    line: usize,
+}
+
+impl LineCounter<'_> {
+    /// The 1-based line of byte `offset`.
+    fn at(&mut self, offset: usize) -> usize {
+        if offset < self.pos {
+            // Never happens (events come in file order); recount rather than be wrong.
+            self.pos = 0;
+            self.line = 1;
+        }
+        let upto = offset.min(self.text.len());
+        let between = self.text.get(self.pos..upto).unwrap_or_default();
+        self.line += between.iter().filter(|&&b| b == b'\n').count();
+        self.pos = upto;
+        self.line
+    }
+}
+
 fn parse_xml(xml: &[u8], path: &Path) -> Result<Doc, MeshIoError> {
     let mut reader = Reader::from_reader(xml);
+    let mut lines = LineCounter {
+        text: xml,
+        pos: 0,
+        line: 1,
+    };
     let mut doc = Doc {
         header: HeaderType::U32,
         big_endian: false,
@@ -464,12 +510,12 @@ fn parse_xml(xml: &[u8], path: &Path) -> Result<Doc, MeshIoError> {
             )
         })?;
         // Line of the start of this event (skip the whitespace before a tag).
-        let line = || {
+        let mut line = || {
             let mut k = before;
             while xml.get(k).is_some_and(u8::is_ascii_whitespace) {
                 k += 1;
             }
-            line_of_offset(xml, k)
+            lines.at(k)
         };
         match event {
             Event::Start(ref e) | Event::Empty(ref e) => {
@@ -483,6 +529,15 @@ fn parse_xml(xml: &[u8], path: &Path) -> Result<Doc, MeshIoError> {
                     element(e, &name, &stack, path, l, &mut doc, &mut current)?;
                 }
                 if !empty {
+                    if stack.len() >= MAX_DEPTH {
+                        return Err(MeshIoError::parse(
+                            path,
+                            l,
+                            format!(
+                                "XML elements nested more than {MAX_DEPTH} deep: a .vtu file needs 7 levels; the file is corrupt or not what it claims"
+                            ),
+                        ));
+                    }
                     stack.push(name);
                 } else if name == b"DataArray" {
                     finish_array(&mut current, &mut doc);
@@ -725,7 +780,7 @@ fn finish_array(current: &mut Option<(Role, Array)>, doc: &mut Doc) {
         Role::Types => &mut piece.types,
     };
     if slot.is_none() {
-        *slot = Some(array);
+        *slot = Some(Box::new(array));
     }
 }
 

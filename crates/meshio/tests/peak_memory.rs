@@ -15,6 +15,7 @@ mod bombs;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard};
+use std::time::{Duration, Instant};
 
 /// Counts live heap bytes and their peak, on every thread.
 struct Counting;
@@ -74,6 +75,8 @@ fn peak_of<T>(f: impl FnOnce() -> T) -> (T, usize) {
 }
 
 const MIB: usize = 1 << 20;
+/// What a read of a few MiB may take on a busy machine; the quadratic cases took minutes.
+const SLOW: Duration = Duration::from_secs(5);
 /// What any of these reads may take: a few times the largest input, nowhere near the hundreds
 /// of MiB the bombs claim.
 const LIMIT: usize = 16 * MIB;
@@ -127,6 +130,61 @@ fn bounded<T>(what: &str, input: &[u8], limit: usize, read: impl FnOnce(&[u8]) -
         limit >> 10
     );
     out
+}
+
+#[test]
+fn vtu_empty_pieces_cost_about_their_text() {
+    let _alone = alone();
+    // About 90,000 pieces in 4 MiB.
+    let piece = "<Piece NumberOfPoints=\"0\" NumberOfCells=\"0\"/>\n";
+    let mut text = String::from("<VTKFile type=\"UnstructuredGrid\"><UnstructuredGrid>\n");
+    while text.len() < 4 * MIB {
+        text += piece;
+    }
+    text += "</UnstructuredGrid></VTKFile>\n";
+    let start = Instant::now();
+    let result = bounded(
+        "VTU, 4 MiB of empty pieces",
+        text.as_bytes(),
+        3 * text.len(),
+        |b| tissue_meshio::parse_vtu(b, "pieces.vtu"),
+    );
+    let e = result.unwrap_err().to_string();
+    assert!(e.contains("no tetrahedra"), "{e}");
+    // Finding each element's line by counting from the start took over a minute.
+    assert!(start.elapsed() < SLOW, "{:?}", start.elapsed());
+}
+
+#[test]
+fn vtu_attributes_cost_linear_time() {
+    let _alone = alone();
+    // 50,000 attributes, then 50,000 repeats of the last: quick-xml's duplicate check compares
+    // each repeat with every name before it.
+    let mut text = String::from("<VTKFile");
+    for k in 0..50_000 {
+        text += &format!(" a{k}=\"\"");
+    }
+    text += &" a49999=\"\"".repeat(50_000);
+    text += " type=\"UnstructuredGrid\"><UnstructuredGrid/></VTKFile>";
+    let start = Instant::now();
+    let result = bounded("VTU, 100,000 attributes", text.as_bytes(), MIB, |b| {
+        tissue_meshio::parse_vtu(b, "attributes.vtu")
+    });
+    assert!(result.unwrap_err().to_string().contains("no <Piece>"));
+    assert!(start.elapsed() < SLOW, "{:?}", start.elapsed());
+}
+
+#[test]
+fn vtu_deep_nesting_is_refused_early() {
+    let _alone = alone();
+    let mut text = String::from("<VTKFile type=\"UnstructuredGrid\">\n");
+    while text.len() < 4 * MIB {
+        text += "<a>";
+    }
+    let result = bounded("VTU, 4 MiB of nested elements", text.as_bytes(), MIB, |b| {
+        tissue_meshio::parse_vtu(b, "deep.vtu")
+    });
+    assert!(result.is_err());
 }
 
 #[test]

@@ -5,7 +5,7 @@
 // Test code: a failed unwrap is a failed test.
 #![allow(clippy::unwrap_used)]
 
-use tissue_meshio::{parse_vtu, MeshIoError};
+use tissue_meshio::{parse_vtu, MeshIoError, MAX_DEPTH};
 
 use crate::bombs::{self, Encoding};
 
@@ -85,6 +85,21 @@ fn vtu_piece_counts_beyond_the_absolute_cap_are_refused() {
     assert!(
         e.to_string()
             .contains("NumberOfCells=\"18446744073709551615\" is more than"),
+        "{e}"
+    );
+}
+
+#[test]
+fn vtu_nesting_is_bounded() {
+    let mut text = String::from("<VTKFile type=\"UnstructuredGrid\">\n");
+    for _ in 0..10 * MAX_DEPTH {
+        text += "<a>";
+    }
+    let e = parse_vtu(text.as_bytes(), "deep.vtu").unwrap_err();
+    assert!(matches!(e, MeshIoError::Parse { line: 2, .. }), "{e}");
+    assert!(
+        e.to_string()
+            .contains(&format!("more than {MAX_DEPTH} deep")),
         "{e}"
     );
 }
