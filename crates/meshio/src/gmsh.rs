@@ -23,6 +23,7 @@ use std::str::FromStr;
 use glam::Vec3;
 
 use crate::atomic::read_file;
+use crate::tally::TypeCounts;
 use crate::text::{capacity, shorten};
 use crate::{MeshIoError, TetData};
 
@@ -51,7 +52,7 @@ pub fn parse_msh(bytes: &[u8], name: impl AsRef<Path>) -> Result<TetData, MeshIo
         binary: None,
         nodes: Nodes::default(),
         tets: Vec::new(),
-        skipped: Vec::new(),
+        skipped: TypeCounts::default(),
         seen_nodes: false,
         seen_elements: false,
     };
@@ -119,29 +120,20 @@ pub fn parse_msh(bytes: &[u8], name: impl AsRef<Path>) -> Result<TetData, MeshIo
                 "no 4-node tetrahedra (element type 4) in the file: it holds {}. tissue needs a \
                  first-order tetrahedral volume mesh: mesh the volume in Gmsh (Mesh > 3D, or \
                  `gmsh -3 -order 1`)",
-                describe(&m.skipped)
+                m.skipped.describe("elements", element_name)
             ),
         ));
     }
     if !m.skipped.is_empty() {
-        tracing::debug!(skipped = %describe(&m.skipped), "msh: elements other than tetrahedra skipped");
+        tracing::debug!(
+            skipped = %m.skipped.describe("elements", element_name),
+            "msh: elements other than tetrahedra skipped"
+        );
     }
     Ok(TetData {
         positions: m.nodes.positions,
         tets: m.tets,
     })
-}
-
-/// "3 triangles (type 2), 1 point (type 15)".
-fn describe(skipped: &[(i64, usize)]) -> String {
-    if skipped.is_empty() {
-        return "no elements".into();
-    }
-    skipped
-        .iter()
-        .map(|&(ty, n)| format!("{n} {} (type {ty})", element_name(ty)))
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 fn element_name(ty: i64) -> &'static str {
@@ -224,7 +216,7 @@ struct Msh {
     nodes: Nodes,
     tets: Vec<[u32; 4]>,
     /// Skipped elements by type.
-    skipped: Vec<(i64, usize)>,
+    skipped: TypeCounts,
     seen_nodes: bool,
     seen_elements: bool,
 }
@@ -513,10 +505,7 @@ impl Msh {
     }
 
     fn skip(&mut self, ty: i64) {
-        match self.skipped.iter_mut().find(|(t, _)| *t == ty) {
-            Some((_, n)) => *n += 1,
-            None => self.skipped.push((ty, 1)),
-        }
+        self.skipped.add(ty);
     }
 
     /// Node tags of a tetrahedron → indices; `at` reports an unknown tag.

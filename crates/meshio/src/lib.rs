@@ -77,6 +77,7 @@ mod gmsh;
 mod obj;
 mod ply;
 mod stl;
+mod tally;
 mod tetgen;
 mod text;
 mod vtk;

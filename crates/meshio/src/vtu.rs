@@ -45,7 +45,8 @@
 //!   compressed size (1100:1), and each block inflates at most its declared size.
 //! - XML: elements nested more than [`MAX_DEPTH`] deep are refused; lines are counted as the
 //!   parser goes and attributes are looked up without quick-xml's duplicate check (both were
-//!   quadratic in the number of elements or attributes).
+//!   quadratic in the number of elements or attributes); the number of skipped cell types kept
+//!   apart for the "no tetrahedra" message is bounded.
 
 use std::borrow::Cow;
 use std::cell::Cell;
@@ -58,6 +59,7 @@ use quick_xml::events::{BytesStart, Event};
 use quick_xml::Reader;
 
 use crate::atomic::read_file;
+use crate::tally::TypeCounts;
 use crate::text::{capacity, line_of_offset, shorten};
 use crate::{MeshIoError, TetData};
 
@@ -137,7 +139,7 @@ pub fn parse_vtu(bytes: &[u8], name: impl AsRef<Path>) -> Result<TetData, MeshIo
         decoded: Cell::new(0),
     };
     let mut data = TetData::default();
-    let mut skipped = CellCounts::default();
+    let mut skipped = TypeCounts::default();
     for piece in &doc.pieces {
         file.add_piece(piece, &mut data, &mut skipped)?;
     }
@@ -156,43 +158,17 @@ pub fn parse_vtu(bytes: &[u8], name: impl AsRef<Path>) -> Result<TetData, MeshIo
                 "no tetrahedra (VTK cell type 10) in the file: it holds {}. tissue needs a \
                  tetrahedral volume mesh: tetrahedralise the shape first (e.g. with Gmsh or \
                  TetGen), or give a surface as a surface",
-                skipped.describe()
+                skipped.describe("cells", vtk_cell_name)
             ),
         ));
     }
     if !skipped.is_empty() {
-        tracing::debug!(skipped = %skipped.describe(), "vtu: cells other than tetrahedra skipped");
+        tracing::debug!(
+            skipped = %skipped.describe("cells", vtk_cell_name),
+            "vtu: cells other than tetrahedra skipped"
+        );
     }
     Ok(data)
-}
-
-/// Counts of skipped cells by VTK type, to say what a file without tetrahedra holds.
-#[derive(Default)]
-struct CellCounts(Vec<(i64, usize)>);
-
-impl CellCounts {
-    fn add(&mut self, ty: i64) {
-        match self.0.iter_mut().find(|(t, _)| *t == ty) {
-            Some((_, n)) => *n += 1,
-            None => self.0.push((ty, 1)),
-        }
-    }
-
-    fn is_empty(&self) -> bool {
-        self.0.is_empty()
-    }
-
-    fn describe(&self) -> String {
-        if self.0.is_empty() {
-            return "no cells".into();
-        }
-        let names: Vec<String> = self
-            .0
-            .iter()
-            .map(|&(ty, n)| format!("{n} {} (type {ty})", vtk_cell_name(ty)))
-            .collect();
-        names.join(", ")
-    }
 }
 
 fn vtk_cell_name(ty: i64) -> &'static str {
@@ -825,7 +801,7 @@ impl File<'_> {
         &self,
         piece: &Piece,
         data: &mut TetData,
-        skipped: &mut CellCounts,
+        skipped: &mut TypeCounts,
     ) -> Result<(), MeshIoError> {
         let path = self.path;
         let missing = |what: &str| {

@@ -5,7 +5,9 @@
 // Test code: a failed unwrap is a failed test.
 #![allow(clippy::unwrap_used)]
 
-use tissue_meshio::{parse_vtu, MeshIoError, MAX_DEPTH};
+use std::fmt::Write as _;
+
+use tissue_meshio::{parse_msh, parse_vtu, MeshIoError, MAX_DEPTH};
 
 use crate::bombs::{self, Encoding};
 
@@ -87,6 +89,69 @@ fn vtu_piece_counts_beyond_the_absolute_cap_are_refused() {
             .contains("NumberOfCells=\"18446744073709551615\" is more than"),
         "{e}"
     );
+}
+
+/// A file whose cells (or elements) each have a type of their own: counting them for the "no
+/// tetrahedra" message used to take time quadratic in their number and write every type into
+/// the message.
+#[test]
+fn many_distinct_cell_types_cost_linear_time_and_a_short_message() {
+    let cells = 200_000usize;
+    // VTU: cells without points (all offsets 0), Int64 types 1000, 1001, ...
+    let offsets = vec![0u8; 8 * cells];
+    let types: Vec<u8> = (0..cells as i64)
+        .flat_map(|t| (1000 + t).to_le_bytes())
+        .collect();
+    let arrays = [
+        bombs::Array::new(
+            "Cells",
+            "connectivity",
+            "Int64",
+            1,
+            bombs::plain(&[], false),
+        ),
+        bombs::Array::new(
+            "Cells",
+            "offsets",
+            "Int64",
+            1,
+            bombs::plain(&offsets, false),
+        ),
+        bombs::Array::new("Cells", "types", "Int64", 1, bombs::plain(&types, false)),
+    ];
+    let bytes = bombs::vtu(
+        false,
+        false,
+        Encoding::AppendedRaw,
+        0,
+        cells as u64,
+        &arrays,
+    );
+    let e = parse_vtu(&bytes, "types.vtu").unwrap_err().to_string();
+    assert!(e.contains("no tetrahedra"), "{e}");
+    assert!(
+        e.contains(&format!("{} cells of other types", cells - 16)),
+        "{e}"
+    );
+    assert!(e.len() < 1500, "{} bytes: {}", e.len(), &e[..1500]);
+
+    // MSH 2: `tag type 0` lines, types 1000, 1001, ...
+    let mut text =
+        String::from("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n");
+    writeln!(text, "$Elements\n{cells}").unwrap();
+    for c in 0..cells {
+        writeln!(text, "{} {} 0", c + 1, 1000 + c).unwrap();
+    }
+    text += "$EndElements\n";
+    let e = parse_msh(text.as_bytes(), "types.msh")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no 4-node tetrahedra"), "{e}");
+    assert!(
+        e.contains(&format!("{} elements of other types", cells - 16)),
+        "{e}"
+    );
+    assert!(e.len() < 1500, "{} bytes: {}", e.len(), &e[..1500]);
 }
 
 #[test]
