@@ -554,7 +554,7 @@ impl Msh {
         // `tag type physical elementary n-nodes nodes...`
         self.read_text_elements(c, "$ENDELM", |c, line, words| {
             let n: usize = word(c, line, words, 4, "the number of nodes of the element")?;
-            if words.len() != 5 + n {
+            if words.len().checked_sub(5) != Some(n) {
                 return Err(c.err(line, format!("the element says it has {n} nodes, but the line has {} after the 5 leading numbers", words.len().saturating_sub(5))));
             }
             Ok(5)
@@ -580,7 +580,8 @@ impl Msh {
                 self.skip(ty);
                 continue;
             }
-            if words.len() != k + 4 {
+            // `k` comes from the file (2^64 - 1 tags is a count like any other): no `k + 4`.
+            if words.len().checked_sub(k) != Some(4) {
                 return Err(c.err(
                     line,
                     format!(
@@ -1007,6 +1008,22 @@ mod tests {
         assert!(e.to_string().contains("MSH 4.1 or 2.2"), "{e}");
         let e = parse_msh(&V2.as_bytes()[..200], "a.msh").unwrap_err();
         assert!(e.to_string().contains("truncated"), "{e}");
+    }
+
+    #[test]
+    fn huge_counts_in_an_element_line_are_errors_not_overflows() {
+        // MSH 2: `tag type n-tags tags... nodes...`, with 2^64 - 1 tags.
+        let v2 = V2.replace(
+            "3 4 2 1 1 10 20 30 7",
+            "3 4 18446744073709551615 1 1 10 20 30 7",
+        );
+        let e = parse_msh(v2.as_bytes(), "a.msh").unwrap_err();
+        assert!(matches!(e, MeshIoError::Parse { line: 20, .. }), "{e}");
+        // MSH 1: `tag type physical elementary n-nodes nodes...`, with 2^64 - 1 nodes.
+        let v1 =
+            "$NOD\n1\n1 0 0 0\n$ENDNOD\n$ELM\n1\n1 4 1 1 18446744073709551615 1 1 1 1\n$ENDELM\n";
+        let e = parse_msh(v1.as_bytes(), "s.msh").unwrap_err();
+        assert!(matches!(e, MeshIoError::Parse { line: 7, .. }), "{e}");
     }
 
     #[test]
