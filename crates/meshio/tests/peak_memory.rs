@@ -133,6 +133,47 @@ fn bounded<T>(what: &str, input: &[u8], limit: usize, read: impl FnOnce(&[u8]) -
 }
 
 #[test]
+fn ascii_ply_lines_are_read_one_at_a_time() {
+    let _alone = alone();
+    // 8 MiB of empty lines, each an element without properties: a list of all lines would
+    // take 16 bytes each, 128 MiB.
+    let lines = 8 * MIB;
+    let mut bytes = format!(
+        "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n\
+         property float z\nelement blank {lines}\nend_header\n"
+    )
+    .into_bytes();
+    bytes.resize(bytes.len() + lines, b'\n');
+    let result = bounded("PLY, 8 Mi empty lines", &bytes, MIB, |b| {
+        tissue_meshio::parse_ply(b, "lines.ply")
+    });
+    assert!(result.unwrap().positions.is_empty());
+}
+
+#[test]
+fn ply_vertex_capacity_is_what_the_body_can_hold() {
+    let _alone = alone();
+    // 8 Mi vertices declared, the body cut after 8 MiB. At 12 bytes a binary record (float
+    // x y z) the body holds 0.7 Mi vertices, 8 MiB of `Vec3`; at the 3 bytes a vertex could
+    // take at least (three `char`s), 32 MiB would be reserved.
+    let declared = 8 * MIB;
+    let mut bytes = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {declared}\nproperty float x\n\
+         property float y\nproperty float z\nend_header\n"
+    )
+    .into_bytes();
+    let body = 8 * MIB;
+    bytes.resize(bytes.len() + body, 0);
+    let result = bounded(
+        "PLY binary, 8 Mi vertices declared, 8 MiB body",
+        &bytes,
+        body + MIB,
+        |b| tissue_meshio::parse_ply(b, "cut.ply"),
+    );
+    assert!(result.unwrap_err().to_string().contains("truncated"));
+}
+
+#[test]
 fn vtu_empty_pieces_cost_about_their_text() {
     let _alone = alone();
     // About 90,000 pieces in 4 MiB.
