@@ -23,6 +23,7 @@ use std::str::FromStr;
 use glam::Vec3;
 
 use crate::atomic::read_file;
+use crate::tally::TypeCounts;
 use crate::text::{capacity, shorten};
 use crate::{MeshIoError, TetData};
 
@@ -51,7 +52,7 @@ pub fn parse_msh(bytes: &[u8], name: impl AsRef<Path>) -> Result<TetData, MeshIo
         binary: None,
         nodes: Nodes::default(),
         tets: Vec::new(),
-        skipped: Vec::new(),
+        skipped: TypeCounts::default(),
         seen_nodes: false,
         seen_elements: false,
     };
@@ -119,29 +120,20 @@ pub fn parse_msh(bytes: &[u8], name: impl AsRef<Path>) -> Result<TetData, MeshIo
                 "no 4-node tetrahedra (element type 4) in the file: it holds {}. tissue needs a \
                  first-order tetrahedral volume mesh: mesh the volume in Gmsh (Mesh > 3D, or \
                  `gmsh -3 -order 1`)",
-                describe(&m.skipped)
+                m.skipped.describe("elements", element_name)
             ),
         ));
     }
     if !m.skipped.is_empty() {
-        tracing::debug!(skipped = %describe(&m.skipped), "msh: elements other than tetrahedra skipped");
+        tracing::debug!(
+            skipped = %m.skipped.describe("elements", element_name),
+            "msh: elements other than tetrahedra skipped"
+        );
     }
     Ok(TetData {
         positions: m.nodes.positions,
         tets: m.tets,
     })
-}
-
-/// "3 triangles (type 2), 1 point (type 15)".
-fn describe(skipped: &[(i64, usize)]) -> String {
-    if skipped.is_empty() {
-        return "no elements".into();
-    }
-    skipped
-        .iter()
-        .map(|&(ty, n)| format!("{n} {} (type {ty})", element_name(ty)))
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 fn element_name(ty: i64) -> &'static str {
@@ -224,7 +216,7 @@ struct Msh {
     nodes: Nodes,
     tets: Vec<[u32; 4]>,
     /// Skipped elements by type.
-    skipped: Vec<(i64, usize)>,
+    skipped: TypeCounts,
     seen_nodes: bool,
     seen_elements: bool,
 }
@@ -513,10 +505,7 @@ impl Msh {
     }
 
     fn skip(&mut self, ty: i64) {
-        match self.skipped.iter_mut().find(|(t, _)| *t == ty) {
-            Some((_, n)) => *n += 1,
-            None => self.skipped.push((ty, 1)),
-        }
+        self.skipped.add(ty);
     }
 
     /// Node tags of a tetrahedron → indices; `at` reports an unknown tag.
@@ -565,7 +554,7 @@ impl Msh {
         // `tag type physical elementary n-nodes nodes...`
         self.read_text_elements(c, "$ENDELM", |c, line, words| {
             let n: usize = word(c, line, words, 4, "the number of nodes of the element")?;
-            if words.len() != 5 + n {
+            if words.len().checked_sub(5) != Some(n) {
                 return Err(c.err(line, format!("the element says it has {n} nodes, but the line has {} after the 5 leading numbers", words.len().saturating_sub(5))));
             }
             Ok(5)
@@ -591,7 +580,8 @@ impl Msh {
                 self.skip(ty);
                 continue;
             }
-            if words.len() != k + 4 {
+            // `k` comes from the file (2^64 - 1 tags is a count like any other): no `k + 4`.
+            if words.len().checked_sub(k) != Some(4) {
                 return Err(c.err(
                     line,
                     format!(
@@ -1018,6 +1008,22 @@ mod tests {
         assert!(e.to_string().contains("MSH 4.1 or 2.2"), "{e}");
         let e = parse_msh(&V2.as_bytes()[..200], "a.msh").unwrap_err();
         assert!(e.to_string().contains("truncated"), "{e}");
+    }
+
+    #[test]
+    fn huge_counts_in_an_element_line_are_errors_not_overflows() {
+        // MSH 2: `tag type n-tags tags... nodes...`, with 2^64 - 1 tags.
+        let v2 = V2.replace(
+            "3 4 2 1 1 10 20 30 7",
+            "3 4 18446744073709551615 1 1 10 20 30 7",
+        );
+        let e = parse_msh(v2.as_bytes(), "a.msh").unwrap_err();
+        assert!(matches!(e, MeshIoError::Parse { line: 20, .. }), "{e}");
+        // MSH 1: `tag type physical elementary n-nodes nodes...`, with 2^64 - 1 nodes.
+        let v1 =
+            "$NOD\n1\n1 0 0 0\n$ENDNOD\n$ELM\n1\n1 4 1 1 18446744073709551615 1 1 1 1\n$ENDELM\n";
+        let e = parse_msh(v1.as_bytes(), "s.msh").unwrap_err();
+        assert!(matches!(e, MeshIoError::Parse { line: 7, .. }), "{e}");
     }
 
     #[test]

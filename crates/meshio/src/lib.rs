@@ -38,12 +38,36 @@
 //! Invariants:
 //! - Reads never panic, whatever the bytes: a malformed, truncated or hostile file is an
 //!   `Err`, and no count in a file makes an allocation larger than the file can fill.
+//! - Reads bound the work any input can cause (the studio reads uploads from the network):
+//!   memory and time stay linear in the file's size, with small factors, whatever its counts
+//!   say. See [Limits](#limits).
 //! - Indices in returned data are in range (0-based), and vertices keep the file's order (STL,
 //!   which stores corners, numbers the welded vertices in order of first appearance).
 //! - Writes are atomic: data go to a temporary file in the target's folder, which is synced and
 //!   then renamed over the target; on failure it is removed. A reader never sees half a file.
 //! - What is written reads back identically: the same triangles, and positions with the same
 //!   `f32` bits (STL: the same triangles up to vertex numbering, since STL stores corners).
+//!
+//! ## Limits
+//! A reader trusts no count or size in a file before checking it against what the file holds:
+//! - Capacities reserved for a declared count (vertices, nodes, cells, elements) are bounded by
+//!   what the bytes left can hold (at the smallest size a record can have), and every loop over
+//!   a declared count consumes at least one byte, token or line per step, so a count larger
+//!   than the data ends in a "truncated" error at the end of the data. Text is read token by
+//!   token or line by line, never split into a list of every line first.
+//! - Compressed data exist only in `.vtu` (zlib; nothing else in these formats is
+//!   compressed). There each array's size follows from `NumberOfPoints`, `NumberOfCells` and
+//!   the offsets, and a header declaring another size is refused before anything is inflated;
+//!   the arrays of one file may decode to at most [`MAX_INFLATION_RATIO`] times its size
+//!   (at least 1 MiB) and never more than [`MAX_INFLATED`] (1 GiB); arrays the reader does not
+//!   use are never decoded. The details are in [`read_vtu`].
+//! - What a file names by number (cell and element types) is tallied in bounded space; XML
+//!   nesting in a `.vtu` is bounded ([`MAX_DEPTH`]); PLY element and property names are at
+//!   most 255 bytes (ply-rs copies them for every record).
+//!
+//! What is not bounded here is the file itself: [`read_surface`] and the other `read_*`
+//! functions read the whole file, so a server caps the size of uploads before calling a
+//! `parse_*` function (the studio takes at most 64 MiB).
 //!
 //! ```
 //! use glam::Vec3;
@@ -77,6 +101,7 @@ mod gmsh;
 mod obj;
 mod ply;
 mod stl;
+mod tally;
 mod tetgen;
 mod text;
 mod vtk;
@@ -96,4 +121,4 @@ pub use vtk::{
     parse_vtk, read_vtk, write_vtk, write_vtk_tets, FieldValues, PointField, PointValues,
     VertexField, VtkData, VtkMesh,
 };
-pub use vtu::{parse_vtu, read_vtu};
+pub use vtu::{parse_vtu, read_vtu, MAX_DEPTH, MAX_INFLATED, MAX_INFLATION_RATIO};

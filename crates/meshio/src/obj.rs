@@ -39,8 +39,8 @@ pub fn parse_obj(bytes: &[u8], name: impl AsRef<Path>) -> Result<SurfaceData, Me
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
     // Absolute indices may point past the vertices read so far (forward references); they are
-    // checked at the end, against the final count. (line, 0-based index), in file order.
-    let mut forward: Vec<(usize, u64)> = Vec::new();
+    // checked at the end, against the final count.
+    let mut forward = ForwardRefs::default();
     let mut polygon: Vec<u32> = Vec::new();
     for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let line = i + 1;
@@ -79,7 +79,7 @@ pub fn parse_obj(bytes: &[u8], name: impl AsRef<Path>) -> Result<SurfaceData, Me
                 for word in words {
                     let index = face_corner(word, positions.len(), path, line)?;
                     if index as usize >= positions.len() {
-                        forward.push((line, u64::from(index)));
+                        forward.add(line, index);
                     }
                     polygon.push(index);
                 }
@@ -98,16 +98,13 @@ pub fn parse_obj(bytes: &[u8], name: impl AsRef<Path>) -> Result<SurfaceData, Me
             _ => {}
         }
     }
-    if let Some(&(line, index)) = forward
-        .iter()
-        .find(|&&(_, index)| index >= positions.len() as u64)
-    {
+    if let Some((line, index)) = forward.first_beyond(positions.len()) {
         return Err(MeshIoError::parse(
             path,
             line,
             format!(
                 "face refers to vertex {}, but the file has only {} vertices (`v` lines): fix the index or add the vertex",
-                index + 1,
+                u64::from(index) + 1,
                 positions.len()
             ),
         ));
@@ -116,6 +113,34 @@ pub fn parse_obj(bytes: &[u8], name: impl AsRef<Path>) -> Result<SurfaceData, Me
         positions,
         triangles,
     })
+}
+
+/// The forward references of a file, enough of them to name the first (in file order) that
+/// is still out of range at the end.
+///
+/// That one refers past every index before it (those are all in range), so it is a new
+/// maximum: only the references that raise the maximum so far are kept, in file order. A file
+/// of `f 9 9 9` lines before its vertices keeps one entry, not one per corner.
+#[derive(Default)]
+struct ForwardRefs {
+    /// (line, 0-based index), the indices strictly increasing.
+    maxima: Vec<(usize, u32)>,
+}
+
+impl ForwardRefs {
+    fn add(&mut self, line: usize, index: u32) {
+        if self.maxima.last().is_none_or(|&(_, max)| index > max) {
+            self.maxima.push((line, index));
+        }
+    }
+
+    /// The first reference to an index `>= count`, as (line, index).
+    fn first_beyond(&self, count: usize) -> Option<(usize, u32)> {
+        self.maxima
+            .iter()
+            .find(|&&(_, index)| index as usize >= count)
+            .copied()
+    }
 }
 
 /// Appends the fan triangulation `p0 p(k) p(k+1)` of a polygon.
@@ -231,6 +256,24 @@ mod tests {
         assert_eq!(d.triangles, vec![[0, 1, 2]]);
         let e = parse("v 0 0 0\nf 1 2 3\nv 1 0 0\n").unwrap_err();
         assert!(matches!(e, MeshIoError::Parse { line: 2, .. }), "{e}");
+    }
+
+    #[test]
+    fn forward_references_keep_only_new_maxima() {
+        let mut f = ForwardRefs::default();
+        for (line, index) in [(1, 5), (1, 5), (2, 3), (3, 9), (4, 7), (5, 9), (6, 12)] {
+            f.add(line, index);
+        }
+        assert_eq!(f.maxima, vec![(1, 5), (3, 9), (6, 12)]);
+        assert_eq!(f.first_beyond(13), None);
+        assert_eq!(f.first_beyond(10), Some((6, 12)));
+        // Index 7 on line 4 is past 7 vertices, but line 3's 9 comes first.
+        assert_eq!(f.first_beyond(7), Some((3, 9)));
+        assert_eq!(f.first_beyond(0), Some((1, 5)));
+        // A million references to one missing vertex keep one entry.
+        let text = "f 3 3 3\n".repeat(1_000_000);
+        let e = parse(&text).unwrap_err();
+        assert!(matches!(e, MeshIoError::Parse { line: 1, .. }), "{e}");
     }
 
     #[test]

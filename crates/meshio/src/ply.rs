@@ -10,14 +10,19 @@
 //! one element at a time so that errors name the element (and, for ASCII, the line), and guards
 //! the two inputs that would make it panic or hang:
 //! - a number in the header with more digits than fit in a `u64` (its grammar `unwrap`s the
-//!   parse; checked by [`check_header_numbers`] before ply-rs sees the header);
+//!   parse; checked by [`check_header`] before ply-rs sees the header);
 //! - a huge element count for an element without properties (it would loop that many times
 //!   reading nothing; such elements carry no data, so they are skipped for binary files and
-//!   bounded by the remaining lines for ASCII ones).
+//!   bounded by the remaining lines for ASCII ones);
+//! - long element and property names: ply-rs copies every property's name for every record it
+//!   reads, so a 1 MiB name on a 1-byte property would cost 1 MiB of copying per byte of the
+//!   body. Names longer than [`MAX_NAME`] bytes are refused (checked by the same scan).
 //!
 //! Every other read consumes at least one byte or one line per element, so a corrupt count ends
-//! in an error at the end of the data instead of a long loop, and capacities are bounded by the
-//! file size.
+//! in an error at the end of the data instead of a long loop. The vertex capacity reserved for
+//! the declared count is bounded by what the body can hold at the smallest record size the
+//! header allows (so by about the body's size for binary files, twice it for ASCII), and an
+//! ASCII body is read line by line, never split into a list of lines first.
 
 use std::io::{Cursor, Write};
 use std::path::Path;
@@ -114,7 +119,7 @@ enum Kind {
 /// Parses PLY data held in memory; `name` stands for the file in error messages.
 pub fn parse_ply(bytes: &[u8], name: impl AsRef<Path>) -> Result<SurfaceData, MeshIoError> {
     let path = name.as_ref();
-    let element_lines = check_header_numbers(bytes, path)?;
+    let element_lines = check_header(bytes, path)?;
     let header_line = |element: &str| {
         element_lines
             .iter()
@@ -199,8 +204,13 @@ pub fn parse_ply(bytes: &[u8], name: impl AsRef<Path>) -> Result<SurfaceData, Me
     }
 
     let rest = bytes.get(body..).unwrap_or_default();
+    let ascii = header.encoding == Encoding::Ascii;
     let mut out = SurfaceData {
-        positions: Vec::with_capacity(capacity(vertex_count, rest.len(), 3)),
+        positions: Vec::with_capacity(capacity(
+            vertex_count,
+            rest.len(),
+            min_record_bytes(vertex, ascii),
+        )),
         triangles: Vec::new(),
     };
     let mut polygon = Vec::new();
@@ -213,11 +223,14 @@ pub fn parse_ply(bytes: &[u8], name: impl AsRef<Path>) -> Result<SurfaceData, Me
     match header.encoding {
         Encoding::Ascii => {
             let mut line = line_of_offset(bytes, body);
-            let mut lines: Vec<&[u8]> = rest.split(|&b| b == b'\n').collect();
-            if lines.last().is_some_and(|l| l.is_empty()) {
-                lines.pop(); // the newline ending the last line starts no new one
-            }
-            let mut lines = lines.into_iter();
+            // Lines are taken one at a time, never collected: a list of every line would cost
+            // 16 bytes per line, 16 times the size of a file of empty lines. The newline ending
+            // the last line starts no new one, and an empty body has no lines.
+            let body_lines = rest.strip_suffix(b"\n").unwrap_or(rest);
+            let mut lines = (!rest.is_empty())
+                .then(|| body_lines.split(|&b| b == b'\n'))
+                .into_iter()
+                .flatten();
             for (name, def) in &header.elements {
                 let kind = kind_of(name);
                 for index in 0..def.count {
@@ -283,6 +296,30 @@ pub fn parse_ply(bytes: &[u8], name: impl AsRef<Path>) -> Result<SurfaceData, Me
     Ok(out)
 }
 
+/// The fewest bytes one record of `def` can take in the file: the sizes of its scalars and list
+/// counts (binary), or a character and a separator per property (ASCII). Bounds the capacity
+/// reserved for a declared count by what the body can hold.
+fn min_record_bytes(def: &ElementDef, ascii: bool) -> usize {
+    if ascii {
+        return 2 * def.properties.len();
+    }
+    def.properties
+        .values()
+        .map(|p| match &p.data_type {
+            PropertyType::Scalar(t) | PropertyType::List(t, _) => scalar_size(t),
+        })
+        .sum()
+}
+
+fn scalar_size(t: &ScalarType) -> usize {
+    match t {
+        ScalarType::Char | ScalarType::UChar => 1,
+        ScalarType::Short | ScalarType::UShort => 2,
+        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
+        ScalarType::Double => 8,
+    }
+}
+
 fn read_binary(
     parser: &Parser<Row>,
     cursor: &mut Cursor<&[u8]>,
@@ -334,26 +371,49 @@ fn take(
     Ok(())
 }
 
+/// The longest element or property name a PLY header may use. PLY writers use short names
+/// (`vertex_indices`, `scalar_intensity`); ply-rs copies each property's name once per record,
+/// so this bounds that copying to a small multiple of the body's size.
+const MAX_NAME: usize = 255;
+
 /// Rejects header numbers that do not fit in a `u64`: ply-rs 0.1.3's header grammar parses
 /// every digit run of `element` and `format` lines with `unwrap()`, so one would panic. Checks
 /// every header line except comments (a false alarm on a property name with 20 digits is the
-/// price of not re-implementing its grammar). Returns each `element` line's name and line
-/// number, for error messages.
-fn check_header_numbers(bytes: &[u8], path: &Path) -> Result<Vec<(String, usize)>, MeshIoError> {
+/// price of not re-implementing its grammar). Also rejects `element` and `property` names
+/// longer than [`MAX_NAME`]. Returns each `element` line's name and line number, for error
+/// messages.
+fn check_header(bytes: &[u8], path: &Path) -> Result<Vec<(String, usize)>, MeshIoError> {
     let mut elements = Vec::new();
     for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
         let line = i + 1;
         let text = String::from_utf8_lossy(raw);
         let text = text.trim_end();
         let mut words = text.split_whitespace();
-        match words.next() {
-            Some("comment" | "obj_info") => continue,
-            Some("element") => {
-                if let Some(name) = words.next() {
-                    elements.push((name.to_string(), line));
-                }
+        let first = words.next();
+        if matches!(first, Some("comment" | "obj_info")) {
+            continue;
+        }
+        // The name is the second word of an `element` line and the last of a `property` line.
+        let name = match first {
+            Some("element") => words.next(),
+            Some("property") => words.last(),
+            _ => None,
+        };
+        if let Some(name) = name.filter(|n| n.len() > MAX_NAME) {
+            return Err(MeshIoError::parse(
+                path,
+                line,
+                format!(
+                    "the name `{}` is {} bytes long: this reader takes names of at most {MAX_NAME} bytes",
+                    shorten(name),
+                    name.len()
+                ),
+            ));
+        }
+        if first == Some("element") {
+            if let Some(name) = name {
+                elements.push((name.to_string(), line));
             }
-            _ => {}
         }
         for run in text
             .split(|c: char| !c.is_ascii_digit())
@@ -488,6 +548,28 @@ mod tests {
         assert!(d.positions.is_empty());
         let ascii = text.replace("binary_little_endian", "ascii");
         assert!(parse_ply(ascii.as_bytes(), "e.ply").is_err());
+    }
+
+    #[test]
+    fn long_names_are_refused() {
+        let long = "n".repeat(MAX_NAME + 1);
+        let bad = ASCII.replace("property uchar red", &format!("property uchar {long}"));
+        let e = parse_ply(bad.as_bytes(), "q.ply").unwrap_err();
+        assert!(matches!(e, MeshIoError::Parse { line: 8, .. }), "{e}");
+        assert!(e.to_string().contains("256 bytes long"), "{e}");
+        let bad = ASCII.replace("element face 1", &format!("element {long} 1"));
+        assert!(parse_ply(bad.as_bytes(), "q.ply").is_err());
+        // At the limit, and in comments, names of any length are fine.
+        let ok = ASCII
+            .replace(
+                "property uchar red",
+                &format!("property uchar {}", &long[1..]),
+            )
+            .replace("comment hi", &format!("comment {long}{long}"));
+        assert_eq!(
+            parse_ply(ok.as_bytes(), "q.ply").unwrap().positions.len(),
+            4
+        );
     }
 
     #[test]
