@@ -373,7 +373,7 @@ pub struct Cli {
     #[arg(long, value_enum, default_value_t = Detect::Bvh, help_heading = "Run")]
     pub detect: Detect,
 
-    /// Step limit of a run.
+    /// Step limit of a run (at most 500000).
     #[arg(long, value_name = "N", default_value_t = default_max_steps(), help_heading = "Run")]
     pub max_steps: u64,
 
@@ -437,7 +437,7 @@ pub struct Cli {
           requires = "expand_weeks", help_heading = "Expansion")]
     pub seed: u64,
 
-    /// Expansion: the growth step in hours (the skin re-settles after each; at most 24).
+    /// Expansion: the growth step in hours, 1 to 24 (the skin re-settles after each).
     #[arg(long, value_name = "HOURS", default_value_t = defaults().growth_step_h,
           requires = "expand_weeks", help_heading = "Expansion")]
     pub growth_step: f64,

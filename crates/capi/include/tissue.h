@@ -189,6 +189,9 @@ typedef struct tissue_patient tissue_patient;
 // `tissue_plan_options_default` first, then change what you need. Enum-valued fields are
 // `uint32_t` holding the named enum's values. Lengths in cm; a size of 0 means "not given"
 // (the library's default or, for a rectangle's or crescent's sizes, a `TISSUE_USAGE` error).
+// Bounds (`TISSUE_PARAMETERS` naming the field beyond them; `TISSUE_PLACEMENT` for the region
+// radius): lengths at most 100 cm, `volume_cm3` at most 5000, `depth_cm` at most 10,
+// `max_steps` 1 to 500000.
 typedef struct tissue_plan_options {
   // A `tissue_placement`.
   uint32_t placement;
@@ -219,7 +222,7 @@ typedef struct tissue_plan_options {
   // The simulation mesh's edge, cm (0: from the implant's size; on the Table 2 plane, 0 runs
   // on its own grid).
   double sim_edge_cm;
-  // A run's step limit.
+  // A run's step limit (1 to 500000; the default 20000).
   uint64_t max_steps;
   // Run on the patient mesh's own triangles instead of a simulation mesh of its own.
   bool scan_triangles;
@@ -514,8 +517,8 @@ enum tissue_status tissue_plan_start(const struct tissue_patient *patient,
 // Starts a sweep: the insertion of `options` at each of `volumes_cm3` (`count` volumes), run in
 // parallel. Read its rows with `tissue_job_sweep_row`.
 //
-// Errors: as `tissue_plan_start`; `TISSUE_PARAMETERS` for no volume or one that is not
-// positive.
+// Errors: as `tissue_plan_start`; `TISSUE_PARAMETERS` for no volume, more than 64, or one that
+// is not positive or above 5000 cm³.
 //
 // Thread safety: any thread.
 enum tissue_status tissue_sweep_start(const struct tissue_patient *patient,
@@ -780,13 +783,18 @@ enum tissue_status tissue_tool_force(const struct tissue_body *body,
 // least the triangle's corners, follow the probe's target (`tissue_body_drag`) until
 // `tissue_body_release`. Adds a `TISSUE_EVENT_GRABBED` event.
 //
+// Errors: `TISSUE_INVALID_ARGUMENT` for a triangle out of range or a point outside the tools'
+// working space (see `tissue_body_drag`).
+//
 // Thread safety: any thread (waits for a running step).
 enum tissue_status tissue_body_grab(const struct tissue_body *body,
                                     const float *point,
                                     uint32_t triangle);
 
 // Moves the grasped point towards `target` (cm) from the next step on (nothing while nothing is
-// grasped).
+// grasped), clamped into the tools' working space: the tray's square grown by half its side on
+// every edge (x and z within ± the tray's side), from 1 cm below the tray's top to a tray's side
+// above it.
 //
 // Thread safety: any thread (waits for a running step).
 enum tissue_status tissue_body_drag(const struct tissue_body *body, const float *target);
@@ -807,8 +815,10 @@ enum tissue_status tissue_body_grasp_force(const struct tissue_body *body, float
 // cuts 1 cm below the path, one segment (about 0.4 cm) per step. `*segments` (may be NULL) is
 // set to the segments queued.
 //
-// Errors: `TISSUE_INVALID_ARGUMENT` for fewer than two distinct points, a path along the
-// view, or a path too short.
+// Errors: `TISSUE_INVALID_ARGUMENT` for fewer than two distinct points, more than 10000 (refused
+// before they are read), a point outside the tools' working space (see `tissue_body_drag`), a
+// path along the view, a path too short, or a cut that would queue more than four tray sides
+// of segments (counting those still waiting; nothing is queued).
 //
 // Thread safety: any thread (waits for a running step).
 enum tissue_status tissue_body_cut(const struct tissue_body *body,
@@ -834,6 +844,10 @@ enum tissue_status tissue_body_cut_sweep(const struct tissue_body *body,
 // passes below them, and the nodes of the wound's walls nearest its crossings are linked. The
 // event (`TISSUE_EVENT_SUTURE_PLACED`, or `TISSUE_EVENT_SUTURE_MISSED` when the needle crossed
 // no wound) is queued and, if `event` is not NULL, also written there.
+//
+// Errors: `TISSUE_INVALID_ARGUMENT` for points that are not finite, coincide, or lie outside
+// the tools' working space (see `tissue_body_drag`), and when a suture is already there: a
+// second stitch within 0.5 cm (along the wound) of an existing one is not a new stitch.
 //
 // Thread safety: any thread (waits for a running step).
 enum tissue_status tissue_body_suture(const struct tissue_body *body,

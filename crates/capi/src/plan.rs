@@ -85,6 +85,9 @@ pub enum tissue_shape {
 /// `tissue_plan_options_default` first, then change what you need. Enum-valued fields are
 /// `uint32_t` holding the named enum's values. Lengths in cm; a size of 0 means "not given"
 /// (the library's default or, for a rectangle's or crescent's sizes, a `TISSUE_USAGE` error).
+/// Bounds (`TISSUE_PARAMETERS` naming the field beyond them; `TISSUE_PLACEMENT` for the region
+/// radius): lengths at most 100 cm, `volume_cm3` at most 5000, `depth_cm` at most 10,
+/// `max_steps` 1 to 500000.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct tissue_plan_options {
@@ -117,7 +120,7 @@ pub struct tissue_plan_options {
     /// The simulation mesh's edge, cm (0: from the implant's size; on the Table 2 plane, 0 runs
     /// on its own grid).
     pub sim_edge_cm: f64,
-    /// A run's step limit.
+    /// A run's step limit (1 to 500000; the default 20000).
     pub max_steps: u64,
     /// Run on the patient mesh's own triangles instead of a simulation mesh of its own.
     pub scan_triangles: bool,
@@ -660,8 +663,8 @@ pub extern "C" fn tissue_plan_start(
 /// Starts a sweep: the insertion of `options` at each of `volumes_cm3` (`count` volumes), run in
 /// parallel. Read its rows with `tissue_job_sweep_row`.
 ///
-/// Errors: as `tissue_plan_start`; `TISSUE_PARAMETERS` for no volume or one that is not
-/// positive.
+/// Errors: as `tissue_plan_start`; `TISSUE_PARAMETERS` for no volume, more than 64, or one that
+/// is not positive or above 5000 cm³.
 ///
 /// Thread safety: any thread.
 #[no_mangle]
@@ -681,6 +684,8 @@ pub extern "C" fn tissue_sweep_start(
                 slice(volumes_cm3, count, "volumes_cm3")?,
             )
         };
+        // Checked on the caller's array, before it is copied.
+        tissue_planner::check_sweep(volumes)?;
         let spec = JobSpec {
             mode: JobMode::Sweep,
             request: request(options)?,

@@ -532,6 +532,9 @@ pub extern "C" fn tissue_tool_force(
 /// least the triangle's corners, follow the probe's target (`tissue_body_drag`) until
 /// `tissue_body_release`. Adds a `TISSUE_EVENT_GRABBED` event.
 ///
+/// Errors: `TISSUE_INVALID_ARGUMENT` for a triangle out of range or a point outside the tools'
+/// working space (see `tissue_body_drag`).
+///
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
 pub extern "C" fn tissue_body_grab(
@@ -550,7 +553,9 @@ pub extern "C" fn tissue_body_grab(
 }
 
 /// Moves the grasped point towards `target` (cm) from the next step on (nothing while nothing is
-/// grasped).
+/// grasped), clamped into the tools' working space: the tray's square grown by half its side on
+/// every edge (x and z within ± the tray's side), from 1 cm below the tray's top to a tray's side
+/// above it.
 ///
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
@@ -601,8 +606,10 @@ pub extern "C" fn tissue_body_grasp_force(
 /// cuts 1 cm below the path, one segment (about 0.4 cm) per step. `*segments` (may be NULL) is
 /// set to the segments queued.
 ///
-/// Errors: `TISSUE_INVALID_ARGUMENT` for fewer than two distinct points, a path along the
-/// view, or a path too short.
+/// Errors: `TISSUE_INVALID_ARGUMENT` for fewer than two distinct points, more than 10000 (refused
+/// before they are read), a point outside the tools' working space (see `tissue_body_drag`), a
+/// path along the view, a path too short, or a cut that would queue more than four tray sides
+/// of segments (counting those still waiting; nothing is queued).
 ///
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]
@@ -614,6 +621,12 @@ pub extern "C" fn tissue_body_cut(
     segments: *mut usize,
 ) -> tissue_status {
     guard(|| {
+        if point_count > tissue_scenes::MAX_CUT_POINTS {
+            return Err(Error::invalid(format!(
+                "a cut path of {point_count} points: at most {} are taken; send fewer points",
+                tissue_scenes::MAX_CUT_POINTS
+            )));
+        }
         // SAFETY: the header's contract.
         let (points, view) = unsafe {
             (
@@ -658,6 +671,10 @@ pub extern "C" fn tissue_body_cut_sweep(
 /// passes below them, and the nodes of the wound's walls nearest its crossings are linked. The
 /// event (`TISSUE_EVENT_SUTURE_PLACED`, or `TISSUE_EVENT_SUTURE_MISSED` when the needle crossed
 /// no wound) is queued and, if `event` is not NULL, also written there.
+///
+/// Errors: `TISSUE_INVALID_ARGUMENT` for points that are not finite, coincide, or lie outside
+/// the tools' working space (see `tissue_body_drag`), and when a suture is already there: a
+/// second stitch within 0.5 cm (along the wound) of an existing one is not a new stitch.
 ///
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]

@@ -188,6 +188,17 @@ mod tests {
         assert_eq!(missing.and_then(|e| e.field), Some("expand_weeks"));
         let empty = planned(r#"{"mode": "sweep"}"#).err();
         assert!(empty.is_some(), "a sweep of no volume");
+        let volumes = vec!["50"; crate::MAX_SWEEP_VOLUMES + 1].join(", ");
+        let many = planned(&format!(
+            r#"{{"mode": "sweep", "volumes_cm3": [{volumes}]}}"#
+        ))
+        .err();
+        assert_eq!(
+            many.map(|e| (e.kind, e.field)),
+            Some((ErrorKind::Parameters, Some("volumes_cm3")))
+        );
+        let steps = planned(r#"{"request": {"max_steps": 1000000000000}}"#).err();
+        assert_eq!(steps.and_then(|e| e.field), Some("max_steps"));
         assert!(
             planned(r#"{"mode": "single", "volume": 50}"#).is_err(),
             "unknown member"

@@ -9,7 +9,12 @@
 //!   [`Shipped`] mesh (the Table 2 plane, the chest, the head); its [`MeshSummary`].
 //! - **The request** ([`PlanRequest`]): one flat record, JSON names with their units, every
 //!   field defaulting to the library's value (`{}` is Table 2). [`PlanRequest::check`] refuses a
-//!   value that cannot be right, naming the field.
+//!   value that cannot be right, naming the field, and bounds every size and count so that a
+//!   request's work is bounded: [`MAX_STEPS`] steps a run, [`MAX_SWEEP_VOLUMES`] volumes a sweep,
+//!   lengths up to [`MAX_LENGTH_CM`], volumes up to [`MAX_VOLUME_CM3`], depth and thickness up
+//!   to [`MAX_DEPTH_CM`] and [`MAX_THICKNESS_CM`], tissue values up to [`MAX_YOUNG_KPA`] and
+//!   [`MAX_DENSITY_G_CM3`], a time step up to [`MAX_TIME_STEP_S`], growth steps of at least
+//!   [`MIN_GROWTH_STEP_H`].
 //! - **Placing** ([`Scenario`]): the point snapped to the surface, the normal (interpolated
 //!   vertex normals), the tangent (given or +x, turned by `rotation_deg`), the
 //!   [`tissue_app::InsertionJob`]; [`Scenario::preview`] draws the footprint and the region and
@@ -63,7 +68,11 @@ pub use patient::{
     BoxSummary, DefectSummary, LoopSummary, MeshSummary, Patient, Shipped, TABLE2_SIDE_CM,
     TABLE2_VERTICES_PER_SIDE,
 };
-pub use request::{check_search, check_sweep, PlanRequest};
+pub use request::{
+    check_search, check_sweep, PlanRequest, MAX_DENSITY_G_CM3, MAX_DEPTH_CM, MAX_LENGTH_CM,
+    MAX_STEPS, MAX_SWEEP_VOLUMES, MAX_THICKNESS_CM, MAX_TIME_STEP_S, MAX_VOLUME_CM3, MAX_YOUNG_KPA,
+    MIN_GROWTH_STEP_H,
+};
 pub use result::{is_mesh_path, PatientResult};
 pub use scenario::{default_gain_tolerance, Preview, Scenario, FOOTPRINT_LIFT_CM};
 pub use tissue_app::{Event, Handle, Job, Outcome, ProgressEvent};

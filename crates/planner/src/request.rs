@@ -123,6 +123,47 @@ impl Default for PlanRequest {
     }
 }
 
+/// The most steps a run may take (`max_steps`): 25 × the library's default of 20 000. The
+/// thesis's runs settle in 2 800–3 300 steps (Table 1), the expansion settles each growth step
+/// within the same budget, and a run that has not settled after 20 000 says so; at the Table 2
+/// plane's ~10 ms a step, this is over an hour of one run.
+pub const MAX_STEPS: u64 = 500_000;
+
+/// The most volumes a sweep runs (`volumes_cm3`): Table 1 sweeps 3; a chart of a few dozen points
+/// is already dense.
+pub const MAX_SWEEP_VOLUMES: usize = 64;
+
+/// The largest length the request takes, cm: an implant's `diameter_cm`, `length_cm`,
+/// `width_cm`, `corner_radius_cm`, `bend_radius_cm`; `region_radius_cm`, `sim_edge_cm`,
+/// `max_hole_cm`. Expanders are at most about 25 cm long; a radius of 1 m covers a whole body.
+pub const MAX_LENGTH_CM: f64 = 100.0;
+
+/// The largest fill volume, cm³ (`volume_cm3`, a sweep's volumes, a search's bracket): expanders
+/// hold up to about 1 000 mL.
+pub const MAX_VOLUME_CM3: f64 = 5000.0;
+
+/// The deepest placement, cm (`depth_cm`): expanders go 0.2–3 cm under the skin.
+pub const MAX_DEPTH_CM: f64 = 10.0;
+
+/// The thickest skin, cm (`thickness_cm`): skin is 0.05–0.4 cm thick, with fat a few cm.
+pub const MAX_THICKNESS_CM: f64 = 10.0;
+
+/// The stiffest skin, kPa (`young_kpa`): 100 MPa, ten times the stiffest skin measured
+/// (skin: 0.1–20 MPa).
+pub const MAX_YOUNG_KPA: f64 = 100_000.0;
+
+/// The densest tissue, g/cm³ (`density_g_cm3`): soft tissue is about 1.0–1.1, bone about 2.
+pub const MAX_DENSITY_G_CM3: f64 = 10.0;
+
+/// The longest time step, s (`time_step_s`): the automatic step is 3.4·10⁻⁵ s on the Table 2
+/// plane and a step of 10⁻³ s already diverges there (the run says so); beyond this the solver's
+/// damping underflows and the run fails without saying why.
+pub const MAX_TIME_STEP_S: f64 = 0.01;
+
+/// The shortest growth step of an expansion, hours (`growth_step_h`): the mechanics re-settle
+/// after every one, so an expansion of a year has at most 8 760 of them.
+pub const MIN_GROWTH_STEP_H: f64 = 1.0;
+
 /// `value` must be finite and positive.
 fn positive(field: &'static str, value: f64, unit: &str) -> Result<(), PlanError> {
     if value.is_finite() && value > 0.0 {
@@ -136,17 +177,67 @@ fn positive(field: &'static str, value: f64, unit: &str) -> Result<(), PlanError
     }
 }
 
+/// `value` must be at most `max` (`why`: what real values are).
+fn at_most(
+    kind: ErrorKind,
+    field: &'static str,
+    value: f64,
+    max: f64,
+    unit: &str,
+    why: &str,
+) -> Result<(), PlanError> {
+    if value <= max {
+        Ok(())
+    } else {
+        Err(PlanError::field(
+            kind,
+            field,
+            format!("`{field}` must be at most {max} {unit} ({why}), got {value}"),
+        ))
+    }
+}
+
+/// A positive length of at most [`MAX_LENGTH_CM`].
+fn length(field: &'static str, value: f64) -> Result<(), PlanError> {
+    positive(field, value, "cm")?;
+    at_most(
+        ErrorKind::Parameters,
+        field,
+        value,
+        MAX_LENGTH_CM,
+        "cm",
+        "larger than any implant or region",
+    )
+}
+
+/// A positive volume of at most [`MAX_VOLUME_CM3`].
+fn volume(field: &'static str, value: f64) -> Result<(), PlanError> {
+    positive(field, value, "cm³ (mL)")?;
+    at_most(
+        ErrorKind::Parameters,
+        field,
+        value,
+        MAX_VOLUME_CM3,
+        "cm³",
+        "expanders hold up to about 1000 mL",
+    )
+}
+
 impl PlanRequest {
     /// Checks the numbers a user types, naming the field: a size, volume or tissue value that
-    /// cannot be right is refused before anything runs.
+    /// cannot be right is refused before anything runs, and every size and count has an upper
+    /// bound no plan reaches ([`MAX_STEPS`], [`MAX_LENGTH_CM`], [`MAX_VOLUME_CM3`],
+    /// [`MAX_DEPTH_CM`], [`MAX_THICKNESS_CM`], [`MAX_YOUNG_KPA`], [`MAX_DENSITY_G_CM3`],
+    /// [`MAX_TIME_STEP_S`], [`MIN_GROWTH_STEP_H`], the implant's vertex budget) so that the
+    /// work a request asks for is bounded.
     ///
     /// # Errors
     /// [`ErrorKind::Parameters`] (or [`ErrorKind::Placement`] for the region radius) naming the
     /// field.
     pub fn check(&self) -> Result<(), PlanError> {
-        positive("volume_cm3", self.volume_cm3, "cm³ (mL)")?;
+        volume("volume_cm3", self.volume_cm3)?;
         match self.shape {
-            Shape::Round => positive("diameter_cm", f64::from(self.diameter_cm), "cm")?,
+            Shape::Round => length("diameter_cm", f64::from(self.diameter_cm))?,
             Shape::Rectangular | Shape::Crescent => {
                 for (field, value) in [
                     ("length_cm", self.length_cm),
@@ -154,15 +245,72 @@ impl PlanRequest {
                     ("bend_radius_cm", self.bend_radius_cm),
                 ] {
                     if let Some(v) = value {
-                        positive(field, f64::from(v), "cm")?;
+                        length(field, f64::from(v))?;
                     }
+                }
+                if self.shape == Shape::Rectangular {
+                    // Zero is a square corner; the implant checks it against the outline.
+                    let r = f64::from(self.corner_radius_cm);
+                    at_most(
+                        ErrorKind::Parameters,
+                        "corner_radius_cm",
+                        r,
+                        MAX_LENGTH_CM,
+                        "cm",
+                        "larger than any implant",
+                    )?;
                 }
             }
         }
+        let budget = ImplantSpec::MIN_VERTEX_BUDGET..=ImplantSpec::MAX_VERTEX_BUDGET;
+        if !budget.contains(&self.implant_vertices) {
+            return Err(PlanError::field(
+                ErrorKind::Parameters,
+                "implant_vertices",
+                format!(
+                    "`implant_vertices` must be {} to {} (the thesis's implant has 514), got {}",
+                    budget.start(),
+                    budget.end(),
+                    self.implant_vertices
+                ),
+            ));
+        }
         positive("depth_cm", self.depth_cm, "cm")?;
+        at_most(
+            ErrorKind::Parameters,
+            "depth_cm",
+            self.depth_cm,
+            MAX_DEPTH_CM,
+            "cm",
+            "expanders go 0.2–3 cm under the skin",
+        )?;
         positive("young_kpa", self.young_kpa, "kPa")?;
+        at_most(
+            ErrorKind::Parameters,
+            "young_kpa",
+            self.young_kpa,
+            MAX_YOUNG_KPA,
+            "kPa",
+            "skin is 100–20000 kPa",
+        )?;
         positive("thickness_cm", self.thickness_cm, "cm")?;
+        at_most(
+            ErrorKind::Parameters,
+            "thickness_cm",
+            self.thickness_cm,
+            MAX_THICKNESS_CM,
+            "cm",
+            "skin is 0.05–0.4 cm thick",
+        )?;
         positive("density_g_cm3", self.density_g_cm3, "g/cm³")?;
+        at_most(
+            ErrorKind::Parameters,
+            "density_g_cm3",
+            self.density_g_cm3,
+            MAX_DENSITY_G_CM3,
+            "g/cm³",
+            "soft tissue is about 1.0–1.1",
+        )?;
         if !(self.poisson.is_finite() && (0.0..0.5).contains(&self.poisson)) {
             return Err(PlanError::field(
                 ErrorKind::Parameters,
@@ -181,22 +329,41 @@ impl PlanRequest {
                     format!("`region_radius_cm` must be a positive region radius in cm, got {r}"),
                 ));
             }
+            at_most(
+                ErrorKind::Placement,
+                "region_radius_cm",
+                r,
+                MAX_LENGTH_CM,
+                "cm",
+                "a region of 1 m radius covers a whole body",
+            )?;
         }
         if let Some(h) = self.sim_edge_cm {
-            positive("sim_edge_cm", h, "cm")?;
+            length("sim_edge_cm", h)?;
         }
-        if !(self.max_hole_cm.is_finite() && self.max_hole_cm >= 0.0) {
+        if !(self.max_hole_cm.is_finite()
+            && self.max_hole_cm >= 0.0
+            && self.max_hole_cm <= MAX_LENGTH_CM)
+        {
             return Err(PlanError::field(
                 ErrorKind::Parameters,
                 "max_hole_cm",
                 format!(
-                    "`max_hole_cm` must be a size ≥ 0 in cm, got {}",
+                    "`max_hole_cm` must be a size from 0 to {MAX_LENGTH_CM} cm, got {}",
                     self.max_hole_cm
                 ),
             ));
         }
         if let Some(h) = self.time_step_s {
             positive("time_step_s", f64::from(h), "seconds")?;
+            at_most(
+                ErrorKind::Parameters,
+                "time_step_s",
+                f64::from(h),
+                MAX_TIME_STEP_S,
+                "s",
+                "leave it null for the automatic step, 3.4e-5 s on Table 2's plane",
+            )?;
         }
         if !self.rotation_deg.is_finite() {
             return Err(PlanError::field(
@@ -219,25 +386,30 @@ impl PlanRequest {
                 ));
             }
             if !(self.growth_step_h.is_finite()
-                && self.growth_step_h > 0.0
+                && self.growth_step_h >= MIN_GROWTH_STEP_H
                 && self.growth_step_h <= 24.0)
             {
                 return Err(PlanError::field(
                     ErrorKind::Parameters,
                     "growth_step_h",
                     format!(
-                        "`growth_step_h` must be in (0, 24] hours (the skin re-settles at least \
-                         daily), got {}",
+                        "`growth_step_h` must be in [{MIN_GROWTH_STEP_H}, 24] hours (the skin \
+                         re-settles after every step, at least daily), got {}",
                         self.growth_step_h
                     ),
                 ));
             }
         }
-        if self.max_steps == 0 {
+        if !(1..=MAX_STEPS).contains(&self.max_steps) {
             return Err(PlanError::field(
                 ErrorKind::Parameters,
                 "max_steps",
-                "`max_steps` must be at least 1",
+                format!(
+                    "`max_steps` must be 1 to {MAX_STEPS} (the default {} is enough for the \
+                     thesis's runs), got {}",
+                    InsertionParams::default().run.stop.max_steps,
+                    self.max_steps
+                ),
             ));
         }
         Ok(())
@@ -353,7 +525,8 @@ impl PlanRequest {
     }
 }
 
-/// Checks the volumes of a sweep: at least one, each positive.
+/// Checks the volumes of a sweep: one to [`MAX_SWEEP_VOLUMES`], each positive and at most
+/// [`MAX_VOLUME_CM3`].
 ///
 /// # Errors
 /// [`ErrorKind::Parameters`] naming `volumes_cm3`.
@@ -365,13 +538,25 @@ pub fn check_sweep(volumes: &[f64]) -> Result<(), PlanError> {
             "a sweep needs at least one volume in `volumes_cm3`",
         ));
     }
+    if volumes.len() > MAX_SWEEP_VOLUMES {
+        return Err(PlanError::field(
+            ErrorKind::Parameters,
+            "volumes_cm3",
+            format!(
+                "a sweep runs at most {MAX_SWEEP_VOLUMES} volumes, `volumes_cm3` has {}: sweep \
+                 fewer, or split the sweep",
+                volumes.len()
+            ),
+        ));
+    }
     for &v in volumes {
-        if !(v.is_finite() && v > 0.0) {
+        if !(v.is_finite() && v > 0.0 && v <= MAX_VOLUME_CM3) {
             return Err(PlanError::field(
                 ErrorKind::Parameters,
                 "volumes_cm3",
                 format!(
-                    "every volume of `volumes_cm3` must be a positive number of cm³ (mL), got {v}"
+                    "every volume of `volumes_cm3` must be a positive number of cm³ (mL) up to \
+                     {MAX_VOLUME_CM3}, got {v}"
                 ),
             ));
         }
@@ -380,7 +565,7 @@ pub fn check_sweep(volumes: &[f64]) -> Result<(), PlanError> {
 }
 
 /// Checks a search for the volume of a target gain and gives its bracket (default: a quarter to
-/// twice `volume_cm3`).
+/// twice `volume_cm3`, at most [`MAX_VOLUME_CM3`]; a given bracket must lie within it too).
 ///
 /// # Errors
 /// [`ErrorKind::Parameters`] naming `target_gain_cm2`, `bracket_cm3` or `gain_tolerance_cm2`.
@@ -398,7 +583,8 @@ pub fn check_search(
         ));
     }
     positive("gain_tolerance_cm2", gain_tolerance_cm2, "cm²")?;
-    let (low, high) = bracket_cm3.unwrap_or((0.25 * volume_cm3, 2.0 * volume_cm3));
+    let (low, high) =
+        bracket_cm3.unwrap_or((0.25 * volume_cm3, (2.0 * volume_cm3).min(MAX_VOLUME_CM3)));
     if !(low.is_finite() && low > 0.0) {
         return Err(PlanError::field(
             ErrorKind::Parameters,
@@ -411,6 +597,16 @@ pub fn check_search(
             ErrorKind::Parameters,
             "bracket_cm3",
             format!("the high end of `bracket_cm3` must be larger than the low end ({low} cm³), got {high}"),
+        ));
+    }
+    if high > MAX_VOLUME_CM3 {
+        return Err(PlanError::field(
+            ErrorKind::Parameters,
+            "bracket_cm3",
+            format!(
+                "the high end of `bracket_cm3` must be at most {MAX_VOLUME_CM3} cm³ (expanders \
+                 hold up to about 1000 mL), got {high}"
+            ),
         ));
     }
     Ok((low, high))
@@ -453,5 +649,208 @@ mod tests {
         );
         let unknown: Result<PlanRequest, _> = serde_json::from_str(r#"{"volume": 3}"#);
         assert!(unknown.is_err(), "unknown fields are refused");
+    }
+
+    fn request(json: serde_json::Value) -> PlanRequest {
+        match serde_json::from_value(json.clone()) {
+            Ok(r) => r,
+            Err(e) => unreachable!("{json}: {e}"),
+        }
+    }
+
+    #[test]
+    fn every_bound_is_refused_naming_its_field_and_a_value_just_inside_is_accepted() {
+        use serde_json::json;
+        let rect = |field: &str, v: f64| {
+            let mut r = json!({"shape": "rectangular", "length_cm": 12, "width_cm": 6});
+            r[field] = json!(v);
+            r
+        };
+        let crescent = |v: f64| json!({"shape": "crescent", "length_cm": 12, "width_cm": 4, "bend_radius_cm": v});
+        let weeks = |h: f64| json!({"expand_weeks": 3, "growth_step_h": h});
+        // (field, kind, just outside, just inside)
+        let cases = [
+            (
+                "max_steps",
+                ErrorKind::Parameters,
+                json!({"max_steps": MAX_STEPS + 1}),
+                json!({"max_steps": MAX_STEPS}),
+            ),
+            (
+                "max_steps",
+                ErrorKind::Parameters,
+                json!({"max_steps": 1_000_000_000_000u64}),
+                json!({"max_steps": 1}),
+            ),
+            (
+                "max_steps",
+                ErrorKind::Parameters,
+                json!({"max_steps": 0}),
+                json!({"max_steps": 20_000}),
+            ),
+            (
+                "volume_cm3",
+                ErrorKind::Parameters,
+                json!({"volume_cm3": 5000.01}),
+                json!({"volume_cm3": MAX_VOLUME_CM3}),
+            ),
+            (
+                "diameter_cm",
+                ErrorKind::Parameters,
+                json!({"diameter_cm": 100.01}),
+                json!({"diameter_cm": MAX_LENGTH_CM}),
+            ),
+            (
+                "length_cm",
+                ErrorKind::Parameters,
+                rect("length_cm", 100.01),
+                rect("length_cm", 100.0),
+            ),
+            (
+                "width_cm",
+                ErrorKind::Parameters,
+                rect("width_cm", 100.01),
+                rect("width_cm", 100.0),
+            ),
+            (
+                "corner_radius_cm",
+                ErrorKind::Parameters,
+                rect("corner_radius_cm", 100.01),
+                rect("corner_radius_cm", 100.0),
+            ),
+            (
+                "bend_radius_cm",
+                ErrorKind::Parameters,
+                crescent(100.01),
+                crescent(100.0),
+            ),
+            (
+                "region_radius_cm",
+                ErrorKind::Placement,
+                json!({"region_radius_cm": 100.01}),
+                json!({"region_radius_cm": 100.0}),
+            ),
+            (
+                "sim_edge_cm",
+                ErrorKind::Parameters,
+                json!({"sim_edge_cm": 100.01}),
+                json!({"sim_edge_cm": 100.0}),
+            ),
+            (
+                "max_hole_cm",
+                ErrorKind::Parameters,
+                json!({"max_hole_cm": 100.01}),
+                json!({"max_hole_cm": 100.0}),
+            ),
+            (
+                "depth_cm",
+                ErrorKind::Parameters,
+                json!({"depth_cm": 1e308}),
+                json!({"depth_cm": MAX_DEPTH_CM}),
+            ),
+            (
+                "depth_cm",
+                ErrorKind::Parameters,
+                json!({"depth_cm": 10.01}),
+                json!({"depth_cm": 9.99}),
+            ),
+            (
+                "thickness_cm",
+                ErrorKind::Parameters,
+                json!({"thickness_cm": 1e308}),
+                json!({"thickness_cm": MAX_THICKNESS_CM}),
+            ),
+            (
+                "thickness_cm",
+                ErrorKind::Parameters,
+                json!({"thickness_cm": 10.01}),
+                json!({"thickness_cm": 9.99}),
+            ),
+            (
+                "young_kpa",
+                ErrorKind::Parameters,
+                json!({"young_kpa": 100_000.1}),
+                json!({"young_kpa": MAX_YOUNG_KPA}),
+            ),
+            (
+                "density_g_cm3",
+                ErrorKind::Parameters,
+                json!({"density_g_cm3": 10.01}),
+                json!({"density_g_cm3": MAX_DENSITY_G_CM3}),
+            ),
+            (
+                "time_step_s",
+                ErrorKind::Parameters,
+                json!({"time_step_s": 0.0101}),
+                json!({"time_step_s": MAX_TIME_STEP_S}),
+            ),
+            (
+                "growth_step_h",
+                ErrorKind::Parameters,
+                weeks(0.99),
+                weeks(MIN_GROWTH_STEP_H),
+            ),
+            (
+                "implant_vertices",
+                ErrorKind::Parameters,
+                json!({"implant_vertices": 100_001}),
+                json!({"implant_vertices": 100_000}),
+            ),
+            (
+                "implant_vertices",
+                ErrorKind::Parameters,
+                json!({"implant_vertices": 49}),
+                json!({"implant_vertices": 50}),
+            ),
+        ];
+        for (field, kind, outside, inside) in cases {
+            let e = request(outside.clone()).check().err();
+            assert_eq!(
+                e.as_ref().map(|e| (e.kind, e.field)),
+                Some((kind, Some(field))),
+                "{outside}: {e:?}"
+            );
+            let message = e.map(|e| e.message).unwrap_or_default();
+            assert!(message.contains(&format!("`{field}`")), "{message}");
+            assert!(
+                request(inside.clone()).check().is_ok(),
+                "{inside}: {:?}",
+                request(inside.clone()).check()
+            );
+        }
+    }
+
+    #[test]
+    fn sweeps_and_searches_are_bounded() {
+        let field = |r: Result<(), PlanError>| r.err().map(|e| (e.kind, e.field));
+        let refused = Some((ErrorKind::Parameters, Some("volumes_cm3")));
+        assert_eq!(
+            field(check_sweep(&vec![50.0; MAX_SWEEP_VOLUMES + 1])),
+            refused
+        );
+        assert_eq!(field(check_sweep(&vec![50.0; 1_000_000])), refused);
+        assert_eq!(field(check_sweep(&[50.0, 5000.5])), refused);
+        assert_eq!(
+            field(check_sweep(&vec![MAX_VOLUME_CM3; MAX_SWEEP_VOLUMES])),
+            None
+        );
+        let bracket = Some((ErrorKind::Parameters, Some("bracket_cm3")));
+        assert_eq!(
+            field(check_search(30.0, Some((10.0, 5000.5)), 0.5, 100.0).map(|_| ())),
+            bracket
+        );
+        assert_eq!(
+            check_search(30.0, Some((10.0, 5000.0)), 0.5, 100.0).ok(),
+            Some((10.0, 5000.0))
+        );
+        // The default bracket stays within the bound: a quarter to twice, at most 5000 cm³.
+        assert_eq!(
+            check_search(30.0, None, 0.5, 4000.0).ok(),
+            Some((1000.0, 5000.0))
+        );
+        assert_eq!(
+            check_search(30.0, None, 0.5, 100.0).ok(),
+            Some((25.0, 200.0))
+        );
     }
 }

@@ -28,17 +28,19 @@ pub enum SceneError {
         /// The mesher's reason.
         reason: String,
     },
-    /// Too many tetrahedra for real time.
-    #[error(
-        "{name} has {tets} tetrahedra, more than the {} a real-time session takes: \
-             decimate the surface or coarsen the tet mesh",
-        crate::MAX_TETS
-    )]
+    /// Too many tetrahedra for real time ([`crate::MAX_TETS`]).
+    #[error("{}", too_large(name, *tets, *estimated, *decimate_to))]
     TooLarge {
         /// The file.
         name: String,
-        /// Its tetrahedra.
+        /// Its tetrahedra, or those a surface would fill with.
         tets: usize,
+        /// Whether `tets` is the estimate made before meshing a surface (it was refused without
+        /// being meshed).
+        estimated: bool,
+        /// About how many triangles the surface, decimated evenly, may have to stay within
+        /// [`crate::MAX_TETS`] (`None` for a tet mesh).
+        decimate_to: Option<usize>,
     },
     /// An organ size that is not a positive length.
     #[error("an organ size of {size} cm: give a positive length in cm")]
@@ -55,6 +57,24 @@ pub enum SceneError {
     /// A tool action that cannot be done (a grab off the surface, a cut path of one point, …).
     #[error("{0}")]
     Tool(String),
+}
+
+fn too_large(name: &str, tets: usize, estimated: bool, decimate_to: Option<usize>) -> String {
+    let max = crate::MAX_TETS;
+    let fix = match decimate_to {
+        Some(n) => format!("decimate the surface to about {n} triangles"),
+        None => "decimate the surface or coarsen the tet mesh".to_owned(),
+    };
+    if estimated {
+        format!(
+            "{name} would fill with about {tets} tetrahedra (estimated before meshing), more than \
+             the {max} a real-time session takes: {fix}"
+        )
+    } else {
+        format!(
+            "{name} has {tets} tetrahedra, more than the {max} a real-time session takes: {fix}"
+        )
+    }
 }
 
 impl SceneError {

@@ -28,6 +28,21 @@
 //!
 //! No threads, no I/O beyond parsing bytes; a front end owns the loop and the clock.
 //!
+//! ## Limits
+//! Every input a front end takes from a user (over the network, for the studio) costs bounded
+//! work:
+//! - an organ has at most [`MAX_TETS`] tetrahedra; a closed surface whose estimated count is
+//!   above it is refused before it is meshed ([`SceneError::TooLarge`] with `estimated` and the
+//!   triangle count to decimate to), and the mesher stops if its work outgrows it;
+//! - the tools work within [`Session::work_space`] (the tray's square grown by half its side,
+//!   up to a tray's side above it): drag targets are clamped into it, grab, cut and suture
+//!   points outside it refused;
+//! - a scalpel path has at most [`MAX_CUT_POINTS`] points (checked before anything else), and
+//!   at most [`Session::max_queued_cuts`] segments ([`CUT_QUEUE_TRAY_SIDES`] tray sides of cut)
+//!   wait to be cut: a cut that would queue more is refused whole;
+//! - a suture within [`SUTURE_SPACING_CM`] of an existing one is refused: a second stitch at
+//!   the same place is not a new stitch.
+//!
 //! ## Units
 //! cm, g, s inside; forces out of [`Session::tool_force`] in newtons (1 N = 10⁵ g·cm/s²).
 //!
@@ -74,4 +89,6 @@ mod session;
 pub use error::SceneError;
 pub use organ::{Organ, Setting, ShippedOrgan, Tray, APPENDIX_BASE_X, MAX_TETS};
 pub use script::{AppendixPlan, AppendixProcedure, PressAndDrag, PressPlan, Script, ScriptStep};
-pub use session::{Session, SessionOptions, TrainerEvent};
+pub use session::{
+    Session, SessionOptions, TrainerEvent, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS, SUTURE_SPACING_CM,
+};

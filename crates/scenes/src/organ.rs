@@ -8,11 +8,14 @@ use tissue_pbd::{
     ColliderShape, ContactParams, Floor, Material, OrientedBox, SoftBody, StepSettings,
     VoxelCollider,
 };
-use tissue_tetra::{tetrahedralize, QualityReport, TetraOptions};
+use tissue_tetra::{tetrahedralize, QualityReport, TetCount, TetraError, TetraOptions};
 
 use crate::error::SceneError;
 
-/// The most tetrahedra a real-time session takes (a step must stay well under 16 ms).
+/// The most tetrahedra a real-time session takes (a step must stay well under 16 ms). A closed
+/// surface is refused before it is meshed when `tissue-tetra`'s estimate (within about 10 % of
+/// the count it makes) is above this, and the mesher stops if its work outgrows it, so an upload
+/// costs at most about a second of meshing; a tet mesh is refused before it is built.
 pub const MAX_TETS: usize = 150_000;
 
 /// How an organ is held in the scene.
@@ -154,7 +157,9 @@ impl Organ {
     ///
     /// # Errors
     /// [`SceneError::Read`] (the loader's message), [`SceneError::Mesh`] for an invalid mesh,
-    /// [`SceneError::Meshing`] for a surface that cannot be filled, [`SceneError::TooLarge`].
+    /// [`SceneError::Meshing`] for a surface that cannot be filled, [`SceneError::TooLarge`]
+    /// for more than [`MAX_TETS`] tetrahedra (a surface expected to fill with more is refused
+    /// before it is meshed, a tet mesh before it is built).
     pub fn from_bytes(bytes: &[u8], name: &str, cm_per_unit: f32) -> Result<Organ, SceneError> {
         let _span = tracing::info_span!("organ_upload", name).entered();
         let ext = std::path::Path::new(name)
@@ -168,6 +173,15 @@ impl Organ {
             Organ::from_surface(&surface, name)
         } else {
             let data = tissue_meshio::parse_tet_data(bytes, name).map_err(SceneError::Read)?;
+            // Counted before the mesh (its neighbours) is built.
+            if data.tets.len() > MAX_TETS {
+                return Err(SceneError::TooLarge {
+                    name: name.to_owned(),
+                    tets: data.tets.len(),
+                    estimated: false,
+                    decimate_to: None,
+                });
+            }
             let scaled: Vec<Vec3> = data.positions.iter().map(|&p| p * cm_per_unit).collect();
             let tets = TetMesh::new(scaled, data.tets).map_err(|e| SceneError::mesh(name, e))?;
             Organ::from_tets(&tets, name)
@@ -241,7 +255,8 @@ impl Organ {
     /// its size, placed on the tray; `name` stands for it in messages.
     ///
     /// # Errors
-    /// [`SceneError::Meshing`] for a surface that cannot be filled, [`SceneError::TooLarge`].
+    /// [`SceneError::Meshing`] for a surface that cannot be filled, [`SceneError::TooLarge`]
+    /// (before meshing when `tissue-tetra`'s estimate is above [`MAX_TETS`]).
     pub fn from_surface(surface: &TriMesh, name: &str) -> Result<Organ, SceneError> {
         let (tets, quality) = fill(surface, name)?;
         Ok(Organ {
@@ -280,13 +295,30 @@ fn scaled_surface(
     TriMesh::new(scaled, triangles).map_err(|e| SceneError::mesh(name, e))
 }
 
-/// Fills a closed surface with tetrahedra, refusing more than [`MAX_TETS`].
+/// Fills a closed surface with tetrahedra, refusing more than [`MAX_TETS`]: by the estimate
+/// before meshing, or by the mesher's counts (`TetraOptions::max_tets`).
 fn fill(surface: &TriMesh, name: &str) -> Result<(TetMesh, QualityReport), SceneError> {
-    let tets =
-        tetrahedralize(surface, &TetraOptions::default()).map_err(|e| SceneError::Meshing {
+    let options = TetraOptions {
+        max_tets: Some(MAX_TETS),
+        ..TetraOptions::default()
+    };
+    let tets = tetrahedralize(surface, &options).map_err(|e| match e {
+        TetraError::TooManyTets {
+            tets,
+            when: when @ (TetCount::Estimated | TetCount::Made),
+            decimate_to,
+            ..
+        } => SceneError::TooLarge {
+            name: name.to_owned(),
+            tets,
+            estimated: when == TetCount::Estimated,
+            decimate_to,
+        },
+        e => SceneError::Meshing {
             name: name.to_owned(),
             reason: e.to_string(),
-        })?;
+        },
+    })?;
     check_size(&tets.mesh, name)?;
     Ok((tets.mesh, tets.report))
 }
@@ -296,6 +328,8 @@ fn check_size(mesh: &TetMesh, name: &str) -> Result<(), SceneError> {
         return Err(SceneError::TooLarge {
             name: name.to_owned(),
             tets: mesh.tets().len(),
+            estimated: false,
+            decimate_to: None,
         });
     }
     Ok(())
@@ -322,8 +356,139 @@ fn place(mesh: &TetMesh, scale: f32, name: &str) -> Result<TetMesh, SceneError> 
 }
 
 #[cfg(test)]
+#[allow(clippy::panic)]
 mod tests {
     use super::*;
+
+    /// A surface as OBJ bytes.
+    fn obj(surface: &TriMesh) -> Vec<u8> {
+        let mut text = String::new();
+        for p in surface.positions() {
+            text.push_str(&format!("v {} {} {}\n", p.x, p.y, p.z));
+        }
+        for t in surface.triangles() {
+            text.push_str(&format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1));
+        }
+        text.into_bytes()
+    }
+
+    /// Each triangle split into four at its edges' midpoints: the same shape, four times the
+    /// triangles.
+    fn refined(s: &TriMesh) -> Result<TriMesh, SceneError> {
+        let mut p = s.positions().to_vec();
+        let mut mid = std::collections::HashMap::new();
+        let mut split = |a: u32, b: u32, p: &mut Vec<Vec3>| -> u32 {
+            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                p.push(0.5 * (p[a as usize] + p[b as usize]));
+                (p.len() - 1) as u32
+            })
+        };
+        let mut t = Vec::new();
+        for &[a, b, c] in s.triangles() {
+            let (ab, bc, ca) = (
+                split(a, b, &mut p),
+                split(b, c, &mut p),
+                split(c, a, &mut p),
+            );
+            t.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+        }
+        TriMesh::new(p, t).map_err(|e| SceneError::mesh("refined", e))
+    }
+
+    fn fixture(name: &str) -> Result<TriMesh, SceneError> {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/");
+        let bytes =
+            std::fs::read(format!("{path}{name}")).map_err(|e| SceneError::mesh(name, e))?;
+        let data = tissue_meshio::parse_surface_data(&bytes, name).map_err(SceneError::Read)?;
+        TriMesh::new(data.positions, data.triangles).map_err(|e| SceneError::mesh(name, e))
+    }
+
+    #[test]
+    fn surfaces_expected_over_max_tets_are_refused_before_meshing_with_a_triangle_count(
+    ) -> Result<(), SceneError> {
+        let bunny = fixture("bunny_10k.obj")?;
+        let once = refined(&bunny)?; // 40 000 triangles: about 290 000 tets
+        let twice = refined(&once)?; // 160 000: about 2.3 million (minutes and GBs to mesh)
+        for (surface, at_least) in [(&once, 250_000), (&twice, 2_000_000)] {
+            let triangles = surface.triangle_count();
+            let refused = Organ::from_bytes(&obj(surface), "big.obj", 1.0);
+            let text = refused.as_ref().err().map(ToString::to_string);
+            let text = text.unwrap_or_default();
+            match refused {
+                Err(SceneError::TooLarge {
+                    tets,
+                    estimated,
+                    decimate_to,
+                    ..
+                }) => {
+                    // Refused by the estimate: nothing was meshed.
+                    assert!(estimated, "{text}");
+                    assert!(tets >= at_least, "{text}");
+                    // The bunny's shape fits at about 25 000 triangles, from either resolution.
+                    let n = decimate_to.unwrap_or(0);
+                    assert!((20_000..30_000).contains(&n), "{text}");
+                    assert!(
+                        text.contains("estimated before meshing")
+                            && text
+                                .contains(&format!("decimate the surface to about {n} triangles")),
+                        "{text}"
+                    );
+                    eprintln!("{triangles} triangles: {text}");
+                }
+                other => panic!("{triangles} triangles: {other:?}"),
+            }
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn legit_uploads_up_to_near_the_limit_are_accepted() -> Result<(), SceneError> {
+        // The bunny (about 40 000 tets), the liver refined to 9 344 triangles (44 000) and the
+        // MakeHuman body in dm (26 756 triangles: 133 000 tets, estimated 133 339).
+        let bunny = fixture("bunny_10k.obj")?;
+        let liver = refined(&fixture("liver_sofa.obj")?)?;
+        let body = fixture("makehuman_body_closed.obj")?;
+        for (surface, name, cm_per_unit, tets) in [
+            (&bunny, "bunny.obj", 1.0, 36_000..44_000),
+            (&liver, "liver.obj", 1.0, 40_000..50_000),
+            (&body, "body.obj", 10.0, 120_000..MAX_TETS + 1),
+        ] {
+            let organ = Organ::from_bytes(&obj(surface), name, cm_per_unit)?;
+            let n = organ.mesh.tets().len();
+            assert!(tets.contains(&n), "{name}: {n} tets");
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn a_tet_mesh_over_max_tets_is_refused() -> Result<(), SceneError> {
+        // 32 × 32 × 25 cells of 6 tets: 153 600.
+        let mesh = tissue_mesh::tet_box(32, 32, 25, Vec3::splat(10.0))
+            .map_err(|e| SceneError::mesh("box", e))?;
+        let mut vtk = format!(
+            "# vtk DataFile Version 3.0\nbox\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS {} float\n",
+            mesh.vertex_count()
+        );
+        for p in mesh.positions() {
+            vtk.push_str(&format!("{} {} {}\n", p.x, p.y, p.z));
+        }
+        let n = mesh.tets().len();
+        vtk.push_str(&format!("CELLS {n} {}\n", 5 * n));
+        for t in mesh.tets() {
+            vtk.push_str(&format!("4 {} {} {} {}\n", t[0], t[1], t[2], t[3]));
+        }
+        vtk.push_str(&format!("CELL_TYPES {n}\n"));
+        vtk.push_str(&"10\n".repeat(n));
+        match Organ::from_bytes(vtk.as_bytes(), "box.vtk", 1.0) {
+            Err(SceneError::TooLarge {
+                tets: 153_600,
+                estimated: false,
+                decimate_to: None,
+                ..
+            }) => Ok(()),
+            other => panic!("{other:?}"),
+        }
+    }
 
     #[test]
     fn shipped_organs_are_placed_on_the_tray_at_their_sizes() -> Result<(), SceneError> {

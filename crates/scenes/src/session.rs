@@ -20,6 +20,25 @@ use crate::script::{AppendixPlan, AppendixProcedure, PressAndDrag, PressPlan, Sc
 /// How many recent step times the session keeps for its median and p99.
 const TIMES_KEPT: usize = 600;
 
+/// The most points a scalpel path may have ([`Session::cut`]); a longer one is refused before
+/// anything is done with it. A path drawn for a minute at 60 points a second has 3 600.
+pub const MAX_CUT_POINTS: usize = 10_000;
+
+/// The scalpel's queue ([`Session::cut`]) holds at most this many tray sides of cut, in segments
+/// of [`SessionOptions::cut_segment`] (and never more than [`MAX_CUT_POINTS`] segments): 240
+/// segments (2.4 s of cutting) on the appendix's 24 cm tray, 300 on the bunny's. A cut that
+/// would queue more is refused, not truncated.
+pub const CUT_QUEUE_TRAY_SIDES: f32 = 4.0;
+
+/// Two sutures closer than this (cm, along the wound: where the needle would cross it against
+/// the existing suture's linked nodes, whatever the depth) are the same stitch: the second is
+/// refused ([`Session::suture`]). Skin stitches are placed 0.5–1 cm apart.
+pub const SUTURE_SPACING_CM: f32 = 0.5;
+
+/// How far below the tray's top (y = 0) the working space reaches, cm
+/// ([`Session::work_space`]).
+const WORK_SPACE_BELOW_CM: f32 = 1.0;
+
 /// A session's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SessionOptions {
@@ -191,6 +210,45 @@ impl Session {
     /// The tray's side (cm): a square centred on x = z = 0, its top at y = 0.
     pub fn tray_side(&self) -> f32 {
         self.tray_side
+    }
+
+    /// The working space of the trainee's tools (cm), as its lowest and highest corners: the
+    /// tray's square grown by half its side on every edge (x and z within ± the tray's side),
+    /// from 1 cm below the tray's top to a tray's side (three times the organ) above it. Drag
+    /// targets are clamped into it ([`Session::drag`]); grab, cut and suture points outside it
+    /// are refused.
+    pub fn work_space(&self) -> (Vec3, Vec3) {
+        let s = self.tray_side;
+        (Vec3::new(-s, -WORK_SPACE_BELOW_CM, -s), Vec3::new(s, s, s))
+    }
+
+    /// Refuses a tool's point that is not finite or is outside [`Session::work_space`].
+    fn in_work_space(&self, what: &str, p: Vec3) -> Result<(), SceneError> {
+        let (lo, hi) = self.work_space();
+        if p.is_finite() && p.cmpge(lo).all() && p.cmple(hi).all() {
+            return Ok(());
+        }
+        Err(SceneError::Tool(format!(
+            "{what} ({}, {}, {}) cm is off the tray: the tools work within x and z of ±{} cm, y \
+             from {} to {} cm; pick a point on the organ",
+            p.x, p.y, p.z, hi.x, lo.y, hi.y
+        )))
+    }
+
+    /// The most scalpel segments the queue holds ([`CUT_QUEUE_TRAY_SIDES`]).
+    pub fn max_queued_cuts(&self) -> usize {
+        let length = CUT_QUEUE_TRAY_SIDES * self.tray_side;
+        let segments = (length / self.options.cut_segment.max(0.01)).ceil();
+        if segments.is_finite() {
+            (segments as usize).clamp(1, MAX_CUT_POINTS)
+        } else {
+            MAX_CUT_POINTS
+        }
+    }
+
+    /// Scalpel segments queued, cut one per step.
+    pub fn queued_cuts(&self) -> usize {
+        self.cuts.len()
     }
 
     /// The body (read only).
@@ -509,10 +567,10 @@ impl Session {
     /// triangle's corners, follow the probe until [`Session::release`].
     ///
     /// # Errors
-    /// [`SceneError::Tool`] for a triangle out of range or a point that is not finite.
+    /// [`SceneError::Tool`] for a triangle out of range or a point that is not finite or is
+    /// outside [`Session::work_space`].
     pub fn grab(&mut self, point: Vec3, triangle: usize) -> Result<TrainerEvent, SceneError> {
         self.hands_off()?;
-        self.release()?;
         let corners = *self.surface.get(triangle).ok_or_else(|| {
             SceneError::Tool(format!(
                 "no surface triangle {triangle} (the surface has {}): pick the organ again",
@@ -522,6 +580,8 @@ impl Session {
         if !point.is_finite() {
             return Err(SceneError::Tool("the grab point is not finite".to_owned()));
         }
+        self.in_work_space("the grab point", point)?;
+        self.release()?;
         let x = self.body.positions();
         let w = self.body.inverse_masses();
         let r2 = self.options.grab_radius * self.options.grab_radius;
@@ -556,11 +616,14 @@ impl Session {
         })
     }
 
-    /// Moves the grabbed point towards `target` (cm) from the next step on.
+    /// Moves the grabbed point towards `target` (cm) from the next step on, clamped into
+    /// [`Session::work_space`] (a target off the tray pulls to its edge; one that is not finite
+    /// is ignored).
     pub fn drag(&mut self, target: Vec3) {
+        let (lo, hi) = self.work_space();
         if let Some(g) = &mut self.grab {
             if target.is_finite() {
-                g.target = target;
+                g.target = target.clamp(lo, hi);
             }
         }
     }
@@ -589,16 +652,31 @@ impl Session {
     /// [`SessionOptions::cut_depth`] below the path, one segment per step. Returns the segments
     /// queued.
     ///
+    /// Bounded: a path of more than [`MAX_CUT_POINTS`] points is refused before it is looked
+    /// at, and a cut that would queue more segments than [`Session::max_queued_cuts`] (counting
+    /// those still waiting) is refused whole, nothing queued.
+    ///
     /// # Errors
-    /// [`SceneError::Tool`] for fewer than two distinct points, a path along the view, or
-    /// non-finite input.
+    /// [`SceneError::Tool`] for fewer than two distinct points, more than [`MAX_CUT_POINTS`], a
+    /// path along the view, non-finite input, a point outside [`Session::work_space`], or a
+    /// full queue.
     pub fn cut(&mut self, path: &[Vec3], view_dir: Vec3) -> Result<usize, SceneError> {
         self.hands_off()?;
+        if path.len() > MAX_CUT_POINTS {
+            return Err(SceneError::Tool(format!(
+                "a cut path of {} points: at most {MAX_CUT_POINTS} are taken; send fewer points \
+                 (one every few millimetres is enough)",
+                path.len()
+            )));
+        }
         let v = view_dir.normalize_or_zero();
         if v == Vec3::ZERO || path.iter().any(|p| !p.is_finite()) {
             return Err(SceneError::Tool(
                 "a cut needs finite surface points and a view direction".to_owned(),
             ));
+        }
+        for p in path {
+            self.in_work_space("a cut path point", *p)?;
         }
         let (Some(&first), Some(&last)) = (path.first(), path.last()) else {
             return Err(SceneError::Tool(
@@ -634,19 +712,33 @@ impl Session {
                 "the cut is too short: drag further".to_owned(),
             ));
         }
+        let segments = points.len() - 1;
+        let (queued, max) = (self.cuts.len(), self.max_queued_cuts());
+        if queued + segments > max {
+            return Err(SceneError::Tool(format!(
+                "this cut would queue {segments} segments behind {queued} still to cut, more \
+                 than the {max} a session holds ({CUT_QUEUE_TRAY_SIDES} tray sides): wait for \
+                 the cut in progress to finish, or draw a shorter cut"
+            )));
+        }
         let pose = |p: Vec3| Pose::new(rotation, p);
         for pair in points.windows(2) {
             self.cuts.push_back((pose(pair[0]), pose(pair[1])));
         }
-        Ok(points.len() - 1)
+        Ok(segments)
     }
 
     /// Places a suture between surface points `a` and `b` on the two sides of a wound: a needle
     /// passes below them (the depth along the surface's inward normal), and the nodes of the
     /// wound's walls nearest its crossings are linked.
     ///
+    /// A second stitch at the same place is not a new stitch: a suture whose needle would pass
+    /// within [`SUTURE_SPACING_CM`] of an existing suture's linked nodes (at any of the depths it
+    /// tries) is refused, and nothing is placed.
+    ///
     /// # Errors
-    /// [`SceneError::Tool`] for non-finite or coincident points; [`SceneError::Surgery`].
+    /// [`SceneError::Tool`] for non-finite or coincident points, points outside
+    /// [`Session::work_space`], or a suture already there; [`SceneError::Surgery`].
     pub fn suture(&mut self, a: Vec3, b: Vec3) -> Result<TrainerEvent, SceneError> {
         self.hands_off()?;
         if !(a.is_finite() && b.is_finite()) || a.distance(b) < 1e-3 {
@@ -654,12 +746,31 @@ impl Session {
                 "click two different points, one on each side of the wound".to_owned(),
             ));
         }
+        self.in_work_space("the suture's first point", a)?;
+        self.in_work_space("the suture's second point", b)?;
         let inward = -(self.normal_near(a) + self.normal_near(b)).normalize_or(Vec3::Y);
         let dir = (b - a).normalize();
         let reach = 0.5 * a.distance(b) + 0.6;
         let mid = 0.5 * (a + b);
         let base = self.options.suture_depth;
-        for depth in [base, 0.6 * base, 1.6 * base, 2.4 * base] {
+        const DEPTHS: [f32; 4] = [1.0, 0.6, 1.6, 2.4];
+        // Where the needle crosses the wound, at the depths it tries: from mid + inward·0.6·base
+        // to mid + inward·2.4·base.
+        let (shallow, deep) = (mid + inward * 0.6 * base, mid + inward * 2.4 * base);
+        let x = self.body.positions();
+        for (id, suture) in self.surgery.sutures().iter().enumerate() {
+            let Some(suture) = suture else { continue };
+            let [p, q] = suture.nodes.map(|n| Vec3::from(x[n as usize]));
+            let d = distance_to_segment(0.5 * (p + q), shallow, deep);
+            if d < SUTURE_SPACING_CM {
+                return Err(SceneError::Tool(format!(
+                    "a suture is already there (suture {id}, {d:.2} cm from where this one would \
+                     go): a second stitch at the same place is not a new one; place the next at \
+                     least {SUTURE_SPACING_CM} cm along the wound"
+                )));
+            }
+        }
+        for depth in DEPTHS.map(|k| k * base) {
             let c = mid + inward * depth;
             if let Some(e) =
                 self.surgery
@@ -694,6 +805,17 @@ impl Session {
             .min_by(|u, v| u.0.distance_squared(p).total_cmp(&v.0.distance_squared(p)))
             .map_or(Vec3::Y, |(_, n)| n.normalize_or(Vec3::Y))
     }
+}
+
+/// The distance from `p` to the segment `a`–`b`.
+fn distance_to_segment(p: Vec3, a: Vec3, b: Vec3) -> f32 {
+    let ab = b - a;
+    let t = if ab.length_squared() > 0.0 {
+        ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    p.distance(a + ab * t)
 }
 
 /// The kind and a line for a surgery event.

@@ -2,9 +2,21 @@
 //! the needle closes the wound it made, the probe lifts tissue and lets go, and the volume holds.
 
 use glam::Vec3;
-use tissue_scenes::{Organ, Session, SessionOptions, ShippedOrgan};
+use tissue_scenes::{
+    Organ, SceneError, Session, SessionOptions, ShippedOrgan, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS,
+    SUTURE_SPACING_CM,
+};
 
 type Result<T = ()> = std::result::Result<T, Box<dyn std::error::Error>>;
+
+/// The message of a [`SceneError::Tool`], or a panic naming what came instead.
+#[allow(clippy::panic)]
+fn tool_error<T: std::fmt::Debug>(r: std::result::Result<T, SceneError>) -> String {
+    match r {
+        Err(SceneError::Tool(text)) => text,
+        other => panic!("expected a tool error, got {other:?}"),
+    }
+}
 
 /// The surface triangle whose centroid is nearest `p`, and that centroid.
 fn surface_near(session: &Session, p: Vec3) -> (usize, Vec3) {
@@ -66,6 +78,27 @@ fn a_cut_across_the_appendix_opens_it_and_a_suture_closes_the_wound() -> Result 
     let b = top(&s, 0.3, 0.0);
     let sutured = s.suture(a, b)?;
     assert_eq!(sutured.kind, "suture_placed", "{}", sutured.text);
+    // The same two clicks again, nearly, or less than SUTURE_SPACING_CM (0.5 cm) along the
+    // wound: a second stitch at the same place is refused and nothing is placed.
+    let placed = s.surface_version();
+    let near = 0.6 * SUTURE_SPACING_CM;
+    let repeats = [
+        (a, b),
+        (b, a),
+        (top(&s, -0.35, 0.1), top(&s, 0.25, 0.1)),
+        (top(&s, -0.3, near), top(&s, 0.3, near)),
+    ];
+    for (a2, b2) in repeats {
+        match s.suture(a2, b2) {
+            Err(SceneError::Tool(text)) => assert!(text.contains("already there"), "{text}"),
+            other => panic!("a repeated suture gave {other:?}"),
+        }
+    }
+    assert_eq!(s.surface_version(), placed, "nothing placed");
+    // The next stitch along the wound, 0.8 cm away, is a new one.
+    let far = 1.6 * SUTURE_SPACING_CM;
+    let next = s.suture(top(&s, -0.3, far), top(&s, 0.3, far))?;
+    assert_eq!(next.kind, "suture_placed", "{}", next.text);
     // Away from any wound the needle misses, and says so.
     let missed = s.suture(top(&s, -2.0, 0.0), top(&s, -1.5, 0.0))?;
     assert_eq!(missed.kind, "suture_missed");
@@ -264,5 +297,117 @@ fn the_tray_demonstration_presses_a_probe_in_and_parks_it_after() -> Result {
     // Played again, the same probe comes back: no second tool.
     session.play()?;
     assert_eq!(session.tool_count(), 1);
+    Ok(())
+}
+
+#[test]
+fn a_drag_far_off_the_tray_is_clamped_to_its_working_space_and_the_organ_stays_finite() -> Result {
+    for which in [ShippedOrgan::Appendix, ShippedOrgan::Bunny] {
+        let organ = Organ::shipped(which)?;
+        let mut s = Session::new(&organ, SessionOptions::default())?;
+        for _ in 0..5 {
+            s.step()?;
+        }
+        let (lo, hi) = s.work_space();
+        let side = s.tray_side();
+        assert_eq!((lo, hi), (Vec3::new(-side, -1.0, -side), Vec3::splat(side)));
+        let highest = s
+            .positions()
+            .iter()
+            .map(|&p| Vec3::from(p))
+            .max_by(|a, b| a.y.total_cmp(&b.y))
+            .ok_or("no nodes")?;
+        let (t, p) = surface_near(&s, highest);
+        s.grab(p, t)?;
+        // A finite target at 1e30: the probe ends at the working space's corner.
+        s.drag(Vec3::new(1e30, 1e30, -1e30));
+        assert_eq!(s.tool_tip(), Some(Vec3::new(side, side, -side)));
+        s.drag(Vec3::new(f32::MAX, f32::NAN, 0.0));
+        assert_eq!(
+            s.tool_tip(),
+            Some(Vec3::new(side, side, -side)),
+            "a target that is not finite is ignored"
+        );
+        for _ in 0..60 {
+            s.step()?;
+        }
+        assert!(s.positions().iter().all(|p| p.is_finite()));
+        assert!(s.volume_drift().is_finite() && s.tool_force().is_finite());
+        // The grabbed tissue went towards the corner, and no further than the working space.
+        let (_, held) = surface_near(&s, Vec3::new(side, side, -side));
+        assert!(
+            held.distance(Vec3::new(side, side, -side)) < held.distance(p),
+            "{which:?}: held at {held}"
+        );
+        assert!(s
+            .positions()
+            .iter()
+            .all(|&q| Vec3::from(q).abs().max_element() < 2.0 * side));
+        s.release()?;
+        // Grab and suture points off the working space are refused.
+        let far = Vec3::new(0.0, 0.0, 10.0 * side);
+        assert!(tool_error(s.grab(far, t)).contains("off the tray"));
+        assert!(tool_error(s.suture(far, Vec3::ZERO)).contains("off the tray"));
+        assert_eq!(s.tool_tip(), None);
+    }
+    Ok(())
+}
+
+#[test]
+fn cut_paths_are_bounded_in_points_and_in_queued_segments() -> Result {
+    let organ = Organ::shipped(ShippedOrgan::Appendix)?;
+    let mut s = Session::new(&organ, SessionOptions::default())?;
+    let side = s.tray_side();
+    let segment = SessionOptions::default().cut_segment;
+    let max = s.max_queued_cuts();
+    // The appendix's tray is 24 cm: 4 sides of 0.4 cm segments.
+    assert_eq!(side, 24.0);
+    assert_eq!(max, (CUT_QUEUE_TRAY_SIDES * side / segment).ceil() as usize);
+    assert_eq!(max, 240);
+    let line = |n: usize, from: f32, step: f32| -> Vec<Vec3> {
+        (0..n)
+            .map(|i| Vec3::new(from + step * i as f32, 2.0, 0.0))
+            .collect()
+    };
+    // Too many points: refused before anything, naming the limit.
+    let text = tool_error(s.cut(&line(MAX_CUT_POINTS + 1, -20.0, 1e-3), Vec3::NEG_Y));
+    assert!(text.contains(&MAX_CUT_POINTS.to_string()), "{text}");
+    assert!(tool_error(s.cut(&line(1_000_000, -20.0, 1e-5), Vec3::NEG_Y)).contains("points"));
+    assert_eq!(s.queued_cuts(), 0);
+    // A point off the tray.
+    let mut off = line(10, -2.0, 0.5);
+    off[5].x = 1e6;
+    assert!(tool_error(s.cut(&off, Vec3::NEG_Y)).contains("off the tray"));
+    // Back and forth across the tray: 5 × 40 cm in 0.5 cm steps, 400 segments > 240: refused
+    // whole.
+    let mut zigzag = Vec::new();
+    for k in 0..5 {
+        let (from, step) = if k % 2 == 0 {
+            (-20.0, 0.5)
+        } else {
+            (20.0, -0.5)
+        };
+        zigzag.extend(line(80, from, step));
+    }
+    assert!(zigzag.len() <= MAX_CUT_POINTS);
+    let text = tool_error(s.cut(&zigzag, Vec3::NEG_Y));
+    assert!(text.contains("shorter cut"), "{text}");
+    assert_eq!(s.queued_cuts(), 0);
+    // Cuts across the tray (40 cm in 0.5 cm steps: 80 segments) queue up to 240, no further.
+    let across = line(81, -20.0, 0.5);
+    for queued in [80, 160, 240] {
+        assert_eq!(s.cut(&across, Vec3::NEG_Y)?, 80);
+        assert_eq!(s.queued_cuts(), queued);
+    }
+    let text = tool_error(s.cut(&across, Vec3::NEG_Y));
+    assert!(text.contains("behind 240"), "{text}");
+    assert_eq!(s.queued_cuts(), 240);
+    // As the queue is cut, one segment a step, room comes back.
+    for _ in 0..80 {
+        s.step()?;
+    }
+    assert_eq!(s.queued_cuts(), 160);
+    assert_eq!(s.cut(&across, Vec3::NEG_Y)?, 80);
+    assert_eq!(s.queued_cuts(), 240);
     Ok(())
 }

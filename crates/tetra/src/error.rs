@@ -109,6 +109,21 @@ pub enum TetraError {
         /// Which option and why.
         what: String,
     },
+    /// More tetrahedra than [`TetraOptions::max_tets`](crate::TetraOptions::max_tets) allows.
+    #[error("{}", too_many_tets(*tets, *max, *when, *triangles, *decimate_to))]
+    TooManyTets {
+        /// The count that was over: estimated, of the Delaunay tetrahedralisation, or made.
+        tets: usize,
+        /// The limit ([`TetraOptions::max_tets`](crate::TetraOptions::max_tets)).
+        max: usize,
+        /// Which count.
+        when: TetCount,
+        /// The surface's triangles.
+        triangles: usize,
+        /// About how many triangles the same shape, decimated evenly, may have to stay within
+        /// the limit ([`TetEstimate::triangles_for`](crate::TetEstimate::triangles_for)).
+        decimate_to: Option<usize>,
+    },
     /// The mesher failed for numerical reasons (a bug or an extreme input, never bad luck).
     #[error(
         "numerical failure while {stage}{}: {detail}; please report it with the input mesh",
@@ -122,4 +137,47 @@ pub enum TetraError {
         /// What went wrong.
         detail: String,
     },
+}
+
+/// Which count of tetrahedra went over [`TetraOptions::max_tets`](crate::TetraOptions::max_tets)
+/// ([`TetraError::TooManyTets`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TetCount {
+    /// [`estimate_tets`](crate::estimate_tets), before any meshing.
+    Estimated,
+    /// The Delaunay tetrahedralisation under construction: it outgrew the estimate (4 × + 1000),
+    /// the surface's points being badly distributed for Delaunay.
+    Delaunay,
+    /// The tetrahedra made.
+    Made,
+}
+
+fn too_many_tets(
+    tets: usize,
+    max: usize,
+    when: TetCount,
+    triangles: usize,
+    decimate_to: Option<usize>,
+) -> String {
+    let fix = match decimate_to {
+        Some(n) if n < triangles => {
+            format!("decimate the surface to about {n} triangles or fewer (it has {triangles})")
+        }
+        _ => format!("decimate the surface (it has {triangles} triangles) or coarsen the spacing"),
+    };
+    match when {
+        TetCount::Estimated => format!(
+            "the surface would fill with about {tets} tetrahedra (estimated before meshing), \
+             more than the limit of {max}: {fix}"
+        ),
+        TetCount::Delaunay => format!(
+            "meshing stopped: the Delaunay tetrahedralisation grew to {tets} tetrahedra, far \
+             more than the estimate for this surface (the limit is {max}): its vertices are \
+             badly spread (e.g. many on a few lines, with long thin triangles between them); \
+             remesh the surface with even triangles"
+        ),
+        TetCount::Made => format!(
+            "the surface filled with {tets} tetrahedra, more than the limit of {max}: {fix}"
+        ),
+    }
 }

@@ -6,19 +6,25 @@
 //!   the interior spacing used. [`tetrahedralize_triangles`] does the same for raw arrays,
 //!   validating them first.
 //! - [`TetraOptions`]: interior spacing (default `1.68 ×` the mean surface edge length, about
-//!   40 000 tetrahedra for a 10 000-triangle bunny), clearance, sliver thresholds.
+//!   40 000 tetrahedra for a 10 000-triangle bunny), clearance, sliver thresholds, and
+//!   `max_tets`, a limit that bounds the work whatever the surface.
+//! - [`estimate_tets`]: the count [`tetrahedralize`] will make, in linear time before any
+//!   meshing ([`TetEstimate`]: from the enclosed volume, the area, the surface vertices and the
+//!   lattice spacing; within 0.91–1.04× of the mesher on the shipped and test surfaces), and
+//!   how far to decimate a surface to stay under a count ([`TetEstimate::triangles_for`]).
 //! - [`QualityReport`]: counts, dihedral angles, radius-ratio histogram, volumes, and how many
 //!   surface triangles are boundary faces of the tetrahedra; [`QualityReport::of_mesh`] measures
 //!   meshes from other tools (TetGen files) the same way. `Display` prints it.
 //! - [`TetraError`]: open surface (names a boundary edge), non-manifold edge or vertex,
-//!   coincident vertices, inside-out or flat surface, too few points, bad options, numerical
+//!   coincident vertices, inside-out or flat surface, too few points, bad options, more
+//!   tetrahedra than `max_tets` (estimated before meshing, or counted: [`TetCount`]), numerical
 //!   failure.
 //!
 //! Pure Rust; the only geometric dependency is `robust` (Shewchuk's adaptive exact predicates).
 //!
 //! ## Algorithm
 //! 1. **Check** the surface (closed, manifold vertices, no coincident vertices, positive
-//!    enclosed volume).
+//!    enclosed volume); with `max_tets`, refuse a surface [`estimate_tets`] expects to exceed it.
 //! 2. **Interior points**: a body-centred cubic lattice of spacing `a`, kept where it is inside
 //!    the surface (exact ray parity), at least `clearance · a` from it and outside the
 //!    circumscribed balls of small surface triangles. The BCC lattice's Delaunay tetrahedra are
@@ -26,7 +32,7 @@
 //! 3. **Insert** (Bowyer–Watson): surface vertices and lattice points in a biased randomised
 //!    order sorted along a Morton curve in each round, located by a visibility walk, cavities
 //!    by exact `insphere` with symbolic perturbation (so cospherical lattice points give no
-//!    flat tetrahedra).
+//!    flat tetrahedra); with `max_tets`, stopped if it outgrows four times the estimate.
 //! 4. **Carve**: keep the tetrahedra whose centroid is inside the surface.
 //! 5. **Improve**: surface triangles missing because the Delaunay tetrahedralisation chose the
 //!    other diagonal of a surface quad are recovered by edge removal; slivers are removed by
@@ -83,6 +89,7 @@ mod carve;
 mod check;
 mod delaunay;
 mod error;
+mod estimate;
 mod improve;
 mod inside;
 mod lattice;
@@ -91,6 +98,7 @@ mod order;
 mod predicates;
 mod quality;
 
-pub use error::TetraError;
+pub use error::{TetCount, TetraError};
+pub use estimate::{estimate_tets, TetEstimate};
 pub use mesher::{tetrahedralize, tetrahedralize_triangles, TetraOptions, Tetrahedralization};
 pub use quality::{QualityReport, RADIUS_RATIO_BINS};

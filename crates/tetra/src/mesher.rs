@@ -6,16 +6,27 @@ use tissue_mesh::{TetMesh, TriMesh};
 use crate::carve::carve;
 use crate::check::{check_raw, check_surface};
 use crate::delaunay::{Delaunay, DelaunayFailure};
+use crate::estimate::TetEstimate;
 use crate::improve::improve;
 use crate::inside::RayCaster;
 use crate::lattice::interior_points;
 use crate::order::insertion_order;
 use crate::predicates::P3;
 use crate::quality::QualityReport;
-use crate::TetraError;
+use crate::{TetCount, TetraError};
 
 /// Most lattice points (in the surface's bounding box) a spacing may ask for.
 const MAX_LATTICE_POINTS: f64 = 2e7;
+
+/// With [`TetraOptions::max_tets`], the Delaunay tetrahedralisation under construction may hold
+/// at most `DELAUNAY_PER_ESTIMATED_TET ×` the estimated count `+ DELAUNAY_SLACK` tetrahedra
+/// (live and free slots). Evenly sampled surfaces need at most 2× (1.4× for the bunny and the
+/// MakeHuman body, 2.0× for the armadillo and a 256-triangle sphere, whose convex hulls are
+/// large for their size); points badly distributed for Delaunay (many on a few lines, whose
+/// tetrahedralisation grows with the square of their number while the estimate grows with the
+/// number) outgrow it early, before the carving and recovery that would take long on them.
+const DELAUNAY_PER_ESTIMATED_TET: usize = 4;
+const DELAUNAY_SLACK: usize = 1000;
 
 /// Options of [`tetrahedralize`]. `TetraOptions::default()` gives about 40 000 tetrahedra for a
 /// 10 000-triangle bunny.
@@ -40,6 +51,15 @@ pub struct TetraOptions {
     /// Boundary tetrahedra whose radius ratio is below this are peeled off even when that takes
     /// surface triangles off the boundary. Default 0.001 (dihedral angles of about 0.1°).
     pub degenerate_radius_ratio: f32,
+    /// The most tetrahedra to make, so that the work is bounded whatever the surface. With
+    /// `Some(m)`, [`tetrahedralize`] refuses with [`TetraError::TooManyTets`]: before any meshing
+    /// when [`estimate_tets`](crate::estimate_tets) expects more than `m`
+    /// ([`TetCount::Estimated`]); while inserting points when the Delaunay tetrahedralisation
+    /// outgrows 4 × the estimate + 1000 tetrahedra, so the estimate was wrong: the surface's
+    /// points are badly spread, e.g. many on a few lines ([`TetCount::Delaunay`]); and at the
+    /// end when more than `m` were made ([`TetCount::Made`]). The work is then linear in `m`
+    /// up to the Delaunay tetrahedralisation. Default `None`: no limit.
+    pub max_tets: Option<usize>,
 }
 
 impl Default for TetraOptions {
@@ -51,12 +71,30 @@ impl Default for TetraOptions {
             interior_points: true,
             sliver_radius_ratio: 0.02,
             degenerate_radius_ratio: 0.001,
+            max_tets: None,
         }
     }
 }
 
 impl TetraOptions {
-    fn validate(&self) -> Result<(), TetraError> {
+    /// The lattice spacing for a surface whose mean edge is `mean_edge`.
+    pub(crate) fn spacing_for(&self, mean_edge: f64) -> f32 {
+        self.spacing
+            .unwrap_or((f64::from(self.spacing_factor) * mean_edge) as f32)
+    }
+
+    /// [`TetraOptions::spacing_for`], refused when it is not a positive length.
+    pub(crate) fn check_spacing(&self, mean_edge: f64) -> Result<f32, TetraError> {
+        let spacing = self.spacing_for(mean_edge);
+        if !(spacing.is_finite() && spacing > 0.0) {
+            return Err(TetraError::InvalidOption {
+                what: format!("the spacing came out as {spacing}; give one explicitly"),
+            });
+        }
+        Ok(spacing)
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), TetraError> {
         let bad = |what: String| Err(TetraError::InvalidOption { what });
         if let Some(s) = self.spacing {
             if !(s.is_finite() && s > 0.0) {
@@ -87,6 +125,9 @@ impl TetraOptions {
                 self.degenerate_radius_ratio
             ));
         }
+        if self.max_tets == Some(0) {
+            return bad("max_tets = 0, must be at least 1 (or None: no limit)".to_owned());
+        }
         Ok(())
     }
 }
@@ -111,7 +152,8 @@ pub struct Tetrahedralization {
 /// [`TetraError::OpenSurface`], [`TetraError::NonManifoldVertex`],
 /// [`TetraError::CoincidentVertices`], [`TetraError::InsideOut`], [`TetraError::NoVolume`],
 /// [`TetraError::TooFewPoints`] for a surface that cannot be filled;
-/// [`TetraError::InvalidOption`]; [`TetraError::NumericalFailure`] if the mesher itself fails.
+/// [`TetraError::InvalidOption`]; [`TetraError::TooManyTets`] beyond
+/// [`TetraOptions::max_tets`]; [`TetraError::NumericalFailure`] if the mesher itself fails.
 pub fn tetrahedralize(
     surface: &TriMesh,
     options: &TetraOptions,
@@ -128,13 +170,19 @@ pub fn tetrahedralize(
         check_surface(surface)?
     };
     let n_surface = surface.vertex_count();
-    let spacing = options
-        .spacing
-        .unwrap_or((f64::from(options.spacing_factor) * checked.mean_edge) as f32);
-    if !(spacing.is_finite() && spacing > 0.0) {
-        return Err(TetraError::InvalidOption {
-            what: format!("the spacing came out as {spacing}; give one explicitly"),
-        });
+    let spacing = options.check_spacing(checked.mean_edge)?;
+    // With a limit, the estimate refuses what is clearly too large before any meshing; the
+    // Delaunay and final counts below catch what it misjudged.
+    let limit = options
+        .max_tets
+        .map(|max| Limit::new(max, TetEstimate::new(surface, &checked, options)));
+    if let Some(limit) = &limit {
+        tracing::debug!(
+            estimated = limit.estimate.tets,
+            max = limit.max,
+            "estimated tets"
+        );
+        limit.check(limit.estimate.tets, TetCount::Estimated)?;
     }
     if options.interior_points {
         let bb = surface.bounding_box();
@@ -185,6 +233,9 @@ pub fn tetrahedralize(
         let mut dt = Delaunay::new(pts.clone());
         for &k in &order {
             dt.insert(candidates[k as usize]).map_err(failure)?;
+            if let Some(limit) = &limit {
+                limit.check(dt.tets.len(), TetCount::Delaunay)?;
+            }
         }
         tracing::debug!(
             walk_steps = dt.walk_steps,
@@ -213,6 +264,9 @@ pub fn tetrahedralize(
         "improved"
     );
     let slivers_removed = stats.peeled + stats.flat_dropped;
+    if let Some(limit) = &limit {
+        limit.check(tets.len(), TetCount::Made)?;
+    }
     if tets.is_empty() {
         return Err(TetraError::NumericalFailure {
             stage: "carving",
@@ -282,6 +336,40 @@ pub fn tetrahedralize_triangles(
     let surface =
         TriMesh::new(positions.to_vec(), triangles.to_vec()).map_err(TetraError::InvalidSurface)?;
     tetrahedralize(&surface, options)
+}
+
+/// [`TetraOptions::max_tets`] and the estimate it is checked against.
+struct Limit {
+    max: usize,
+    estimate: TetEstimate,
+}
+
+impl Limit {
+    fn new(max: usize, estimate: TetEstimate) -> Self {
+        Limit { max, estimate }
+    }
+
+    /// Refuses `tets` counted `when` above the limit for that count.
+    fn check(&self, tets: usize, when: TetCount) -> Result<(), TetraError> {
+        let allowed = match when {
+            TetCount::Estimated | TetCount::Made => self.max,
+            TetCount::Delaunay => self
+                .estimate
+                .tets
+                .saturating_mul(DELAUNAY_PER_ESTIMATED_TET)
+                .saturating_add(DELAUNAY_SLACK),
+        };
+        if tets <= allowed {
+            return Ok(());
+        }
+        Err(TetraError::TooManyTets {
+            tets,
+            max: self.max,
+            when,
+            triangles: self.estimate.triangles,
+            decimate_to: self.estimate.triangles_for(self.max),
+        })
+    }
 }
 
 fn failure(f: DelaunayFailure) -> TetraError {

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use glam::Vec3;
 use tissue_mesh::{subdivided_cube, uv_sphere, TriMesh};
 use tissue_tetra::{
-    tetrahedralize, tetrahedralize_triangles, QualityReport, TetraError, TetraOptions,
+    tetrahedralize, tetrahedralize_triangles, QualityReport, TetCount, TetraError, TetraOptions,
     Tetrahedralization,
 };
 
@@ -417,4 +417,221 @@ fn bad_options_are_refused() {
         assert!(matches!(e, TetraError::InvalidOption { .. }), "{e:?}");
         assert!(e.to_string().starts_with("invalid option"));
     }
+}
+
+// --- the estimate and the limit ---------------------------------------------------------------
+
+/// Each triangle split into four at its edges' midpoints: the same shape with four times the
+/// triangles and half the edge length (a refined upload).
+fn refined(s: &TriMesh) -> TriMesh {
+    let mut p = s.positions().to_vec();
+    let mut mid = std::collections::HashMap::new();
+    let mut split = |a: u32, b: u32, p: &mut Vec<Vec3>| -> u32 {
+        *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+            p.push(0.5 * (p[a as usize] + p[b as usize]));
+            (p.len() - 1) as u32
+        })
+    };
+    let mut t = Vec::new();
+    for &[a, b, c] in s.triangles() {
+        let (ab, bc, ca) = (
+            split(a, b, &mut p),
+            split(b, c, &mut p),
+            split(c, a, &mut p),
+        );
+        t.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+    }
+    TriMesh::new(p, t).unwrap()
+}
+
+/// `s` stretched by `k` along the axes.
+fn stretched(s: &TriMesh, k: Vec3) -> TriMesh {
+    TriMesh::new(
+        s.positions().iter().map(|&p| p * k).collect(),
+        s.triangles().to_vec(),
+    )
+    .unwrap()
+}
+
+/// A tetrahedron whose opposite edges (on the x axis, and on a skew line at z = 1) are split
+/// into `n` segments each, its faces fanned: all its vertices lie on two skew lines, whose
+/// Delaunay tetrahedralisation has n² tetrahedra while the estimate (a thin volume, 2n + 2
+/// vertices) expects about 6n.
+fn two_skew_lines(n: u32) -> TriMesh {
+    let along = |i: u32| -1.0 + 2.0 * i as f32 / n as f32;
+    let mut p: Vec<Vec3> = (0..=n).map(|i| Vec3::new(along(i), 0.0, 0.0)).collect();
+    p.extend((0..=n).map(|i| Vec3::new(0.0, along(i), 1.0)));
+    let (ab, cd) = (|i: u32| i, |i: u32| n + 1 + i);
+    let (a, b, c, d) = (ab(0), ab(n), cd(0), cd(n));
+    let mut t = Vec::new();
+    for i in 0..n {
+        t.push([c, ab(i), ab(i + 1)]);
+        t.push([d, ab(i + 1), ab(i)]);
+        t.push([a, cd(i), cd(i + 1)]);
+        t.push([b, cd(i + 1), cd(i)]);
+    }
+    let s = TriMesh::new(p, t).unwrap();
+    assert!(s.signed_volume().unwrap() > 0.0);
+    s
+}
+
+#[test]
+fn the_estimate_is_within_0_8_to_1_25_of_the_mesher_on_real_and_refined_surfaces() {
+    let read = |name: &str| tissue_meshio::read_surface(fixture(name)).unwrap();
+    let bunny = read("bunny_10k.obj");
+    let liver = read("liver_sofa.obj");
+    let armadillo = {
+        let d = tissue_meshio::read_tetgen(fixture("armadillo_4k")).unwrap();
+        let tets = tissue_mesh::TetMesh::new(d.positions, d.tets).unwrap();
+        tets.boundary_surface().unwrap()
+    };
+    let cube = subdivided_cube(20, 1.0).unwrap();
+    let default = TetraOptions::default();
+    let fine = TetraOptions {
+        spacing: Some(0.1),
+        ..TetraOptions::default()
+    };
+    let cases = [
+        ("bunny 10k", refined(&bunny), default), // 40 000 triangles
+        ("bunny", bunny, default),
+        ("liver", liver.clone(), default),
+        ("liver refined", refined(&liver), default),
+        ("armadillo", armadillo.clone(), default),
+        ("armadillo refined", refined(&armadillo), default),
+        ("MakeHuman body", read("makehuman_body_closed.obj"), default),
+        ("sphere", uv_sphere(64, 32, 1.0).unwrap(), default),
+        ("sphere, spacing 0.1", uv_sphere(24, 12, 1.0).unwrap(), fine),
+        ("cube", subdivided_cube(30, 1.0).unwrap(), default),
+        (
+            "flat box",
+            stretched(&cube, Vec3::new(1.0, 0.1, 1.0)),
+            default,
+        ),
+        (
+            "long box",
+            stretched(&cube, Vec3::new(10.0, 1.0, 1.0)),
+            default,
+        ),
+    ];
+    for (name, surface, options) in cases {
+        let estimate = tissue_tetra::estimate_tets(&surface, &options).unwrap();
+        let made = tetrahedralize(&surface, &options).unwrap();
+        let ratio = estimate.tets as f64 / made.report.tets as f64;
+        eprintln!(
+            "{name}: {} triangles, {} tets estimated, {} made ({ratio:.3}×); interior {} / {}",
+            surface.triangle_count(),
+            estimate.tets,
+            made.report.tets,
+            estimate.interior_points,
+            made.report.interior_nodes
+        );
+        assert!((0.8..=1.25).contains(&ratio), "{name}: {ratio}");
+        assert_eq!(
+            estimate.spacing, made.spacing,
+            "{name}: the mesher's spacing"
+        );
+        assert_eq!(estimate.triangles, surface.triangle_count());
+    }
+}
+
+#[test]
+fn the_decimation_hint_is_the_same_for_the_same_shape_at_any_resolution() {
+    let bunny = tissue_meshio::read_surface(fixture("bunny_10k.obj")).unwrap();
+    let finer = refined(&bunny);
+    let options = TetraOptions::default();
+    let coarse = tissue_tetra::estimate_tets(&bunny, &options).unwrap();
+    let fine = tissue_tetra::estimate_tets(&finer, &options).unwrap();
+    // Within the limit already: the triangles it has.
+    assert_eq!(coarse.triangles_for(150_000), Some(10_000));
+    // The bunny refined to 40 000 triangles (about 290 000 tets) fits 150 000 at about 25 000
+    // triangles, whichever resolution it starts from; and 40 000 tets at about the bunny's own
+    // 10 000.
+    let hint = fine.triangles_for(150_000).unwrap();
+    assert!((20_000..=30_000).contains(&hint), "{hint}");
+    let from_coarse = coarse.triangles_for(40_000).unwrap();
+    let from_fine = fine.triangles_for(40_000).unwrap();
+    for n in [from_coarse, from_fine] {
+        assert!((9_000..=11_000).contains(&n), "{from_coarse} / {from_fine}");
+    }
+}
+
+#[test]
+fn max_tets_refuses_by_the_estimate_before_meshing_by_the_delaunay_size_and_by_the_count() {
+    let bunny = tissue_meshio::read_surface(fixture("bunny_10k.obj")).unwrap();
+    let limited = |max: usize| TetraOptions {
+        max_tets: Some(max),
+        ..TetraOptions::default()
+    };
+    let unlimited = tetrahedralize(&bunny, &TetraOptions::default()).unwrap();
+    // Within the limit: the same mesh as without one.
+    assert_eq!(tetrahedralize(&bunny, &limited(45_000)).unwrap(), unlimited);
+
+    // Estimated at 39 176: refused before meshing, with the triangles to decimate to.
+    let e = tetrahedralize(&bunny, &limited(10_000)).unwrap_err();
+    match &e {
+        TetraError::TooManyTets {
+            tets,
+            max: 10_000,
+            when: TetCount::Estimated,
+            triangles: 10_000,
+            decimate_to: Some(n),
+        } => {
+            assert!((35_000..45_000).contains(tets), "{e}");
+            assert!((2_000..10_000).contains(n), "{e}");
+        }
+        other => panic!("{other:?}"),
+    }
+    let text = e.to_string();
+    assert!(
+        text.contains("estimated before meshing") && text.contains("decimate the surface to about"),
+        "{text}"
+    );
+
+    // Estimated under 39 500, made 39 706: refused by the count.
+    assert!(unlimited.report.tets > 39_500);
+    let e = tetrahedralize(&bunny, &limited(39_500)).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            TetraError::TooManyTets {
+                when: TetCount::Made,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+
+    // Points on two skew lines fool the estimate (n² tets for about 6n expected); the Delaunay
+    // size stops them, however high the limit.
+    let skew = two_skew_lines(60);
+    let estimate = tissue_tetra::estimate_tets(&skew, &TetraOptions::default()).unwrap();
+    let made = tetrahedralize(&skew, &TetraOptions::default()).unwrap();
+    assert!(
+        made.report.tets > 8 * estimate.tets,
+        "{made:?} {estimate:?}"
+    );
+    let e = tetrahedralize(&skew, &limited(150_000)).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            TetraError::TooManyTets {
+                when: TetCount::Delaunay,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("badly spread"), "{e}");
+
+    // The estimate checks the surface as the mesher does.
+    let (p, t) = tet_surface(Vec3::ZERO, 0);
+    let open = TriMesh::new(p, t[..3].to_vec()).unwrap();
+    assert!(matches!(
+        tissue_tetra::estimate_tets(&open, &TetraOptions::default()),
+        Err(TetraError::OpenSurface { .. })
+    ));
+    assert!(matches!(
+        tetrahedralize(&bunny, &limited(0)),
+        Err(TetraError::InvalidOption { .. })
+    ));
 }

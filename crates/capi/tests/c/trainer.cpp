@@ -113,6 +113,14 @@ void surgery() {
     std::printf("suture: %s\n", sutured.text);
     check(sutured.kind == TISSUE_EVENT_SUTURE_PLACED, "the suture was placed");
     drain(body.p, TISSUE_EVENT_SUTURE_PLACED);
+    // The same stitch again is refused, naming why.
+    check(tissue_body_suture(body.p, a, b, nullptr) == TISSUE_INVALID_ARGUMENT &&
+              last_error().find("already there") != std::string::npos,
+          "a second suture at the same place is refused");
+    // A path of a million points is refused before it is read (the NULL path is never touched).
+    check(tissue_body_cut(body.p, nullptr, 1000000, down, nullptr) == TISSUE_INVALID_ARGUMENT &&
+              last_error().find("at most 10000") != std::string::npos,
+          "a path of a million points is refused before it is read");
 
     // A blade sweep across the organ at x = 2: the blade's plane x = 0 in its frame, its edge
     // 1 cm under the pose's origin.
