@@ -249,11 +249,6 @@ impl Studio {
         self.shutdown.subscribe()
     }
 
-    /// Whether the server is stopping.
-    pub fn is_stopping(&self) -> bool {
-        *self.shutdown.borrow()
-    }
-
     /// Stops: cancels the running job, tells every socket to close, and removes the temporary
     /// folder.
     pub fn shutdown(&self) {

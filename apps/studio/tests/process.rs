@@ -91,6 +91,20 @@ impl Server {
             .ok_or_else(|| format!("no {field} in /proc/PID/status").into())
     }
 
+    /// An upload that declares 60 MB, sends a line and then nothing: the connection held open,
+    /// once the server has read its headers.
+    fn hold_upload(&self) -> Result<TcpStream> {
+        let mut held = TcpStream::connect(self.addr)?;
+        write!(
+            held,
+            "POST /api/patients?name=a.obj&unit=cm HTTP/1.1\r\nHost: {}\r\nContent-Type: \
+             application/octet-stream\r\nContent-Length: 60000000\r\n\r\nv 0 0 0\n",
+            self.addr
+        )?;
+        std::thread::sleep(Duration::from_millis(300));
+        Ok(held)
+    }
+
     /// An HTTP/1.1 request with `Connection: close`; the status and the body.
     fn request(
         &self,
@@ -190,14 +204,7 @@ fn a_stop_ends_while_an_upload_is_unfinished_and_a_second_ctrl_c_forces_it() -> 
     // One Ctrl-C: the held upload is given the grace (3 s), then the process exits anyway.
     let mut server = Server::start("int")?;
     let folder = server.folders()?.remove(0);
-    let mut held = TcpStream::connect(server.addr)?;
-    write!(
-        held,
-        "POST /api/patients?name=a.obj&unit=cm HTTP/1.1\r\nHost: {}\r\nContent-Type: \
-         application/octet-stream\r\nContent-Length: 60000000\r\n\r\nv 0 0 0\n",
-        server.addr
-    )?;
-    std::thread::sleep(Duration::from_millis(300));
+    let held = server.hold_upload()?;
     server.signal("INT")?;
     let (code, took) = server.wait_exit(Duration::from_secs(10))?;
     assert_eq!(code, Some(0));
@@ -208,14 +215,7 @@ fn a_stop_ends_while_an_upload_is_unfinished_and_a_second_ctrl_c_forces_it() -> 
     // Two: out at once (status 130), the folder removed all the same.
     let mut server = Server::start("int2")?;
     let folder = server.folders()?.remove(0);
-    let mut held = TcpStream::connect(server.addr)?;
-    write!(
-        held,
-        "POST /api/patients?name=a.obj&unit=cm HTTP/1.1\r\nHost: {}\r\nContent-Type: \
-         application/octet-stream\r\nContent-Length: 60000000\r\n\r\nv 0 0 0\n",
-        server.addr
-    )?;
-    std::thread::sleep(Duration::from_millis(300));
+    let held = server.hold_upload()?;
     server.signal("INT")?;
     std::thread::sleep(Duration::from_millis(100));
     server.signal("INT")?;

@@ -372,27 +372,10 @@ mod tests {
         text.into_bytes()
     }
 
-    /// Each triangle split into four at its edges' midpoints: the same shape, four times the
-    /// triangles.
+    /// Each triangle split into four at its edges' midpoints (tissue-testscans): the same
+    /// shape, four times the triangles.
     fn refined(s: &TriMesh) -> Result<TriMesh, SceneError> {
-        let mut p = s.positions().to_vec();
-        let mut mid = std::collections::HashMap::new();
-        let mut split = |a: u32, b: u32, p: &mut Vec<Vec3>| -> u32 {
-            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                p.push(0.5 * (p[a as usize] + p[b as usize]));
-                (p.len() - 1) as u32
-            })
-        };
-        let mut t = Vec::new();
-        for &[a, b, c] in s.triangles() {
-            let (ab, bc, ca) = (
-                split(a, b, &mut p),
-                split(b, c, &mut p),
-                split(c, a, &mut p),
-            );
-            t.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
-        }
-        TriMesh::new(p, t).map_err(|e| SceneError::mesh("refined", e))
+        tissue_testscans::subdivide_midpoint(s).map_err(|e| SceneError::mesh("refined", e))
     }
 
     fn fixture(name: &str) -> Result<TriMesh, SceneError> {
@@ -433,7 +416,6 @@ mod tests {
                                 .contains(&format!("decimate the surface to about {n} triangles")),
                         "{text}"
                     );
-                    eprintln!("{triangles} triangles: {text}");
                 }
                 other => panic!("{triangles} triangles: {other:?}"),
             }

@@ -421,27 +421,10 @@ fn bad_options_are_refused() {
 
 // --- the estimate and the limit ---------------------------------------------------------------
 
-/// Each triangle split into four at its edges' midpoints: the same shape with four times the
-/// triangles and half the edge length (a refined upload).
+/// Each triangle split into four at its edges' midpoints (tissue-testscans): the same shape with
+/// four times the triangles and half the edge length (a refined upload).
 fn refined(s: &TriMesh) -> TriMesh {
-    let mut p = s.positions().to_vec();
-    let mut mid = std::collections::HashMap::new();
-    let mut split = |a: u32, b: u32, p: &mut Vec<Vec3>| -> u32 {
-        *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-            p.push(0.5 * (p[a as usize] + p[b as usize]));
-            (p.len() - 1) as u32
-        })
-    };
-    let mut t = Vec::new();
-    for &[a, b, c] in s.triangles() {
-        let (ab, bc, ca) = (
-            split(a, b, &mut p),
-            split(b, c, &mut p),
-            split(c, a, &mut p),
-        );
-        t.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
-    }
-    TriMesh::new(p, t).unwrap()
+    tissue_testscans::subdivide_midpoint(s).unwrap()
 }
 
 /// `s` stretched by `k` along the axes.
