@@ -108,6 +108,6 @@ pub use plan::{
     PlannedInsertion, PreparedInsertion, SimMesh, SweepJob, SweepResult, SweepRun,
 };
 pub use worker::{
-    CustomJob, Event, Events, Handle, HandleOptions, Job, Outcome, ProgressEvent, ProgressSink,
-    RunMonitor,
+    CancelToken, CustomJob, Event, Events, Handle, HandleOptions, Job, Outcome, ProgressEvent,
+    ProgressSink, RunMonitor,
 };

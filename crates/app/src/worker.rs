@@ -227,7 +227,7 @@ impl Event {
 #[derive(Debug)]
 pub struct ProgressSink {
     tx: Sender<ProgressEvent>,
-    cancel: Arc<AtomicBool>,
+    cancel: CancelToken,
     start: Instant,
     steps: AtomicU64,
 }
@@ -235,7 +235,7 @@ pub struct ProgressSink {
 impl ProgressSink {
     /// Whether the handle asked to cancel (or was dropped).
     pub fn is_cancelled(&self) -> bool {
-        self.cancel.load(Ordering::Relaxed)
+        self.cancel.is_cancelled()
     }
 
     /// [`ControlFlow::Break`] once cancelled.
@@ -314,6 +314,29 @@ impl RunMonitor<'_> {
     }
 }
 
+/// A cancel request shared between threads: clone it into a Ctrl-C handler, a socket's task or
+/// a C host's call, and the job started with it ([`Handle::start_cancellable`]) ends within one
+/// step of [`CancelToken::cancel`]. Cancelling is sticky: a token, once cancelled, stays so.
+#[derive(Debug, Clone, Default)]
+pub struct CancelToken(Arc<AtomicBool>);
+
+impl CancelToken {
+    /// A token not cancelled.
+    pub fn new() -> Self {
+        CancelToken::default()
+    }
+
+    /// Asks every job started with this token (or a clone) to stop.
+    pub fn cancel(&self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether [`CancelToken::cancel`] was called on this token or a clone.
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
 /// Options of [`Handle::start_with`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct HandleOptions {
@@ -341,7 +364,7 @@ pub struct Handle {
     pending: Option<Event>,
     /// The terminal event was handed out.
     done: bool,
-    cancel: Arc<AtomicBool>,
+    cancel: CancelToken,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -354,12 +377,17 @@ impl Handle {
     /// Starts `job` on a new worker thread. If the thread cannot be started, the handle's only
     /// event is [`Event::Failed`] with [`AppError::Spawn`].
     pub fn start_with(job: Job, options: HandleOptions) -> Handle {
-        let cancel = Arc::new(AtomicBool::new(false));
+        Handle::start_cancellable(job, options, CancelToken::new())
+    }
+
+    /// Starts `job` on a new worker thread, cancelled through `cancel` (or [`Handle::cancel`]):
+    /// a token already cancelled ends the job before its first phase.
+    pub fn start_cancellable(job: Job, options: HandleOptions, cancel: CancelToken) -> Handle {
         let (progress_tx, progress) = bounded(options.progress_capacity.max(1));
         let (terminal_tx, terminal) = bounded(1);
         let sink = ProgressSink {
             tx: progress_tx,
-            cancel: Arc::clone(&cancel),
+            cancel: cancel.clone(),
             start: Instant::now(),
             steps: AtomicU64::new(0),
         };
@@ -389,12 +417,36 @@ impl Handle {
     /// [`Event::Cancelled`]. A job that finishes its last step first still reports
     /// [`Event::Finished`].
     pub fn cancel(&self) {
-        self.cancel.store(true, Ordering::Relaxed);
+        self.cancel.cancel();
     }
 
-    /// Whether [`Handle::cancel`] was called.
+    /// Whether [`Handle::cancel`] was called (or the job's [`CancelToken`] cancelled).
     pub fn is_cancelled(&self) -> bool {
-        self.cancel.load(Ordering::Relaxed)
+        self.cancel.is_cancelled()
+    }
+
+    /// The job's cancel token: cancelling it (from any thread) is [`Handle::cancel`].
+    pub fn cancel_token(&self) -> CancelToken {
+        self.cancel.clone()
+    }
+
+    /// Blocks until the job ends, handing every progress event to `on_progress` on this thread
+    /// (no polling: the call sleeps until the worker reports). Cancel it from another thread
+    /// through [`Handle::cancel_token`] or the token the job was started with.
+    ///
+    /// # Errors
+    /// As [`Handle::wait`]: [`AppError::Cancelled`] with the steps done for a cancelled job,
+    /// the job's error for a failed one.
+    pub fn run(mut self, mut on_progress: impl FnMut(&ProgressEvent)) -> Result<Outcome, AppError> {
+        while let Some(event) = self.recv() {
+            match event {
+                Event::Progress(p) => on_progress(&p),
+                Event::Finished(outcome) => return Ok(outcome),
+                Event::Cancelled { steps } => return Err(AppError::Cancelled { steps }),
+                Event::Failed(e) => return Err(e),
+            }
+        }
+        Err(AppError::AlreadyReceived)
     }
 
     /// Whether the worker thread has ended: its terminal event is then ready (or was already
@@ -701,7 +753,7 @@ mod tests {
             terminal: trx,
             pending: None,
             done: false,
-            cancel: Arc::new(AtomicBool::new(false)),
+            cancel: CancelToken::new(),
             thread: None,
         };
         (handle, ptx)

@@ -114,3 +114,67 @@ fn a_slow_receiver_does_not_stall_the_run() {
         start.elapsed()
     );
 }
+
+/// The blocking run: progress on the calling thread, no polling; a token cancelled from another
+/// thread ends it with the steps done, and the same job run to its end gives its outcome.
+#[test]
+fn run_blocks_with_progress_and_a_token_cancels_it_from_another_thread() {
+    let token = tissue_app::CancelToken::new();
+    let handle = Handle::start_cancellable(
+        Job::Insertion(table2_job(100.0)),
+        HandleOptions::default(),
+        token.clone(),
+    );
+    let caller = std::thread::current().id();
+    let (seen_tx, seen_rx) = std::sync::mpsc::channel::<u64>();
+    let canceller = std::thread::spawn(move || {
+        // Cancel once the fifth step was seen.
+        while let Ok(step) = seen_rx.recv() {
+            if step >= 5 {
+                token.cancel();
+                break;
+            }
+        }
+    });
+    let mut last = 0;
+    let result = handle.run(|p| {
+        assert_eq!(
+            std::thread::current().id(),
+            caller,
+            "progress on the caller's thread"
+        );
+        assert!(p.step > last || p.step == 1, "steps in order");
+        last = p.step;
+        let _ = seen_tx.send(p.step);
+    });
+    let _ = canceller.join();
+    match result {
+        Err(AppError::Cancelled { steps }) => {
+            assert!(steps >= 5 && steps < 4000, "cancelled after {steps} steps")
+        }
+        other => panic!("expected a cancel, got {other:?}"),
+    }
+
+    // A small job runs to its end: its outcome, and its progress seen.
+    let mut progress = 0;
+    let outcome = Handle::start(Job::Insertion(small_job(50.0))).run(|_| progress += 1);
+    assert!(
+        matches!(outcome, Ok(tissue_app::Outcome::Insertion(_))),
+        "{outcome:?}"
+    );
+    assert!(progress > 0);
+
+    // A token cancelled before the start ends the job before its first step.
+    let token = tissue_app::CancelToken::new();
+    token.cancel();
+    let early = Handle::start_cancellable(
+        Job::Insertion(small_job(50.0)),
+        HandleOptions::default(),
+        token,
+    )
+    .run(|_| panic!("no step after a cancel before the start"));
+    assert!(
+        matches!(early, Err(AppError::Cancelled { steps: 0 })),
+        "{early:?}"
+    );
+}
