@@ -69,6 +69,16 @@ pub(crate) fn write_atomic(
     Ok(())
 }
 
+/// Writes `bytes` to `path` atomically: a temporary file in the same folder, synced, then
+/// renamed over `path`; on any error nothing is left behind.
+///
+/// # Errors
+/// [`MeshIoError::Io`] of `path` when the folder is missing or not writable.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), MeshIoError> {
+    use std::io::Write as _;
+    write_atomic(path, |out| out.write_all(bytes))
+}
+
 /// Removes the temporary file when dropped, unless disarmed by taking `path`.
 struct TempGuard {
     path: Option<PathBuf>,

@@ -2,12 +2,12 @@
 //! `tissue_job_start_json` both take a [`JobSpec`], so a mode one of them knows the other knows
 //! too.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::{ErrorKind, PlanError, PlanRequest, Scenario};
 
-/// What to run on a placed request.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+/// What to run on a placed request (the report's `mode`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum JobMode {
     /// One insertion (the default).
@@ -17,7 +17,8 @@ pub enum JobMode {
     Sweep,
     /// The volume that gains [`JobSpec::target_gain_cm2`] of skin.
     TargetGain,
-    /// Expansion over weeks: the request's `expand_weeks` and its companions.
+    /// Expansion over weeks: the request's `expand_weeks` and its companions. `expand_weeks`
+    /// asks for this mode and for no other: any other mode with it is refused, naming the field.
     Expansion,
 }
 
@@ -36,7 +37,7 @@ impl JobMode {
 /// A job as JSON: `{"mode": "single" | "sweep" | "target-gain" | "expansion", "request": {…},
 /// "volumes_cm3": [..], "target_gain_cm2": 30, "bracket_cm3": [lo, hi], "gain_tolerance_cm2":
 /// 0.5}`; every member optional (`{}` is Table 2's single run), unknown members refused.
-#[derive(Debug, Clone, Default, Deserialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct JobSpec {
     /// What to run.
@@ -86,14 +87,77 @@ pub enum JobKind {
 }
 
 impl JobSpec {
-    /// The job on `scenario` (placed from [`JobSpec::request`]).
+    /// Checks what can be checked before the patient is read: the request
+    /// ([`PlanRequest::check`]), that its members belong to its mode, a sweep's volumes and a
+    /// search's target, bracket and tolerance.
     ///
     /// # Errors
-    /// A [`PlanError`] naming the member at fault: a search without `target_gain_cm2`, an
-    /// expansion without `expand_weeks`, and the checks of [`Scenario::sweep_job`],
+    /// A [`PlanError`] naming the member at fault: `expand_weeks` outside an expansion (it
+    /// asks for one), an expansion without it, a search without `target_gain_cm2`, and the
+    /// checks of [`crate::check_sweep`] and [`crate::check_search`].
+    pub fn check(&self) -> Result<(), PlanError> {
+        self.request.check()?;
+        let expansion = self.mode == JobMode::Expansion;
+        match (expansion, self.request.expand_weeks) {
+            (false, Some(_)) => {
+                return Err(PlanError::field(
+                    ErrorKind::Usage,
+                    "expand_weeks",
+                    format!(
+                        "`expand_weeks` asks for an expansion over weeks, not a {} run: run the \
+                         job as an expansion (mode `expansion`), or leave `expand_weeks` out",
+                        self.mode.name()
+                    ),
+                ))
+            }
+            (true, None) => {
+                return Err(PlanError::field(
+                    ErrorKind::Usage,
+                    "expand_weeks",
+                    "an expansion needs `expand_weeks` in the request",
+                ))
+            }
+            _ => {}
+        }
+        match self.mode {
+            JobMode::Sweep => crate::check_sweep(&self.volumes_cm3)?,
+            JobMode::TargetGain => {
+                crate::check_search(
+                    self.target()?,
+                    self.bracket_cm3,
+                    self.tolerance(),
+                    self.request.volume_cm3,
+                )?;
+            }
+            JobMode::Single | JobMode::Expansion => {}
+        }
+        Ok(())
+    }
+
+    fn target(&self) -> Result<f64, PlanError> {
+        self.target_gain_cm2.ok_or_else(|| {
+            PlanError::field(
+                ErrorKind::Usage,
+                "target_gain_cm2",
+                "a search needs `target_gain_cm2`",
+            )
+        })
+    }
+
+    fn tolerance(&self) -> f64 {
+        self.gain_tolerance_cm2
+            .unwrap_or_else(crate::default_gain_tolerance)
+    }
+
+    /// The job on `scenario` (placed from [`JobSpec::request`]); run it with
+    /// [`PlannedJob::run`].
+    ///
+    /// # Errors
+    /// [`JobSpec::check`]'s, and those of [`Scenario::sweep_job`],
     /// [`Scenario::inverse_job`] and [`Scenario::expansion_job`].
     pub fn plan(&self, scenario: &Scenario) -> Result<PlannedJob, PlanError> {
         use tissue_app::Job;
+        self.check()?;
         Ok(match self.mode {
             JobMode::Single => PlannedJob {
                 job: Job::Insertion(scenario.job.clone()),
@@ -106,17 +170,8 @@ impl JobSpec {
                 kind: JobKind::Sweep,
             },
             JobMode::TargetGain => {
-                let target = self.target_gain_cm2.ok_or_else(|| {
-                    PlanError::field(
-                        ErrorKind::Usage,
-                        "target_gain_cm2",
-                        "a search needs `target_gain_cm2`",
-                    )
-                })?;
-                let tolerance = self
-                    .gain_tolerance_cm2
-                    .unwrap_or_else(crate::default_gain_tolerance);
-                let job = scenario.inverse_job(target, self.bracket_cm3, tolerance)?;
+                let target = self.target()?;
+                let job = scenario.inverse_job(target, self.bracket_cm3, self.tolerance())?;
                 let bracket = job.bracket;
                 PlannedJob {
                     job: Job::Inverse(job),
@@ -186,6 +241,20 @@ mod tests {
         assert_eq!(missing.and_then(|e| e.field), Some("target_gain_cm2"));
         let missing = planned(r#"{"mode": "expansion"}"#).err();
         assert_eq!(missing.and_then(|e| e.field), Some("expand_weeks"));
+        // `expand_weeks` asks for an expansion: in any other mode it is refused, by name, the
+        // same in every front end (it was silently a single run in two of them).
+        for mode in ["single", "sweep", "target-gain"] {
+            let json = format!(
+                r#"{{"mode": "{mode}", "request": {{"expand_weeks": 3}}, "volumes_cm3": [50],
+                    "target_gain_cm2": 30}}"#
+            );
+            let refused = planned(&json).err();
+            assert_eq!(
+                refused.map(|e| (e.kind, e.field)),
+                Some((ErrorKind::Usage, Some("expand_weeks"))),
+                "{mode}"
+            );
+        }
         let empty = planned(r#"{"mode": "sweep"}"#).err();
         assert!(empty.is_some(), "a sweep of no volume");
         let volumes = vec!["50"; crate::MAX_SWEEP_VOLUMES + 1].join(", ");

@@ -24,8 +24,12 @@
 //! - **The report** ([`report`]): the JSON contract, with [`report::SCHEMA_VERSION`]; field
 //!   names are only ever added.
 //! - **What to run** ([`JobSpec`]): a single run, a sweep, the inverse search or an expansion
-//!   over weeks, as one JSON shape (the studio's run message, the C ABI's job JSON), planned on
-//!   a [`Scenario`] into the worker's job ([`JobSpec::plan`]).
+//!   over weeks, as one JSON shape (the studio's run message, the C ABI's job JSON, the flags
+//!   of `insert`), planned on a [`Scenario`] into the worker's job ([`JobSpec::plan`]).
+//! - **Running and finishing it** ([`PlannedJob::run`], [`finish`]): the job run on the
+//!   worker with a [`CancelToken`] and a progress callback, then its [`JobReport`], the
+//!   deformed patient and a sweep's runs ([`Finished`]); divergence is checked and the sweep
+//!   policy applied here, once, for every front end.
 //! - **Errors** ([`PlanError`]): a kind ([`ErrorKind`]: a front end's exit code or HTTP status),
 //!   the request field at fault, and one sentence that says what to change.
 //!
@@ -59,6 +63,7 @@ mod patient;
 pub mod report;
 mod request;
 mod result;
+mod run;
 mod scenario;
 mod units;
 
@@ -68,12 +73,14 @@ pub use patient::{
     BoxSummary, DefectSummary, LoopSummary, MeshSummary, Patient, Shipped, TABLE2_SIDE_CM,
     TABLE2_VERTICES_PER_SIDE,
 };
+pub use report::{JobReport, Tool};
 pub use request::{
     check_search, check_sweep, PlanRequest, MAX_DENSITY_G_CM3, MAX_DEPTH_CM, MAX_LENGTH_CM,
     MAX_STEPS, MAX_SWEEP_VOLUMES, MAX_THICKNESS_CM, MAX_TIME_STEP_S, MAX_VOLUME_CM3, MAX_YOUNG_KPA,
     MIN_GROWTH_STEP_H,
 };
 pub use result::{is_mesh_path, PatientResult};
+pub use run::{finish, Finished, Stopped};
 pub use scenario::{default_gain_tolerance, Preview, Scenario, FOOTPRINT_LIFT_CM};
-pub use tissue_app::{Event, Handle, Job, Outcome, ProgressEvent};
+pub use tissue_app::{CancelToken, Event, Handle, Job, Outcome, ProgressEvent};
 pub use units::{ColorBy, Detect, Rule, Shape, Unit, KPA};
