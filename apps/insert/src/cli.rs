@@ -4,7 +4,9 @@
 use std::path::PathBuf;
 
 use clap::Parser;
-use tissue_planner::{ColorBy, Detect, PlanRequest, Rule, Shape, Unit};
+use tissue_planner::{ColorBy, Detect, JobMode, JobSpec, PlanRequest, Rule, Shape, Unit};
+
+use crate::failure::{Exit, Failure};
 
 /// The library's defaults, read from an empty request.
 fn defaults() -> PlanRequest {
@@ -60,31 +62,12 @@ outside the region displacement is 0 and stretch 1.
   stdout          a summary table (single run), one row per run (--sweep), or the runs and the \
 answer (--target-gain).
 
-REPORT JSON (a contract, the same for every front end of tissue-planner: fields are only ever added; a change that is not an addition raises schema_version). Single run:
-  schema_version, tool (\"insert\"), version, mode (\"single\"), inputs {...}, and
-  area_before_cm2, area_after_cm2, area_gain_cm2   skin region area before/after, gain
-  volume_difference_cm3                            volume between the skin before and after
-  implant_volume_cm3, implant_volume_end_cm3       implant volume as built, at the end
-  implant_compression                              1 - end/built (a fraction: 0.01 = 1 %)
-  dome_height_cm, max_displacement_cm, max_penetration_cm, boundary_unchanged
-  region_vertices, region_triangles, region_radius_cm
-  steps, max_steps, stop_reason (\"settled\" | \"step_limit\"), time_step_s, wall_time_s
-  inputs: mesh, mesh_generated, unit, cm_per_unit, mesh_vertices, mesh_triangles, at, vertex, \
-point_cm, surface_point_cm, normal, tangent, rotation_deg, shape {kind, diameter_cm | length_cm, width_cm, \
-corner_radius_cm | length_cm, width_cm, bend_radius_cm}, volume_cm3, implant_vertices, depth_cm, \
-region_radius_cm, region_rule, young_kpa, poisson, thickness_cm, density_g_cm3, detect, \
-max_steps, time_step_s (null: automatic), fill_time_s.
-  --sweep: mode \"sweep\", inputs (+ sweep_volumes_cm3), runs: [{volume_cm3, and the single \
-run's result fields}].
-  --target-gain: mode \"target-gain\", inputs (+ target_gain_cm2, bracket_cm3), volume_cm3, \
-area_gain_cm2, converged, runs: [{volume_cm3, area_gain_cm2}].
-  --expand-weeks: mode \"expansion\", inputs (+ expand_weeks, hold_weeks, leakage, overfill, \
-band_samples, band_seed, growth_step_h), protocol, growth, weeks and days [{day, week, \
-injected_cm3, volume_cm3, area_gain_cm2, grown_area_cm2, grown_gain_cm2, mean_growth}], flap \
-{base_area_cm2, recruited_area_cm2, dome_area_cm2, grown_area_cm2, flap_area_cm2, retraction, \
-geometric_gain_cm2, grown_gain_cm2, efficiency, flap_growth}, band {samples, seed, method, \
-flap_area_cm2, retraction, efficiency, grown_area_cm2: {p5, p50, p95}} or null, steps, \
-reference_steps, wall_time_s.";
+REPORT JSON: one object, the contract every front end of tissue-planner writes (insert, the \
+studio, the C ABI): the same request gives the same report, whatever wrote it, and fields are \
+only ever added (a change that is not an addition raises schema_version). Every report has \
+schema_version, tool, version, mode (single | sweep | target-gain | expansion) and inputs; the \
+fields of each mode are documented in the rustdoc of tissue_planner::report, and \
+fixtures/reports/ holds one example report per mode (checked against every front end).";
 
 /// The text after the options in `--help`: outputs, the report, and the exit codes (the table
 /// every tissue binary shares, with what each code means here).
@@ -258,25 +241,17 @@ pub struct Cli {
 
     /// Turns the tangent about the normal by this many degrees (counter-clockwise seen from
     /// outside the body).
-    #[arg(
-        long,
-        value_name = "DEG",
-        default_value_t = 0.0,
-        help_heading = "Placement"
-    )]
+    #[arg(long, value_name = "DEG", default_value_t = defaults().rotation_deg,
+          help_heading = "Placement")]
     pub rotation: f32,
 
     /// The implant's base outline.
-    #[arg(long, value_enum, default_value_t = Shape::Round, help_heading = "Implant")]
+    #[arg(long, value_enum, default_value_t = defaults().shape, help_heading = "Implant")]
     pub shape: Shape,
 
     /// Round base: diameter (cm).
-    #[arg(
-        long,
-        value_name = "CM",
-        default_value_t = 7.0,
-        help_heading = "Implant"
-    )]
+    #[arg(long, value_name = "CM", default_value_t = defaults().diameter_cm,
+          help_heading = "Implant")]
     pub diameter: f32,
 
     /// Rectangular base: length along the tangent; crescent: centre-line length tip to tip (cm).
@@ -288,25 +263,17 @@ pub struct Cli {
     pub width: Option<f32>,
 
     /// Rectangular base: corner radius (cm), at most half the shorter side.
-    #[arg(
-        long,
-        value_name = "CM",
-        default_value_t = 0.5,
-        help_heading = "Implant"
-    )]
+    #[arg(long, value_name = "CM", default_value_t = defaults().corner_radius_cm,
+          help_heading = "Implant")]
     pub corner_radius: f32,
 
-    /// Crescent base: radius of the centre line's arc (cm), at least the width.
+    /// Crescent base: radius of the centre line's arc (cm), at least 1.5 × the width.
     #[arg(long, value_name = "CM", help_heading = "Implant")]
     pub bend_radius: Option<f32>,
 
     /// Implant fill volume (cm³ = mL).
-    #[arg(
-        long,
-        value_name = "CM3",
-        default_value_t = 100.0,
-        help_heading = "Implant"
-    )]
+    #[arg(long, value_name = "CM3", default_value_t = defaults().volume_cm3,
+          help_heading = "Implant")]
     pub volume: f64,
 
     /// Implant mesh size: wanted vertex count (50 to 100000).
@@ -324,7 +291,7 @@ pub struct Cli {
     pub radius: Option<f64>,
 
     /// Which triangles within the radius form the region.
-    #[arg(long, value_enum, default_value_t = Rule::TouchesVertex, help_heading = "Tissue")]
+    #[arg(long, value_enum, default_value_t = defaults().region_rule, help_heading = "Tissue")]
     pub region_rule: Rule,
 
     /// The simulation mesh's edge (cm): the region is remeshed to it, smoothed below it, its
@@ -370,7 +337,7 @@ pub struct Cli {
     pub density: f64,
 
     /// Collision detection broad phase.
-    #[arg(long, value_enum, default_value_t = Detect::Bvh, help_heading = "Run")]
+    #[arg(long, value_enum, default_value_t = defaults().detect, help_heading = "Run")]
     pub detect: Detect,
 
     /// Step limit of a run (at most 500000).
@@ -453,6 +420,13 @@ pub struct Cli {
     pub chart: Option<PathBuf>,
 
     /// Write every result and its inputs as JSON (see the contract in --help).
+    /// Run this job: a JSON file in the planner's job shape (`{"mode": …, "request": {…},
+    /// "volumes_cm3": […], …}`, the studio's and the C ABI's), in place of the request and
+    /// mode flags (--mesh and --unit still give the patient).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["sweep", "target_gain", "expand_weeks"],
+          help_heading = "Run")]
+    pub job: Option<PathBuf>,
+
     #[arg(long, value_name = "FILE", help_heading = "Outputs")]
     pub report: Option<PathBuf>,
 
@@ -481,6 +455,62 @@ impl Cli {
     }
 
     /// The planning request the flags make.
+    /// What to run: `--job`'s file, or the job the flags make.
+    ///
+    /// # Errors
+    /// A `--job` file that cannot be read or is not a job, or one given with request flags.
+    pub fn job(&self) -> Result<JobSpec, Failure> {
+        let Some(path) = &self.job else {
+            return Ok(self.job_spec());
+        };
+        let given = serde_json::to_value(self.request()).ok();
+        if given != serde_json::to_value(PlanRequest::default()).ok() {
+            return Err(Failure::new(
+                Exit::Usage,
+                "--job takes the whole job: put the request's values in its \"request\", not \
+                 in flags",
+            ));
+        }
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            Failure::new(
+                Exit::Input,
+                format!("cannot read the job {}: {e}", path.display()),
+            )
+        })?;
+        serde_json::from_str(&text).map_err(|e| {
+            Failure::new(
+                Exit::Usage,
+                format!(
+                    "{} is not a job: {e}; see tissue_planner::JobSpec for its members",
+                    path.display()
+                ),
+            )
+        })
+    }
+
+    /// What the flags ask to run: the planner's job, as the studio and the C ABI send it.
+    /// `--sweep` makes a sweep, `--target-gain` a search, `--expand-weeks` an expansion;
+    /// otherwise one run.
+    pub fn job_spec(&self) -> JobSpec {
+        let mode = if self.sweep.is_some() {
+            JobMode::Sweep
+        } else if self.expand_weeks.is_some() {
+            JobMode::Expansion
+        } else if self.target_gain.is_some() {
+            JobMode::TargetGain
+        } else {
+            JobMode::Single
+        };
+        JobSpec {
+            mode,
+            request: self.request(),
+            volumes_cm3: self.sweep.clone().unwrap_or_default(),
+            target_gain_cm2: self.target_gain,
+            bracket_cm3: self.bracket,
+            gain_tolerance_cm2: Some(self.gain_tolerance),
+        }
+    }
+
     pub fn request(&self) -> PlanRequest {
         PlanRequest {
             at: self.at,
@@ -561,6 +591,7 @@ pub fn flag_of(field: &str) -> Option<&'static str> {
         "band_samples" => "--band-samples",
         "band_seed" => "--seed",
         "growth_step_h" => "--growth-step",
+        "mode" => "--job",
         _ => return None,
     })
 }
@@ -581,6 +612,23 @@ mod tests {
         for field in json.as_object().unwrap().keys() {
             assert!(flag_of(field).is_some(), "no flag for {field}");
         }
+    }
+
+    /// Every default shown in `--help` is the library's: the flags with no value give
+    /// `PlanRequest::default()` exactly.
+    #[test]
+    fn the_defaults_are_the_librarys() {
+        let cli = Cli::try_parse_from(["insert"]).unwrap();
+        assert_eq!(
+            serde_json::to_value(cli.request()).unwrap(),
+            serde_json::to_value(PlanRequest::default()).unwrap()
+        );
+        assert_eq!(cli.job_spec().mode, JobMode::Single);
+        let sweep = Cli::try_parse_from(["insert", "--sweep", "50,100"]).unwrap();
+        assert_eq!(sweep.job_spec().mode, JobMode::Sweep);
+        assert_eq!(sweep.job_spec().volumes_cm3, [50.0, 100.0]);
+        let weeks = Cli::try_parse_from(["insert", "--expand-weeks", "4"]).unwrap();
+        assert_eq!(weeks.job_spec().mode, JobMode::Expansion);
     }
 
     #[test]

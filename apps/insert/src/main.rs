@@ -1,14 +1,15 @@
 //! `insert`: plan a tissue-expander insertion on a patient's surface scan from the command line.
 //!
-//! A thin shell over the planning front door, tissue-planner: command line ([`cli`]) → the
-//! planner's request and scenario ([`setup`]) → the events loop with progress and Ctrl-C
-//! ([`progress`]) → stdout, the mesh, picture and JSON report ([`modes`], [`output`],
-//! [`report`]: the tables on stdout; the JSON contract is the planner's). Every failure is one line on stderr and a documented exit code
-//! ([`failure`]); see `insert --help` and `apps/insert/README.md`.
+//! A thin shell over the planning front door, tissue-planner: the command line ([`cli`]) makes
+//! the planner's [`JobSpec`](tissue_planner::JobSpec) (`Cli::job_spec`, the same JSON shape the
+//! studio and the C ABI take) and the patient ([`setup`]); the planner runs and finishes the job
+//! ([`tissue_planner::PlannedJob::run`]) with the progress display and Ctrl-C ([`progress`]);
+//! then the tables on stdout ([`report`]) and the outputs, written together ([`output`]).
+//! Every failure is one line on stderr and a documented exit code ([`failure`]); see
+//! `insert --help` and `apps/insert/README.md`.
 
 mod cli;
 mod failure;
-mod modes;
 mod output;
 mod progress;
 mod report;
@@ -17,27 +18,83 @@ mod setup;
 use std::process::ExitCode;
 
 use clap::Parser;
-use tissue_planner::report::Inputs;
+use tissue_planner::{Finished, JobMode, JobReport, Stopped, Tool};
 
 use crate::cli::Cli;
 use crate::failure::{Exit, Failure};
-use crate::progress::Interrupt;
+use crate::output::Staged;
+use crate::progress::{Display, Interrupt};
 
 fn run(cli: &Cli) -> Result<(), Failure> {
     let interrupt = Interrupt::install()?;
     output::check_targets(cli)?;
-    let scenario = setup::scenario(cli)?;
-    interrupt.check()?;
-    let inputs = Inputs::new(&scenario).map_err(|e| Failure::from_plan(&e))?;
-    if let Some(volumes) = &cli.sweep {
-        modes::sweep(cli, &scenario, &inputs, volumes, &interrupt)
-    } else if cli.expand_weeks.is_some() {
-        modes::expansion(cli, &scenario, &inputs, &interrupt)
-    } else if let Some(target) = cli.target_gain {
-        modes::target_gain(cli, &scenario, &inputs, target, &interrupt)
-    } else {
-        modes::single(cli, &scenario, &inputs, &interrupt)
+    let spec = cli.job()?;
+    if spec.mode != JobMode::Single && (!cli.out.is_empty() || cli.png.is_some()) {
+        return Err(Failure::new(
+            Exit::Usage,
+            format!(
+                "--out and --png are a single run's (the patient after it); this job is a {} run",
+                spec.mode.name()
+            ),
+        ));
     }
+    // The numbers are checked before the file is read: a typo costs no load.
+    spec.check().map_err(|e| Failure::from_plan(&e))?;
+    let scenario = setup::scenario(cli, &spec)?;
+    interrupt.check()?;
+    let planned = spec.plan(&scenario).map_err(|e| Failure::from_plan(&e))?;
+    let mut display = Display::new(cli.quiet, spec.mode != JobMode::Single);
+    let finished = planned.run(&scenario, Tool::Insert, interrupt.token(), |p| {
+        display.progress(p);
+    });
+    display.finish();
+    let finished = finished.map_err(|stopped| match stopped {
+        Stopped::Cancelled { steps } => Failure::interrupted(steps),
+        Stopped::Failed(e) => Failure::from_plan(&e),
+    })?;
+    print!("{}", report::stdout(&finished));
+    for warning in report::warnings(&finished) {
+        eprintln!("insert: warning: {warning}");
+    }
+    let staged = stage(cli, &scenario, &finished)?;
+    for path in staged.commit(&interrupt)? {
+        eprintln!("insert: wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// The outputs the command line asked for, staged beside their targets.
+fn stage(
+    cli: &Cli,
+    scenario: &tissue_planner::Scenario,
+    finished: &Finished,
+) -> Result<Staged, Failure> {
+    let mut staged = Staged::default();
+    if let Some(patient) = &finished.patient {
+        for out in &cli.out {
+            staged.mesh(out, patient)?;
+        }
+        if let Some(png) = &cli.png {
+            let bytes = patient
+                .picture(cli.color, cli.png_size, scenario.patient.unit.symbol())
+                .map_err(|e| Failure::from_plan(&e))?;
+            staged.bytes(png, &bytes, "picture")?;
+        }
+    }
+    if let Some(path) = &cli.report {
+        let json = finished
+            .report
+            .to_json()
+            .map_err(|e| Failure::from_plan(&e))?;
+        staged.bytes(path, json.as_bytes(), "report")?;
+    }
+    if let (Some(path), JobReport::Expansion(report)) = (&cli.chart, &finished.report) {
+        let bytes = report
+            .chart(cli.png_size)
+            .map_err(|e| Failure::from_plan(&e))?;
+        staged.bytes(path, &bytes, "chart")?;
+    }
+    Ok(staged)
 }
 
 /// Where the demo (no arguments at all) puts its picture.

@@ -1,20 +1,18 @@
-//! Driving a tissue-app job: the events loop, the progress display on stderr (bars on a
-//! terminal, plain lines otherwise) and Ctrl-C, which cancels through the handle.
+//! The progress display on stderr (bars on a terminal, plain lines otherwise), fed by the
+//! planner's progress callback, and Ctrl-C, which cancels the job through its token.
 
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use tissue_planner::{Event, Handle, Job, Outcome, ProgressEvent};
+use tissue_planner::{CancelToken, ProgressEvent};
 
 use crate::failure::{Exit, Failure};
 
-/// Set by Ctrl-C (SIGINT); read by the events loop and before outputs are committed.
+/// Set by Ctrl-C (SIGINT): the job's cancel token, read again before outputs are committed.
 #[derive(Debug, Clone)]
-pub struct Interrupt(Arc<AtomicBool>);
+pub struct Interrupt(CancelToken);
 
 impl Interrupt {
     /// Installs the Ctrl-C handler.
@@ -22,17 +20,22 @@ impl Interrupt {
     /// # Errors
     /// When the handler cannot be installed.
     pub fn install() -> Result<Self, Failure> {
-        let flag = Arc::new(AtomicBool::new(false));
-        let set = Arc::clone(&flag);
-        ctrlc::set_handler(move || set.store(true, Ordering::SeqCst)).map_err(|e| {
+        let token = CancelToken::new();
+        let set = token.clone();
+        ctrlc::set_handler(move || set.cancel()).map_err(|e| {
             Failure::new(Exit::Run, format!("cannot install the Ctrl-C handler: {e}"))
         })?;
-        Ok(Interrupt(flag))
+        Ok(Interrupt(token))
+    }
+
+    /// The token a job runs with: Ctrl-C cancels it.
+    pub fn token(&self) -> &CancelToken {
+        &self.0
     }
 
     /// Whether Ctrl-C was pressed.
     pub fn is_set(&self) -> bool {
-        self.0.load(Ordering::SeqCst)
+        self.0.is_cancelled()
     }
 
     /// `Err(interrupted)` once Ctrl-C was pressed.
@@ -159,30 +162,5 @@ impl Display {
                 bar.abandon();
             }
         }
-    }
-}
-
-/// Runs `job` on a tissue-app worker, showing its progress, cancelling it on Ctrl-C.
-///
-/// # Errors
-/// [`Failure::interrupted`] (exit 130) when cancelled, the job's failure otherwise.
-pub fn drive(job: Job, display: &mut Display, interrupt: &Interrupt) -> Result<Outcome, Failure> {
-    let mut handle = Handle::start(job);
-    let terminal = loop {
-        if interrupt.is_set() && !handle.is_cancelled() {
-            handle.cancel();
-        }
-        match handle.recv_timeout(Duration::from_millis(50)) {
-            Some(Event::Progress(p)) => display.progress(&p),
-            Some(terminal) => break terminal,
-            None => {}
-        }
-    };
-    display.finish();
-    match terminal {
-        Event::Finished(outcome) => Ok(outcome),
-        Event::Cancelled { steps } => Err(Failure::interrupted(steps)),
-        Event::Failed(e) => Err(Failure::from_plan(&tissue_planner::PlanError::from_app(&e))),
-        Event::Progress(_) => Err(Failure::new(Exit::Run, "the worker ended without a result")),
     }
 }

@@ -1,12 +1,102 @@
-//! The tables on stdout. The `--report` JSON is the planner's contract
-//! ([`tissue_planner::report`]).
+//! The tables on stdout and the warnings on stderr, read from the finished job's report. The
+//! `--report` JSON is the planner's contract ([`tissue_planner::report`]).
 
 use std::fmt::Write as _;
 
-use tissue_planner::report::{Inputs, RunResult, ShapeInputs};
+use tissue_planner::report::{Inputs, InverseReport, RunResult, ShapeInputs, StopReason};
+use tissue_planner::{Finished, JobReport};
+
+use crate::failure::Failure;
+
+/// What the job prints on stdout: a single run's summary, a sweep's table (failed runs as
+/// rows), a search's runs and answer, an expansion's weeks and flap.
+pub fn stdout(finished: &Finished) -> String {
+    match &finished.report {
+        JobReport::Single(r) => summary(&r.inputs, &r.body),
+        JobReport::Sweep(_) => {
+            let mut s = format!("{SWEEP_HEADER}\n");
+            for (volume, row) in &finished.sweep {
+                let line = match row {
+                    Ok(result) => sweep_row(*volume, result),
+                    Err(e) => sweep_failed_row(*volume, &Failure::from_plan(e).line()),
+                };
+                let _ = writeln!(s, "{line}");
+            }
+            s
+        }
+        JobReport::TargetGain(r) => search(r),
+        JobReport::Expansion(r) => expansion_summary(r),
+    }
+}
+
+/// What the job warns of on stderr: runs that reached the step limit before the tissue
+/// settled, and a sweep's failed runs (the report lists them in `failed_runs`).
+pub fn warnings(finished: &Finished) -> Vec<String> {
+    let not_at_rest = |r: &RunResult, what: &str| {
+        (r.stop_reason != StopReason::Settled).then(|| {
+            format!(
+                "{what} reached the step limit ({}) before the tissue settled; the results are \
+                 not at rest: raise --max-steps",
+                r.max_steps
+            )
+        })
+    };
+    match &finished.report {
+        JobReport::Single(r) => not_at_rest(&r.body, "the run").into_iter().collect(),
+        JobReport::Sweep(r) => {
+            let mut out: Vec<String> = r
+                .body
+                .runs
+                .iter()
+                .filter_map(|row| {
+                    not_at_rest(&row.result, &format!("the {} cm³ run", row.volume_cm3))
+                })
+                .collect();
+            if !r.body.failed_runs.is_empty() {
+                out.push(format!(
+                    "{} of {} runs of the sweep failed (their rows above); the report lists \
+                     them in failed_runs",
+                    r.body.failed_runs.len(),
+                    r.body.failed_runs.len() + r.body.runs.len()
+                ));
+            }
+            out
+        }
+        JobReport::TargetGain(_) | JobReport::Expansion(_) => Vec::new(),
+    }
+}
+
+/// A search's runs and its answer.
+fn search(r: &InverseReport) -> String {
+    let b = &r.body;
+    let mut s = String::from("run  volume cm³  area gain cm²\n");
+    for (i, run) in b.runs.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "{:>3}  {:>10.4}  {:>13.4}",
+            i + 1,
+            run.volume_cm3,
+            run.area_gain_cm2
+        );
+    }
+    let _ = writeln!(
+        s,
+        "answer: {:.4} cm³ gives an area gain of {:.4} cm² (target {} cm², {} runs, {})",
+        b.volume_cm3,
+        b.area_gain_cm2,
+        b.target_gain_cm2,
+        b.runs.len(),
+        if b.converged {
+            "converged"
+        } else {
+            "not converged: the run budget ran out, best estimate"
+        }
+    );
+    s
+}
 
 /// The summary table of one run, for stdout.
-pub fn summary(inputs: &Inputs, r: &RunResult) -> String {
+fn summary(inputs: &Inputs, r: &RunResult) -> String {
     let mut s = String::new();
     let shape = match inputs.shape {
         ShapeInputs::Round { diameter_cm } => format!("round {diameter_cm} cm"),
@@ -27,8 +117,8 @@ pub fn summary(inputs: &Inputs, r: &RunResult) -> String {
         inputs.volume_cm3, inputs.depth_cm, inputs.mesh
     );
     let stop = match r.stop_reason {
-        "settled" => "settled",
-        _ => "step limit reached: not settled",
+        StopReason::Settled => "settled",
+        StopReason::StepLimit => "step limit reached: not settled",
     };
     let rows: [(&str, String); 12] = [
         (
@@ -94,11 +184,11 @@ pub fn summary(inputs: &Inputs, r: &RunResult) -> String {
 }
 
 /// The header of the sweep table.
-pub const SWEEP_HEADER: &str =
+const SWEEP_HEADER: &str =
     "volume cm³  area gain cm²  area after cm²  vol. diff cm³  compression %  steps  stop        wall s";
 
 /// One sweep row for stdout.
-pub fn sweep_row(volume: f64, r: &RunResult) -> String {
+fn sweep_row(volume: f64, r: &RunResult) -> String {
     format!(
         "{volume:>10.3}  {:>13.4}  {:>14.4}  {:>13.4}  {:>13.4}  {:>5}  {:<10}  {:>6.2}",
         r.area_gain_cm2,
@@ -106,20 +196,21 @@ pub fn sweep_row(volume: f64, r: &RunResult) -> String {
         r.volume_difference_cm3,
         100.0 * r.implant_compression,
         r.steps,
-        r.stop_reason,
+        r.stop_reason.name(),
         r.wall_time_s
     )
 }
 
 /// One sweep row for a failed run.
-pub fn sweep_failed_row(volume: f64, message: &str) -> String {
+fn sweep_failed_row(volume: f64, message: &str) -> String {
     format!("{volume:>10.3}  failed: {message}")
 }
 
 /// The summary of an expansion over weeks, for stdout: the protocol, one row per week, the flap
 /// at removal and its band.
-pub fn expansion_summary(r: &tissue_planner::report::ExpansionReport) -> String {
+fn expansion_summary(report: &tissue_planner::report::ExpansionReport) -> String {
     let mut s = String::new();
+    let r = &report.body;
     let p = &r.protocol;
     let _ = writeln!(
         s,

@@ -30,6 +30,7 @@ use base64::Engine;
 use sha2::Digest;
 
 use crate::api::ApiError;
+use crate::messages::ErrorKind;
 
 /// Who may use the server: its address, the extra host names, and the token when one is needed.
 #[derive(Clone)]
@@ -180,7 +181,7 @@ pub fn random_hex(bytes: usize) -> Result<String, getrandom::Error> {
     Ok(raw.iter().map(|b| format!("{b:02x}")).collect())
 }
 
-fn refuse(status: StatusCode, kind: &str, message: String) -> Response {
+fn refuse(status: StatusCode, kind: ErrorKind, message: String) -> Response {
     ApiError::new(status, kind, message).into_response()
 }
 
@@ -198,7 +199,7 @@ pub async fn guard(State(access): State<Arc<Access>>, request: Request, next: Ne
     let Some(host) = headers.get(header::HOST).and_then(|h| h.to_str().ok()) else {
         return refuse(
             StatusCode::BAD_REQUEST,
-            "usage",
+            ErrorKind::Usage,
             "a request needs a Host header".to_owned(),
         );
     };
@@ -209,7 +210,7 @@ pub async fn guard(State(access): State<Arc<Access>>, request: Request, next: Ne
     if !access.host_allowed(host) || !authority_ok {
         return refuse(
             StatusCode::MISDIRECTED_REQUEST,
-            "forbidden",
+            ErrorKind::Forbidden,
             format!(
                 "this studio answers only at its own address ({}); open that address, or start \
                  it with --allowed-host NAME for the name a reverse proxy passes on",
@@ -228,7 +229,7 @@ pub async fn guard(State(access): State<Arc<Access>>, request: Request, next: Ne
             if !same {
                 return refuse(
                     StatusCode::FORBIDDEN,
-                    "forbidden",
+                    ErrorKind::Forbidden,
                     "only the studio's own page may use it: this request came from another site"
                         .to_owned(),
                 );
@@ -238,7 +239,7 @@ pub async fn guard(State(access): State<Arc<Access>>, request: Request, next: Ne
         if site.is_some_and(|s| s != "same-origin" && s != "none") {
             return refuse(
                 StatusCode::FORBIDDEN,
-                "forbidden",
+                ErrorKind::Forbidden,
                 "only the studio's own page may use it: the browser says this request came from \
                  another site"
                     .to_owned(),
@@ -253,7 +254,7 @@ pub async fn guard(State(access): State<Arc<Access>>, request: Request, next: Ne
         if !presented.as_deref().is_some_and(|t| access.token_ok(t)) {
             return refuse(
                 StatusCode::UNAUTHORIZED,
-                "unauthorized",
+                ErrorKind::Unauthorized,
                 "this studio needs the token it printed when it started: open the address it \
                  printed (…/?token=…)"
                     .to_owned(),

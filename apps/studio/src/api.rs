@@ -12,11 +12,12 @@ use axum::routing::{get, post};
 use axum::{Json, Router};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
-use tissue_planner::{ErrorKind, Patient, PlanError, PlanRequest, Scenario, Shipped, Unit};
+use tissue_planner::{Patient, PlanError, PlanRequest, Scenario, Shipped, Unit};
 use tissue_scenes::{Organ, ShippedOrgan};
 
 use crate::access::{self, Access};
 use crate::assets;
+use crate::messages::{ErrorBody, ErrorKind};
 use crate::serve::BodyTimeout;
 use crate::state::{Studio, UPLOAD_LIMIT};
 
@@ -39,7 +40,9 @@ pub fn router(studio: Studio, access: Access) -> Router {
         .route("/api/preview", post(preview))
         .route("/api/results/{job}/{file}", get(download))
         .route("/api/ws", get(socket))
-        .fallback(|| async { ApiError::new(StatusCode::NOT_FOUND, "not_found", "no such page") })
+        .fallback(|| async {
+            ApiError::new(StatusCode::NOT_FOUND, ErrorKind::NotFound, "no such page")
+        })
         .with_state(studio)
         .layer(axum::middleware::from_fn_with_state(
             Arc::new(access),
@@ -55,69 +58,12 @@ pub struct ApiError {
     body: ErrorBody,
 }
 
-/// The JSON of an error.
-#[derive(Debug, Clone, Serialize)]
-pub struct ErrorBody {
-    /// `usage`, `input`, `mesh`, `placement`, `parameters`, `run`, `output`, `cancelled`,
-    /// `busy`, `too_large`, `not_found`, `timeout`, `forbidden`, `unauthorized`.
-    pub kind: String,
-    /// The request field at fault.
-    pub field: Option<&'static str>,
-    /// One sentence for the user.
-    pub message: String,
-}
-
-impl ErrorBody {
-    /// The planner's error as the page shows it (request fields named as the page labels them).
-    pub fn of(e: &PlanError) -> ErrorBody {
-        let kind = serde_json::to_value(e.kind)
-            .ok()
-            .and_then(|v| v.as_str().map(str::to_owned))
-            .unwrap_or_else(|| "run".to_owned());
-        ErrorBody {
-            kind,
-            field: e.field,
-            message: e.message_with(label_of),
-        }
-    }
-}
-
-/// How the page labels a request field.
-pub fn label_of(field: &str) -> Option<&'static str> {
-    Some(match field {
-        "at" | "vertex" => "placement",
-        "tangent" | "rotation_deg" => "rotation",
-        "diameter_cm" => "diameter",
-        "length_cm" => "length",
-        "width_cm" => "width",
-        "corner_radius_cm" => "corner radius",
-        "bend_radius_cm" => "bend radius",
-        "volume_cm3" => "volume",
-        "volumes_cm3" => "sweep volumes",
-        "depth_cm" => "depth",
-        "region_radius_cm" => "region radius",
-        "sim_edge_cm" => "simulation edge",
-        "max_hole_cm" => "largest hole filled",
-        "max_steps" => "step limit",
-        "time_step_s" => "time step",
-        "target_gain_cm2" => "target gain",
-        "bracket_cm3" => "volume bracket",
-        "unit" => "unit",
-        "mesh" => "file",
-        _ => return None,
-    })
-}
-
 impl ApiError {
     /// An error of `kind` with `status`.
-    pub fn new(status: StatusCode, kind: &str, message: impl Into<String>) -> ApiError {
+    pub fn new(status: StatusCode, kind: ErrorKind, message: impl Into<String>) -> ApiError {
         ApiError {
             status,
-            body: ErrorBody {
-                kind: kind.to_owned(),
-                field: None,
-                message: message.into(),
-            },
+            body: ErrorBody::new(kind, message),
         }
     }
 
@@ -158,7 +104,7 @@ async fn upload_organ(
     let (bytes, _slot) = read_upload(&studio, &headers, body, &name).await?;
     let organ = blocking(move || {
         Organ::from_bytes(&bytes, &name, unit.cm_per_unit())
-            .map_err(|e| ApiError::new(StatusCode::BAD_REQUEST, "mesh", e.to_string()))
+            .map_err(|e| ApiError::new(StatusCode::BAD_REQUEST, ErrorKind::Mesh, e.to_string()))
     })
     .await?;
     let reply = json!({
@@ -175,7 +121,7 @@ fn name_and_unit(query: &HashMap<String, String>) -> Result<(String, Unit), ApiE
     let name = query.get("name").cloned().ok_or_else(|| {
         ApiError::new(
             StatusCode::BAD_REQUEST,
-            "usage",
+            ErrorKind::Usage,
             "an upload needs ?name=FILE (its extension picks the format) and ?unit=",
         )
     })?;
@@ -183,7 +129,7 @@ fn name_and_unit(query: &HashMap<String, String>) -> Result<(String, Unit), ApiE
     let unit = Unit::from_symbol(symbol).ok_or_else(|| {
         ApiError::new(
             StatusCode::BAD_REQUEST,
-            "usage",
+            ErrorKind::Usage,
             format!("unit {symbol:?} is not one of mm, cm, dm, m"),
         )
     })?;
@@ -210,7 +156,7 @@ async fn read_upload(
     {
         return Err(ApiError::new(
             StatusCode::UNSUPPORTED_MEDIA_TYPE,
-            "usage",
+            ErrorKind::Usage,
             format!(
                 "an upload is sent as application/octet-stream (as the studio's page does), not \
                  {kind:?}"
@@ -227,7 +173,7 @@ async fn read_upload(
     let slot = studio.upload_slot().ok_or_else(|| {
         ApiError::new(
             StatusCode::SERVICE_UNAVAILABLE,
-            "busy",
+            ErrorKind::Busy,
             format!(
                 "{} uploads are being read already: try again when one has finished",
                 studio.limits().uploads
@@ -243,7 +189,7 @@ async fn read_upload(
 fn too_large(name: &str) -> ApiError {
     ApiError::new(
         StatusCode::PAYLOAD_TOO_LARGE,
-        "too_large",
+        ErrorKind::TooLarge,
         format!(
             "{name} is larger than the upload limit of {} MiB; decimate the scan or crop it to \
              the region of interest",
@@ -259,7 +205,7 @@ fn body_error(name: &str, e: &axum::Error) -> ApiError {
         if let Some(t) = s.downcast_ref::<BodyTimeout>() {
             return ApiError::new(
                 StatusCode::REQUEST_TIMEOUT,
-                "timeout",
+                ErrorKind::Timeout,
                 format!("{name}: {t}; send it again"),
             );
         }
@@ -270,7 +216,7 @@ fn body_error(name: &str, e: &axum::Error) -> ApiError {
     }
     ApiError::new(
         StatusCode::BAD_REQUEST,
-        "input",
+        ErrorKind::Input,
         format!("{name}: the upload broke off ({e}); send it again"),
     )
 }
@@ -314,7 +260,7 @@ async fn blocking<T: Send + 'static>(
     tokio::task::spawn_blocking(f).await.unwrap_or_else(|e| {
         Err(ApiError::new(
             StatusCode::INTERNAL_SERVER_ERROR,
-            "run",
+            ErrorKind::Run,
             format!("the server's task failed: {e}; report this"),
         ))
     })
@@ -331,7 +277,7 @@ async fn upload(
         let shipped = Shipped::from_id(id).ok_or_else(|| {
             ApiError::new(
                 StatusCode::BAD_REQUEST,
-                "input",
+                ErrorKind::Input,
                 format!("no shipped mesh {id:?}: pick table2, chest or head"),
             )
         })?;
@@ -343,7 +289,7 @@ async fn upload(
         if bytes.is_empty() {
             return Err(ApiError::new(
                 StatusCode::BAD_REQUEST,
-                "input",
+                ErrorKind::Input,
                 format!("{name} is empty: pick the scan file again"),
             ));
         }
@@ -440,7 +386,7 @@ async fn preview(
     let Json(body) = body.map_err(|e| {
         ApiError::new(
             StatusCode::BAD_REQUEST,
-            "usage",
+            ErrorKind::Usage,
             format!("the placement request is not valid: {}", e.body_text()),
         )
     })?;
@@ -493,7 +439,7 @@ async fn download(
     if !DOWNLOADS.contains(&file.as_str()) {
         return Err(ApiError::new(
             StatusCode::NOT_FOUND,
-            "not_found",
+            ErrorKind::NotFound,
             format!(
                 "no download {file:?}: a job offers {}",
                 DOWNLOADS.join(", ")
@@ -503,14 +449,14 @@ async fn download(
     let dir = studio.finished_dir(&job).ok_or_else(|| {
         ApiError::new(
             StatusCode::NOT_FOUND,
-            "not_found",
+            ErrorKind::NotFound,
             format!("no finished job {job:?} (the server keeps the last few): run it again"),
         )
     })?;
     let bytes = tokio::fs::read(dir.join(&file)).await.map_err(|_| {
         ApiError::new(
             StatusCode::NOT_FOUND,
-            "not_found",
+            ErrorKind::NotFound,
             format!("job {job} has no {file} (a sweep or a search has the report only, an expansion the report and chart.png)"),
         )
     })?;
@@ -532,7 +478,7 @@ async fn socket(State(studio): State<Studio>, ws: WebSocketUpgrade) -> Response 
     let Some(slot) = studio.socket_slot() else {
         return ApiError::new(
             StatusCode::SERVICE_UNAVAILABLE,
-            "busy",
+            ErrorKind::Busy,
             format!(
                 "{} job sockets are open on this server: close some of its tabs",
                 crate::state::JOB_SOCKETS

@@ -78,6 +78,7 @@ mod access;
 mod api;
 pub mod assets;
 mod jobs;
+pub mod messages;
 mod serve;
 mod state;
 pub mod trainer;

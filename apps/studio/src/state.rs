@@ -3,11 +3,11 @@
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
-use tissue_planner::Patient;
+use tissue_planner::{CancelToken, Patient};
 use tokio::sync::{watch, OwnedSemaphorePermit, Semaphore};
 
 /// Largest upload, bytes (64 MiB: a 160k-triangle scan as text OBJ is about 10 MiB).
@@ -70,8 +70,8 @@ pub struct Finished {
 pub struct Running {
     /// The job's id.
     pub id: String,
-    /// Set to cancel it.
-    pub cancel: Arc<AtomicBool>,
+    /// Cancels it.
+    pub cancel: CancelToken,
 }
 
 #[derive(Debug, Default)]
@@ -192,7 +192,7 @@ impl Studio {
         }
         let running = Running {
             id: id.to_owned(),
-            cancel: Arc::new(AtomicBool::new(false)),
+            cancel: CancelToken::new(),
         };
         inner.running = Some(running.clone());
         Ok(running)
@@ -253,7 +253,7 @@ impl Studio {
     /// folder.
     pub fn shutdown(&self) {
         if let Some(r) = &self.lock().running {
-            r.cancel.store(true, Ordering::Relaxed);
+            r.cancel.cancel();
         }
         self.shutdown.send_replace(true);
         let _ = std::fs::remove_dir_all(self.temp.as_path());

@@ -227,7 +227,7 @@ impl Event {
 #[derive(Debug)]
 pub struct ProgressSink {
     tx: Sender<ProgressEvent>,
-    cancel: CancelToken,
+    cancel: Cancel,
     start: Instant,
     steps: AtomicU64,
 }
@@ -337,6 +337,21 @@ impl CancelToken {
     }
 }
 
+/// What a job's worker reads: the handle's own flag (set by [`Handle::cancel`] and by dropping
+/// the handle) and the caller's token it was started with. Dropping a handle never cancels the
+/// caller's token, which may outlive the job (a Ctrl-C flag read again afterwards).
+#[derive(Debug, Clone, Default)]
+struct Cancel {
+    own: CancelToken,
+    caller: Option<CancelToken>,
+}
+
+impl Cancel {
+    fn is_cancelled(&self) -> bool {
+        self.own.is_cancelled() || self.caller.as_ref().is_some_and(CancelToken::is_cancelled)
+    }
+}
+
 /// Options of [`Handle::start_with`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct HandleOptions {
@@ -364,7 +379,7 @@ pub struct Handle {
     pending: Option<Event>,
     /// The terminal event was handed out.
     done: bool,
-    cancel: CancelToken,
+    cancel: Cancel,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -377,12 +392,21 @@ impl Handle {
     /// Starts `job` on a new worker thread. If the thread cannot be started, the handle's only
     /// event is [`Event::Failed`] with [`AppError::Spawn`].
     pub fn start_with(job: Job, options: HandleOptions) -> Handle {
-        Handle::start_cancellable(job, options, CancelToken::new())
+        Handle::start_inner(job, options, Cancel::default())
     }
 
     /// Starts `job` on a new worker thread, cancelled through `cancel` (or [`Handle::cancel`]):
-    /// a token already cancelled ends the job before its first phase.
+    /// a token already cancelled ends the job before its first phase. The handle never cancels
+    /// `cancel` itself (not even when dropped): the caller may read it afterwards.
     pub fn start_cancellable(job: Job, options: HandleOptions, cancel: CancelToken) -> Handle {
+        let cancel = Cancel {
+            own: CancelToken::new(),
+            caller: Some(cancel),
+        };
+        Handle::start_inner(job, options, cancel)
+    }
+
+    fn start_inner(job: Job, options: HandleOptions, cancel: Cancel) -> Handle {
         let (progress_tx, progress) = bounded(options.progress_capacity.max(1));
         let (terminal_tx, terminal) = bounded(1);
         let sink = ProgressSink {
@@ -417,7 +441,7 @@ impl Handle {
     /// [`Event::Cancelled`]. A job that finishes its last step first still reports
     /// [`Event::Finished`].
     pub fn cancel(&self) {
-        self.cancel.cancel();
+        self.cancel.own.cancel();
     }
 
     /// Whether [`Handle::cancel`] was called (or the job's [`CancelToken`] cancelled).
@@ -425,9 +449,9 @@ impl Handle {
         self.cancel.is_cancelled()
     }
 
-    /// The job's cancel token: cancelling it (from any thread) is [`Handle::cancel`].
+    /// The handle's own cancel token: cancelling it (from any thread) is [`Handle::cancel`].
     pub fn cancel_token(&self) -> CancelToken {
-        self.cancel.clone()
+        self.cancel.own.clone()
     }
 
     /// Blocks until the job ends, handing every progress event to `on_progress` on this thread
@@ -753,7 +777,7 @@ mod tests {
             terminal: trx,
             pending: None,
             done: false,
-            cancel: CancelToken::new(),
+            cancel: Cancel::default(),
             thread: None,
         };
         (handle, ptx)

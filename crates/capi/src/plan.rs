@@ -4,15 +4,14 @@
 
 use std::ffi::{c_char, c_int, c_void};
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use tissue_planner::report::{self, Inputs, RunResult};
+use tissue_planner::report::{RunResult, StopReason};
 use tissue_planner::{
-    Event, Handle, Job, JobKind, JobMode, JobSpec, Outcome, Patient, PatientResult, PlanError,
-    PlanRequest, PlannedJob, Scenario, Shape, Shipped, Unit,
+    CancelToken, Finished, JobMode, JobReport, JobSpec, Patient, PlanError, PlanRequest, Scenario,
+    Shape, Shipped, Stopped, Tool, Unit,
 };
 
 use crate::ffi::{
@@ -20,9 +19,6 @@ use crate::ffi::{
     text, tissue_status, Error,
 };
 use crate::mesh::{tissue_mesh, MeshKind};
-
-/// The report's `tool`.
-const TOOL: &str = "capi";
 
 /// A patient surface, in its file's unit and in cm (the planner's `Patient`). Immutable: any
 /// thread may use it at once, e.g. to start several jobs.
@@ -250,23 +246,13 @@ pub struct tissue_job {
 }
 
 struct JobShared {
-    cancel: AtomicBool,
+    cancel: CancelToken,
     progress: Mutex<tissue_progress>,
     end: Mutex<Option<Result<Done, Error>>>,
     ended: Condvar,
 }
 
-enum Finished {
-    Single {
-        result: Box<RunResult>,
-        patient: Box<PatientResult>,
-    },
-    Sweep(Vec<(f64, Result<RunResult, Error>)>),
-    Inverse(tissue_inverse_result),
-    /// An expansion over weeks: its figures are in the report's JSON.
-    Expansion,
-}
-
+/// A finished job: the planner's results and its report's JSON.
 struct Done {
     finished: Finished,
     report: String,
@@ -469,17 +455,15 @@ fn request(o: &tissue_plan_options) -> Result<PlanRequest, Error> {
 /// caller's thread, so a bad request fails at once).
 fn start(patient: &tissue_patient, spec: JobSpec) -> Result<tissue_job, Error> {
     let scenario = Scenario::new(patient.patient.clone(), spec.request.clone())?;
-    let inputs = Inputs::new(&scenario)?;
-    let PlannedJob { job, runs, kind } = spec.plan(&scenario)?;
-    let max_steps = scenario.job.params.run.stop.max_steps;
+    let planned = spec.plan(&scenario)?;
     let shared = Arc::new(JobShared {
-        cancel: AtomicBool::new(false),
+        cancel: CancelToken::new(),
         progress: Mutex::new(tissue_progress {
             state: tissue_job_state::TISSUE_JOB_RUNNING,
             run: 0,
-            runs: runs as u32,
+            runs: planned.runs as u32,
             step: 0,
-            max_steps,
+            max_steps: scenario.job.params.run.stop.max_steps,
             settle: 0.0,
             elapsed_s: 0.0,
         }),
@@ -489,7 +473,21 @@ fn start(patient: &tissue_patient, spec: JobSpec) -> Result<tissue_job, Error> {
     let theirs = Arc::clone(&shared);
     let driver = std::thread::Builder::new()
         .name("tissue-capi-job".into())
-        .spawn(move || drive(&theirs, job, &scenario, inputs, &kind))
+        .spawn(move || {
+            let started = Instant::now();
+            let end = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                finish(planned.run(&scenario, Tool::Capi, &theirs.cancel, |p| {
+                    theirs.keep(p);
+                }))
+            }))
+            .unwrap_or_else(|_| {
+                Err(Error::new(
+                    tissue_status::TISSUE_PANIC,
+                    "the planning job panicked (a bug, please report it)",
+                ))
+            });
+            theirs.end(end, started);
+        })
         .map_err(|e| {
             Error::new(
                 tissue_status::TISSUE_RUN,
@@ -502,134 +500,43 @@ fn start(patient: &tissue_patient, spec: JobSpec) -> Result<tissue_job, Error> {
     })
 }
 
-/// The driver thread: runs `job` on tissue-app's worker, keeps the progress, builds the result.
-fn drive(shared: &JobShared, job: Job, scenario: &Scenario, inputs: Inputs, kind: &JobKind) {
-    let started = Instant::now();
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        let mut handle = Handle::start(job);
-        let outcome = loop {
-            if shared.cancel.load(Ordering::Relaxed) && !handle.is_cancelled() {
-                handle.cancel();
+/// The job's end as the C ABI keeps it: the results with the report's JSON, or the error.
+fn finish(run: Result<Finished, Stopped>) -> Result<Done, Error> {
+    let finished = run.map_err(PlanError::from)?;
+    let report = finished.report.to_json()?;
+    Ok(Done { finished, report })
+}
+
+impl JobShared {
+    /// Keeps the latest progress for `tissue_job_progress` and the run callback.
+    fn keep(&self, p: &tissue_planner::ProgressEvent) {
+        if let Ok(mut q) = self.progress.lock() {
+            q.run = p.run as u32;
+            q.runs = q.runs.max(p.run as u32 + 1);
+            q.step = p.step;
+            q.max_steps = p.max_steps;
+            q.settle = p.settle;
+            q.elapsed_s = p.elapsed.as_secs_f64();
+        }
+    }
+
+    /// Records the job's end and wakes the waiters.
+    fn end(&self, end: Result<Done, Error>, started: Instant) {
+        let state = match &end {
+            Ok(_) => tissue_job_state::TISSUE_JOB_FINISHED,
+            Err(e) if e.status == tissue_status::TISSUE_CANCELLED => {
+                tissue_job_state::TISSUE_JOB_CANCELLED
             }
-            let Some(event) = handle.recv_timeout(Duration::from_millis(10)) else {
-                continue;
-            };
-            match event {
-                Event::Progress(p) => {
-                    if let Ok(mut q) = shared.progress.lock() {
-                        q.run = p.run as u32;
-                        q.runs = q.runs.max(p.run as u32 + 1);
-                        q.step = p.step;
-                        q.max_steps = p.max_steps;
-                        q.settle = p.settle;
-                        q.elapsed_s = p.elapsed.as_secs_f64();
-                    }
-                }
-                Event::Finished(outcome) => break Ok(outcome),
-                Event::Cancelled { steps } => break Err(Error::from(PlanError::cancelled(steps))),
-                Event::Failed(e) => break Err(Error::from(PlanError::from_app(&e))),
-            }
+            Err(_) => tissue_job_state::TISSUE_JOB_FAILED,
         };
-        outcome.and_then(|o| finish(o, scenario, inputs, kind))
-    }))
-    .unwrap_or_else(|_| {
-        Err(Error::new(
-            tissue_status::TISSUE_PANIC,
-            "the planning job panicked (a bug, please report it)",
-        ))
-    });
-    let state = match &outcome {
-        Ok(_) => tissue_job_state::TISSUE_JOB_FINISHED,
-        Err(e) if e.status == tissue_status::TISSUE_CANCELLED => {
-            tissue_job_state::TISSUE_JOB_CANCELLED
+        if let Ok(mut q) = self.progress.lock() {
+            q.state = state;
+            q.elapsed_s = started.elapsed().as_secs_f64();
         }
-        Err(_) => tissue_job_state::TISSUE_JOB_FAILED,
-    };
-    if let Ok(mut q) = shared.progress.lock() {
-        q.state = state;
-        q.elapsed_s = started.elapsed().as_secs_f64();
-    }
-    if let Ok(mut end) = shared.end.lock() {
-        *end = Some(outcome);
-    }
-    shared.ended.notify_all();
-}
-
-fn json(value: &impl serde::Serialize) -> Result<String, Error> {
-    serde_json::to_string_pretty(value).map_err(|e| {
-        Error::new(
-            tissue_status::TISSUE_OUTPUT,
-            format!("cannot write the report: {e}"),
-        )
-    })
-}
-
-/// The results of a finished job, and its report.
-fn finish(
-    outcome: Outcome,
-    scenario: &Scenario,
-    inputs: Inputs,
-    kind: &JobKind,
-) -> Result<Done, Error> {
-    let max_steps = scenario.job.params.run.stop.max_steps;
-    match (outcome, kind) {
-        (Outcome::Insertion(planned), JobKind::Single) => {
-            let patient = PatientResult::new(scenario, &planned)?;
-            let result = RunResult::of(&planned, patient.scan.as_ref(), max_steps);
-            let report = json(&report::single(TOOL, inputs, result.clone()))?;
-            Ok(Done {
-                finished: Finished::Single {
-                    result: Box::new(result),
-                    patient: Box::new(patient),
-                },
-                report,
-            })
+        if let Ok(mut slot) = self.end.lock() {
+            *slot = Some(end);
         }
-        (Outcome::Sweep(sweep), JobKind::Sweep) => {
-            let mut rows = Vec::new();
-            let mut all = Vec::new();
-            for (volume, row) in report::sweep_rows(&sweep, max_steps) {
-                match row {
-                    Ok(row) => {
-                        all.push((volume, Ok(row.result.clone())));
-                        rows.push(row);
-                    }
-                    Err(e) => all.push((volume, Err(Error::from(e)))),
-                }
-            }
-            let report = json(&report::sweep(TOOL, inputs, &sweep, rows))?;
-            Ok(Done {
-                finished: Finished::Sweep(all),
-                report,
-            })
-        }
-        (Outcome::Expansion(planned), JobKind::Expansion(job)) => {
-            let r = report::expansion(TOOL, inputs, &scenario.request, job, &planned);
-            Ok(Done {
-                finished: Finished::Expansion,
-                report: json(&r)?,
-            })
-        }
-        (Outcome::Inverse(found), JobKind::TargetGain { target, bracket }) => {
-            let answer = tissue_inverse_result {
-                target_gain_cm2: *target,
-                bracket_low_cm3: bracket.0,
-                bracket_high_cm3: bracket.1,
-                volume_cm3: found.volume,
-                area_gain_cm2: found.gain,
-                converged: found.converged,
-                runs: found.runs.len() as u32,
-            };
-            let report = json(&report::inverse(TOOL, inputs, *target, *bracket, &found))?;
-            Ok(Done {
-                finished: Finished::Inverse(answer),
-                report,
-            })
-        }
-        (other, _) => Err(Error::new(
-            tissue_status::TISSUE_RUN,
-            format!("the worker returned an unexpected result: {other:?}"),
-        )),
+        self.ended.notify_all();
     }
 }
 
@@ -799,7 +706,7 @@ pub extern "C" fn tissue_job_cancel(job: *const tissue_job) -> tissue_status {
     guard(|| {
         // SAFETY: the header's contract.
         let job = unsafe { get(job, "job") }?;
-        job.shared.cancel.store(true, Ordering::Relaxed);
+        job.shared.cancel.cancel();
         Ok(())
     })
 }
@@ -872,7 +779,7 @@ pub extern "C" fn tissue_job_run(
                 let p = *job_ref.shared.progress.lock().map_err(poisoned)?;
                 // SAFETY: the caller's callback, given a valid progress record for the call.
                 if unsafe { callback(&p, user_data) } != 0 {
-                    job_ref.shared.cancel.store(true, Ordering::Relaxed);
+                    job_ref.shared.cancel.cancel();
                 }
             }
         }
@@ -924,7 +831,7 @@ pub extern "C" fn tissue_job_free(job: *mut tissue_job) {
         }
         // SAFETY: the header's contract: a job from this library, freed once.
         let job = unsafe { Box::from_raw(job) };
-        job.shared.cancel.store(true, Ordering::Relaxed);
+        job.shared.cancel.cancel();
         if let Some(driver) = job.driver.lock().ok().and_then(|mut d| d.take()) {
             let _ = driver.join();
         }
@@ -971,7 +878,7 @@ fn numbers(r: &RunResult) -> tissue_plan_result {
         steps: r.steps,
         max_steps: r.max_steps,
         region_vertices: r.region_vertices as u64,
-        settled: r.stop_reason == "settled",
+        settled: r.stop_reason == StopReason::Settled,
         boundary_unchanged: r.boundary_unchanged,
     }
 }
@@ -992,8 +899,8 @@ pub extern "C" fn tissue_job_result(
     result: *mut tissue_plan_result,
 ) -> tissue_status {
     guard(|| {
-        let r = with_done(job, |done| match &done.finished {
-            Finished::Single { result, .. } => Ok(numbers(result)),
+        let r = with_done(job, |done| match &done.finished.report {
+            JobReport::Single(r) => Ok(numbers(&r.body)),
             _ => Err(not_single()),
         })?;
         // SAFETY: `result` is NULL or valid.
@@ -1010,8 +917,8 @@ pub extern "C" fn tissue_job_sweep_count(
     count: *mut usize,
 ) -> tissue_status {
     guard(|| {
-        let n = with_done(job, |done| match &done.finished {
-            Finished::Sweep(rows) => Ok(rows.len()),
+        let n = with_done(job, |done| match &done.finished.report {
+            JobReport::Sweep(_) => Ok(done.finished.sweep.len()),
             _ => Err(Error::invalid("this job is not a sweep")),
         })?;
         // SAFETY: `count` is NULL or valid.
@@ -1032,12 +939,17 @@ pub extern "C" fn tissue_job_sweep_row(
     result: *mut tissue_plan_result,
 ) -> tissue_status {
     guard(|| {
-        let (volume, row) = with_done(job, |done| match &done.finished {
-            Finished::Sweep(rows) => rows
+        let (volume, row) = with_done(job, |done| match &done.finished.report {
+            JobReport::Sweep(_) => done
+                .finished
+                .sweep
                 .get(index)
-                .map(|(v, r)| (*v, r.as_ref().map(numbers).map_err(Clone::clone)))
+                .map(|(v, r)| (*v, r.as_ref().map(numbers).map_err(Error::from)))
                 .ok_or_else(|| {
-                    Error::invalid(format!("row {index} of a sweep of {} volumes", rows.len()))
+                    Error::invalid(format!(
+                        "row {index} of a sweep of {} volumes",
+                        done.finished.sweep.len()
+                    ))
                 }),
             _ => Err(Error::invalid("this job is not a sweep")),
         })?;
@@ -1057,8 +969,16 @@ pub extern "C" fn tissue_job_inverse_result(
     result: *mut tissue_inverse_result,
 ) -> tissue_status {
     guard(|| {
-        let r = with_done(job, |done| match &done.finished {
-            Finished::Inverse(r) => Ok(*r),
+        let r = with_done(job, |done| match &done.finished.report {
+            JobReport::TargetGain(r) => Ok(tissue_inverse_result {
+                target_gain_cm2: r.body.target_gain_cm2,
+                bracket_low_cm3: r.body.bracket_cm3[0],
+                bracket_high_cm3: r.body.bracket_cm3[1],
+                volume_cm3: r.body.volume_cm3,
+                area_gain_cm2: r.body.area_gain_cm2,
+                converged: r.body.converged,
+                runs: r.body.runs.len() as u32,
+            }),
             _ => Err(Error::invalid("this job is not an inverse search")),
         })?;
         // SAFETY: `result` is NULL or valid.
@@ -1097,9 +1017,9 @@ pub extern "C" fn tissue_job_patient_after(
     out: *mut *mut tissue_mesh,
 ) -> tissue_status {
     guard(|| {
-        let mesh = with_done(job, |done| match &done.finished {
-            Finished::Single { patient, .. } => Ok(patient.after.clone()),
-            _ => Err(not_single()),
+        let mesh = with_done(job, |done| match &done.finished.patient {
+            Some(patient) => Ok(patient.after.clone()),
+            None => Err(not_single()),
         })?;
         let handle = into_handle(tissue_mesh {
             kind: MeshKind::Surface(mesh),
@@ -1127,7 +1047,7 @@ pub extern "C" fn tissue_job_copy_field(
 ) -> tissue_status {
     guard(|| {
         with_done(job, |done| {
-            let Finished::Single { patient, .. } = &done.finished else {
+            let Some(patient) = &done.finished.patient else {
                 return Err(not_single());
             };
             let values = match field {

@@ -107,11 +107,11 @@ mod text;
 mod vtk;
 mod vtu;
 
+pub use atomic::write_bytes;
 pub use data::{
     parse_surface_data, parse_tet_data, read_surface, read_surface_data, read_tet_data, read_tets,
     write_surface, SurfaceData, SurfaceFormat, TetData, TetFormat,
 };
-pub use atomic::write_bytes;
 pub use error::MeshIoError;
 pub use gmsh::{parse_msh, read_msh};
 pub use obj::{parse_obj, read_obj, write_obj};

@@ -58,6 +58,8 @@
 )]
 
 mod error;
+#[cfg(feature = "golden")]
+pub mod golden;
 mod job;
 mod patient;
 pub mod report;

@@ -22,6 +22,16 @@ pub enum StopReason {
     StepLimit,
 }
 
+impl StopReason {
+    /// Its JSON name.
+    pub fn name(self) -> &'static str {
+        match self {
+            StopReason::Settled => "settled",
+            StopReason::StepLimit => "step_limit",
+        }
+    }
+}
+
 impl From<tissue_mss::StopReason> for StopReason {
     fn from(reason: tissue_mss::StopReason) -> Self {
         match reason {
