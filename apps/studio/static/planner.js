@@ -292,22 +292,21 @@ function nearestVertex(point) {
 
 function onParamsChanged(e) {
   setText('rotation-out', `${$('rotation').value}°`);
-  if (e?.target?.id) onInputEdited(e.target.id);
   renderRunSummary();
   schedulePreview();
+  if (e?.target?.id) onInputEdited(e.target.id);
 }
 
 function onShapeChange() {
   const shape = $('shape').value;
   for (const d of document.querySelectorAll('.dims')) d.hidden = d.dataset.shape !== shape;
-  state.inputErrors = {};
   onParamsChanged();
 }
 
 function schedulePreview() {
   clearTimeout(state.previewTimer);
   state.previewPending = true;
-  renderRunControls();
+  renderPreview();
   state.previewTimer = setTimeout(runPreview, PREVIEW_DEBOUNCE_MS);
 }
 
@@ -318,6 +317,7 @@ async function runPreview() {
   Object.assign(state.inputErrors, errors);
   if (Object.keys(errors).length || !state.placement) {
     state.previewPending = false;
+    state.preview = null;
     renderPreview();
     return;
   }
@@ -355,7 +355,7 @@ function renderPreview() {
     if (a.region_vertices != null) parts.push(`${fmtInt(a.region_vertices)} region vertices`);
     if (a.sim_edge_cm != null) parts.push(`simulation edge ${fmt(a.sim_edge_cm, 3)} cm`);
   }
-  setText('preview-status', !a?.ok ? '' : parts.length ? `Placement checked: ${parts.join(', ')}.` : 'Placement checked.');
+  if (!state.previewPending) setText('preview-status', !a?.ok ? '' : parts.length ? `Placement checked: ${parts.join(', ')}.` : 'Placement checked.');
   renderErrors();
   renderRunControls();
 }
