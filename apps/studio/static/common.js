@@ -177,6 +177,16 @@ export function el(tag, attrs = {}, ...children) {
   return e;
 }
 
+/** Offers `blob` as a download named `name`. */
+export function saveBlob(blob, name) {
+  const url = URL.createObjectURL(blob);
+  const a = el('a', { href: url, download: name });
+  document.body.append(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 10000);
+}
+
 /** Shows `message` in the page's error box and keeps it in `state.error`. */
 export function showErrorIn(state, message) {
   state.error = message;

@@ -8,7 +8,7 @@ import * as api from './planner-api.js';
 import { PlannerView, RAMP } from './planner-view.js';
 import { setupPointer } from './planner-pointer.js';
 import { renderColorbar, renderExpansion, renderReport, renderSummary, renderSweep, renderTarget } from './planner-report.js';
-import { $, MAX_UPLOAD, clearErrorIn, el, fmt, fmtInt, renderFieldErrors, setText, showErrorIn } from './common.js';
+import { $, MAX_UPLOAD, clearErrorIn, el, fmt, fmtInt, renderFieldErrors, saveBlob, setText, showErrorIn } from './common.js';
 
 const PREVIEW_DEBOUNCE_MS = 150;
 
@@ -611,13 +611,7 @@ async function cancelJob() {
 
 async function savePng() {
   const blob = await view.toPng();
-  if (!blob) return;
-  const url = URL.createObjectURL(blob);
-  const a = el('a', { href: url, download: `studio-${state.lastRun?.job || 'view'}.png` });
-  document.body.append(a);
-  a.click();
-  a.remove();
-  setTimeout(() => URL.revokeObjectURL(url), 10000);
+  if (blob) saveBlob(blob, `studio-${state.lastRun?.job || 'view'}.png`);
 }
 
 // ---------------------------------------------------------------- start
