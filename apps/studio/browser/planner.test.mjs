@@ -126,6 +126,66 @@ async function main() {
     check(lines === 3 && whisker === 1, `the weekly chart draws volume, area gain and growth, and the band (${lines} lines, ${whisker} whisker)`);
     await shot(page, '4b-expansion.png');
 
+    // d3. the server's field errors at their inputs (the page copies none of its rules): 60 weeks
+    // of fills → the run ends naming `expand_weeks`, shown at the weeks input; depth 0 → the
+    // preview names `depth_cm`, shown at the depth input; an edit clears each.
+    await page.fill('#expand-weeks', '60');
+    await page.getByRole('button', { name: 'Simulate expansion', exact: true }).click();
+    await page.waitForFunction(() => {
+      const j = window.tissueStudio.planner.job;
+      return j.mode === 'expansion' && j.state !== 'running' && j.state !== 'finished';
+    }, null, { timeout: 60000, polling: 200 });
+    await page.waitForSelector('#expand-weeks-error', { timeout: 5000 });
+    const weeksMsg = (await page.textContent('#expand-weeks-error')).trim();
+    const weeksJob = await planner(page, () => window.tissueStudio.planner.job.state);
+    check(/60 weeks/.test(weeksMsg) && /52/.test(weeksMsg) && await page.getAttribute('#expand-weeks', 'aria-invalid') === 'true',
+      `60 weeks: the run ${weeksJob} and the server's message is at the weeks input: "${weeksMsg}"`);
+    check(await page.isHidden('#error'), 'the message is at its input, not in the page\'s error box');
+    await shot(page, '4c-weeks-at-input.png');
+    await page.fill('#expand-weeks', '10');
+    check(await page.locator('#expand-weeks-error').count() === 0 && await page.getAttribute('#expand-weeks', 'aria-invalid') === null,
+      'editing the weeks clears the message');
+
+    await page.click('#tab-2');
+    await page.fill('#depth', '0');
+    await page.waitForSelector('#depth-error', { timeout: 30000 });
+    const depthMsg = (await page.textContent('#depth-error')).trim();
+    check(/depth/i.test(depthMsg) && /positive/i.test(depthMsg) && await page.getAttribute('#depth', 'aria-invalid') === 'true',
+      `depth 0: the server's message is at the depth input: "${depthMsg}"`);
+    check(await page.isDisabled('#run'), 'Run waits for a depth the server takes');
+    await shot(page, '4d-depth-at-input.png');
+    await page.fill('#depth', '0.25');
+    await page.waitForFunction(() => window.tissueStudio.planner.preview?.ok === true && !document.getElementById('depth-error'),
+      null, { timeout: 30000 });
+    ok('a depth of 0.25 cm clears the message and the preview is ok again');
+
+    // d4. a series: its chart (chart.js, as the expansion's) and table; a run the server reports
+    // failed (`failed_runs`, when it sends them) is a row marked failed.
+    await page.click('#tab-3');
+    await page.fill('#sweep-volumes', '40, 80');
+    await page.getByRole('button', { name: 'Start series', exact: true }).click();
+    await page.waitForFunction(() => {
+      const j = window.tissueStudio.planner.job;
+      return j.mode === 'sweep' && j.state !== 'running';
+    }, null, { timeout: RUN_TIMEOUT_MS, polling: 200 });
+    const sweep = await planner(page, () => ({ job: window.tissueStudio.planner.job, result: window.tissueStudio.planner.result, error: window.tissueStudio.planner.error }));
+    const dots = await page.locator('#sweep-chart circle.series-dot').count();
+    const rows = await page.locator('#sweep-table tbody tr').count();
+    check(sweep.job.state === 'finished' && sweep.result?.runs?.length === 2 && dots === 2 && rows === 2,
+      `the series of 40 and 80 cm³ finished: ${dots} points on its chart, ${rows} rows`, `${sweep.job.state}: ${sweep.error}`);
+    await shot(page, '4e-sweep.png');
+    const failedRows = await page.evaluate(async (job) => {
+      const { renderSweep } = await import('/static/planner-report.js');
+      const p = window.tissueStudio.planner;
+      const failed = [{ volume_cm3: 60, error: { kind: 'run', field: null, message: 'the run diverged at step 12' } }];
+      renderSweep(p.result, job, { failed_runs: failed, warnings: ['the 60 cm³ run failed: the run diverged at step 12'] });
+      return [...document.querySelectorAll('#sweep-table tbody tr')].map((tr) => `${tr.className}|${tr.textContent}`);
+    }, sweep.job.job);
+    check(failedRows.length === 3 && /^failed\|60.*diverged/.test(failedRows[1]) && await page.isHidden('#sweep-warnings'),
+      'a failed run of a series (failed_runs) is a row marked failed, in volume order', failedRows.join(' / '));
+    await page.locator('#sweep-result .report-link').scrollIntoViewIfNeeded();
+    await shot(page, '4f-sweep-failed-row.png');
+
     // e. files: too large (refused in the page) and broken (the server's message)
     await page.click('#tab-1');
     let uploads = 0;

@@ -1,6 +1,6 @@
 // The planner's side of apps/studio/API.md: HTTP calls and the page's one WebSocket.
 
-import { ApiError, call } from './common.js';
+import { ApiError, ReconnectingSocket, call } from './common.js';
 
 export { ApiError };
 
@@ -39,72 +39,12 @@ export function resultUrl(job, file) {
 }
 
 /**
- * The page's one WebSocket to /api/ws, opened on first use and again if it closed.
- * `onMessage(msg)` gets every server message; `onClose()` is told when an open socket closes.
+ * The page's one job socket, `/api/ws` (common.js's ReconnectingSocket opens it, and again after
+ * a loss). `onMessage(msg)` gets every server message; `onClose()` is told when an open socket
+ * closes (a running job is lost with it).
  */
-export class JobSocket {
+export class JobSocket extends ReconnectingSocket {
   constructor(onMessage, onClose) {
-    this.onMessage = onMessage;
-    this.onClose = onClose;
-    this.ws = null;
-    this.opening = null;
-  }
-
-  url() {
-    const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
-    return `${scheme}//${location.host}/api/ws`;
-  }
-
-  /** Resolves with an open socket (reusing the current one). */
-  open() {
-    if (this.ws && this.ws.readyState === WebSocket.OPEN) return Promise.resolve(this.ws);
-    if (this.opening) return this.opening;
-    this.opening = new Promise((resolve, reject) => {
-      let ws;
-      try {
-        ws = new WebSocket(this.url());
-      } catch (e) {
-        this.opening = null;
-        reject(new ApiError({ kind: 'unknown', field: null, message: 'Cannot open the connection to the studio server.' }, 0));
-        return;
-      }
-      let opened = false;
-      ws.addEventListener('open', () => {
-        opened = true;
-        this.ws = ws;
-        this.opening = null;
-        resolve(ws);
-      });
-      ws.addEventListener('message', (ev) => {
-        let msg;
-        try {
-          msg = JSON.parse(ev.data);
-        } catch {
-          return;
-        }
-        this.onMessage(msg);
-      });
-      ws.addEventListener('close', () => {
-        if (this.ws === ws) this.ws = null;
-        if (!opened) {
-          this.opening = null;
-          reject(new ApiError({ kind: 'unknown', field: null, message: 'Cannot open the connection to the studio server. Is it still running?' }, 0));
-        } else {
-          this.onClose();
-        }
-      });
-    });
-    return this.opening;
-  }
-
-  /** Sends `msg` as JSON, opening the socket first if needed. */
-  async send(msg) {
-    const ws = await this.open();
-    ws.send(JSON.stringify(msg));
-  }
-
-  /** Whether the socket is open now. */
-  isOpen() {
-    return !!this.ws && this.ws.readyState === WebSocket.OPEN;
+    super('/api/ws', { onText: onMessage, onClose });
   }
 }

@@ -1,7 +1,7 @@
 // The trainer's side of apps/studio/API.md ("The trainer"): the organ calls, the session socket and
 // the binary surface frames.
 
-import { ApiError, MAX_UPLOAD, call } from './common.js';
+import { ApiError, MAX_UPLOAD, ReconnectingSocket, call } from './common.js';
 
 export { ApiError, MAX_UPLOAD };
 export const FRAME_MAGIC = 0x31465354; // "TSF1", little-endian
@@ -50,75 +50,29 @@ export function parseFrame(buffer) {
 }
 
 /**
- * The page's one session socket, `/api/trainer/ws`. Text messages go to `onMessage(msg)`; binary
- * frames are parsed and kept as the newest one only (`takeFrame()` hands it over once): if
+ * The page's one session socket, `/api/trainer/ws` (common.js's ReconnectingSocket opens it, and
+ * again after a loss: `onOpen({ reconnected })` says so). Text messages go to `onMessage(msg)`;
+ * binary frames are parsed and kept as the newest one only (`takeFrame()` hands it over once): if
  * several arrive between two animation frames, only the last is drawn — but an index buffer a
  * skipped frame carried is kept with the frame that replaces it.
  */
-export class TrainerSocket {
-  constructor({ onMessage, onClose, onFrameReceived }) {
-    this.onMessage = onMessage;
-    this.onClose = onClose;
+export class TrainerSocket extends ReconnectingSocket {
+  constructor({ onMessage, onOpen, onClose, onFrameReceived }) {
+    super('/api/trainer/ws', {
+      onText: onMessage,
+      onBinary: (buffer) => this.onFrame(buffer),
+      onOpen,
+      onClose: () => {
+        this.pending = null;
+        onClose();
+      },
+    });
     this.onFrameReceived = onFrameReceived || (() => {});
-    this.ws = null;
-    this.opening = null;
     this.pending = null;
     this.badFrames = 0;
   }
 
-  url() {
-    const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
-    return `${scheme}//${location.host}/api/trainer/ws`;
-  }
-
-  open() {
-    if (this.ws && this.ws.readyState === WebSocket.OPEN) return Promise.resolve(this.ws);
-    if (this.opening) return this.opening;
-    this.opening = new Promise((resolve, reject) => {
-      let ws;
-      try {
-        ws = new WebSocket(this.url());
-      } catch {
-        this.opening = null;
-        reject(new ApiError({ kind: 'unknown', field: null, message: 'Cannot open the connection to the studio server.' }, 0));
-        return;
-      }
-      ws.binaryType = 'arraybuffer';
-      let opened = false;
-      ws.addEventListener('open', () => {
-        opened = true;
-        this.ws = ws;
-        this.opening = null;
-        resolve(ws);
-      });
-      ws.addEventListener('message', (ev) => {
-        if (ev.data instanceof ArrayBuffer) {
-          this.onBinary(ev.data);
-          return;
-        }
-        let msg;
-        try {
-          msg = JSON.parse(ev.data);
-        } catch {
-          return;
-        }
-        this.onMessage(msg);
-      });
-      ws.addEventListener('close', () => {
-        if (this.ws === ws) this.ws = null;
-        this.pending = null;
-        if (!opened) {
-          this.opening = null;
-          reject(new ApiError({ kind: 'unknown', field: null, message: 'Cannot open the connection to the studio server. Is it still running?' }, 0));
-        } else {
-          this.onClose();
-        }
-      });
-    });
-    return this.opening;
-  }
-
-  onBinary(buffer) {
+  onFrame(buffer) {
     const frame = parseFrame(buffer);
     if (!frame) {
       if (this.badFrames++ === 0) console.warn('trainer: a binary message that is not a TSF1 frame was ignored');
@@ -140,21 +94,5 @@ export class TrainerSocket {
   /** Drops a frame waiting to be drawn (a new organ is coming). */
   dropFrames() {
     this.pending = null;
-  }
-
-  async send(msg) {
-    const ws = await this.open();
-    ws.send(JSON.stringify(msg));
-  }
-
-  /** Sends now if the socket is open (pointer moves: never queued behind a reconnect). */
-  sendIfOpen(msg) {
-    if (!this.isOpen()) return false;
-    this.ws.send(JSON.stringify(msg));
-    return true;
-  }
-
-  isOpen() {
-    return !!this.ws && this.ws.readyState === WebSocket.OPEN;
   }
 }

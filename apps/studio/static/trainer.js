@@ -15,9 +15,11 @@ const PATH_SPACING_PX = 6; // the scalpel's path: a surface point every few pixe
 const MAX_PATH_POINTS = 2000;
 
 
-// ---- The state hook for tests (kept up to date; see apps/studio/browser/README.md).
-const hook = {
-  ready: false,
+// One `state` object holds everything the page knows; it is also the test hook
+// `window.tissueStudio.trainer` (apps/studio/browser/README.md).
+const state = {
+  // What the browser tests read.
+  ready: false, // the current organ's first frame is drawn
   steps: 0,
   stepMs: { median: null, p99: null },
   volumeDrift: null,
@@ -26,39 +28,35 @@ const hook = {
   force: [0, 0, 0],
   triangles: 0,
   framesDrawn: 0,
-  error: null,
-  // beyond the required ones
-  paused: false,
-  organ: null,
-  scene: null,
-  stats: null,
   framesReceived: 0,
   fps: { received: 0, drawn: 0 },
-  reallocations: 0,
   renderScale: 1,
-};
-window.tissueStudio = Object.assign(window.tissueStudio || {}, { trainer: hook });
-
-const state = {
+  error: null,
+  paused: false, // the server's word (the stats), or what was asked until it had time to land
+  organ: null, // the organ asked for last, then the scene's
+  scene: null,
+  stats: null,
+  reallocations: 0,
+  lastCut: null, // { path: [[x,y,z], ...], viewDir, fromVertex }
+  // The page's own.
   organs: [],
-  organ: null, // the organ id asked for last
   awaitingScene: false,
   fitPending: false,
   refused: false,
-  paused: false,
+  pauseAsked: false, // what the Pause button shows
   pauseSentAt: 0,
   gesture: null,
   needleFirst: null,
-  lastCut: null, // { path: [[x,y,z], ...] }
   pathTimer: null,
   tip: [NaN, NaN, NaN],
   received: [], // arrival times of frames (ms), the last second
   drawn: [],
   adaptedAt: 0,
 };
+window.tissueStudio = Object.assign(window.tissueStudio || {}, { trainer: state });
 
-const showError = (message) => showErrorIn(hook, message);
-const clearError = () => clearErrorIn(hook);
+const showError = (message) => showErrorIn(state, message);
+const clearError = () => clearErrorIn(state);
 
 let view;
 let socket;
@@ -67,7 +65,7 @@ let socket;
 
 
 function setReady(on) {
-  hook.ready = on;
+  state.ready = on;
   document.body.classList.toggle('loading', !on);
   updateControls();
 }
@@ -103,9 +101,8 @@ async function load(id, label = organLabel(id)) {
   state.awaitingScene = true;
   state.fitPending = true;
   state.refused = false; // (pausing is the session's, not the organ's: it stays as it is)
-  hook.organ = id;
-  hook.events = [];
-  hook.steps = 0;
+  state.events = [];
+  state.steps = 0;
   $('events').replaceChildren();
   $('events-empty').hidden = false;
   cancelGesture();
@@ -132,10 +129,6 @@ function uploadFile(file) {
     showError(`${file.name} is larger than 64 MiB (${fmtInt(file.size)} bytes); files up to 64 MiB can be loaded.`);
     return;
   }
-  if (!/\.(obj|ply|stl|vtk|vtu|msh)$/i.test(file.name)) {
-    showError(`${file.name}: choose an OBJ, PLY or STL surface, or a VTK, VTU or MSH tet mesh (by its extension).`);
-    return;
-  }
   const unit = $('unit-select').value;
   setText('organ-status', `Uploading ${file.name} (${unit})…`);
   $('file-input').disabled = true;
@@ -151,7 +144,7 @@ function uploadFile(file) {
     })
     .catch((e) => {
       showError(e.message);
-      setText('organ-status', hook.ready ? `Still showing ${organLabel(state.organ)}.` : '');
+      setText('organ-status', state.ready ? `Still showing ${organLabel(state.organ)}.` : '');
       $('organ-select').value = state.organ ?? '';
     })
     .finally(() => {
@@ -173,6 +166,7 @@ function onMessage(msg) {
       if (msg.event) addEvent(msg.event);
       break;
     case 'refused':
+      socket.close(); // the session runs in another tab: no reconnecting until an organ is chosen
       state.refused = true;
       state.awaitingScene = false;
       showError(msg.error?.message || 'The server refused the session.');
@@ -194,42 +188,41 @@ function onMessage(msg) {
 }
 
 function onScene(msg) {
-  const newOrgan = msg.organ !== hook.scene?.organ || state.fitPending;
-  hook.scene = msg;
-  hook.organ = msg.organ;
+  const newOrgan = msg.organ !== state.scene?.organ || state.fitPending;
+  state.scene = msg;
+  state.organ = msg.organ;
   state.awaitingScene = false;
   state.fitPending = newOrgan;
   socket.dropFrames(); // anything before the scene belongs to the previous one
   view.allocate(msg.capacity.vertices, msg.capacity.triangles);
   if (msg.tray) view.setTray(msg.tray.size, msg.tray.top ?? 0);
-  hook.steps = 0;
-  hook.triangles = 0;
+  state.steps = 0;
+  state.triangles = 0;
   setReady(false);
   setText('organ-badge', `${msg.label || organLabel(msg.organ)} · ${fmtInt(msg.nodes)} nodes · ${fmtInt(msg.tets)} tets`);
   setText('h-mesh', `${fmtInt(msg.nodes)} nodes · ${fmtInt(msg.tets)} tets`);
-  socket.sendIfOpen({ type: 'tool', tool: hook.tool });
 }
 
 function onStats(msg) {
-  hook.stats = msg;
+  state.stats = msg;
   // Newer than the last drawn frame (while paused, say); not before this scene's first frame.
-  if (hook.ready && Number.isFinite(msg.steps) && msg.steps > hook.steps) hook.steps = msg.steps;
-  hook.stepMs = { median: msg.step_ms?.median ?? null, p99: msg.step_ms?.p99 ?? null };
-  hook.volumeDrift = msg.volume_drift ?? null;
-  hook.paused = !!msg.paused;
+  if (state.ready && Number.isFinite(msg.steps) && msg.steps > state.steps) state.steps = msg.steps;
+  state.stepMs = { median: msg.step_ms?.median ?? null, p99: msg.step_ms?.p99 ?? null };
+  state.volumeDrift = msg.volume_drift ?? null;
+  state.paused = !!msg.paused;
   // The button shows what was asked; the server's word wins once the request had time to land.
-  if (hook.paused !== state.paused && performance.now() - state.pauseSentAt > 1000) {
-    state.paused = hook.paused;
+  if (state.paused !== state.pauseAsked && performance.now() - state.pauseSentAt > 1000) {
+    state.pauseAsked = state.paused;
     updateControls();
   }
   renderHud();
 }
 
 function addEvent(ev) {
-  hook.events.push(ev);
+  state.events.push(ev);
   $('events-empty').hidden = true;
   const list = $('events');
-  const step = Number.isFinite(ev.step) ? ev.step : hook.steps;
+  const step = Number.isFinite(ev.step) ? ev.step : state.steps;
   const details = eventDetails(ev);
   const li = el('li', { class: `ev ev-${String(ev.kind).replace(/[^a-z_]/gi, '')}` },
     el('span', { class: 'ev-step' }, `step ${fmtInt(step)}`),
@@ -275,45 +268,48 @@ function eventDetails(ev) {
   return parts.join(' · ');
 }
 
+/** A socket opened again after a loss: the session starts again with the organ shown. */
+function onSocketOpened({ reconnected }) {
+  if (reconnected && state.organ && !state.refused) load(state.organ);
+}
+
 function onSocketClosed() {
   cancelGesture();
   setReady(false);
-  hook.scene = null;
-  if (!state.refused) {
-    showError('The connection to the studio server was lost. Choose an organ to start again.');
-  }
+  state.scene = null;
+  if (!state.refused) showError('The connection to the studio server was lost; reconnecting…');
   setText('hud-state', 'disconnected');
 }
 
 // ---------------------------------------------------------------- frames and drawing
 
 function onFrameReceived() {
-  hook.framesReceived++;
+  state.framesReceived++;
   state.received.push(performance.now());
 }
 
 function loop() {
   requestAnimationFrame(loop);
   const frame = socket.takeFrame();
-  if (frame && !state.awaitingScene && hook.scene) {
+  if (frame && !state.awaitingScene && state.scene) {
     const before = view.capacity;
     if (view.applyFrame(frame)) {
-      if (view.capacity !== before) hook.reallocations++;
-      hook.steps = frame.step;
-      hook.triangles = view.triangles;
+      if (view.capacity !== before) state.reallocations++;
+      state.steps = frame.step;
+      state.triangles = view.triangles;
       const f = frame.force;
       const finite = f.every(Number.isFinite);
-      hook.force = finite ? [f[0], f[1], f[2]] : [0, 0, 0];
+      state.force = finite ? [f[0], f[1], f[2]] : [0, 0, 0];
       state.tip = frame.tip;
-      view.setForce(hook.force, frame.tip);
+      view.setForce(state.force, frame.tip);
       if (state.fitPending) {
         view.fit();
         state.fitPending = false;
       }
       view.renderNow();
-      hook.framesDrawn++;
+      state.framesDrawn++;
       state.drawn.push(performance.now());
-      if (!hook.ready) {
+      if (!state.ready) {
         setReady(true);
         clearErrorIfStale();
         $('view-empty').hidden = true;
@@ -327,7 +323,7 @@ function loop() {
 
 function clearErrorIfStale() {
   // A message about a lost connection or a refused session no longer applies once a frame is drawn.
-  if (hook.error && /connection|in use|refused/i.test(hook.error)) clearError();
+  if (state.error && /connection|in use|refused/i.test(state.error)) clearError();
 }
 
 function perSecond(times, now) {
@@ -337,29 +333,29 @@ function perSecond(times, now) {
 
 function renderHud() {
   const now = performance.now();
-  hook.fps = { received: perSecond(state.received, now), drawn: perSecond(state.drawn, now) };
-  if (now - state.adaptedAt > 1000 && hook.ready && !hook.paused) {
+  state.fps = { received: perSecond(state.received, now), drawn: perSecond(state.drawn, now) };
+  if (now - state.adaptedAt > 1000 && state.ready && !state.paused) {
     state.adaptedAt = now;
-    view.adapt(hook.fps.drawn, hook.fps.received);
-    hook.renderScale = view.scale;
+    view.adapt(state.fps.drawn, state.fps.received);
+    state.renderScale = view.scale;
   }
-  const s = hook.stats;
-  const fmag = Math.hypot(...hook.force);
+  const s = state.stats;
+  const fmag = Math.hypot(...state.force);
   setText('h-force', `${fmt(fmag, 3)} N`);
   setText('h-step-ms', s ? `${fmt(s.step_ms?.median, 2)} ms · p99 ${fmt(s.step_ms?.p99, 2)} ms` : '—');
   setText('h-sps', s ? `${fmt(s.steps_per_s, 0)} steps/s` : '—');
   const scale = view.scale < 0.99 ? ` · ${Math.round(view.scale * 100)} % res.` : '';
-  setText('h-fps', `${hook.fps.received} in · ${hook.fps.drawn} drawn /s${scale}`);
+  setText('h-fps', `${state.fps.received} in · ${state.fps.drawn} drawn /s${scale}`);
   setText('h-drift', s && Number.isFinite(s.volume_drift) ? `${fmt(s.volume_drift * 100, 3)} %` : '—');
-  const nodes = s?.nodes ?? hook.scene?.nodes;
-  const tets = s?.tets ?? hook.scene?.tets;
+  const nodes = s?.nodes ?? state.scene?.nodes;
+  const tets = s?.tets ?? state.scene?.tets;
   setText('h-mesh', `${fmtInt(nodes)} nodes · ${fmtInt(tets)} tets`);
-  setText('h-surface', `${fmtInt(view.vertices)} vertices · ${fmtInt(hook.triangles)} triangles`);
-  setText('h-steps', fmtInt(hook.steps));
+  setText('h-surface', `${fmtInt(view.vertices)} vertices · ${fmtInt(state.triangles)} triangles`);
+  setText('h-steps', fmtInt(state.steps));
   let status;
   if (state.refused) status = 'refused';
-  else if (!hook.ready) status = 'loading';
-  else status = hook.paused ? 'paused' : 'running';
+  else if (!state.ready) status = 'loading';
+  else status = state.paused ? 'paused' : 'running';
   const badge = $('hud-state');
   badge.textContent = status;
   badge.dataset.state = status;
@@ -375,11 +371,11 @@ const TOOL_HINTS = {
 
 function setTool(tool) {
   if (!TOOLS.includes(tool)) return;
-  if (tool !== hook.tool) {
+  if (tool !== state.tool) {
     cancelGesture();
     setNeedleFirst(null);
   }
-  hook.tool = tool;
+  state.tool = tool;
   for (const b of document.querySelectorAll('.tool')) {
     const on = b.dataset.tool === tool;
     b.setAttribute('aria-pressed', on ? 'true' : 'false');
@@ -387,7 +383,6 @@ function setTool(tool) {
   }
   setText('tool-hint', TOOL_HINTS[tool]);
   $('view').dataset.tool = tool;
-  socket.sendIfOpen({ type: 'tool', tool });
 }
 
 function setNeedleFirst(point) {
@@ -415,7 +410,7 @@ function setupPointer() {
   // Capture phase on the container: this runs before OrbitControls' own pointerdown on the canvas,
   // and a left press on the organ turns the controls off for the gesture.
   container.addEventListener('pointerdown', (ev) => {
-    if (ev.button !== 0 || state.gesture || !hook.ready) return;
+    if (ev.button !== 0 || state.gesture || !state.ready) return;
     const hit = view.pick(ev.clientX, ev.clientY);
     if (!hit) return; // the background: OrbitControls orbits
     view.controls.enabled = false;
@@ -426,7 +421,7 @@ function setupPointer() {
     } catch {
       // synthetic pointer
     }
-    const g = { tool: hook.tool, pointerId: ev.pointerId, x0: ev.clientX, y0: ev.clientY, lastX: ev.clientX, lastY: ev.clientY, hit };
+    const g = { tool: state.tool, pointerId: ev.pointerId, x0: ev.clientX, y0: ev.clientY, lastX: ev.clientX, lastY: ev.clientY, hit };
     state.gesture = g;
     if (g.tool === 'probe') {
       g.grab = hit.point;
@@ -485,7 +480,6 @@ function setupPointer() {
         // The nodes this cut adds come after the ones there now (the frame's vertices are the
         // body's nodes): where the wound is as the organ moves on.
         state.lastCut = { path: g.path, viewDir, fromVertex: view.vertices };
-        hook.lastCut = state.lastCut;
         state.pathTimer = setTimeout(() => view.setPath(null), PATH_SHOWN_MS);
       } else {
         view.setPath(null);
@@ -513,20 +507,20 @@ function setupPointer() {
 
 function updateControls() {
   const pause = $('pause');
-  pause.textContent = state.paused ? 'Resume' : 'Pause';
-  pause.setAttribute('aria-pressed', state.paused ? 'true' : 'false');
-  pause.disabled = !hook.ready && !state.paused;
-  $('step').disabled = !state.paused || !hook.scene;
-  $('reset').disabled = !hook.scene;
-  $('demo').disabled = !hook.scene;
+  pause.textContent = state.pauseAsked ? 'Resume' : 'Pause';
+  pause.setAttribute('aria-pressed', state.pauseAsked ? 'true' : 'false');
+  pause.disabled = !state.ready && !state.pauseAsked;
+  $('step').disabled = !state.pauseAsked || !state.scene;
+  $('reset').disabled = !state.scene;
+  $('demo').disabled = !state.scene;
   renderHud();
 }
 
 function togglePause() {
-  state.paused = !state.paused;
+  state.pauseAsked = !state.pauseAsked;
   state.pauseSentAt = performance.now();
-  hook.paused = state.paused;
-  socket.send({ type: 'pause', paused: state.paused }).catch((e) => showError(e.message));
+  state.paused = state.pauseAsked;
+  socket.send({ type: 'pause', paused: state.pauseAsked }).catch((e) => showError(e.message));
   updateControls();
 }
 
@@ -609,8 +603,8 @@ function woundSides() {
 
 function main() {
   view = new TrainerView($('view'));
-  socket = new TrainerSocket({ onMessage, onClose: onSocketClosed, onFrameReceived });
-  Object.assign(hook, {
+  socket = new TrainerSocket({ onMessage, onOpen: onSocketOpened, onClose: onSocketClosed, onFrameReceived });
+  Object.assign(state, {
     screenOf: (p) => view.screenOf(p),
     surfacePointAt: (x, y) => view.pick(x, y)?.point ?? null,
     organBox: () => view.organBox(),
