@@ -944,7 +944,12 @@ pub extern "C" fn tissue_job_sweep_row(
                 .finished
                 .sweep
                 .get(index)
-                .map(|(v, r)| (*v, r.as_ref().map(numbers).map_err(Error::from)))
+                .map(|(v, r)| {
+                    (
+                        *v,
+                        r.as_ref().map(numbers).map_err(|e| Error::from(e.clone())),
+                    )
+                })
                 .ok_or_else(|| {
                     Error::invalid(format!(
                         "row {index} of a sweep of {} volumes",
