@@ -12,7 +12,9 @@ use axum::routing::{get, post};
 use axum::{Json, Router};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
-use tissue_planner::{Patient, PlanError, PlanRequest, Scenario, Shipped, Unit};
+use tissue_planner::{
+    ErrorKind as PlanKind, Patient, PlanError, PlanRequest, Scenario, Shipped, Unit,
+};
 use tissue_scenes::{Organ, ShippedOrgan};
 
 use crate::access::{self, Access};
@@ -69,7 +71,7 @@ impl ApiError {
 
     fn plan(e: &PlanError) -> ApiError {
         let status = match e.kind {
-            ErrorKind::Run | ErrorKind::Output => StatusCode::INTERNAL_SERVER_ERROR,
+            PlanKind::Run | PlanKind::Output => StatusCode::INTERNAL_SERVER_ERROR,
             _ => StatusCode::BAD_REQUEST,
         };
         ApiError {
@@ -361,7 +363,7 @@ pub fn scenario(
 ) -> Result<Scenario, PlanError> {
     let p = studio.patient(patient).ok_or_else(|| {
         PlanError::new(
-            ErrorKind::Usage,
+            PlanKind::Usage,
             format!(
                 "no patient {:?} on the server (it keeps the last few): load it again",
                 shorten(patient)

@@ -5,7 +5,7 @@
 use std::time::{Duration, Instant};
 
 use axum::extract::ws::{Message, WebSocket};
-use tissue_planner::{CancelToken, Finished, JobReport, PlanError, Stopped, Tool};
+use tissue_planner::{Finished, JobReport, PlanError, Stopped, Tool};
 use tokio::sync::mpsc;
 
 use crate::api::scenario;
@@ -240,6 +240,7 @@ fn finished_message(job: &str, finished: &Finished, scale: f32) -> Result<JobMes
 #[cfg(test)]
 mod tests {
     use super::*;
+    use tissue_planner::CancelToken;
 
     fn job(id: &str) -> Running {
         Running {

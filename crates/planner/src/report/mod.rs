@@ -180,13 +180,16 @@ impl JobReport {
         write_output(path, self.to_json()?.as_bytes(), "report")
     }
 
-    /// The same as a JSON value (what the studio sends on its socket).
+    /// The same as a JSON value (what the studio sends on its socket), read back from
+    /// [`JobReport::to_json`]'s text so that it prints the same: a value made straight from the
+    /// report would widen every `f32` figure (`0.0025` would print as `0.0024999999441206455`).
     ///
     /// # Errors
     /// [`ErrorKind::Output`] when it cannot be serialized (a bug).
     pub fn to_value(&self) -> Result<serde_json::Value, PlanError> {
-        serde_json::to_value(self)
-            .map_err(|e| PlanError::new(ErrorKind::Output, format!("cannot write the report: {e}")))
+        serde_json::from_str(&self.to_json()?).map_err(|e| {
+            PlanError::new(ErrorKind::Output, format!("cannot write the report: {e}"))
+        })
     }
 }
 
