@@ -9,7 +9,9 @@ use tissue_planner::{Finished, JobReport, PlanError, Stopped, Tool};
 use tokio::sync::mpsc;
 
 use crate::api::scenario;
-use crate::messages::{ClientMessage, ErrorBody, ErrorKind, Fields, JobMessage, RunMessage};
+use crate::messages::{
+    ClientMessage, ErrorBody, ErrorKind, FailedRow, Fields, JobMessage, RunMessage,
+};
 use crate::serve::send_within;
 use crate::state::{Running, Studio};
 
@@ -199,7 +201,7 @@ fn write_files(dir: &std::path::Path, finished: &Finished) -> Result<(), PlanErr
 }
 
 /// The `finished` message: the report, a single run's fields (displacement in the file's unit:
-/// `scale` cm per unit), a line per failed run of a sweep.
+/// `scale` cm per unit), a sweep's failed runs with their messages as the page labels fields.
 fn finished_message(job: &str, finished: &Finished, scale: f32) -> Result<JobMessage, PlanError> {
     let fields = finished.patient.as_ref().map(|patient| {
         Box::new(Fields {
@@ -214,17 +216,14 @@ fn finished_message(job: &str, finished: &Finished, scale: f32) -> Result<JobMes
             in_region: patient.in_region.clone(),
         })
     });
-    let warnings = match &finished.report {
+    let failed_runs = match &finished.report {
         JobReport::Sweep(r) => r
             .body
             .failed_runs
             .iter()
-            .map(|f| {
-                format!(
-                    "the {} cm³ run failed: {}",
-                    f.volume_cm3,
-                    ErrorBody::of(&f.error).message
-                )
+            .map(|f| FailedRow {
+                volume_cm3: f.volume_cm3,
+                error: ErrorBody::of(&f.error),
             })
             .collect(),
         _ => Vec::new(),
@@ -233,7 +232,7 @@ fn finished_message(job: &str, finished: &Finished, scale: f32) -> Result<JobMes
         job: job.to_owned(),
         report: finished.report.to_value()?,
         fields,
-        warnings,
+        failed_runs,
     })
 }
 

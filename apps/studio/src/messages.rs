@@ -196,6 +196,15 @@ pub struct Fields {
     pub in_region: Vec<f32>,
 }
 
+/// A failed run of a sweep, as the page shows it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FailedRow {
+    /// The run's volume, cm³.
+    pub volume_cm3: f64,
+    /// Why it has no results.
+    pub error: ErrorBody,
+}
+
 /// A message from the server on the job socket: `accepted`, then `progress` (at most every
 /// 50 ms), then one terminal message (`finished`, `cancelled` or `failed`); `refused` answers a
 /// run that was not started.
@@ -236,9 +245,10 @@ pub enum JobMessage {
         report: Value,
         /// A single run's per-vertex fields (null for the other modes).
         fields: Option<Box<Fields>>,
-        /// One line per failed run of a sweep (the report's `failed_runs`).
+        /// A sweep's failed runs (the report's `failed_runs`), their messages labelled for the
+        /// page; absent when none failed.
         #[serde(default, skip_serializing_if = "Vec::is_empty")]
-        warnings: Vec<String>,
+        failed_runs: Vec<FailedRow>,
     },
     /// The job was cancelled after `steps` steps.
     Cancelled {

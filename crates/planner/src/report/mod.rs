@@ -187,9 +187,8 @@ impl JobReport {
     /// # Errors
     /// [`ErrorKind::Output`] when it cannot be serialized (a bug).
     pub fn to_value(&self) -> Result<serde_json::Value, PlanError> {
-        serde_json::from_str(&self.to_json()?).map_err(|e| {
-            PlanError::new(ErrorKind::Output, format!("cannot write the report: {e}"))
-        })
+        serde_json::from_str(&self.to_json()?)
+            .map_err(|e| PlanError::new(ErrorKind::Output, format!("cannot write the report: {e}")))
     }
 }
 
