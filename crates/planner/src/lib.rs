@@ -37,15 +37,22 @@
 //!
 //! ## Example: Table 2, planned as every front end plans it
 //! ```
-//! use tissue_planner::{Patient, PlanRequest, Scenario, Shipped};
+//! use tissue_planner::{CancelToken, JobReport, JobSpec, Patient, Scenario, Shipped, Tool};
 //!
-//! let request: PlanRequest = serde_json::from_str(r#"{ "volume_cm3": 100, "max_steps": 40 }"#)?;
-//! let scenario = Scenario::new(Patient::shipped(Shipped::Table2)?, request)?;
+//! // The job as the studio's socket, the C ABI and `insert --job` take it.
+//! let spec: JobSpec = serde_json::from_str(r#"{ "request": { "volume_cm3": 100, "max_steps": 40 } }"#)?;
+//! let scenario = Scenario::new(Patient::shipped(Shipped::Table2)?, spec.request.clone())?;
 //! assert!(scenario.preview().ok);
-//! let planned = tissue_app::plan(&scenario.job, |_| std::ops::ControlFlow::Continue(()))?;
-//! let result = tissue_planner::report::RunResult::of(&planned, None, 40);
-//! assert_eq!(result.steps, 40); // a short run for the example: not settled
-//! assert!(result.area_gain_cm2 > 0.0);
+//! let mut steps = 0;
+//! let finished = spec
+//!     .plan(&scenario)?
+//!     .run(&scenario, Tool::Insert, &CancelToken::new(), |_| steps += 1)
+//!     .map_err(tissue_planner::PlanError::from)?;
+//! let JobReport::Single(report) = &finished.report else { unreachable!() };
+//! assert_eq!(report.body.steps, 40); // a short run for the example: not settled
+//! assert!(report.body.area_gain_cm2 > 0.0);
+//! assert!(steps > 0 && finished.patient.is_some());
+//! assert!(finished.report.to_json()?.contains(r#""mode": "single""#));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![forbid(unsafe_code)]
