@@ -77,7 +77,56 @@ fn too_large(name: &str, tets: usize, estimated: bool, decimate_to: Option<usize
     }
 }
 
+/// What kind of failure a [`SceneError`] is ([`SceneError::kind`]): the classes a front end
+/// maps to its own codes (the `trainer`'s exit codes, the C ABI's statuses, the studio's error
+/// kinds) in one `match`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SceneErrorKind {
+    /// A file that cannot be read, or is not of a kind the loader takes.
+    Input,
+    /// A mesh that is malformed or not valid (a degenerate tet, a node out of range).
+    Mesh,
+    /// A surface that cannot be filled with tetrahedra (open, non-manifold, inside out).
+    Meshing,
+    /// An organ too large for real time ([`crate::MAX_TETS`]).
+    TooLarge,
+    /// A size, material, step or contact parameter out of range.
+    Parameters,
+    /// A tool action that cannot be done (a grab off the surface, a cut too short, a
+    /// demonstration playing).
+    Tool,
+    /// The simulation diverged, or a cut or suture failed.
+    Simulation,
+}
+
 impl SceneError {
+    /// What kind of failure this is.
+    pub fn kind(&self) -> SceneErrorKind {
+        use tissue_meshio::MeshIoError as Io;
+        use tissue_pbd::PbdError as Pbd;
+        match self {
+            SceneError::Read(
+                Io::Io { .. } | Io::UnsupportedFormat { .. } | Io::WrongKind { .. },
+            ) => SceneErrorKind::Input,
+            SceneError::Read(_) | SceneError::Mesh { .. } => SceneErrorKind::Mesh,
+            SceneError::Meshing { .. } => SceneErrorKind::Meshing,
+            SceneError::TooLarge { .. } => SceneErrorKind::TooLarge,
+            SceneError::Size { .. } => SceneErrorKind::Parameters,
+            SceneError::Pbd(Pbd::DegenerateTet { .. } | Pbd::NodeOutOfRange { .. }) => {
+                SceneErrorKind::Mesh
+            }
+            SceneError::Pbd(
+                Pbd::InvalidParameter { .. }
+                | Pbd::InvalidTool { .. }
+                | Pbd::InvalidColliderShape { .. }
+                | Pbd::ColliderMeshNotClosed { .. }
+                | Pbd::ColliderTooLarge { .. },
+            ) => SceneErrorKind::Parameters,
+            SceneError::Pbd(_) | SceneError::Surgery(_) => SceneErrorKind::Simulation,
+            SceneError::Tool(_) => SceneErrorKind::Tool,
+        }
+    }
+
     pub(crate) fn mesh(name: &str, e: impl std::fmt::Display) -> SceneError {
         SceneError::Mesh {
             name: name.to_owned(),
