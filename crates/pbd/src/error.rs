@@ -126,10 +126,10 @@ pub enum PbdError {
     },
 }
 
-/// A parameter the crate checks ([`PbdError::InvalidParameter`]): a closed list, so a front end
-/// maps each to its own flag or field in an exhaustive `match`.
+/// A parameter the crate checks ([`PbdError::InvalidParameter`]): a closed list (deliberately
+/// not `#[non_exhaustive]`), so a front end maps each to its own flag or field in an exhaustive
+/// `match`, and a new parameter is a compile error there until it is mapped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[non_exhaustive]
 pub enum PbdParam {
     /// [`crate::Material::density`] (g/cm³).
     Density,

@@ -99,30 +99,46 @@ pub enum SceneErrorKind {
     Simulation,
 }
 
+impl SceneErrorKind {
+    /// The kind of a loader's error ([`SceneError::Read`]): a file that cannot be read or is of
+    /// the wrong type is input, anything else a bad mesh.
+    pub fn of_mesh_io(e: &MeshIoError) -> SceneErrorKind {
+        match e {
+            MeshIoError::Io { .. }
+            | MeshIoError::UnsupportedFormat { .. }
+            | MeshIoError::WrongKind { .. } => SceneErrorKind::Input,
+            _ => SceneErrorKind::Mesh,
+        }
+    }
+
+    /// The kind of a solver's error ([`SceneError::Pbd`]): a bad tet is a mesh error, a
+    /// parameter, tool or collider out of range a parameter error, anything else (a divergence)
+    /// a simulation error.
+    pub fn of_pbd(e: &tissue_pbd::PbdError) -> SceneErrorKind {
+        use tissue_pbd::PbdError as E;
+        match e {
+            E::DegenerateTet { .. } | E::NodeOutOfRange { .. } => SceneErrorKind::Mesh,
+            E::InvalidParameter { .. }
+            | E::InvalidTool { .. }
+            | E::InvalidColliderShape { .. }
+            | E::ColliderMeshNotClosed { .. }
+            | E::ColliderTooLarge { .. } => SceneErrorKind::Parameters,
+            _ => SceneErrorKind::Simulation,
+        }
+    }
+}
+
 impl SceneError {
     /// What kind of failure this is.
     pub fn kind(&self) -> SceneErrorKind {
-        use tissue_meshio::MeshIoError as Io;
-        use tissue_pbd::PbdError as Pbd;
         match self {
-            SceneError::Read(
-                Io::Io { .. } | Io::UnsupportedFormat { .. } | Io::WrongKind { .. },
-            ) => SceneErrorKind::Input,
-            SceneError::Read(_) | SceneError::Mesh { .. } => SceneErrorKind::Mesh,
+            SceneError::Read(e) => SceneErrorKind::of_mesh_io(e),
+            SceneError::Mesh { .. } => SceneErrorKind::Mesh,
             SceneError::Meshing { .. } => SceneErrorKind::Meshing,
             SceneError::TooLarge { .. } => SceneErrorKind::TooLarge,
             SceneError::Size { .. } => SceneErrorKind::Parameters,
-            SceneError::Pbd(Pbd::DegenerateTet { .. } | Pbd::NodeOutOfRange { .. }) => {
-                SceneErrorKind::Mesh
-            }
-            SceneError::Pbd(
-                Pbd::InvalidParameter { .. }
-                | Pbd::InvalidTool { .. }
-                | Pbd::InvalidColliderShape { .. }
-                | Pbd::ColliderMeshNotClosed { .. }
-                | Pbd::ColliderTooLarge { .. },
-            ) => SceneErrorKind::Parameters,
-            SceneError::Pbd(_) | SceneError::Surgery(_) => SceneErrorKind::Simulation,
+            SceneError::Pbd(e) => SceneErrorKind::of_pbd(e),
+            SceneError::Surgery(_) => SceneErrorKind::Simulation,
             SceneError::Tool(_) => SceneErrorKind::Tool,
         }
     }
