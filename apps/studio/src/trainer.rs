@@ -1,6 +1,10 @@
 //! The trainer's server side: shipped organs and uploads, and one live session at a time — a
 //! native simulation thread stepping at a fixed rate, publishing only its newest surface frame,
 //! which the socket task sends as a binary WebSocket frame (see `API.md`).
+//!
+//! The socket's text messages are typed: [`Command`] (page → server) and [`TrainerMessage`]
+//! (server → page), both `{"type": …}`-tagged JSON; the tests build and read them with these
+//! types too. A failure's `error.kind` comes from one function, [`error_body`].
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -8,11 +12,13 @@ use std::time::{Duration, Instant};
 
 use axum::extract::ws::{Message, WebSocket};
 use glam::Vec3;
-use serde::Deserialize;
-use serde_json::{json, Value};
-use tissue_scenes::{Organ, Session, SessionOptions, ShippedOrgan, TrainerEvent};
+use serde::{Deserialize, Serialize};
+use tissue_scenes::{
+    Organ, SceneError, SceneErrorKind, Session, SessionOptions, ShippedOrgan, TrainerEvent,
+};
 use tokio::sync::{mpsc, watch};
 
+use crate::api::ErrorBody;
 use crate::serve::send_within;
 use crate::state::Studio;
 
@@ -74,18 +80,21 @@ impl Frame {
     }
 }
 
-/// What the simulation thread reports besides frames.
-#[derive(Debug, Clone, Default)]
+/// What the simulation thread reports besides frames; with the socket's `frames_per_s`, the
+/// `stats` message.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Stats {
     /// Steps taken.
     pub steps: u64,
     /// Median and p99 step time, ms.
-    pub step_ms: (f64, f64),
+    pub step_ms: StepTimes,
     /// Steps per second, measured over the last second.
     pub steps_per_s: f64,
+    /// Frames sent to the page per second, measured over the last second (the socket's).
+    pub frames_per_s: f64,
     /// `V/V₀ − 1`.
     pub volume_drift: f64,
-    /// Nodes, tets.
+    /// Nodes (grows as cuts split them).
     pub nodes: usize,
     /// Tets.
     pub tets: usize,
@@ -95,19 +104,23 @@ pub struct Stats {
     pub force_n: f64,
 }
 
-/// A command from the page to the simulation thread.
-#[derive(Debug, Clone, Deserialize)]
+/// Step times of [`Stats`], ms.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct StepTimes {
+    /// Median of the recent steps.
+    pub median: f64,
+    /// 99th percentile of the recent steps.
+    pub p99: f64,
+}
+
+/// A command from the page to the simulation thread (`{"type": "load", …}`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum Command {
     /// Start (or restart) with an organ.
     Load {
         /// A shipped organ's id or an upload's.
         organ: String,
-    },
-    /// The active tool (for the record; the actions say what they are).
-    Tool {
-        /// `probe`, `scalpel`, `needle`.
-        tool: String,
     },
     /// Probe down on a surface point.
     Grab {
@@ -151,6 +164,131 @@ pub enum Command {
     Step,
 }
 
+/// A text message from the server to the page (`{"type": "scene", …}`). `E` is the error's
+/// body: [`ErrorBody`] on the server; a reader that only needs its fields (the tests) reads it
+/// as any type that deserializes `{kind, field, message}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum TrainerMessage<E = ErrorBody> {
+    /// A session started on an organ: what the page allocates for.
+    Scene(SceneInfo),
+    /// Something happened in the session.
+    Event {
+        /// The event (`kind`, `step`, `text`).
+        event: TrainerEvent,
+    },
+    /// The session's figures, every 250 ms.
+    Stats(Stats),
+    /// A command was not taken (the server is busy, or the message is unknown).
+    Refused {
+        /// Why.
+        error: E,
+    },
+    /// A command or a step failed.
+    Failed {
+        /// Why.
+        error: E,
+    },
+}
+
+/// The `scene` message: the organ and the buffers the page allocates.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SceneInfo {
+    /// The organ's id (a shipped organ's or an upload's).
+    pub organ: String,
+    /// What a person reads.
+    pub label: String,
+    /// Nodes as loaded.
+    pub nodes: usize,
+    /// Tets as loaded.
+    pub tets: usize,
+    /// Buffer sizes that hold what cuts are likely to add.
+    pub capacity: Capacity,
+    /// The tray the organ lies on.
+    pub tray: TrayInfo,
+}
+
+/// Buffer sizes of [`SceneInfo`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Capacity {
+    /// Vertices.
+    pub vertices: usize,
+    /// Triangles.
+    pub triangles: usize,
+}
+
+/// The tray of [`SceneInfo`]: a square centred on x = z = 0.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TrayInfo {
+    /// Its sides along x and z, cm.
+    pub size: [f32; 2],
+    /// The height of its top, cm (0).
+    pub top: f32,
+}
+
+/// Why a command was not done, as the page's `error.kind` ([`error_body`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Fault {
+    /// A command that cannot be done now (no organ loaded yet) or that the server does not know.
+    Usage,
+    /// No organ of that id.
+    NotFound,
+    /// Another tab's session runs, or too many commands wait.
+    Busy,
+    /// A scene error of this kind (tissue-scenes' [`SceneError::kind`]).
+    Scene(SceneErrorKind),
+}
+
+/// An error's body: its kind (the one place a [`Fault`] is named for the page) and message.
+pub fn error_body(fault: Fault, message: impl Into<String>) -> ErrorBody {
+    let kind = match fault {
+        Fault::Usage => "usage",
+        Fault::NotFound => "not_found",
+        Fault::Busy => "busy",
+        Fault::Scene(kind) => match kind {
+            SceneErrorKind::Input => "input",
+            SceneErrorKind::Mesh | SceneErrorKind::Meshing => "mesh",
+            SceneErrorKind::TooLarge => "too_large",
+            SceneErrorKind::Parameters => "parameters",
+            SceneErrorKind::Tool => "usage",
+            SceneErrorKind::Simulation => "run",
+        },
+    };
+    ErrorBody {
+        kind: kind.to_owned(),
+        field: None,
+        message: message.into(),
+    }
+}
+
+/// A command that failed: why and what to do.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Refusal {
+    /// Its kind.
+    pub fault: Fault,
+    /// One sentence for the user.
+    pub message: String,
+}
+
+impl Refusal {
+    fn new(fault: Fault, message: impl Into<String>) -> Refusal {
+        Refusal {
+            fault,
+            message: message.into(),
+        }
+    }
+
+    fn body(self) -> ErrorBody {
+        error_body(self.fault, self.message)
+    }
+}
+
+impl From<SceneError> for Refusal {
+    fn from(e: SceneError) -> Refusal {
+        Refusal::new(Fault::Scene(e.kind()), e.to_string())
+    }
+}
+
 /// Uploaded organs, kept by id (the last few).
 #[derive(Debug, Default)]
 pub struct Organs {
@@ -171,9 +309,13 @@ impl Organs {
     }
 
     /// The organ of `id`: a shipped one or an upload.
-    pub fn get(&self, id: &str) -> Result<Arc<Organ>, String> {
+    ///
+    /// # Errors
+    /// A [`Fault::NotFound`] refusal for an unknown id (an upload dropped since); a scene
+    /// error's for a shipped organ that cannot be built (not expected).
+    pub fn get(&self, id: &str) -> Result<Arc<Organ>, Refusal> {
         if let Some(s) = ShippedOrgan::from_id(id) {
-            return Organ::shipped(s).map(Arc::new).map_err(|e| e.to_string());
+            return Ok(Arc::new(Organ::shipped(s)?));
         }
         self.uploads
             .lock()
@@ -181,12 +323,23 @@ impl Organs {
             .iter()
             .find(|(i, _)| i == id)
             .map(|(_, o)| Arc::clone(o))
-            .ok_or_else(|| format!("no organ {id:?}: pick a shipped one or upload it again"))
+            .ok_or_else(|| {
+                Refusal::new(
+                    Fault::NotFound,
+                    format!("no organ {id:?}: pick a shipped one or upload it again"),
+                )
+            })
     }
 }
 
-fn error_json(kind: &str, message: impl Into<String>) -> Value {
-    json!({ "kind": kind, "field": null, "message": message.into() })
+/// The JSON text of a message (the messages' types always serialize; were one not to, the page
+/// is told the server failed).
+fn text_of(m: &TrainerMessage) -> Message {
+    let json = serde_json::to_string(m).unwrap_or_else(|_| {
+        r#"{"type":"failed","error":{"kind":"run","field":null,"message":"the server could not write a message"}}"#
+            .to_owned()
+    });
+    Message::Text(json.into())
 }
 
 /// Serves one tab's trainer socket: one session at a time on the server.
@@ -194,22 +347,20 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
     let organs = studio.organs();
     let send_timeout = studio.limits().send_timeout;
     if organs.busy.swap(true, Ordering::AcqRel) {
-        let refused = json!({ "type": "refused", "error": error_json(
-            "busy",
-            "a trainer session runs in another tab on this server: close it first (one session \
-             runs at a time, so that it keeps its 60 steps per second)") });
-        let _ = send_within(
-            &mut socket,
-            Message::Text(refused.to_string().into()),
-            send_timeout,
-        )
-        .await;
+        let refused = TrainerMessage::Refused {
+            error: error_body(
+                Fault::Busy,
+                "a trainer session runs in another tab on this server: close it first (one \
+                 session runs at a time, so that it keeps its 60 steps per second)",
+            ),
+        };
+        let _ = send_within(&mut socket, text_of(&refused), send_timeout).await;
         return;
     }
     let (commands, command_rx) = std::sync::mpsc::sync_channel::<Command>(COMMAND_QUEUE);
-    let (frames_tx, mut frames) = watch::channel::<Option<Arc<Frame>>>(None);
+    let (frames_tx, frames) = watch::channel::<Option<Arc<Frame>>>(None);
     let (stats_tx, stats) = watch::channel(Stats::default());
-    let (texts_tx, mut texts) = mpsc::unbounded_channel::<Value>();
+    let (texts_tx, texts) = mpsc::unbounded_channel::<TrainerMessage>();
     let stop = Arc::new(AtomicBool::new(false));
     let thread = {
         let stop = Arc::clone(&stop);
@@ -217,96 +368,17 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
         std::thread::Builder::new()
             .name("studio-trainer".to_owned())
             .spawn(move || {
-                simulate(
-                    &organs,
-                    &command_rx,
-                    &frames_tx,
-                    &stats_tx,
-                    &texts_tx,
-                    &stop,
-                )
+                let out = Outlets {
+                    frames: frames_tx,
+                    stats: stats_tx,
+                    texts: texts_tx,
+                };
+                simulate(&organs, &command_rx, &out, &stop)
             })
     };
-    let mut shutdown = studio.on_shutdown();
-    let mut sent_version = 0u64;
-    let mut frames_sent = 0u64;
-    let mut window = (Instant::now(), 0u64);
-    let mut frames_per_s = 0.0;
-    let mut ticker = tokio::time::interval(STATS_EVERY);
     if thread.is_ok() {
-        loop {
-            tokio::select! {
-                incoming = socket.recv() => {
-                    let text = match incoming {
-                        Some(Ok(Message::Text(t))) => t.to_string(),
-                        Some(Ok(Message::Close(_)) | Err(_)) | None => break,
-                        Some(Ok(_)) => continue,
-                    };
-                    let refusal = match serde_json::from_str::<Command>(&text) {
-                        Ok(c) => match commands.try_send(c) {
-                            Ok(()) => None,
-                            Err(std::sync::mpsc::TrySendError::Full(_)) => Some(error_json(
-                                "busy",
-                                format!("more than {COMMAND_QUEUE} commands are waiting for the \
-                                         simulation: this one was dropped"),
-                            )),
-                            Err(std::sync::mpsc::TrySendError::Disconnected(_)) => break,
-                        },
-                        Err(e) => Some(error_json(
-                            "usage", format!("the page sent a message the server does not know: {e}"))),
-                    };
-                    if let Some(error) = refusal {
-                        let m = json!({ "type": "refused", "error": error });
-                        if !send_within(&mut socket, Message::Text(m.to_string().into()), send_timeout).await {
-                            break;
-                        }
-                    }
-                }
-                changed = frames.changed() => {
-                    if changed.is_err() {
-                        break;
-                    }
-                    let frame = frames.borrow_and_update().clone();
-                    if let Some(frame) = frame {
-                        let with_indices = frame.surface.0 != sent_version;
-                        let bytes = frame.encode(with_indices);
-                        if !send_within(&mut socket, Message::Binary(bytes.into()), send_timeout).await {
-                            break;
-                        }
-                        sent_version = frame.surface.0;
-                        frames_sent += 1;
-                    }
-                }
-                Some(text) = texts.recv() => {
-                    if text["type"] == "scene" {
-                        // A new organ: its first frame carries the index buffer.
-                        sent_version = 0;
-                    }
-                    if !send_within(&mut socket, Message::Text(text.to_string().into()), send_timeout).await {
-                        break;
-                    }
-                }
-                _ = ticker.tick() => {
-                    let elapsed = window.0.elapsed().as_secs_f64();
-                    if elapsed >= 1.0 {
-                        frames_per_s = (frames_sent - window.1) as f64 / elapsed;
-                        window = (Instant::now(), frames_sent);
-                    }
-                    let s = stats.borrow().clone();
-                    let m = json!({
-                        "type": "stats", "steps": s.steps,
-                        "step_ms": { "median": s.step_ms.0, "p99": s.step_ms.1 },
-                        "steps_per_s": s.steps_per_s, "frames_per_s": frames_per_s,
-                        "volume_drift": s.volume_drift, "nodes": s.nodes, "tets": s.tets,
-                        "paused": s.paused, "force_n": s.force_n,
-                    });
-                    if !send_within(&mut socket, Message::Text(m.to_string().into()), send_timeout).await {
-                        break;
-                    }
-                }
-                _ = shutdown.changed() => break,
-            }
-        }
+        let mut relay = Relay::new(socket, send_timeout);
+        relay.run(&studio, &commands, frames, &stats, texts).await;
     }
     stop.store(true, Ordering::Relaxed);
     drop(commands);
@@ -316,103 +388,193 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
     organs.busy.store(false, Ordering::Release);
 }
 
+/// The socket's side of a session: what it sent, and its frame rate.
+struct Relay {
+    socket: WebSocket,
+    send_timeout: Duration,
+    /// The surface version of the last index buffer sent (0: none yet for this organ).
+    sent_version: u64,
+    frames_sent: u64,
+    /// Since when, and from which count, the frame rate is measured.
+    window: (Instant, u64),
+    frames_per_s: f64,
+}
+
+impl Relay {
+    fn new(socket: WebSocket, send_timeout: Duration) -> Relay {
+        Relay {
+            socket,
+            send_timeout,
+            sent_version: 0,
+            frames_sent: 0,
+            window: (Instant::now(), 0),
+            frames_per_s: 0.0,
+        }
+    }
+
+    /// Relays until the tab closes, a send times out, the thread ends or the studio shuts
+    /// down: the page's commands in, frames, messages and stats out.
+    async fn run(
+        &mut self,
+        studio: &Studio,
+        commands: &std::sync::mpsc::SyncSender<Command>,
+        mut frames: watch::Receiver<Option<Arc<Frame>>>,
+        stats: &watch::Receiver<Stats>,
+        mut texts: mpsc::UnboundedReceiver<TrainerMessage>,
+    ) {
+        let mut shutdown = studio.on_shutdown();
+        let mut ticker = tokio::time::interval(STATS_EVERY);
+        loop {
+            let go_on = tokio::select! {
+                incoming = self.socket.recv() => match incoming {
+                    Some(Ok(Message::Text(t))) => self.command(&t, commands).await,
+                    Some(Ok(Message::Close(_)) | Err(_)) | None => false,
+                    Some(Ok(_)) => true,
+                },
+                changed = frames.changed() => {
+                    let frame = frames.borrow_and_update().clone();
+                    changed.is_ok() && self.frame(frame).await
+                }
+                Some(m) = texts.recv() => self.message(&m).await,
+                _ = ticker.tick() => {
+                    let now = stats.borrow().clone();
+                    self.stats(now).await
+                }
+                _ = shutdown.changed() => false,
+            };
+            if !go_on {
+                break;
+            }
+        }
+    }
+
+    async fn send(&mut self, m: &TrainerMessage) -> bool {
+        send_within(&mut self.socket, text_of(m), self.send_timeout).await
+    }
+
+    /// A command from the page: queued for the simulation thread, or refused (unknown, or too
+    /// many waiting). False when the thread has gone or the refusal cannot be sent.
+    async fn command(
+        &mut self,
+        text: &str,
+        commands: &std::sync::mpsc::SyncSender<Command>,
+    ) -> bool {
+        use std::sync::mpsc::TrySendError;
+        let refusal = match serde_json::from_str::<Command>(text) {
+            Ok(c) => match commands.try_send(c) {
+                Ok(()) => return true,
+                Err(TrySendError::Full(_)) => error_body(
+                    Fault::Busy,
+                    format!(
+                        "more than {COMMAND_QUEUE} commands are waiting for the simulation: \
+                         this one was dropped"
+                    ),
+                ),
+                Err(TrySendError::Disconnected(_)) => return false,
+            },
+            Err(e) => error_body(
+                Fault::Usage,
+                format!("the page sent a message the server does not know: {e}"),
+            ),
+        };
+        self.send(&TrainerMessage::Refused { error: refusal }).await
+    }
+
+    /// The newest frame, with the index buffer when the surface changed since the last sent.
+    async fn frame(&mut self, frame: Option<Arc<Frame>>) -> bool {
+        let Some(frame) = frame else {
+            return true;
+        };
+        let with_indices = frame.surface.0 != self.sent_version;
+        let bytes = frame.encode(with_indices);
+        if !send_within(
+            &mut self.socket,
+            Message::Binary(bytes.into()),
+            self.send_timeout,
+        )
+        .await
+        {
+            return false;
+        }
+        self.sent_version = frame.surface.0;
+        self.frames_sent += 1;
+        true
+    }
+
+    /// A message of the simulation thread.
+    async fn message(&mut self, m: &TrainerMessage) -> bool {
+        if matches!(m, TrainerMessage::Scene(_)) {
+            // A new organ: its first frame carries the index buffer.
+            self.sent_version = 0;
+        }
+        self.send(m).await
+    }
+
+    /// The stats, with the frame rate measured here.
+    async fn stats(&mut self, stats: Stats) -> bool {
+        let elapsed = self.window.0.elapsed().as_secs_f64();
+        if elapsed >= 1.0 {
+            self.frames_per_s = (self.frames_sent - self.window.1) as f64 / elapsed;
+            self.window = (Instant::now(), self.frames_sent);
+        }
+        let m = TrainerMessage::Stats(Stats {
+            frames_per_s: self.frames_per_s,
+            ..stats
+        });
+        self.send(&m).await
+    }
+}
+
+/// Where the simulation thread publishes: the newest frame, the newest stats, and its messages
+/// in order.
+struct Outlets {
+    frames: watch::Sender<Option<Arc<Frame>>>,
+    stats: watch::Sender<Stats>,
+    texts: mpsc::UnboundedSender<TrainerMessage>,
+}
+
+impl Outlets {
+    fn send(&self, m: TrainerMessage) {
+        // The socket task has gone: the thread is about to be stopped.
+        let _ = self.texts.send(m);
+    }
+
+    fn event(&self, e: &TrainerEvent) {
+        self.send(TrainerMessage::Event { event: e.clone() });
+    }
+
+    fn fail(&self, r: Refusal) {
+        self.send(TrainerMessage::Failed { error: r.body() });
+    }
+}
+
 /// The simulation thread: applies commands, steps at [`STEPS_PER_SECOND`], publishes frames.
 fn simulate(
     organs: &Organs,
     commands: &std::sync::mpsc::Receiver<Command>,
-    frames: &watch::Sender<Option<Arc<Frame>>>,
-    stats: &watch::Sender<Stats>,
-    texts: &mpsc::UnboundedSender<Value>,
+    out: &Outlets,
     stop: &AtomicBool,
 ) {
     let _span = tracing::info_span!("studio_trainer").entered();
     let period = Duration::from_secs_f64(1.0 / STEPS_PER_SECOND);
-    let mut desk = Desk::default();
-    let mut paused = false;
-    let mut number = 0u32;
+    let mut sim = Simulation::default();
     let mut next = Instant::now();
-    let mut rate = (Instant::now(), 0u64, 0.0f64);
-    let event = |e: &TrainerEvent| {
-        let _ = texts.send(json!({ "type": "event", "event": {
-            "kind": e.kind, "step": e.step, "text": e.text } }));
-    };
-    let fail = |kind: &str, message: String| {
-        let _ = texts.send(json!({ "type": "failed", "error": error_json(kind, message) }));
-    };
     while !stop.load(Ordering::Relaxed) {
-        let mut single = false;
         loop {
             let command = match commands.try_recv() {
                 Ok(c) => c,
                 Err(std::sync::mpsc::TryRecvError::Empty) => break,
                 Err(std::sync::mpsc::TryRecvError::Disconnected) => return,
             };
-            let result = match command {
-                Command::Load { organ } => organs.get(&organ).and_then(|o| desk.load(o, &organ)),
-                Command::Reset => desk.reset(),
-                Command::Demo => desk.demo().map(|(scene, started)| {
-                    let _ = texts.send(scene);
-                    event(&started);
-                    None
-                }),
-                Command::Pause { paused: p } => {
-                    paused = p;
-                    Ok(None)
-                }
-                Command::Step => {
-                    single = true;
-                    Ok(None)
-                }
-                Command::Tool { .. } => Ok(None),
-                other => match &mut desk.live {
-                    Some(l) => l.apply(other, &event).map(|()| None),
-                    None => Err(desk.not_live()),
-                },
-            };
-            match result {
-                Ok(Some(scene)) => {
-                    let _ = texts.send(scene);
-                    next = Instant::now();
-                }
-                Ok(None) => {}
-                Err(message) => fail("run", message),
+            match sim.apply(command, organs, out) {
+                // A new scene: its steps start now.
+                Ok(true) => next = Instant::now(),
+                Ok(false) => {}
+                Err(r) => out.fail(r),
             }
         }
-        if let Some(l) = &mut desk.live {
-            if !paused || single {
-                match l.session.step() {
-                    Ok(events) => events.iter().for_each(event),
-                    Err(e) => {
-                        fail(
-                            "run",
-                            format!("the simulation failed: {e}; press Reset to start again"),
-                        );
-                        desk.diverged();
-                        continue;
-                    }
-                }
-                rate.1 += 1;
-            }
-            let elapsed = rate.0.elapsed().as_secs_f64();
-            if elapsed >= 1.0 {
-                rate = (Instant::now(), 0, rate.1 as f64 / elapsed);
-            }
-            number = number.wrapping_add(1);
-            frames.send_replace(Some(Arc::new(l.frame(number))));
-            let s = &l.session;
-            let (median, p99) = s.step_ms();
-            let force = s.tool_force();
-            stats.send_replace(Stats {
-                steps: s.steps(),
-                step_ms: (median, p99),
-                steps_per_s: rate.2,
-                volume_drift: s.volume_drift(),
-                nodes: s.body().node_count(),
-                tets: s.body().tets().len(),
-                paused,
-                force_n: f64::from(force.length()),
-            });
-        }
+        sim.step_live(out);
+        sim.publish(out);
         next += period;
         let now = Instant::now();
         if next > now {
@@ -421,6 +583,112 @@ fn simulate(
             // Behind (a slow step): do not try to catch up with a burst.
             next = now;
         }
+    }
+}
+
+/// The simulation thread's state between steps.
+#[derive(Default)]
+struct Simulation {
+    desk: Desk,
+    paused: bool,
+    /// One step asked for while paused.
+    single: bool,
+    /// Frames published.
+    number: u32,
+    /// The step rate: since when, steps since then, the last measured rate.
+    rate: Option<(Instant, u64, f64)>,
+}
+
+impl Simulation {
+    /// Applies one command of the page; whether it started a new scene.
+    fn apply(&mut self, command: Command, organs: &Organs, out: &Outlets) -> Result<bool, Refusal> {
+        let scene = match command {
+            Command::Load { organ } => Some(self.desk.load(organs.get(&organ)?, &organ)?),
+            Command::Reset => self.desk.reset()?,
+            Command::Demo => {
+                let (scene, started) = self.desk.demo()?;
+                out.send(TrainerMessage::Scene(scene));
+                out.event(&started);
+                None
+            }
+            Command::Pause { paused } => {
+                self.paused = paused;
+                None
+            }
+            Command::Step => {
+                self.single = true;
+                None
+            }
+            tool => {
+                match self.desk.live.as_mut() {
+                    Some(live) => live.apply(tool, out)?,
+                    None => return Err(self.desk.not_live()),
+                }
+                None
+            }
+        };
+        Ok(match scene {
+            Some(scene) => {
+                out.send(TrainerMessage::Scene(scene));
+                true
+            }
+            None => false,
+        })
+    }
+
+    /// One step of the live session, unless paused (one step when asked for while paused); a
+    /// step that fails drops the session and tells the page to reset.
+    fn step_live(&mut self, out: &Outlets) {
+        let single = std::mem::take(&mut self.single);
+        let Some(live) = &mut self.desk.live else {
+            return;
+        };
+        if self.paused && !single {
+            return;
+        }
+        match live.session.step() {
+            Ok(events) => events.iter().for_each(|e| out.event(e)),
+            Err(e) => {
+                let kind = e.kind();
+                out.fail(Refusal::new(
+                    Fault::Scene(kind),
+                    format!("the simulation failed: {e}; press Reset to start again"),
+                ));
+                self.desk.diverged();
+                return;
+            }
+        }
+        let rate = self.rate.get_or_insert((Instant::now(), 0, 0.0));
+        rate.1 += 1;
+    }
+
+    /// The live session's newest frame and stats.
+    fn publish(&mut self, out: &Outlets) {
+        let Some(live) = &mut self.desk.live else {
+            return;
+        };
+        let rate = self.rate.get_or_insert((Instant::now(), 0, 0.0));
+        let elapsed = rate.0.elapsed().as_secs_f64();
+        if elapsed >= 1.0 {
+            *rate = (Instant::now(), 0, rate.1 as f64 / elapsed);
+        }
+        let steps_per_s = rate.2;
+        self.number = self.number.wrapping_add(1);
+        out.frames
+            .send_replace(Some(Arc::new(live.frame(self.number))));
+        let s = &live.session;
+        let (median, p99) = s.step_ms();
+        out.stats.send_replace(Stats {
+            steps: s.steps(),
+            step_ms: StepTimes { median, p99 },
+            steps_per_s,
+            frames_per_s: 0.0,
+            volume_drift: s.volume_drift(),
+            nodes: s.body().node_count(),
+            tets: s.body().tets().len(),
+            paused: self.paused,
+            force_n: f64::from(s.tool_force().length()),
+        });
     }
 }
 
@@ -436,31 +704,31 @@ struct Desk {
 
 impl Desk {
     /// Starts a session on `organ`; the `scene` message.
-    fn load(&mut self, organ: Arc<Organ>, id: &str) -> Result<Option<Value>, String> {
+    fn load(&mut self, organ: Arc<Organ>, id: &str) -> Result<SceneInfo, Refusal> {
         let live = Live::new(&organ, id)?;
-        let scene = live.scene_message();
+        let scene = live.scene();
         self.loaded = Some((organ, id.to_owned()));
         self.live = Some(live);
-        Ok(Some(scene))
+        Ok(scene)
     }
 
     /// The loaded organ's session afresh (also after a failure); nothing before a load.
-    fn reset(&mut self) -> Result<Option<Value>, String> {
+    fn reset(&mut self) -> Result<Option<SceneInfo>, Refusal> {
         match self.loaded.clone() {
-            Some((organ, id)) => self.load(organ, &id),
+            Some((organ, id)) => self.load(organ, &id).map(Some),
             None => Ok(None),
         }
     }
 
     /// The loaded organ afresh with its demonstration playing: the `scene` message and the
     /// demonstration's first event.
-    fn demo(&mut self) -> Result<(Value, TrainerEvent), String> {
+    fn demo(&mut self) -> Result<(SceneInfo, TrainerEvent), Refusal> {
         let Some((organ, id)) = self.loaded.clone() else {
             return Err(self.not_live());
         };
         let mut fresh = Live::new(&organ, &id)?;
-        let started = fresh.session.play().map_err(|e| e.to_string())?;
-        let scene = fresh.scene_message();
+        let started = fresh.session.play()?;
+        let scene = fresh.scene();
         self.live = Some(fresh);
         Ok((scene, started))
     }
@@ -471,11 +739,14 @@ impl Desk {
     }
 
     /// Why a tool cannot act now.
-    fn not_live(&self) -> String {
+    fn not_live(&self) -> Refusal {
         if self.loaded.is_some() {
-            "the simulation stopped after a failure: press Reset to start again".to_owned()
+            Refusal::new(
+                Fault::Scene(SceneErrorKind::Simulation),
+                "the simulation stopped after a failure: press Reset to start again",
+            )
         } else {
-            "load an organ first".to_owned()
+            Refusal::new(Fault::Usage, "load an organ first")
         }
     }
 }
@@ -488,8 +759,8 @@ struct Live {
 }
 
 impl Live {
-    fn new(organ: &Organ, id: &str) -> Result<Live, String> {
-        let session = Session::new(organ, SessionOptions::default()).map_err(|e| e.to_string())?;
+    fn new(organ: &Organ, id: &str) -> Result<Live, SceneError> {
+        let session = Session::new(organ, SessionOptions::default())?;
         Ok(Live {
             id: id.to_owned(),
             surface: Arc::new((0, Vec::new())),
@@ -498,35 +769,45 @@ impl Live {
     }
 
     /// The `scene` message: what the page allocates for.
-    fn scene_message(&self) -> Value {
+    fn scene(&self) -> SceneInfo {
         let s = &self.session;
         let (vertices, triangles) = s.capacity();
-        json!({
-            "type": "scene", "organ": self.id, "label": s.label(),
-            "nodes": s.body().node_count(), "tets": s.body().tets().len(),
-            "capacity": { "vertices": vertices, "triangles": triangles },
-            "tray": { "size": [s.tray_side(), s.tray_side()], "top": 0.0 },
-        })
+        SceneInfo {
+            organ: self.id.clone(),
+            label: s.label().to_owned(),
+            nodes: s.body().node_count(),
+            tets: s.body().tets().len(),
+            capacity: Capacity {
+                vertices,
+                triangles,
+            },
+            tray: TrayInfo {
+                size: [s.tray_side(), s.tray_side()],
+                top: 0.0,
+            },
+        }
     }
 
-    fn apply(&mut self, command: Command, event: &impl Fn(&TrainerEvent)) -> Result<(), String> {
+    /// A trainee's tool command (grab, drag, release, cut, suture); its events go out.
+    fn apply(&mut self, command: Command, out: &Outlets) -> Result<(), SceneError> {
         let v = |p: [f32; 3]| Vec3::from_array(p);
         let s = &mut self.session;
-        let done = match command {
-            Command::Grab { point, triangle } => s.grab(v(point), triangle).map(|e| event(&e)),
-            Command::Drag { target } => {
-                s.drag(v(target));
-                Ok(())
-            }
-            Command::Release => s.release().map(|e| e.iter().for_each(event)),
+        match command {
+            Command::Grab { point, triangle } => out.event(&s.grab(v(point), triangle)?),
+            Command::Drag { target } => s.drag(v(target)),
+            Command::Release => s.release()?.iter().for_each(|e| out.event(e)),
             Command::Cut { path, view_dir } => {
                 let path: Vec<Vec3> = path.into_iter().map(v).collect();
-                s.cut(&path, v(view_dir)).map(|_| ())
+                s.cut(&path, v(view_dir))?;
             }
-            Command::Suture { a, b } => s.suture(v(a), v(b)).map(|e| event(&e)),
-            _ => Ok(()),
-        };
-        done.map_err(|e| e.to_string())
+            Command::Suture { a, b } => out.event(&s.suture(v(a), v(b))?),
+            Command::Load { .. }
+            | Command::Reset
+            | Command::Demo
+            | Command::Pause { .. }
+            | Command::Step => {}
+        }
+        Ok(())
     }
 
     fn frame(&mut self, number: u32) -> Frame {
@@ -564,16 +845,19 @@ mod tests {
             None,
             "nothing to reset before a load"
         );
-        assert_eq!(desk.not_live(), "load an organ first");
+        assert_eq!(
+            desk.not_live(),
+            Refusal::new(Fault::Usage, "load an organ first")
+        );
         desk.load(Arc::clone(&organ), "appendix").unwrap();
         for _ in 0..3 {
             desk.live.as_mut().unwrap().session.step().unwrap();
         }
         desk.diverged();
         assert!(desk.live.is_none());
-        assert!(desk.not_live().contains("press Reset"));
+        assert!(desk.not_live().message.contains("press Reset"));
         let scene = desk.reset().unwrap().expect("a scene after Reset");
-        assert_eq!(scene["organ"], "appendix");
+        assert_eq!(scene.organ, "appendix");
         let live = desk.live.as_mut().expect("a live session after Reset");
         assert_eq!(live.session.steps(), 0);
         live.session.step().unwrap();
@@ -582,5 +866,40 @@ mod tests {
         desk.diverged();
         assert!(desk.demo().is_ok());
         assert!(desk.live.is_some());
+    }
+
+    /// The kinds the page reads: "load an organ first" is a usage error, an unknown organ is not
+    /// found, a tool the session refuses is a usage error, a failed step a run error.
+    #[test]
+    fn trainer_errors_have_their_own_kinds() {
+        let kind = |f: Fault| error_body(f, "").kind;
+        assert_eq!(Desk::default().not_live().body().kind, "usage");
+        let unknown = Organs::default().get("u-gone").err().map(Refusal::body);
+        assert_eq!(unknown.map(|b| b.kind).as_deref(), Some("not_found"));
+        assert_eq!(kind(Fault::Busy), "busy");
+        assert_eq!(kind(Fault::Scene(SceneErrorKind::Tool)), "usage");
+        assert_eq!(kind(Fault::Scene(SceneErrorKind::Simulation)), "run");
+        assert_eq!(kind(Fault::Scene(SceneErrorKind::TooLarge)), "too_large");
+        assert_eq!(kind(Fault::Scene(SceneErrorKind::Meshing)), "mesh");
+    }
+
+    /// The messages keep the shapes the page reads (`API.md`).
+    #[test]
+    fn messages_are_tagged_by_type() {
+        let m: TrainerMessage = TrainerMessage::Refused {
+            error: error_body(Fault::Busy, "wait"),
+        };
+        let v: serde_json::Value = serde_json::to_value(&m).unwrap();
+        assert_eq!(
+            v,
+            serde_json::json!({ "type": "refused",
+                "error": { "kind": "busy", "field": null, "message": "wait" } })
+        );
+        let c: Command = serde_json::from_str(r#"{"type": "pause", "paused": true}"#).unwrap();
+        assert_eq!(c, Command::Pause { paused: true });
+        assert!(
+            serde_json::from_str::<Command>(r#"{"type": "tool", "tool": "probe"}"#).is_err(),
+            "the tool message is gone"
+        );
     }
 }

@@ -241,8 +241,11 @@ fn a_stop_ends_while_a_trainer_tab_has_stopped_reading() -> Result {
         let (mut tab, _) =
             tokio_tungstenite::connect_async(format!("ws://{}/api/trainer/ws", server.addr))
                 .await?;
-        let load = serde_json::json!({ "type": "load", "organ": "liver" });
-        tab.send(Message::Text(load.to_string().into())).await?;
+        let load = tissue_studio::trainer::Command::Load {
+            organ: "liver".to_owned(),
+        };
+        tab.send(Message::Text(serde_json::to_string(&load)?.into()))
+            .await?;
         Ok::<_, Box<dyn std::error::Error>>(tab)
     })?;
     // Long enough for the kernel's buffers to fill and a send to block.

@@ -2,7 +2,8 @@
 //! script the studio's demonstration plays) on the shipped appendix (8 × 2 × 2 cm, 32 × 8 × 8
 //! cells, base pinned, on the abdominal wall) with this run's physics: the tip lifted by a
 //! grasper and let go, an incision near the base, the tip cut off, the incision sutured with
-//! three stitches. Prints every surgery event and the step times (median, p99; the steps with a
+//! three stitches. Prints every surgery event (as tissue-scenes' `TrainerEvent::surgery` words
+//! it, the studio's events list too) and the step times (median, p99; the steps with a
 //! cut with the cut's own time included), writes OBJ frames of the boundary surface with
 //! `--frames DIR` every `--every` steps.
 
@@ -12,24 +13,17 @@ use glam::Vec3;
 use tissue_mesh::TriMesh;
 use tissue_pbd::{ContactParams, SoftBody, StepSettings};
 use tissue_scenes::{
-    AppendixPlan, AppendixProcedure, Organ, SceneError, Script, ShippedOrgan, Tray,
+    AppendixPlan, AppendixProcedure, Organ, SceneError, Script, ShippedOrgan, TrainerEvent, Tray,
 };
-use tissue_surgery::{Surgery, SurgeryEvent, SurgerySettings};
+use tissue_surgery::{Surgery, SurgerySettings};
 
 use crate::cli::{Cli, Scheme};
-use crate::failure::{Exit, Failure};
+use crate::failure::{self, Exit, Failure};
 use crate::ms;
 use crate::run::percentiles;
 
 fn surgery_failure(e: &tissue_surgery::SurgeryError) -> Failure {
-    Failure::new(Exit::Run, format!("surgery: {e}"))
-}
-
-fn scene_failure(e: &SceneError) -> Failure {
-    match e {
-        SceneError::Pbd(e) => Failure::from_pbd(e),
-        other => Failure::new(Exit::Run, format!("appendix scenario: {other}")),
-    }
+    failure::from_scene(&SceneError::Surgery(e.clone()))
 }
 
 /// Runs the scenario and prints its summary.
@@ -44,7 +38,7 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
     let tray = Tray::for_extent(organ.extent());
     let mut body = organ
         .body(&material, settings, ContactParams::default(), tray)
-        .map_err(|e| scene_failure(&e))?;
+        .map_err(|e| failure::from_scene(&e))?;
     let mut surgery =
         Surgery::new(&body, SurgerySettings::default()).map_err(|e| surgery_failure(&e))?;
     println!(
@@ -54,7 +48,7 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
         body.total_mass()
     );
     let mut script = AppendixProcedure::new(&mut body, AppendixPlan::default())
-        .map_err(|e| scene_failure(&e))?;
+        .map_err(|e| failure::from_scene(&e))?;
     let total = script.steps();
     let mut plain = Vec::new();
     let mut with_cut = Vec::new();
@@ -64,14 +58,14 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
     for step in 1..=total {
         script
             .before_step(step, &mut body)
-            .map_err(|e| scene_failure(&e))?;
+            .map_err(|e| failure::from_scene(&e))?;
         let t = Instant::now();
-        body.step().map_err(|e| Failure::from_pbd(&e))?;
+        body.step().map_err(|e| failure::from_pbd(&e))?;
         let drift = body.volume() / body.rest_volume() - 1.0;
         worst_drift = worst_drift.max(drift.abs());
         let done = script
             .after_step(step, &mut body, &mut surgery)
-            .map_err(|e| scene_failure(&e))?;
+            .map_err(|e| failure::from_scene(&e))?;
         let elapsed = t.elapsed().as_secs_f64();
         if done.cut {
             with_cut.push(elapsed);
@@ -80,7 +74,8 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
         }
         for e in &done.events {
             events_seen += 1;
-            println!("  step {step:3}  {}", describe(e));
+            let event = TrainerEvent::surgery(step as u64, e);
+            println!("  step {step:3}  {}", event.text);
         }
         if let Some(dir) = &cli.frames {
             if step % cli.every as usize == 0 || step == total {
@@ -129,49 +124,6 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
         println!("  frames        {frames} written to {}", dir.display());
     }
     Ok(())
-}
-
-fn describe(e: &SurgeryEvent) -> String {
-    match e {
-        SurgeryEvent::CutAdvanced {
-            new_nodes,
-            changed_tets,
-            opened_faces,
-            ..
-        } => format!(
-            "cut advanced: {} wall triangles, {} new nodes ({}..{}), {} tets moved",
-            opened_faces.len(),
-            new_nodes.len(),
-            new_nodes.start,
-            new_nodes.end,
-            changed_tets.len()
-        ),
-        SurgeryEvent::PieceDetached {
-            component,
-            tets,
-            nodes,
-            rest_volume,
-        } => format!(
-            "piece detached: component {component}, {} tets, {} nodes, {rest_volume:.2} cm³",
-            tets.len(),
-            nodes.len()
-        ),
-        SurgeryEvent::SuturePlaced {
-            suture,
-            nodes,
-            constraint,
-        } => format!(
-            "suture {suture} placed: nodes {} and {}, constraint {constraint}",
-            nodes[0], nodes[1]
-        ),
-        SurgeryEvent::SutureRemoved { suture, nodes } => {
-            format!(
-                "suture {suture} removed: nodes {} and {}",
-                nodes[0], nodes[1]
-            )
-        }
-        other => format!("{other:?}"),
-    }
 }
 
 fn write_frame(

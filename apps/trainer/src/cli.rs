@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Parser, ValueEnum};
+use tissue_scenes::PressPlan;
 
 const ABOUT: &str = "Headless surgical-trainer run: an organ settles on a tray, a probe presses \
 into it and drags along a path; prints per-step timing and the volume drift, writes surface \
@@ -177,24 +178,25 @@ pub struct Cli {
     #[arg(long, value_name = "MU", default_value_t = 0.5)]
     pub friction: f32,
     /// Radius of the probe (cm).
-    #[arg(long, value_name = "CM", default_value_t = 0.4)]
+    #[arg(long, value_name = "CM", default_value_t = PressPlan::default().radius)]
     pub tool_radius: f32,
     /// How far below the organ's top the probe's tip presses (cm).
-    #[arg(long, value_name = "CM", default_value_t = 1.5)]
+    #[arg(long, value_name = "CM", default_value_t = PressPlan::default().depth)]
     pub depth: f32,
     /// A point X,Z (cm) of the drag path on the tray plane; give two or more in order [default:
     /// from -size/4,0 to size/4,0].
     #[arg(long = "waypoint", value_name = "X,Z", value_parser = parse_xz, allow_hyphen_values = true)]
     pub waypoints: Vec<[f32; 2]>,
-    /// Steps to let the organ settle on the tray.
-    #[arg(long, value_name = "N", default_value_t = 100)]
-    pub settle_steps: u32,
+    /// Steps to let the organ settle on the tray (the defaults of the timeline are tissue-scenes'
+    /// PressPlan::default(), the studio's demonstration's too).
+    #[arg(long, value_name = "N", default_value_t = PressPlan::default().settle)]
+    pub settle_steps: usize,
     /// Steps to press the probe in.
-    #[arg(long, value_name = "N", default_value_t = 50)]
-    pub press_steps: u32,
+    #[arg(long, value_name = "N", default_value_t = PressPlan::default().press)]
+    pub press_steps: usize,
     /// Steps to drag the probe along the path.
-    #[arg(long, value_name = "N", default_value_t = 100)]
-    pub drag_steps: u32,
+    #[arg(long, value_name = "N", default_value_t = PressPlan::default().drag)]
+    pub drag_steps: usize,
     /// Write surface frames into this folder (created if missing).
     #[arg(long, value_name = "DIR")]
     pub frames: Option<PathBuf>,
@@ -278,4 +280,23 @@ fn parse_xz(s: &str) -> Result<[f32; 2], String> {
             .ok_or_else(|| format!("{p:?} is not a finite number"))?;
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The headless run and the studio's demonstration on a tray run one timeline: the flags'
+    /// defaults are tissue-scenes' PressPlan::default().
+    #[test]
+    fn the_press_flags_default_to_the_scenes_plan() {
+        let cli = Cli::try_parse_from(["trainer"]).unwrap_or_else(|e| panic!("{e}"));
+        let plan = PressPlan::default();
+        assert_eq!(
+            (cli.settle_steps, cli.press_steps, cli.drag_steps),
+            (plan.settle, plan.press, plan.drag)
+        );
+        assert_eq!((cli.depth, cli.tool_radius), (plan.depth, plan.radius));
+        assert!(cli.waypoints.is_empty() && plan.waypoints.is_empty());
+    }
 }

@@ -1,112 +1,149 @@
-//! Why the program stops: a one-line message and its exit code.
+//! Why the program stops: tissue-cli's [`Failure`] (a one-line message and its exit code), and
+//! the trainer's mappings of its libraries' errors to it: a scene error's kind to the exit-code
+//! table ([`exit_of`]), the solver's parameters to the flags that set them ([`flag_of`]).
 
 use tissue_meshio::MeshIoError;
-use tissue_pbd::PbdError;
+use tissue_pbd::{PbdError, PbdParam};
+use tissue_scenes::{SceneError, SceneErrorKind};
 
-/// The exit codes: the table every tissue binary shares (see `trainer --help`).
-pub use tissue_cli::Exit;
+/// The exit codes (the table every tissue binary shares, see `trainer --help`) and the failure
+/// the program stops with.
+pub use tissue_cli::{Exit, Failure};
 
-/// A reason to stop with a non-zero exit code.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Failure {
-    /// The exit code.
-    pub code: Exit,
-    /// What went wrong and what to change.
-    pub message: String,
+/// The exit code of a scene error's kind: the one place the trainer maps them.
+pub fn exit_of(kind: SceneErrorKind) -> Exit {
+    match kind {
+        SceneErrorKind::Input => Exit::Input,
+        SceneErrorKind::Mesh | SceneErrorKind::TooLarge => Exit::Mesh,
+        SceneErrorKind::Meshing => Exit::Meshing,
+        SceneErrorKind::Parameters | SceneErrorKind::Tool => Exit::Parameters,
+        SceneErrorKind::Simulation => Exit::Run,
+    }
 }
 
-impl Failure {
-    /// A failure with `code` and `message`.
-    pub fn new(code: Exit, message: impl Into<String>) -> Self {
-        Self {
-            code,
-            message: message.into(),
+/// The flag that sets a solver parameter, if the trainer has one.
+pub fn flag_of(param: PbdParam) -> Option<&'static str> {
+    use PbdParam as P;
+    match param {
+        P::Dt => Some("--dt"),
+        P::Substeps => Some("--substeps"),
+        P::Iterations => Some("--iterations"),
+        P::DistanceStiffness => Some("--stiffness"),
+        P::DistanceCompliance => Some("--compliance"),
+        P::CellSize => Some("--cell"),
+        P::StaticFriction | P::KineticFriction => Some("--friction"),
+        P::Density
+        | P::VolumeStiffness
+        | P::VolumeCompliance
+        | P::GravityX
+        | P::GravityY
+        | P::GravityZ
+        | P::Damping
+        | P::LinearDamping
+        | P::Margin
+        | P::Detection
+        | P::ContactReach
+        | P::ColliderReach
+        | P::Shapes
+        | P::FloorAxis
+        | P::FloorHeight
+        | P::NodeTetCount
+        | P::NodeCount
+        | P::TetCount
+        | P::Mass
+        | P::ConstraintNodes
+        | P::RestVolume
+        | P::RestLength
+        | P::Stiffness
+        | P::Compliance => None,
+    }
+}
+
+/// Reading the organ failed.
+pub fn from_mesh_io(e: &MeshIoError) -> Failure {
+    let code = exit_of(SceneErrorKind::of_mesh_io(e));
+    let message = match e {
+        MeshIoError::Io { .. } => format!("cannot read the organ: {e}; check the --organ path"),
+        MeshIoError::UnsupportedFormat { .. } => {
+            format!("{e} (for --organ; a surface goes to --surface)")
         }
-    }
+        MeshIoError::WrongKind { .. } => format!(
+            "{e}; --organ takes a tetrahedral mesh: .vtu, .msh (Gmsh), .vtk or TetGen \
+             .node/.ele (a surface goes to --surface)"
+        ),
+        _ => format!("the organ mesh is not usable: {e}; check it with meshinfo"),
+    };
+    Failure::new(code, message)
+}
 
-    /// The message on one line.
-    pub fn line(&self) -> String {
-        self.message
-            .split_whitespace()
-            .collect::<Vec<_>>()
-            .join(" ")
-    }
-
-    /// Reading the organ failed.
-    pub fn from_mesh_io(e: &MeshIoError) -> Self {
-        match e {
-            MeshIoError::Io { .. } => Failure::new(
-                Exit::Input,
-                format!("cannot read the organ: {e}; check the --organ path"),
-            ),
-            MeshIoError::UnsupportedFormat { .. } => Failure::new(
-                Exit::Input,
-                format!("{e} (for --organ; a surface goes to --surface)"),
-            ),
-            MeshIoError::WrongKind { .. } => Failure::new(
-                Exit::Input,
-                format!("{e}; --organ takes a tetrahedral mesh: .vtu, .msh (Gmsh), .vtk or TetGen .node/.ele (a surface goes to --surface)"),
-            ),
-            _ => Failure::new(
-                Exit::Mesh,
-                format!("the organ mesh is not usable: {e}; check it with meshinfo"),
-            ),
+/// The physics library refused a parameter or failed.
+pub fn from_pbd(e: &PbdError) -> Failure {
+    let code = exit_of(SceneErrorKind::of_pbd(e));
+    let message = match e {
+        PbdError::Diverged { .. } => {
+            format!("{e} (lower --dt or --stiffness, or raise --iterations)")
         }
-    }
-
-    /// The physics library refused a parameter or failed.
-    pub fn from_pbd(e: &PbdError) -> Self {
-        match e {
-            PbdError::Diverged { .. } => Failure::new(
-                Exit::Run,
-                format!("{e} (lower --dt or --stiffness, or raise --iterations)"),
-            ),
-            PbdError::DegenerateTet { .. } | PbdError::NodeOutOfRange { .. } => {
-                Failure::new(Exit::Mesh, format!("the organ mesh is not usable: {e}"))
-            }
-            PbdError::InvalidParameter { name, .. } => {
-                let flag = match *name {
-                    "dt" => " (--dt)",
-                    "iterations" => " (--iterations)",
-                    "distance_stiffness" => " (--stiffness)",
-                    "cell_size" => " (--cell)",
-                    "static_friction" | "kinetic_friction" => " (--friction)",
-                    _ => "",
-                };
-                Failure::new(Exit::Parameters, format!("{e}{flag}"))
-            }
-            PbdError::InvalidTool { .. } => {
-                Failure::new(Exit::Parameters, format!("{e} (--tool-radius)"))
-            }
-            PbdError::ColliderTooLarge { .. } => {
-                Failure::new(Exit::Parameters, format!("{e} (--cell)"))
-            }
-            _ => Failure::new(Exit::Run, format!("the run failed: {e}")),
+        PbdError::DegenerateTet { .. } | PbdError::NodeOutOfRange { .. } => {
+            format!("the organ mesh is not usable: {e}")
         }
+        PbdError::InvalidParameter { param, .. } => match flag_of(*param) {
+            Some(flag) => format!("{e} ({flag})"),
+            None => e.to_string(),
+        },
+        PbdError::InvalidTool { .. } => format!("{e} (--tool-radius)"),
+        PbdError::ColliderTooLarge { .. } => format!("{e} (--cell)"),
+        _ if code == Exit::Run => format!("the run failed: {e}"),
+        _ => e.to_string(),
+    };
+    Failure::new(code, message)
+}
+
+/// A scene error (tissue-scenes): its loader and solver errors as [`from_mesh_io`] and
+/// [`from_pbd`] say them, the others by their kind ([`exit_of`]).
+pub fn from_scene(e: &SceneError) -> Failure {
+    match e {
+        SceneError::Read(io) => from_mesh_io(io),
+        SceneError::Pbd(pbd) => from_pbd(pbd),
+        SceneError::Size { .. } => Failure::new(exit_of(e.kind()), format!("{e} (--size)")),
+        _ => Failure::new(exit_of(e.kind()), e.to_string()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solver_parameters_are_named_by_their_flags() {
+        let e = PbdError::InvalidParameter {
+            param: PbdParam::StaticFriction,
+            value: -1.0,
+            expected: "finite and ≥ 0",
+        };
+        let f = from_pbd(&e);
+        assert_eq!(f.code, Exit::Parameters);
+        assert!(f.line().ends_with("(--friction)"), "{}", f.line());
+        let e = PbdError::InvalidParameter {
+            param: PbdParam::Damping,
+            value: 2.0,
+            expected: "in [0, 1]",
+        };
+        assert_eq!(from_pbd(&e).line(), e.to_string(), "no flag sets damping");
+        let diverged = from_pbd(&PbdError::Diverged { step: 3, node: 7 });
+        assert_eq!(diverged.code, Exit::Run);
     }
 
-    /// A scene error (tissue-scenes): its mesh, meshing, solver and script failures mapped to
-    /// the table's codes.
-    pub fn from_scene(e: &tissue_scenes::SceneError) -> Self {
-        use tissue_scenes::SceneError;
-        match e {
-            SceneError::Read(e) => Failure::from_mesh_io(e),
-            SceneError::Pbd(e) => Failure::from_pbd(e),
-            SceneError::Meshing { .. } => Failure::new(Exit::Meshing, e.to_string()),
-            SceneError::Mesh { .. } | SceneError::TooLarge { .. } => {
-                Failure::new(Exit::Mesh, e.to_string())
-            }
-            SceneError::Size { .. } => Failure::new(Exit::Parameters, format!("{e} (--size)")),
-            SceneError::Tool(_) => Failure::new(Exit::Parameters, e.to_string()),
-            _ => Failure::new(Exit::Run, e.to_string()),
-        }
-    }
-
-    /// Writing an output failed.
-    pub fn output(what: &str, e: impl std::fmt::Display) -> Self {
-        Failure::new(
-            Exit::Output,
-            format!("cannot write the {what}: {e}; check the folder is writable"),
-        )
+    #[test]
+    fn scene_errors_go_by_their_kind() {
+        let tool = from_scene(&SceneError::Tool("a drag path needs two waypoints".into()));
+        assert_eq!(tool.code, Exit::Parameters);
+        let size = from_scene(&SceneError::Size { size: -1.0 });
+        assert_eq!(size.code, Exit::Parameters);
+        assert!(size.line().ends_with("(--size)"));
+        let meshing = SceneError::Meshing {
+            name: "open.obj".into(),
+            reason: "edge [0, 1] has one triangle".into(),
+        };
+        assert_eq!(from_scene(&meshing).code, Exit::Meshing);
     }
 }

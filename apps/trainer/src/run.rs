@@ -11,7 +11,7 @@ use tissue_render::{draw_text, render, Camera, ColorScale, Image, Rgb, Surface, 
 use tissue_scenes::{SceneError, Script};
 
 use crate::cli::{Cli, FrameFormat};
-use crate::failure::{Exit, Failure};
+use crate::failure::{self, Exit, Failure};
 use crate::scene::Scene;
 
 /// What the run measured.
@@ -45,7 +45,7 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
         Some(dir) => Some(Frames::new(cli, scene, dir)?),
         None => None,
     };
-    let settle = cli.settle_steps as usize;
+    let settle = scene.script.plan().settle;
     let total = scene.script.steps();
     let tool = scene.script.tool();
     let mut step_seconds = Vec::with_capacity(total);
@@ -75,15 +75,15 @@ pub fn run(cli: &Cli, scene: &mut Scene) -> Result<Summary, Failure> {
                         cli.size
                     ),
                 ),
-                e => Failure::from_scene(&e),
+                e => failure::from_scene(&e),
             })?;
         let t = Instant::now();
-        scene.body.step().map_err(|e| Failure::from_pbd(&e))?;
+        scene.body.step().map_err(|e| failure::from_pbd(&e))?;
         step_seconds.push(t.elapsed().as_secs_f64());
         force = scene
             .body
             .tool_force(tool)
-            .map_err(|e| Failure::from_pbd(&e))?
+            .map_err(|e| failure::from_pbd(&e))?
             / DYN_PER_NEWTON;
         largest_force = largest_force.max(force.length());
         worst_drift = worst_drift.max((scene.body.volume() / rest - 1.0).abs());
@@ -262,7 +262,7 @@ impl Frames {
             let pose = scene
                 .body
                 .tool(scene.script.tool())
-                .map_err(|e| Failure::from_pbd(&e))?
+                .map_err(|e| failure::from_pbd(&e))?
                 .pose();
             let probe = self
                 .probe

@@ -1,15 +1,16 @@
 //! The scene: the organ loaded, scaled and set on the tray (tissue-scenes' `Organ`), the body,
-//! and the probe's press-and-drag script (tissue-scenes' `PressAndDrag`).
+//! and the probe's press-and-drag run (tissue-scenes' `PressAndDrag::on_tray`, the set-up the
+//! studio's demonstration uses too).
 
 use std::path::PathBuf;
 
 use glam::Vec3;
 use tissue_mesh::{tet_box, TetMesh};
-use tissue_pbd::{ContactParams, Pose, SoftBody, ToolShape};
+use tissue_pbd::{ContactParams, SoftBody, ToolShape};
 use tissue_scenes::{Organ, PressAndDrag, PressPlan, ShippedOrgan, Tray};
 
 use crate::cli::Cli;
-use crate::failure::{Exit, Failure};
+use crate::failure::{self, Exit, Failure};
 
 /// Where the organ came from.
 #[derive(Debug, Clone)]
@@ -62,10 +63,10 @@ pub struct Scene {
 
 /// Loads the organ, scales and places it, builds the body, the tray and the probe (parked above).
 pub fn build(cli: &Cli) -> Result<Scene, Failure> {
-    let scene = |e| Failure::from_scene(&e);
+    let scene = |e| failure::from_scene(&e);
     let (source, organ) = match (&cli.surface, &cli.organ, cli.box_cells) {
         (Some(p), _, _) => {
-            let surface = tissue_meshio::read_surface(p).map_err(|e| Failure::from_mesh_io(&e))?;
+            let surface = tissue_meshio::read_surface(p).map_err(|e| failure::from_mesh_io(&e))?;
             let organ = Organ::from_surface(&surface, &p.display().to_string()).map_err(scene)?;
             let report = organ.quality.clone().ok_or_else(|| {
                 Failure::new(Exit::Meshing, format!("{}: no mesher report", p.display()))
@@ -73,7 +74,7 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
             (Source::Surface(p.clone(), Box::new(report)), organ)
         }
         (None, Some(p), _) => {
-            let tets = tissue_meshio::read_tets(p).map_err(|e| Failure::from_mesh_io(&e))?;
+            let tets = tissue_meshio::read_tets(p).map_err(|e| failure::from_mesh_io(&e))?;
             let organ = Organ::from_tets(&tets, &p.display().to_string()).map_err(scene)?;
             (Source::File(p.clone()), organ)
         }
@@ -102,7 +103,7 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
         tissue_scenes::SceneError::Mesh { .. } => {
             Failure::new(Exit::Mesh, format!("{e}; use a larger --size"))
         }
-        e => Failure::from_scene(&e),
+        e => failure::from_scene(&e),
     })?;
     let (material, settings) = cli.physics();
     let contact = ContactParams {
@@ -110,45 +111,35 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
         kinetic_friction: cli.friction,
         ..ContactParams::default()
     };
+    // The tray of tissue-scenes' rule (three times the organ), its collider's cell as given.
     let tray = Tray {
-        side: 3.0 * cli.size,
         cell: cli.cell,
+        ..Tray::for_extent(cli.size)
     };
     let mut body = organ
         .body(&material, settings, contact, tray)
         .map_err(scene)?;
-    let probe = ToolShape::Capsule {
-        a: Vec3::ZERO,
-        b: Vec3::new(0.0, cli.size, 0.0),
-        radius: cli.tool_radius,
-    };
-    let parked = Pose::from_translation(Vec3::new(0.0, 3.0 * cli.size, 0.0));
-    let tool = body
-        .add_tool(probe, parked, contact)
-        .map_err(|e| Failure::from_pbd(&e))?;
-    let waypoints = match cli.waypoints.len() {
-        0 => vec![[-0.25 * cli.size, 0.0], [0.25 * cli.size, 0.0]],
-        1 => {
-            return Err(Failure::new(
-                Exit::Parameters,
-                "one --waypoint is not a path: give two or more",
-            ))
-        }
-        _ => cli.waypoints.clone(),
-    };
-    let edges = body.distance_constraints();
-    let mean_edge =
-        edges.iter().map(|c| c.rest_length as f64).sum::<f64>() / edges.len().max(1) as f64;
+    if cli.waypoints.len() == 1 {
+        return Err(Failure::new(
+            Exit::Parameters,
+            "one --waypoint is not a path: give two or more",
+        ));
+    }
     let plan = PressPlan {
-        settle: cli.settle_steps as usize,
-        press: cli.press_steps as usize,
-        drag: cli.drag_steps as usize,
+        settle: cli.settle_steps,
+        press: cli.press_steps,
+        drag: cli.drag_steps,
         depth: cli.depth,
-        waypoints,
-        // 1 cm, or the mean tet edge length when that is longer.
-        reach: (mean_edge as f32).max(1.0),
+        radius: cli.tool_radius,
+        waypoints: cli.waypoints.clone(),
+        ..PressPlan::default()
     };
-    let script = PressAndDrag::new(tool, cli.tool_radius, plan).map_err(scene)?;
+    let script = PressAndDrag::on_tray(&mut body, cli.size, plan, contact).map_err(scene)?;
+    let probe = body
+        .tool(script.tool())
+        .map_err(|e| failure::from_pbd(&e))?
+        .shape()
+        .to_owned();
     Ok(Scene {
         source,
         mesh: organ.mesh,
@@ -156,4 +147,37 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
         probe,
         script,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+
+    /// With its defaults the headless run is the studio's demonstration on a tray: the same
+    /// timeline, probe and path (tissue-scenes' PressPlan::default() through
+    /// PressAndDrag::on_tray).
+    #[test]
+    fn the_default_run_is_the_demonstrations_timeline() {
+        let cli = Cli::try_parse_from(["trainer", "--box", "3"]).unwrap_or_else(|e| panic!("{e}"));
+        let scene = build(&cli).unwrap_or_else(|e| panic!("{}", e.line()));
+        let plan = scene.script.plan();
+        let default = PressPlan::default();
+        assert_eq!(
+            (plan.settle, plan.press, plan.drag, plan.depth, plan.radius),
+            (
+                default.settle,
+                default.press,
+                default.drag,
+                default.depth,
+                default.radius
+            )
+        );
+        assert_eq!(plan.waypoints, default.path(cli.size));
+        assert_eq!(
+            scene.body.tool(scene.script.tool()).map(|t| t.pose()).ok(),
+            Some(PressAndDrag::parked(cli.size))
+        );
+    }
 }

@@ -99,8 +99,13 @@ typedef enum tissue_event_kind {
   TISSUE_EVENT_GRABBED = 5,
   // The probe let go.
   TISSUE_EVENT_RELEASED = 6,
-  // Anything else.
+  // A surgery event of a kind this list does not name yet (tissue-scenes' `surgery` kind);
+  // its text says what it is.
   TISSUE_EVENT_OTHER = 7,
+  // A demonstration started (`tissue_body_play`).
+  TISSUE_EVENT_DEMO_STARTED = 8,
+  // The demonstration ended: the organ is the host's again.
+  TISSUE_EVENT_DEMO_FINISHED = 9,
 } tissue_event_kind;
 
 // A mesh unit of length (the patient file's; planning runs in cm).
@@ -854,6 +859,20 @@ enum tissue_status tissue_body_suture(const struct tissue_body *body,
                                       const float *a,
                                       const float *b,
                                       struct tissue_event *event);
+
+// Plays the organ's demonstration from the next step on (tissue-scenes' scripted scenario, the
+// one the studio plays): on the appendix the procedure (grasped and lifted, incised, its tip cut
+// off, the incision sutured; 200 steps), on a tray a probe pressed 1.5 cm into the organ and
+// dragged across it (250 steps; the probe is added as the next tool, parked above the organ
+// after the run, and reused when the demonstration is played again). A
+// `TISSUE_EVENT_DEMO_STARTED` event is queued now; the demonstration's events come with the
+// steps (`tissue_body_step`), the last one `TISSUE_EVENT_DEMO_FINISHED`. Meant for a fresh
+// body; while it plays, grab, cut and suture are refused.
+//
+// Errors: `TISSUE_INVALID_ARGUMENT` when a demonstration is already playing.
+//
+// Thread safety: any thread (waits for a running step).
+enum tissue_status tissue_body_play(const struct tissue_body *body);
 
 // Takes the oldest queued event into `*event`; `*has_event` is set to whether there was one
 // (the event is left alone when not).

@@ -7,7 +7,7 @@ use std::ffi::{c_char, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use tissue_planner::{ErrorKind, PlanError};
-use tissue_scenes::SceneError;
+use tissue_scenes::{SceneError, SceneErrorKind};
 
 /// What a call did. `TISSUE_OK` is 0; every other value comes with a message
 /// (`tissue_last_error`).
@@ -96,28 +96,27 @@ impl From<PlanError> for Error {
     }
 }
 
+/// The status of a scene error's kind: the one place the C ABI maps them.
+pub(crate) fn status_of(kind: SceneErrorKind) -> tissue_status {
+    match kind {
+        SceneErrorKind::Input => TISSUE_INPUT,
+        SceneErrorKind::Mesh | SceneErrorKind::Meshing | SceneErrorKind::TooLarge => {
+            TISSUE_INVALID_MESH
+        }
+        SceneErrorKind::Parameters | SceneErrorKind::Tool => TISSUE_INVALID_ARGUMENT,
+        SceneErrorKind::Simulation => TISSUE_SIMULATION,
+    }
+}
+
 impl From<SceneError> for Error {
     fn from(e: SceneError) -> Self {
-        let status = match &e {
-            SceneError::Read(io) => return Error::from(io),
-            SceneError::Mesh { .. } | SceneError::Meshing { .. } | SceneError::TooLarge { .. } => {
-                TISSUE_INVALID_MESH
-            }
-            SceneError::Tool(_) => TISSUE_INVALID_ARGUMENT,
-            _ => TISSUE_SIMULATION,
-        };
-        Error::new(status, e.to_string())
+        Error::new(status_of(e.kind()), e.to_string())
     }
 }
 
 impl From<&tissue_meshio::MeshIoError> for Error {
     fn from(e: &tissue_meshio::MeshIoError) -> Self {
-        use tissue_meshio::MeshIoError as E;
-        let status = match e {
-            E::Io { .. } | E::UnsupportedFormat { .. } => TISSUE_INPUT,
-            _ => TISSUE_INVALID_MESH,
-        };
-        Error::new(status, e.to_string())
+        Error::new(status_of(SceneErrorKind::of_mesh_io(e)), e.to_string())
     }
 }
 

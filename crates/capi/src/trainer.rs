@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex, MutexGuard, RwLock};
 use ::tissue_mesh::{TetMesh, TriMesh};
 use glam::{Quat, Vec3};
 use tissue_pbd::{ContactForceModel, Pose, ToolShape};
-use tissue_scenes::{Organ, Session, SessionOptions, ShippedOrgan, TrainerEvent};
+use tissue_scenes::{Organ, Session, SessionOptions, ShippedOrgan, TrainerEvent, TrainerEventKind};
 
 use crate::ffi::{
     copy_out, free_handle, get, guard, guard_void, into_handle, poisoned, put, put_opt, slice,
@@ -64,8 +64,33 @@ pub enum tissue_event_kind {
     TISSUE_EVENT_GRABBED = 5,
     /// The probe let go.
     TISSUE_EVENT_RELEASED = 6,
-    /// Anything else.
+    /// A surgery event of a kind this list does not name yet (tissue-scenes' `surgery` kind);
+    /// its text says what it is.
     TISSUE_EVENT_OTHER = 7,
+    /// A demonstration started (`tissue_body_play`).
+    TISSUE_EVENT_DEMO_STARTED = 8,
+    /// The demonstration ended: the organ is the host's again.
+    TISSUE_EVENT_DEMO_FINISHED = 9,
+}
+
+impl From<TrainerEventKind> for tissue_event_kind {
+    /// Every kind of tissue-scenes to its own C value, in one exhaustive match (a new kind is a
+    /// compile error here until the header has its value).
+    fn from(kind: TrainerEventKind) -> Self {
+        use tissue_event_kind::*;
+        match kind {
+            TrainerEventKind::CutAdvanced => TISSUE_EVENT_CUT_ADVANCED,
+            TrainerEventKind::PieceDetached => TISSUE_EVENT_PIECE_DETACHED,
+            TrainerEventKind::SuturePlaced => TISSUE_EVENT_SUTURE_PLACED,
+            TrainerEventKind::SutureRemoved => TISSUE_EVENT_SUTURE_REMOVED,
+            TrainerEventKind::SutureMissed => TISSUE_EVENT_SUTURE_MISSED,
+            TrainerEventKind::Grabbed => TISSUE_EVENT_GRABBED,
+            TrainerEventKind::Released => TISSUE_EVENT_RELEASED,
+            TrainerEventKind::Surgery => TISSUE_EVENT_OTHER,
+            TrainerEventKind::DemoStarted => TISSUE_EVENT_DEMO_STARTED,
+            TrainerEventKind::DemoFinished => TISSUE_EVENT_DEMO_FINISHED,
+        }
+    }
 }
 
 /// Bytes of `tissue_event.text`, NUL included.
@@ -697,18 +722,48 @@ pub extern "C" fn tissue_body_suture(
     })
 }
 
+/// Plays the organ's demonstration from the next step on (tissue-scenes' scripted scenario, the
+/// one the studio plays): on the appendix the procedure (grasped and lifted, incised, its tip cut
+/// off, the incision sutured; 200 steps), on a tray a probe pressed 1.5 cm into the organ and
+/// dragged across it (250 steps; the probe is added as the next tool, parked above the organ
+/// after the run, and reused when the demonstration is played again). A
+/// `TISSUE_EVENT_DEMO_STARTED` event is queued now; the demonstration's events come with the
+/// steps (`tissue_body_step`), the last one `TISSUE_EVENT_DEMO_FINISHED`. Meant for a fresh
+/// body; while it plays, grab, cut and suture are refused.
+///
+/// Errors: `TISSUE_INVALID_ARGUMENT` when a demonstration is already playing.
+///
+/// Thread safety: any thread (waits for a running step).
+#[no_mangle]
+pub extern "C" fn tissue_body_play(body: *const tissue_body) -> tissue_status {
+    guard(|| {
+        let body = body_of(body)?;
+        let mut sim = body.sim()?;
+        let started = sim.session.play()?;
+        sim.events.push_back(started);
+        // A tray's demonstration adds its probe as a tool: the host's pose list and the force
+        // models follow, so that tool ids stay the session's.
+        let mut poses = body.haptic.poses.lock().map_err(poisoned)?;
+        let mut models: Vec<ContactForceModel> =
+            body.haptic.models.read().map_err(poisoned)?.to_vec();
+        for id in poses.len()..sim.session.tool_count() {
+            let pose = sim.session.body().tool(id)?.pose();
+            poses.push(pose);
+            models.push(
+                sim.session
+                    .contact_force_model(id)
+                    .cloned()
+                    .unwrap_or_default(),
+            );
+        }
+        drop(poses);
+        *body.haptic.models.write().map_err(poisoned)? = Arc::new(models);
+        Ok(())
+    })
+}
+
 fn to_c(e: &TrainerEvent) -> tissue_event {
-    use tissue_event_kind::*;
-    let kind = match e.kind {
-        "cut_advanced" => TISSUE_EVENT_CUT_ADVANCED,
-        "piece_detached" => TISSUE_EVENT_PIECE_DETACHED,
-        "suture_placed" => TISSUE_EVENT_SUTURE_PLACED,
-        "suture_removed" => TISSUE_EVENT_SUTURE_REMOVED,
-        "suture_missed" => TISSUE_EVENT_SUTURE_MISSED,
-        "grabbed" => TISSUE_EVENT_GRABBED,
-        "released" => TISSUE_EVENT_RELEASED,
-        _ => TISSUE_EVENT_OTHER,
-    };
+    let kind = tissue_event_kind::from(e.kind);
     let mut text = [0 as c_char; TISSUE_EVENT_TEXT];
     let mut n = e.text.len().min(TISSUE_EVENT_TEXT - 1);
     while !e.text.is_char_boundary(n) {
@@ -751,4 +806,27 @@ pub extern "C" fn tissue_body_next_event(
         }
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every tissue-scenes event kind has its own C value; only the surgery events the list does
+    /// not name yet are `TISSUE_EVENT_OTHER`.
+    #[test]
+    fn every_event_kind_has_its_own_c_value() {
+        let values: Vec<u32> = TrainerEventKind::ALL
+            .iter()
+            .map(|&k| tissue_event_kind::from(k) as u32)
+            .collect();
+        let mut distinct = values.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        assert_eq!(distinct.len(), values.len(), "{values:?}");
+        for kind in TrainerEventKind::ALL {
+            let other = tissue_event_kind::from(kind) == tissue_event_kind::TISSUE_EVENT_OTHER;
+            assert_eq!(other, kind == TrainerEventKind::Surgery, "{kind}");
+        }
+    }
 }

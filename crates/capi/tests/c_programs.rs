@@ -132,6 +132,6 @@ fn cpp17_cancels_from_another_thread_sweeps_and_searches() {
 }
 
 #[test]
-fn cpp17_trainer_cuts_sutures_and_renders_force_at_1khz_while_stepping() {
+fn cpp17_trainer_cuts_sutures_plays_the_demonstration_and_renders_force_at_1khz() {
     build_and_run("trainer.cpp", &[]);
 }

@@ -3,6 +3,9 @@
 //! ## Brief overview
 //! - [`Exit`]: the exit codes of every binary, one table (`insert`, `trainer`, `meshinfo`,
 //!   `meshgen` and `studio` all return them; [`Exit::help_section`] is their `--help`'s table).
+//! - [`Failure`]: why a binary stops, an [`Exit`] code and a message that says what to change
+//!   ([`Failure::line`] is what it prints on standard error); the failures every binary has
+//!   ([`Failure::output`], [`Failure::interrupted`]) are written here once.
 //! - [`reset_sigpipe`]: the first call in every binary's `main`. Rust's runtime starts programs
 //!   with SIGPIPE ignored, so a write to a pipe whose reader has gone (`meshinfo FILE | head`)
 //!   fails with `EPIPE` and `println!` panics with "failed printing to stdout: Broken pipe".
@@ -26,9 +29,11 @@
 //! ```
 
 mod exit;
+mod failure;
 mod sigpipe;
 #[cfg(all(unix, feature = "testing"))]
 pub mod testing;
 
 pub use crate::exit::Exit;
+pub use crate::failure::Failure;
 pub use crate::sigpipe::reset_sigpipe;

@@ -8,7 +8,7 @@ use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
 use crate::partition::{bisection_order, spare_tree, Tree};
 use crate::{
     AttachmentId, CentroidVolumeConstraint, DistanceConstraint, Floor, Material, PbdError,
-    StepSettings, TetVolumeConstraint, VolumeConstraintKind,
+    PbdParam, StepSettings, TetVolumeConstraint, VolumeConstraintKind,
 };
 
 /// A tetrahedral soft body simulated by position-based dynamics.
@@ -218,7 +218,7 @@ impl SoftBody {
         };
         let Some((tree, slot)) = spare else {
             return Err(PbdError::InvalidParameter {
-                name: "node/tet count",
+                param: PbdParam::NodeTetCount,
                 value: n as f64,
                 expected: "at least one node and one tet, fewer than 2³¹ nodes",
             });
@@ -698,14 +698,14 @@ impl SoftBody {
         if let Some(f) = floor {
             if f.axis > 2 {
                 return Err(PbdError::InvalidParameter {
-                    name: "floor.axis",
+                    param: PbdParam::FloorAxis,
                     value: f.axis as f64,
                     expected: "0, 1 or 2",
                 });
             }
             if !f.height.is_finite() {
                 return Err(PbdError::InvalidParameter {
-                    name: "floor.height",
+                    param: PbdParam::FloorHeight,
                     value: f.height as f64,
                     expected: "finite",
                 });

@@ -36,7 +36,7 @@ use std::sync::Arc;
 use glam::{DVec3, Vec3, Vec3A, Vec4};
 
 use crate::tool::{check_pose, sweep_node, Pose, Tool, ToolShape};
-use crate::{PbdError, SoftBody, VoxelCollider};
+use crate::{PbdError, PbdParam, SoftBody, VoxelCollider};
 
 /// How a body's nodes meet one collider or tool (cm).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,15 +82,15 @@ impl ContactParams {
     }
 
     fn validate(&self) -> Result<(), PbdError> {
-        for (name, v) in [
-            ("margin", self.margin),
-            ("detection", self.detection),
-            ("static_friction", self.static_friction),
-            ("kinetic_friction", self.kinetic_friction),
+        for (param, v) in [
+            (PbdParam::Margin, self.margin),
+            (PbdParam::Detection, self.detection),
+            (PbdParam::StaticFriction, self.static_friction),
+            (PbdParam::KineticFriction, self.kinetic_friction),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(PbdError::InvalidParameter {
-                    name,
+                    param,
                     value: v as f64,
                     expected: "finite and ≥ 0",
                 });
@@ -833,7 +833,7 @@ fn check_reach(collider: &VoxelCollider, params: &ContactParams) -> Result<(), P
     let reach = params.margin + params.detection;
     if reach > collider.reach() {
         return Err(PbdError::InvalidParameter {
-            name: "margin + detection",
+            param: PbdParam::ContactReach,
             value: reach as f64,
             expected: "at most the collider's reach (VoxelCollider::new's `reach`)",
         });

@@ -52,7 +52,7 @@ use crate::body::{Block, SoftBody};
 use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
 use crate::partition::Tree;
 use crate::{
-    CentroidVolumeConstraint, DistanceConstraint, PbdError, Solver, TetVolumeConstraint,
+    CentroidVolumeConstraint, DistanceConstraint, PbdError, PbdParam, Solver, TetVolumeConstraint,
     VolumeConstraintKind,
 };
 
@@ -446,7 +446,7 @@ impl SoftBody {
         // Solver slots (at least one per node) must stay below SPARE.
         if self.q.len() + sources.len() >= u32::MAX as usize {
             return Err(PbdError::InvalidParameter {
-                name: "node count",
+                param: PbdParam::NodeCount,
                 value: (n + sources.len()) as f64,
                 expected: "fewer than 2³² solver slots",
             });
@@ -500,7 +500,7 @@ impl SoftBody {
         }
         if !(mass.is_finite() && mass >= 0.0) {
             return Err(PbdError::InvalidParameter {
-                name: "mass",
+                param: PbdParam::Mass,
                 value: mass as f64,
                 expected: "finite and ≥ 0 (g)",
             });
@@ -535,7 +535,7 @@ impl SoftBody {
             }
             if nodes[..k].contains(&a) {
                 return Err(PbdError::InvalidParameter {
-                    name: "constraint nodes",
+                    param: PbdParam::ConstraintNodes,
                     value: a as f64,
                     expected: "distinct nodes",
                 });
@@ -1023,7 +1023,7 @@ impl SoftBody {
         }
         if t + 1 >= u32::MAX as usize {
             return Err(PbdError::InvalidParameter {
-                name: "tet count",
+                param: PbdParam::TetCount,
                 value: t as f64,
                 expected: "fewer than 2³² tets",
             });
@@ -1351,7 +1351,7 @@ fn rest_shape(r: &[DVec3; 4]) -> Result<(f32, [f32; 4]), PbdError> {
     let volume = (b - a).cross(c - a).dot(d - a) / 6.0;
     if !(volume.is_finite() && volume > 0.0 && (volume as f32) > 0.0) {
         return Err(PbdError::InvalidParameter {
-            name: "rest volume",
+            param: PbdParam::RestVolume,
             value: volume,
             expected: "finite and > 0: rest positions positively oriented, not flat",
         });
@@ -1393,22 +1393,26 @@ fn slot_at(set: usize, serial: usize, position: usize) -> ConstraintSlot {
 }
 
 fn check_distance_values(c: &DistanceConstraint) -> Result<(), PbdError> {
-    for (name, v, ok) in [
+    for (param, v, ok) in [
         (
-            "rest_length",
+            PbdParam::RestLength,
             c.rest_length,
             c.rest_length.is_finite() && c.rest_length >= 0.0,
         ),
-        ("stiffness", c.stiffness, (0.0..=1.0).contains(&c.stiffness)),
         (
-            "compliance",
+            PbdParam::Stiffness,
+            c.stiffness,
+            (0.0..=1.0).contains(&c.stiffness),
+        ),
+        (
+            PbdParam::Compliance,
             c.compliance,
             c.compliance.is_finite() && c.compliance >= 0.0,
         ),
     ] {
         if !ok {
             return Err(PbdError::InvalidParameter {
-                name,
+                param,
                 value: v as f64,
                 expected: "rest length ≥ 0, stiffness in [0, 1], compliance ≥ 0 (all finite)",
             });

@@ -5,10 +5,11 @@
 #[non_exhaustive]
 pub enum PbdError {
     /// A material or step parameter is out of range.
-    #[error("invalid parameter {name} = {value}: expected {expected}")]
+    #[error("invalid parameter {} = {value}: expected {expected}", param.name())]
     InvalidParameter {
-        /// Parameter name, e.g. `"distance_stiffness"` or `"dt"`.
-        name: &'static str,
+        /// Which parameter (its [`PbdParam::name`] is the field's name, e.g.
+        /// `distance_stiffness` or `dt`).
+        param: PbdParam,
         /// The value given.
         value: f64,
         /// The accepted range.
@@ -123,4 +124,184 @@ pub enum PbdError {
         /// How many there are.
         count: usize,
     },
+}
+
+/// A parameter the crate checks ([`PbdError::InvalidParameter`]): a closed list (deliberately
+/// not `#[non_exhaustive]`), so a front end maps each to its own flag or field in an exhaustive
+/// `match`, and a new parameter is a compile error there until it is mapped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PbdParam {
+    /// [`crate::Material::density`] (g/cm³).
+    Density,
+    /// [`crate::Material::distance_stiffness`].
+    DistanceStiffness,
+    /// [`crate::Material::volume_stiffness`].
+    VolumeStiffness,
+    /// [`crate::Material::distance_compliance`].
+    DistanceCompliance,
+    /// [`crate::Material::volume_compliance`].
+    VolumeCompliance,
+    /// [`crate::StepSettings::dt`] (s).
+    Dt,
+    /// [`crate::StepSettings::substeps`].
+    Substeps,
+    /// [`crate::StepSettings::iterations`].
+    Iterations,
+    /// [`crate::StepSettings::gravity`]'s x (cm/s²).
+    GravityX,
+    /// [`crate::StepSettings::gravity`]'s y (cm/s²).
+    GravityY,
+    /// [`crate::StepSettings::gravity`]'s z (cm/s²).
+    GravityZ,
+    /// [`crate::StepSettings::damping`].
+    Damping,
+    /// [`crate::StepSettings::linear_damping`].
+    LinearDamping,
+    /// [`crate::ContactParams::margin`] (cm).
+    Margin,
+    /// [`crate::ContactParams::detection`] (cm).
+    Detection,
+    /// [`crate::ContactParams::static_friction`].
+    StaticFriction,
+    /// [`crate::ContactParams::kinetic_friction`].
+    KineticFriction,
+    /// A contact's margin plus its detection distance, against a collider's reach (cm).
+    ContactReach,
+    /// A [`crate::VoxelCollider`]'s cell size (cm).
+    CellSize,
+    /// A [`crate::VoxelCollider`]'s reach (cm).
+    ColliderReach,
+    /// A [`crate::VoxelCollider`]'s shapes (at least one).
+    Shapes,
+    /// [`crate::Floor::axis`].
+    FloorAxis,
+    /// [`crate::Floor::height`] (cm).
+    FloorHeight,
+    /// A new body's node and tet counts.
+    NodeTetCount,
+    /// The nodes (solver slots) a body can hold.
+    NodeCount,
+    /// The tets a body can hold.
+    TetCount,
+    /// A node's mass (g).
+    Mass,
+    /// The nodes of a constraint or tet (distinct).
+    ConstraintNodes,
+    /// A tet's rest volume (cm³).
+    RestVolume,
+    /// A distance constraint's rest length (cm).
+    RestLength,
+    /// A distance constraint's stiffness.
+    Stiffness,
+    /// A distance constraint's compliance (cm/dyn).
+    Compliance,
+}
+
+impl PbdParam {
+    /// Every parameter, in declaration order.
+    pub const ALL: [PbdParam; 32] = [
+        PbdParam::Density,
+        PbdParam::DistanceStiffness,
+        PbdParam::VolumeStiffness,
+        PbdParam::DistanceCompliance,
+        PbdParam::VolumeCompliance,
+        PbdParam::Dt,
+        PbdParam::Substeps,
+        PbdParam::Iterations,
+        PbdParam::GravityX,
+        PbdParam::GravityY,
+        PbdParam::GravityZ,
+        PbdParam::Damping,
+        PbdParam::LinearDamping,
+        PbdParam::Margin,
+        PbdParam::Detection,
+        PbdParam::StaticFriction,
+        PbdParam::KineticFriction,
+        PbdParam::ContactReach,
+        PbdParam::CellSize,
+        PbdParam::ColliderReach,
+        PbdParam::Shapes,
+        PbdParam::FloorAxis,
+        PbdParam::FloorHeight,
+        PbdParam::NodeTetCount,
+        PbdParam::NodeCount,
+        PbdParam::TetCount,
+        PbdParam::Mass,
+        PbdParam::ConstraintNodes,
+        PbdParam::RestVolume,
+        PbdParam::RestLength,
+        PbdParam::Stiffness,
+        PbdParam::Compliance,
+    ];
+
+    /// The parameter's name as the messages give it: the field's name (`distance_stiffness`,
+    /// `dt`, `gravity.y`, …) or what is counted (`node count`).
+    pub fn name(self) -> &'static str {
+        match self {
+            PbdParam::Density => "density",
+            PbdParam::DistanceStiffness => "distance_stiffness",
+            PbdParam::VolumeStiffness => "volume_stiffness",
+            PbdParam::DistanceCompliance => "distance_compliance",
+            PbdParam::VolumeCompliance => "volume_compliance",
+            PbdParam::Dt => "dt",
+            PbdParam::Substeps => "substeps",
+            PbdParam::Iterations => "iterations",
+            PbdParam::GravityX => "gravity.x",
+            PbdParam::GravityY => "gravity.y",
+            PbdParam::GravityZ => "gravity.z",
+            PbdParam::Damping => "damping",
+            PbdParam::LinearDamping => "linear_damping",
+            PbdParam::Margin => "margin",
+            PbdParam::Detection => "detection",
+            PbdParam::StaticFriction => "static_friction",
+            PbdParam::KineticFriction => "kinetic_friction",
+            PbdParam::ContactReach => "margin + detection",
+            PbdParam::CellSize => "cell_size",
+            PbdParam::ColliderReach => "reach",
+            PbdParam::Shapes => "shapes",
+            PbdParam::FloorAxis => "floor.axis",
+            PbdParam::FloorHeight => "floor.height",
+            PbdParam::NodeTetCount => "node/tet count",
+            PbdParam::NodeCount => "node count",
+            PbdParam::TetCount => "tet count",
+            PbdParam::Mass => "mass",
+            PbdParam::ConstraintNodes => "constraint nodes",
+            PbdParam::RestVolume => "rest volume",
+            PbdParam::RestLength => "rest_length",
+            PbdParam::Stiffness => "stiffness",
+            PbdParam::Compliance => "compliance",
+        }
+    }
+}
+
+impl std::fmt::Display for PbdParam {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_parameter_error_reads_as_before_the_names_were_typed() {
+        let e = PbdError::InvalidParameter {
+            param: PbdParam::DistanceStiffness,
+            value: 1.5,
+            expected: "in [0, 1]",
+        };
+        assert_eq!(
+            e.to_string(),
+            "invalid parameter distance_stiffness = 1.5: expected in [0, 1]"
+        );
+    }
+
+    #[test]
+    fn every_parameter_has_its_own_name() {
+        let mut names: Vec<&str> = PbdParam::ALL.iter().map(|p| p.name()).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), PbdParam::ALL.len());
+    }
 }

@@ -173,7 +173,7 @@ pub use constraint::{
 };
 pub use contact::{Contact, ContactParams, ContactSource};
 pub use edit::ConstraintSlot;
-pub use error::PbdError;
+pub use error::{PbdError, PbdParam};
 pub use force::DYN_PER_NEWTON;
 pub use haptic::{ContactForceModel, ModelContact, StiffnessEstimator};
 pub use settings::{Material, Solver, StepSettings, VolumeConstraintKind};

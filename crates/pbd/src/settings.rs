@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use crate::PbdError;
+use crate::{PbdError, PbdParam};
 
 /// Which volume constraint the body carries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -71,11 +71,11 @@ impl Material {
     }
 
     pub(crate) fn validate(&self) -> Result<(), PbdError> {
-        positive("density", self.density)?;
-        unit("distance_stiffness", self.distance_stiffness)?;
-        unit("volume_stiffness", self.volume_stiffness)?;
-        non_negative("distance_compliance", self.distance_compliance)?;
-        non_negative("volume_compliance", self.volume_compliance)?;
+        positive(PbdParam::Density, self.density)?;
+        unit(PbdParam::DistanceStiffness, self.distance_stiffness)?;
+        unit(PbdParam::VolumeStiffness, self.volume_stiffness)?;
+        non_negative(PbdParam::DistanceCompliance, self.distance_compliance)?;
+        non_negative(PbdParam::VolumeCompliance, self.volume_compliance)?;
         Ok(())
     }
 }
@@ -176,36 +176,36 @@ impl StepSettings {
     }
 
     pub(crate) fn validate(&self) -> Result<(), PbdError> {
-        positive("dt", self.dt)?;
+        positive(PbdParam::Dt, self.dt)?;
         if self.substeps == 0 {
             return Err(PbdError::InvalidParameter {
-                name: "substeps",
+                param: PbdParam::Substeps,
                 value: 0.0,
                 expected: "at least 1",
             });
         }
         if self.iterations == 0 {
             return Err(PbdError::InvalidParameter {
-                name: "iterations",
+                param: PbdParam::Iterations,
                 value: 0.0,
                 expected: "at least 1",
             });
         }
-        for (name, g) in [
-            ("gravity.x", self.gravity.x),
-            ("gravity.y", self.gravity.y),
-            ("gravity.z", self.gravity.z),
+        for (param, g) in [
+            (PbdParam::GravityX, self.gravity.x),
+            (PbdParam::GravityY, self.gravity.y),
+            (PbdParam::GravityZ, self.gravity.z),
         ] {
             if !g.is_finite() {
                 return Err(PbdError::InvalidParameter {
-                    name,
+                    param,
                     value: g as f64,
                     expected: "finite",
                 });
             }
         }
-        unit("damping", self.damping)?;
-        unit("linear_damping", self.linear_damping)?;
+        unit(PbdParam::Damping, self.damping)?;
+        unit(PbdParam::LinearDamping, self.linear_damping)?;
         Ok(())
     }
 
@@ -235,36 +235,36 @@ impl StepSettings {
     }
 }
 
-fn positive(name: &'static str, v: f32) -> Result<(), PbdError> {
+fn positive(param: PbdParam, v: f32) -> Result<(), PbdError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
         Err(PbdError::InvalidParameter {
-            name,
+            param,
             value: v as f64,
             expected: "finite and > 0",
         })
     }
 }
 
-fn non_negative(name: &'static str, v: f32) -> Result<(), PbdError> {
+fn non_negative(param: PbdParam, v: f32) -> Result<(), PbdError> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
     } else {
         Err(PbdError::InvalidParameter {
-            name,
+            param,
             value: v as f64,
             expected: "finite and ≥ 0",
         })
     }
 }
 
-fn unit(name: &'static str, v: f32) -> Result<(), PbdError> {
+fn unit(param: PbdParam, v: f32) -> Result<(), PbdError> {
     if (0.0..=1.0).contains(&v) {
         Ok(())
     } else {
         Err(PbdError::InvalidParameter {
-            name,
+            param,
             value: v as f64,
             expected: "in [0, 1]",
         })

@@ -22,7 +22,7 @@ use glam::{Quat, Vec3, Vec3A};
 use tissue_mesh::TriMesh;
 
 use crate::geometry::closest_point_on_triangle;
-use crate::PbdError;
+use crate::{PbdError, PbdParam};
 
 /// The largest grid [`VoxelCollider::new`] builds (corners; 64 MB of distances).
 pub const MAX_COLLIDER_CORNERS: u64 = 1 << 24;
@@ -168,21 +168,21 @@ impl VoxelCollider {
         let _span = tracing::debug_span!("voxel_collider_new", shapes = shapes.len()).entered();
         if !(cell_size.is_finite() && cell_size > 0.0) {
             return Err(PbdError::InvalidParameter {
-                name: "cell_size",
+                param: PbdParam::CellSize,
                 value: cell_size as f64,
                 expected: "finite and > 0 (cm)",
             });
         }
         if !(reach.is_finite() && reach >= 0.0) {
             return Err(PbdError::InvalidParameter {
-                name: "reach",
+                param: PbdParam::ColliderReach,
                 value: reach as f64,
                 expected: "finite and ≥ 0 (cm)",
             });
         }
         if shapes.is_empty() {
             return Err(PbdError::InvalidParameter {
-                name: "shapes",
+                param: PbdParam::Shapes,
                 value: 0.0,
                 expected: "at least one mesh or box",
             });

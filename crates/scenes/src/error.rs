@@ -77,7 +77,72 @@ fn too_large(name: &str, tets: usize, estimated: bool, decimate_to: Option<usize
     }
 }
 
+/// What kind of failure a [`SceneError`] is ([`SceneError::kind`]): the classes a front end
+/// maps to its own codes (the `trainer`'s exit codes, the C ABI's statuses, the studio's error
+/// kinds) in one `match`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SceneErrorKind {
+    /// A file that cannot be read, or is not of a kind the loader takes.
+    Input,
+    /// A mesh that is malformed or not valid (a degenerate tet, a node out of range).
+    Mesh,
+    /// A surface that cannot be filled with tetrahedra (open, non-manifold, inside out).
+    Meshing,
+    /// An organ too large for real time ([`crate::MAX_TETS`]).
+    TooLarge,
+    /// A size, material, step or contact parameter out of range.
+    Parameters,
+    /// A tool action that cannot be done (a grab off the surface, a cut too short, a
+    /// demonstration playing).
+    Tool,
+    /// The simulation diverged, or a cut or suture failed.
+    Simulation,
+}
+
+impl SceneErrorKind {
+    /// The kind of a loader's error ([`SceneError::Read`]): a file that cannot be read or is of
+    /// the wrong type is input, anything else a bad mesh.
+    pub fn of_mesh_io(e: &MeshIoError) -> SceneErrorKind {
+        match e {
+            MeshIoError::Io { .. }
+            | MeshIoError::UnsupportedFormat { .. }
+            | MeshIoError::WrongKind { .. } => SceneErrorKind::Input,
+            _ => SceneErrorKind::Mesh,
+        }
+    }
+
+    /// The kind of a solver's error ([`SceneError::Pbd`]): a bad tet is a mesh error, a
+    /// parameter, tool or collider out of range a parameter error, anything else (a divergence)
+    /// a simulation error.
+    pub fn of_pbd(e: &tissue_pbd::PbdError) -> SceneErrorKind {
+        use tissue_pbd::PbdError as E;
+        match e {
+            E::DegenerateTet { .. } | E::NodeOutOfRange { .. } => SceneErrorKind::Mesh,
+            E::InvalidParameter { .. }
+            | E::InvalidTool { .. }
+            | E::InvalidColliderShape { .. }
+            | E::ColliderMeshNotClosed { .. }
+            | E::ColliderTooLarge { .. } => SceneErrorKind::Parameters,
+            _ => SceneErrorKind::Simulation,
+        }
+    }
+}
+
 impl SceneError {
+    /// What kind of failure this is.
+    pub fn kind(&self) -> SceneErrorKind {
+        match self {
+            SceneError::Read(e) => SceneErrorKind::of_mesh_io(e),
+            SceneError::Mesh { .. } => SceneErrorKind::Mesh,
+            SceneError::Meshing { .. } => SceneErrorKind::Meshing,
+            SceneError::TooLarge { .. } => SceneErrorKind::TooLarge,
+            SceneError::Size { .. } => SceneErrorKind::Parameters,
+            SceneError::Pbd(e) => SceneErrorKind::of_pbd(e),
+            SceneError::Surgery(_) => SceneErrorKind::Simulation,
+            SceneError::Tool(_) => SceneErrorKind::Tool,
+        }
+    }
+
     pub(crate) fn mesh(name: &str, e: impl std::fmt::Display) -> SceneError {
         SceneError::Mesh {
             name: name.to_owned(),

@@ -12,7 +12,7 @@
 //!   ([`Session::grab`], [`Session::drag`], [`Session::release`]: nodes attached to a moving
 //!   target), the scalpel ([`Session::cut`]: a path and the view direction make the blade's plane;
 //!   one segment is cut per step) and the needle ([`Session::suture`]); it reports
-//!   [`TrainerEvent`]s, the drawable surface ([`Session::surface`], versioned), the volume drift
+//!   [`TrainerEvent`]s (of a closed set of [`TrainerEventKind`]s), the drawable surface ([`Session::surface`], versioned), the volume drift
 //!   `V/V₀ − 1`, step times and the tissue's force on the probe in newtons; contact tools the
 //!   host poses ([`Session::add_tool`], [`Session::set_tool_pose`]: a probe's tip, a needle, a
 //!   blade) with each one's force model of the last step for a haptic loop
@@ -22,7 +22,9 @@
 //!   and lift the appendix's tip, incise near the base, cut the tip off, suture the incision)
 //!   and [`PressAndDrag`] (a probe pressed into an organ and dragged along waypoints), behind
 //!   the [`Script`] trait (`before_step`, the host's solver step, `after_step`). The headless
-//!   `trainer`, the studio's demonstration and the surgery crate's moving-body test run these.
+//!   `trainer`, the studio's demonstration and this crate's moving-body test run these;
+//!   [`PressPlan::default`] is the one press-and-drag timeline, and [`PressAndDrag::on_tray`]
+//!   the one set-up of its probe.
 //! - [`Organ::body`]: an organ as a `tissue-pbd` body held as its [`Setting`] says (on a
 //!   [`Tray`], or the appendix's base pinned over the abdominal wall); [`Organ::scaled_to`].
 //!
@@ -82,13 +84,15 @@
 )]
 
 mod error;
+mod event;
 mod organ;
 pub mod script;
 mod session;
 
-pub use error::SceneError;
+pub use error::{SceneError, SceneErrorKind};
+pub use event::{TrainerEvent, TrainerEventKind};
 pub use organ::{Organ, Setting, ShippedOrgan, Tray, APPENDIX_BASE_X, MAX_TETS};
 pub use script::{AppendixPlan, AppendixProcedure, PressAndDrag, PressPlan, Script, ScriptStep};
 pub use session::{
-    Session, SessionOptions, TrainerEvent, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS, SUTURE_SPACING_CM,
+    Session, SessionOptions, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS, SUTURE_SPACING_CM,
 };

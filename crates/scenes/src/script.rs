@@ -14,7 +14,7 @@
 //!   presses down to a depth below its top and drags along waypoints.
 
 use glam::{Quat, Vec3};
-use tissue_pbd::{AttachmentId, Pose, SoftBody, ToolShape};
+use tissue_pbd::{AttachmentId, ContactParams, Pose, SoftBody, ToolShape};
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent};
 
 use crate::error::SceneError;
@@ -285,7 +285,8 @@ fn top_near(body: &SoftBody, x: f32) -> f32 {
         .max(-10.0)
 }
 
-/// The press-and-drag run's timeline (steps) and path (cm).
+/// The press-and-drag run's timeline (steps), probe and path (cm). [`PressPlan::default`] is the
+/// run the studio's demonstration on a tray plays and the headless `trainer`'s defaults.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PressPlan {
     /// Steps while the organ settles (the probe parked above).
@@ -296,10 +297,49 @@ pub struct PressPlan {
     pub drag: usize,
     /// How deep below the organ's top the probe's tip goes (cm).
     pub depth: f32,
-    /// The drag's path (x, z), at least two points; the press is over the first.
+    /// The probe's radius (cm): a capsule as long as the organ, its tip at the local origin,
+    /// its axis +y.
+    pub radius: f32,
+    /// The drag's path (x, z), two points or more; the press is over the first. Empty: across
+    /// the organ's top along x, from −¼ to +¼ of its extent ([`PressPlan::path`]).
     pub waypoints: Vec<[f32; 2]>,
-    /// Horizontal radius within which the organ's top is looked for (cm).
+    /// Horizontal radius within which the organ's top is looked for (cm);
+    /// [`PressAndDrag::on_tray`] widens it to the body's mean tet edge when that is longer.
     pub reach: f32,
+}
+
+impl Default for PressPlan {
+    /// Settle 100 steps (1 s: the organ comes to rest on the tray before the probe touches
+    /// it), press 50, drag 100; 1.5 cm deep with a 0.4 cm probe, across the organ, its top
+    /// looked for within 1 cm.
+    fn default() -> Self {
+        PressPlan {
+            settle: 100,
+            press: 50,
+            drag: 100,
+            depth: 1.5,
+            radius: 0.4,
+            waypoints: Vec::new(),
+            reach: 1.0,
+        }
+    }
+}
+
+impl PressPlan {
+    /// The steps of the whole run: settle, press and drag.
+    pub fn steps(&self) -> usize {
+        self.settle + self.press + self.drag
+    }
+
+    /// The drag's path on an organ of largest extent `extent` (cm): the waypoints given, or,
+    /// when there are none, across the top along x from −¼ to +¼ of the extent.
+    pub fn path(&self, extent: f32) -> Vec<[f32; 2]> {
+        if self.waypoints.is_empty() {
+            vec![[-0.25 * extent, 0.0], [0.25 * extent, 0.0]]
+        } else {
+            self.waypoints.clone()
+        }
+    }
 }
 
 /// A probe pressed into the organ and dragged ([`PressPlan`]); the probe is a capsule tool of
@@ -308,19 +348,19 @@ pub struct PressPlan {
 pub struct PressAndDrag {
     plan: PressPlan,
     tool: usize,
-    radius: f32,
     /// The press's start and end (the tip, cm), known once the organ has settled.
     start: Vec3,
     end: Vec3,
 }
 
 impl PressAndDrag {
-    /// The run of tool `tool` (a capsule of radius `radius`, cm) along `plan`.
+    /// The run of tool `tool` (a capsule of [`PressPlan::radius`], already in the body) along
+    /// `plan`, whose waypoints must be given (see [`PressPlan::path`]).
     ///
     /// # Errors
     /// [`SceneError::Tool`] when the plan has fewer than two waypoints, a negative or
     /// non-finite depth, or a reach that is not positive.
-    pub fn new(tool: usize, radius: f32, plan: PressPlan) -> Result<PressAndDrag, SceneError> {
+    pub fn new(tool: usize, plan: PressPlan) -> Result<PressAndDrag, SceneError> {
         if plan.waypoints.len() < 2 {
             return Err(SceneError::Tool(format!(
                 "a drag path needs two or more waypoints, not {}",
@@ -342,10 +382,62 @@ impl PressAndDrag {
         Ok(PressAndDrag {
             plan,
             tool,
-            radius,
             start: Vec3::ZERO,
             end: Vec3::ZERO,
         })
+    }
+
+    /// The press-and-drag set-up on an organ of largest extent `extent` (cm) lying on its tray:
+    /// adds the probe to `body` (a capsule of [`PressPlan::radius`] as long as the organ, with
+    /// `contact`'s friction), parks it ([`PressAndDrag::parked`]) and plans its run: the path
+    /// of [`PressPlan::path`], the top looked for within the plan's reach or the body's mean tet
+    /// edge, whichever is longer. The probe's id is [`PressAndDrag::tool`].
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] when the solver refuses the probe (a radius that is not positive,
+    /// bad contact parameters); [`SceneError::Tool`] as [`PressAndDrag::new`].
+    pub fn on_tray(
+        body: &mut SoftBody,
+        extent: f32,
+        plan: PressPlan,
+        contact: ContactParams,
+    ) -> Result<PressAndDrag, SceneError> {
+        let probe = ToolShape::Capsule {
+            a: Vec3::ZERO,
+            b: Vec3::new(0.0, extent, 0.0),
+            radius: plan.radius,
+        };
+        let tool = body.add_tool(probe, PressAndDrag::parked(extent), contact)?;
+        PressAndDrag::again(body, tool, extent, plan)
+    }
+
+    /// The run of `plan` with the probe `tool` that [`PressAndDrag::on_tray`] added before
+    /// (a demonstration played again): parks it and plans the run as `on_tray` does.
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] for an unknown tool; [`SceneError::Tool`] as [`PressAndDrag::new`].
+    pub fn again(
+        body: &mut SoftBody,
+        tool: usize,
+        extent: f32,
+        plan: PressPlan,
+    ) -> Result<PressAndDrag, SceneError> {
+        body.set_tool_pose(tool, PressAndDrag::parked(extent))?;
+        let edges = body.distance_constraints();
+        let mean_edge =
+            edges.iter().map(|c| f64::from(c.rest_length)).sum::<f64>() / edges.len().max(1) as f64;
+        let plan = PressPlan {
+            waypoints: plan.path(extent),
+            reach: plan.reach.max(mean_edge as f32),
+            ..plan
+        };
+        PressAndDrag::new(tool, plan)
+    }
+
+    /// Where the probe waits before and after its run: on the tray's centre line, three organ
+    /// extents above the tray.
+    pub fn parked(extent: f32) -> Pose {
+        Pose::from_translation(Vec3::new(0.0, 3.0 * extent, 0.0))
     }
 
     /// Its plan.
@@ -361,7 +453,7 @@ impl PressAndDrag {
 
 impl Script for PressAndDrag {
     fn steps(&self) -> usize {
-        self.plan.settle + self.plan.press + self.plan.drag
+        self.plan.steps()
     }
 
     fn before_step(&mut self, k: usize, body: &mut SoftBody) -> Result<(), SceneError> {
@@ -375,8 +467,8 @@ impl Script for PressAndDrag {
                     xz[0], xz[1], p.reach
                 ))
             })?;
-            self.start = Vec3::new(xz[0], top + 0.5 + self.radius, xz[1]);
-            self.end = Vec3::new(xz[0], top - p.depth + self.radius, xz[1]);
+            self.start = Vec3::new(xz[0], top + 0.5 + p.radius, xz[1]);
+            self.end = Vec3::new(xz[0], top - p.depth + p.radius, xz[1]);
         }
         if k > p.settle {
             let tip = if k <= p.settle + p.press {

@@ -14,6 +14,7 @@ use tissue_pbd::{
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
 
 use crate::error::SceneError;
+use crate::event::{TrainerEvent, TrainerEventKind};
 use crate::organ::{Organ, Setting, Tray};
 use crate::script::{AppendixPlan, AppendixProcedure, PressAndDrag, PressPlan, Script};
 
@@ -81,18 +82,6 @@ impl Default for SessionOptions {
     }
 }
 
-/// Something that happened, for the events list.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TrainerEvent {
-    /// The step it happened in.
-    pub step: u64,
-    /// `cut_advanced`, `piece_detached`, `suture_placed`, `suture_removed`, `suture_missed`,
-    /// `grabbed`, `released`.
-    pub kind: &'static str,
-    /// One line for a person.
-    pub text: String,
-}
-
 #[derive(Debug, Clone)]
 struct Grab {
     /// (node, attachment id, the node's offset from the grabbed point).
@@ -132,6 +121,8 @@ pub struct Session {
     times_ms: VecDeque<f64>,
     steps: u64,
     worst_drift: f64,
+    /// The organ's largest extent (cm); its tray is [`Tray::for_extent`] of it.
+    extent: f32,
     tray_side: f32,
     /// Per contact tool ([`Session::add_tool`]): its force model after the last step and the
     /// stiffness estimate that feeds it.
@@ -160,7 +151,8 @@ impl Session {
     /// [`SceneError::Pbd`] / [`SceneError::Surgery`] if the body cannot be built.
     pub fn new(organ: &Organ, options: SessionOptions) -> Result<Session, SceneError> {
         let _span = tracing::info_span!("session_new", organ = %organ.label).entered();
-        let tray = Tray::for_extent(organ.extent());
+        let extent = organ.extent();
+        let tray = Tray::for_extent(extent);
         let body = organ.body(&options.material, options.step, options.contact, tray)?;
         let tray_side = tray.side;
         let surgery = Surgery::new(&body, SurgerySettings::default())?;
@@ -187,6 +179,7 @@ impl Session {
             times_ms: VecDeque::with_capacity(TIMES_KEPT),
             steps: 0,
             worst_drift: 0.0,
+            extent,
             tray_side,
             tools: Vec::new(),
             playing: None,
@@ -320,7 +313,7 @@ impl Session {
         let probe = self.playing.as_ref()?.probe?;
         let tip = self.body.tool(probe).ok()?.pose().translation;
         // Parked above the organ until the press starts.
-        (tip.y < self.tray_side / 3.0 + 1.0).then_some(tip)
+        (tip.y < self.extent + 1.0).then_some(tip)
     }
 
     /// Takes one step: the probe's targets, the solver, one queued scalpel segment.
@@ -374,13 +367,18 @@ impl Session {
     /// [`SceneError::Pbd`] for a degenerate shape or a bad pose.
     pub fn add_tool(&mut self, shape: ToolShape, pose: Pose) -> Result<usize, SceneError> {
         let id = self.body.add_tool(shape, pose, self.options.contact)?;
+        self.track_tool(pose);
+        Ok(id)
+    }
+
+    /// Starts the force model of the tool just added to the body at `pose`.
+    fn track_tool(&mut self, pose: Pose) {
         let model = ContactForceModel {
             step: self.body.step_count(),
             origin: pose.translation,
             ..ContactForceModel::default()
         };
         self.tools.push((model, StiffnessEstimator::default()));
-        Ok(id)
     }
 
     /// Moves contact tool `id`: the next step sweeps it from its last pose to `pose`.
@@ -447,32 +445,24 @@ impl Session {
                  incision sutured",
             ),
             Setting::Tray => {
-                let extent = self.tray_side / 3.0;
-                let radius = 0.4;
-                let shape = ToolShape::Capsule {
-                    a: Vec3::ZERO,
-                    b: Vec3::new(0.0, extent, 0.0),
-                    radius,
-                };
-                let parked = Pose::from_translation(Vec3::new(0.0, 3.0 * extent, 0.0));
-                let tool = match self.demo_probe {
-                    Some(tool) => {
-                        self.set_tool_pose(tool, parked)?;
-                        tool
+                let (extent, plan) = (self.extent, PressPlan::default());
+                let script = match self.demo_probe {
+                    Some(tool) => PressAndDrag::again(&mut self.body, tool, extent, plan)?,
+                    None => {
+                        let script = PressAndDrag::on_tray(
+                            &mut self.body,
+                            extent,
+                            plan,
+                            self.options.contact,
+                        )?;
+                        self.track_tool(PressAndDrag::parked(extent));
+                        script
                     }
-                    None => self.add_tool(shape, parked)?,
                 };
+                let tool = script.tool();
                 self.demo_probe = Some(tool);
-                let plan = PressPlan {
-                    settle: 50,
-                    press: 50,
-                    drag: 150,
-                    depth: 1.5,
-                    waypoints: vec![[-0.25 * extent, 0.0], [0.25 * extent, 0.0]],
-                    reach: 1.0,
-                };
                 (
-                    Box::new(PressAndDrag::new(tool, radius, plan)?),
+                    Box::new(script),
                     Some(tool),
                     "demonstration: a probe presses 1.5 cm into the organ and drags across it",
                 )
@@ -483,11 +473,11 @@ impl Session {
             k: 0,
             probe,
         });
-        Ok(TrainerEvent {
-            step: self.steps,
-            kind: "demo_started",
-            text: text.to_owned(),
-        })
+        Ok(TrainerEvent::new(
+            self.steps,
+            TrainerEventKind::DemoStarted,
+            text,
+        ))
     }
 
     /// Whether a demonstration is playing.
@@ -508,20 +498,19 @@ impl Session {
         if let Some(tool) = p.probe {
             self.force = self.body.tool_force(tool)? / DYN_PER_NEWTON;
             if finished {
-                // Parked well above the organ.
-                let up = Vec3::new(0.0, self.tray_side, 0.0);
-                self.body.set_tool_pose(tool, Pose::from_translation(up))?;
+                self.body
+                    .set_tool_pose(tool, PressAndDrag::parked(self.extent))?;
             }
         }
         self.record(&out.events, events);
         if finished {
             self.playing = None;
             self.force = Vec3::ZERO;
-            events.push(TrainerEvent {
-                step: self.steps,
-                kind: "demo_finished",
-                text: "demonstration finished: the organ is yours".to_owned(),
-            });
+            events.push(TrainerEvent::new(
+                self.steps,
+                TrainerEventKind::DemoFinished,
+                "demonstration finished: the organ is yours",
+            ));
         }
         Ok(())
     }
@@ -550,14 +539,11 @@ impl Session {
         if happened.is_empty() {
             return;
         }
-        for e in happened {
-            let (kind, text) = describe(e);
-            events.push(TrainerEvent {
-                step: self.steps,
-                kind,
-                text,
-            });
-        }
+        events.extend(
+            happened
+                .iter()
+                .map(|e| TrainerEvent::surgery(self.steps, e)),
+        );
         self.surface = self.surgery.boundary_faces(&self.body);
         self.surface_version += 1;
     }
@@ -609,11 +595,11 @@ impl Session {
             baseline,
             target: point,
         });
-        Ok(TrainerEvent {
-            step: self.steps,
-            kind: "grabbed",
-            text: format!("probe grabbed {count} nodes"),
-        })
+        Ok(TrainerEvent::new(
+            self.steps,
+            TrainerEventKind::Grabbed,
+            format!("probe grabbed {count} nodes"),
+        ))
     }
 
     /// Moves the grabbed point towards `target` (cm) from the next step on, clamped into
@@ -640,11 +626,11 @@ impl Session {
             self.body.unpin(n)?;
         }
         self.force = Vec3::ZERO;
-        Ok(Some(TrainerEvent {
-            step: self.steps,
-            kind: "released",
-            text: format!("probe released {} nodes", g.nodes.len()),
-        }))
+        Ok(Some(TrainerEvent::new(
+            self.steps,
+            TrainerEventKind::Released,
+            format!("probe released {} nodes", g.nodes.len()),
+        )))
     }
 
     /// Queues a scalpel cut along `path` (surface points, cm) seen along `view_dir`: the blade's
@@ -776,21 +762,15 @@ impl Session {
                 self.surgery
                     .suture_segment(&mut self.body, c - dir * reach, c + dir * reach)?
             {
-                let (kind, text) = describe(&e);
                 self.surface_version += 1;
-                return Ok(TrainerEvent {
-                    step: self.steps,
-                    kind,
-                    text,
-                });
+                return Ok(TrainerEvent::surgery(self.steps, &e));
             }
         }
-        Ok(TrainerEvent {
-            step: self.steps,
-            kind: "suture_missed",
-            text: "the needle did not cross a wound there: click on each side of an open cut"
-                .to_owned(),
-        })
+        Ok(TrainerEvent::new(
+            self.steps,
+            TrainerEventKind::SutureMissed,
+            "the needle did not cross a wound there: click on each side of an open cut",
+        ))
     }
 
     /// The outward normal of the surface triangle nearest `p` (by centroid).
@@ -816,39 +796,4 @@ fn distance_to_segment(p: Vec3, a: Vec3, b: Vec3) -> f32 {
         0.0
     };
     p.distance(a + ab * t)
-}
-
-/// The kind and a line for a surgery event.
-fn describe(e: &SurgeryEvent) -> (&'static str, String) {
-    match e {
-        SurgeryEvent::CutAdvanced {
-            new_nodes,
-            opened_faces,
-            ..
-        } => (
-            "cut_advanced",
-            format!(
-                "cut advanced: {} wall triangles opened, {} nodes added",
-                opened_faces.len(),
-                new_nodes.len()
-            ),
-        ),
-        SurgeryEvent::PieceDetached {
-            tets, rest_volume, ..
-        } => (
-            "piece_detached",
-            format!("piece detached: {} tets, {rest_volume:.2} cm³", tets.len()),
-        ),
-        SurgeryEvent::SuturePlaced { suture, nodes, .. } => (
-            "suture_placed",
-            format!(
-                "suture {suture} placed between nodes {} and {}",
-                nodes[0], nodes[1]
-            ),
-        ),
-        SurgeryEvent::SutureRemoved { suture, .. } => {
-            ("suture_removed", format!("suture {suture} removed"))
-        }
-        other => ("surgery", format!("{other:?}")),
-    }
 }

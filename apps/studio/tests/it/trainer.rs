@@ -1,11 +1,15 @@
 //! The trainer's socket without a browser: the appendix loads, frames stream in the documented
 //! binary layout (the index buffer first and after a cut), a cut and a suture give their events,
-//! a second tab is refused, and closing the tab frees the server.
+//! a second tab is refused, and closing the tab frees the server; errors arrive with their
+//! kinds. The messages are built and read with the studio's own types (`Command`,
+//! `TrainerMessage`).
 
 use std::time::{Duration, Instant};
 
 use futures_util::{SinkExt, StreamExt};
-use serde_json::{json, Value};
+use serde_json::Value;
+use tissue_scenes::{TrainerEvent, TrainerEventKind};
+use tissue_studio::trainer::{Command, SceneInfo, TrainerMessage};
 use tokio_tungstenite::tungstenite::Message;
 
 type Result<T = ()> = std::result::Result<T, Box<dyn std::error::Error>>;
@@ -43,8 +47,11 @@ fn decode(b: &[u8]) -> Result<Frame> {
     })
 }
 
+/// A message of the server as the tests read it: the studio's own type, its errors as JSON.
+type Msg = TrainerMessage<Value>;
+
 enum In {
-    Text(Value),
+    Text(Msg),
     Frame(Frame),
 }
 
@@ -61,25 +68,63 @@ async fn next(socket: &mut Socket) -> Result<In> {
     }
 }
 
-async fn text_of(socket: &mut Socket, kind: &str, field: Option<(&str, &str)>) -> Result<Value> {
+/// The first message `pick` takes, within 60 s; a `failed` message it does not take is an
+/// error.
+async fn until<T>(socket: &mut Socket, what: &str, pick: impl Fn(&Msg) -> Option<T>) -> Result<T> {
     let deadline = Instant::now() + Duration::from_secs(60);
     let mut seen = Vec::new();
     loop {
         assert!(
             Instant::now() < deadline,
-            "no {kind} {field:?} within 60 s; events seen: {seen:?}"
+            "no {what} within 60 s; events seen: {seen:?}"
         );
-        if let In::Text(v) = next(socket).await? {
-            if v["type"] == "event" {
-                seen.push(v["event"]["kind"].clone());
+        if let In::Text(m) = next(socket).await? {
+            if let Some(t) = pick(&m) {
+                return Ok(t);
             }
-            let field_ok = field.is_none_or(|(k, want)| v["event"][k] == want);
-            if v["type"] == kind && field_ok {
-                return Ok(v);
+            match m {
+                Msg::Event { event } => seen.push(event.kind),
+                Msg::Failed { error } => {
+                    return Err(format!("waiting for {what}, the server failed: {error}").into())
+                }
+                _ => {}
             }
-            assert_ne!(v["type"], "failed", "{v}");
         }
     }
+}
+
+async fn scene(socket: &mut Socket) -> Result<SceneInfo> {
+    until(socket, "a scene", |m| match m {
+        Msg::Scene(s) => Some(s.clone()),
+        _ => None,
+    })
+    .await
+}
+
+async fn event(socket: &mut Socket, kind: TrainerEventKind) -> Result<TrainerEvent> {
+    until(socket, kind.name(), |m| match m {
+        Msg::Event { event } if event.kind == kind => Some(event.clone()),
+        _ => None,
+    })
+    .await
+}
+
+/// The error of the next `failed` message.
+async fn failed(socket: &mut Socket) -> Result<Value> {
+    until(socket, "a failure", |m| match m {
+        Msg::Failed { error } => Some(error.clone()),
+        _ => None,
+    })
+    .await
+}
+
+/// The error of the next `refused` message.
+async fn refused(socket: &mut Socket) -> Result<Value> {
+    until(socket, "a refusal", |m| match m {
+        Msg::Refused { error } => Some(error.clone()),
+        _ => None,
+    })
+    .await
 }
 
 async fn frame_with(socket: &mut Socket, indices: bool) -> Result<Frame> {
@@ -92,9 +137,16 @@ async fn frame_with(socket: &mut Socket, indices: bool) -> Result<Frame> {
     }
 }
 
-async fn send(socket: &mut Socket, v: Value) -> Result {
-    socket.send(Message::Text(v.to_string().into())).await?;
+async fn send(socket: &mut Socket, command: &Command) -> Result {
+    let text = serde_json::to_string(command)?;
+    socket.send(Message::Text(text.into())).await?;
     Ok(())
+}
+
+fn load(organ: &str) -> Command {
+    Command::Load {
+        organ: organ.to_owned(),
+    }
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -102,11 +154,11 @@ async fn the_appendix_streams_is_cut_and_sutured_and_one_session_runs_at_a_time(
     let (studio, addr, server) = crate::serve().await?;
     let url = format!("ws://{addr}/api/trainer/ws");
     let (mut tab, _) = tokio_tungstenite::connect_async(&url).await?;
-    send(&mut tab, json!({ "type": "load", "organ": "appendix" })).await?;
-    let scene = text_of(&mut tab, "scene", None).await?;
-    let nodes = scene["nodes"].as_u64().unwrap_or(0) as usize;
+    send(&mut tab, &load("appendix")).await?;
+    let scene = scene(&mut tab).await?;
+    let nodes = scene.nodes;
     assert_eq!(nodes, 33 * 9 * 9);
-    assert!(scene["capacity"]["vertices"].as_u64().unwrap_or(0) as usize > nodes);
+    assert!(scene.capacity.vertices > nodes);
 
     // The first frame carries the index buffer; the next ones positions only, steps advancing.
     let first = frame_with(&mut tab, true).await?;
@@ -119,8 +171,8 @@ async fn the_appendix_streams_is_cut_and_sutured_and_one_session_runs_at_a_time(
 
     // A second tab is refused while this one runs.
     let (mut other, _) = tokio_tungstenite::connect_async(&url).await?;
-    let refused = text_of(&mut other, "refused", None).await?;
-    assert_eq!(refused["error"]["kind"], "busy");
+    let error = refused(&mut other).await?;
+    assert_eq!(error["kind"], "busy");
 
     // A cut across the top at x = 0, seen from above.
     let top = later
@@ -132,12 +184,12 @@ async fn the_appendix_streams_is_cut_and_sutured_and_one_session_runs_at_a_time(
     let path: Vec<[f32; 3]> = (0..=10)
         .map(|i| [0.0, top, -1.3 + 0.26 * i as f32])
         .collect();
-    send(
-        &mut tab,
-        json!({ "type": "cut", "path": path, "view_dir": [0, -1, 0] }),
-    )
-    .await?;
-    text_of(&mut tab, "event", Some(("kind", "cut_advanced"))).await?;
+    let cut = Command::Cut {
+        path,
+        view_dir: [0.0, -1.0, 0.0],
+    };
+    send(&mut tab, &cut).await?;
+    event(&mut tab, TrainerEventKind::CutAdvanced).await?;
     let cut = frame_with(&mut tab, true).await?;
     assert!(
         cut.triangles > first.triangles,
@@ -149,19 +201,19 @@ async fn the_appendix_streams_is_cut_and_sutured_and_one_session_runs_at_a_time(
 
     // The needle across the wound, once the whole path is cut (a segment per step).
     tokio::time::sleep(Duration::from_millis(1000)).await;
-    send(
-        &mut tab,
-        json!({ "type": "suture", "a": [-0.3, top, 0.0], "b": [0.3, top, 0.0] }),
-    )
-    .await?;
-    text_of(&mut tab, "event", Some(("kind", "suture_placed"))).await?;
+    let suture = Command::Suture {
+        a: [-0.3, top, 0.0],
+        b: [0.3, top, 0.0],
+    };
+    send(&mut tab, &suture).await?;
+    event(&mut tab, TrainerEventKind::SuturePlaced).await?;
 
     // Pause: the steps stop; one step advances by exactly one.
-    send(&mut tab, json!({ "type": "pause", "paused": true })).await?;
+    send(&mut tab, &Command::Pause { paused: true }).await?;
     tokio::time::sleep(Duration::from_millis(200)).await;
     let paused = frame_with(&mut tab, false).await?;
     tokio::time::sleep(Duration::from_millis(200)).await;
-    send(&mut tab, json!({ "type": "step" })).await?;
+    send(&mut tab, &Command::Step).await?;
     let deadline = Instant::now() + Duration::from_secs(10);
     loop {
         let f = frame_with(&mut tab, false).await?;
@@ -171,19 +223,23 @@ async fn the_appendix_streams_is_cut_and_sutured_and_one_session_runs_at_a_time(
         }
         assert!(Instant::now() < deadline, "the single step should come");
     }
-    let stats = text_of(&mut tab, "stats", None).await?;
-    assert_eq!(stats["paused"], true);
-    assert!(stats["volume_drift"].as_f64().is_some_and(f64::is_finite));
+    let stats = until(&mut tab, "stats", |m| match m {
+        Msg::Stats(s) => Some(s.clone()),
+        _ => None,
+    })
+    .await?;
+    assert!(stats.paused);
+    assert!(stats.volume_drift.is_finite());
 
     // Closing the tab ends the session: another tab can start one.
     drop(tab);
     let deadline = Instant::now() + Duration::from_secs(10);
     loop {
         let (mut again, _) = tokio_tungstenite::connect_async(&url).await?;
-        send(&mut again, json!({ "type": "load", "organ": "appendix" })).await?;
+        send(&mut again, &load("appendix")).await?;
         match next(&mut again).await? {
-            In::Text(v) if v["type"] == "scene" => break,
-            In::Text(v) if v["type"] == "refused" => {
+            In::Text(Msg::Scene(_)) => break,
+            In::Text(Msg::Refused { .. }) => {
                 assert!(
                     Instant::now() < deadline,
                     "the closed tab should free the server"
@@ -205,38 +261,38 @@ async fn the_appendix_demonstration_plays_the_procedure_to_its_end() -> Result {
     let (studio, addr, server) = crate::serve().await?;
     let url = format!("ws://{addr}/api/trainer/ws");
     let (mut tab, _) = tokio_tungstenite::connect_async(&url).await?;
-    send(&mut tab, json!({ "type": "demo" })).await?;
-    let refused = text_of(&mut tab, "failed", None).await;
-    assert!(refused.is_ok(), "a demonstration needs an organ first");
-    send(&mut tab, json!({ "type": "load", "organ": "appendix" })).await?;
-    text_of(&mut tab, "scene", None).await?;
-    send(&mut tab, json!({ "type": "demo" })).await?;
-    text_of(&mut tab, "scene", None).await?;
-    text_of(&mut tab, "event", Some(("kind", "demo_started"))).await?;
+    send(&mut tab, &Command::Demo).await?;
+    let error = failed(&mut tab).await?;
+    assert_eq!(
+        error["kind"], "usage",
+        "a demonstration needs an organ first: {error}"
+    );
+    send(&mut tab, &load("appendix")).await?;
+    scene(&mut tab).await?;
+    send(&mut tab, &Command::Demo).await?;
+    scene(&mut tab).await?;
+    event(&mut tab, TrainerEventKind::DemoStarted).await?;
     // The trainee's scalpel is refused while it plays.
-    send(
-        &mut tab,
-        json!({ "type": "cut", "path": [[0, 2, -1], [0, 2, 1]], "view_dir": [0, -1, 0] }),
-    )
-    .await?;
+    let cut = Command::Cut {
+        path: vec![[0.0, 2.0, -1.0], [0.0, 2.0, 1.0]],
+        view_dir: [0.0, -1.0, 0.0],
+    };
+    send(&mut tab, &cut).await?;
     let (mut pieces, mut sutures, mut refused) = (Vec::new(), 0, 0);
     let deadline = Instant::now() + Duration::from_secs(60);
     loop {
         assert!(Instant::now() < deadline, "the demonstration did not end");
-        let In::Text(v) = next(&mut tab).await? else {
-            continue;
-        };
-        if v["type"] == "failed" {
-            refused += 1;
-            continue;
-        }
-        if v["type"] != "event" {
-            continue;
-        }
-        match v["event"]["kind"].as_str() {
-            Some("piece_detached") => pieces.push(v["event"]["text"].to_string()),
-            Some("suture_placed") => sutures += 1,
-            Some("demo_finished") => break,
+        match next(&mut tab).await? {
+            In::Text(Msg::Failed { error }) => {
+                assert_eq!(error["kind"], "usage", "{error}");
+                refused += 1;
+            }
+            In::Text(Msg::Event { event }) => match event.kind {
+                TrainerEventKind::PieceDetached => pieces.push(event.text),
+                TrainerEventKind::SuturePlaced => sutures += 1,
+                TrainerEventKind::DemoFinished => break,
+                _ => {}
+            },
             _ => {}
         }
     }
@@ -245,18 +301,50 @@ async fn the_appendix_demonstration_plays_the_procedure_to_its_end() -> Result {
     // The tip (about 7.8 cm³ at rest) is among the pieces.
     let volumes: Vec<f64> = pieces
         .iter()
-        .filter_map(|t| {
-            t.trim_matches('"')
-                .rsplit(", ")
-                .next()?
-                .trim_end_matches(" cm³")
-                .parse()
-                .ok()
-        })
+        .filter_map(|t| t.rsplit(", ").next()?.trim_end_matches(" cm³").parse().ok())
         .collect();
     assert!(
         volumes.iter().any(|v| (6.0..11.0).contains(v)),
         "pieces: {pieces:?}"
+    );
+    studio.shutdown();
+    server.abort();
+    Ok(())
+}
+
+/// Errors arrive with their own kinds, not all as `run`: a tool before any organ is a usage
+/// error, an organ that is not there is not found, a message the server does not know (the old
+/// `tool` message) is refused as usage, a grab off the surface is a usage error.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn trainer_errors_arrive_with_their_kinds() -> Result {
+    let (studio, addr, server) = crate::serve().await?;
+    let url = format!("ws://{addr}/api/trainer/ws");
+    let (mut tab, _) = tokio_tungstenite::connect_async(&url).await?;
+    send(&mut tab, &Command::Release).await?;
+    let error = failed(&mut tab).await?;
+    assert_eq!(error["kind"], "usage", "{error}");
+    assert_eq!(error["message"], "load an organ first");
+    send(&mut tab, &load("u-not-uploaded")).await?;
+    let error = failed(&mut tab).await?;
+    assert_eq!(error["kind"], "not_found", "{error}");
+    let tool = r#"{"type": "tool", "tool": "probe"}"#;
+    tab.send(Message::Text(tool.into())).await?;
+    let error = refused(&mut tab).await?;
+    assert_eq!(error["kind"], "usage", "{error}");
+    send(&mut tab, &load("appendix")).await?;
+    scene(&mut tab).await?;
+    let grab = Command::Grab {
+        point: [0.0, 1.0, 0.0],
+        triangle: usize::MAX,
+    };
+    send(&mut tab, &grab).await?;
+    let error = failed(&mut tab).await?;
+    assert_eq!(error["kind"], "usage", "{error}");
+    assert!(
+        error["message"]
+            .as_str()
+            .is_some_and(|m| m.contains("no surface triangle")),
+        "{error}"
     );
     studio.shutdown();
     server.abort();

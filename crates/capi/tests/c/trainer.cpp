@@ -1,7 +1,8 @@
 // C++17: the trainer through tissue.h. The appendix is cut (a drawn path, then a blade sweep)
 // and sutured, its surface read back after each change; then a probe presses it while a
 // haptic thread sets the probe's pose and asks for the force at 1 kHz, the physics stepping at
-// 100 Hz on another thread: the force opposes the press and moves smoothly between steps.
+// 100 Hz on another thread: the force opposes the press and moves smoothly between steps. The
+// appendix's demonstration plays with its events arriving by their own kinds.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -282,10 +283,46 @@ void force_loop() {
     check(std::fabs(f[1]) < 1e-3f, "free again: " + std::to_string(f[1]));
 }
 
+// The appendix's demonstration played through the C ABI: its events arrive with their own
+// kinds (started, cuts, the tip off, three stitches, finished), none as TISSUE_EVENT_OTHER.
+void demonstration() {
+    Body body;
+    ok(tissue_body_new_shipped(TISSUE_ORGAN_APPENDIX, &body.p), "appendix");
+    ok(tissue_body_play(body.p), "play");
+    check(tissue_body_play(body.p) == TISSUE_INVALID_ARGUMENT, "a second play is refused");
+    int counts[16] = {0};
+    int steps = 0;
+    bool finished = false;
+    while (!finished && steps < 400) {
+        ok(tissue_body_step(body.p, nullptr), "step");
+        ++steps;
+        tissue_event e{};
+        bool has = false;
+        while (tissue_body_next_event(body.p, &e, &has) == TISSUE_OK && has) {
+            const int k = static_cast<int>(e.kind);
+            counts[k >= 0 && k < 16 ? k : 15] += 1;
+            finished = finished || e.kind == TISSUE_EVENT_DEMO_FINISHED;
+        }
+    }
+    std::printf("demonstration: %d steps; started %d, cut %d, pieces %d, sutures %d, finished "
+                "%d, other %d\n",
+                steps, counts[TISSUE_EVENT_DEMO_STARTED], counts[TISSUE_EVENT_CUT_ADVANCED],
+                counts[TISSUE_EVENT_PIECE_DETACHED], counts[TISSUE_EVENT_SUTURE_PLACED],
+                counts[TISSUE_EVENT_DEMO_FINISHED], counts[TISSUE_EVENT_OTHER]);
+    check(finished && steps == 200, "the demonstration ends after its 200 steps");
+    check(counts[TISSUE_EVENT_DEMO_STARTED] == 1, "one demo_started event");
+    check(counts[TISSUE_EVENT_DEMO_FINISHED] == 1, "one demo_finished event");
+    check(counts[TISSUE_EVENT_CUT_ADVANCED] > 0, "the demonstration's cuts arrive as cuts");
+    check(counts[TISSUE_EVENT_PIECE_DETACHED] > 0, "the tip comes off");
+    check(counts[TISSUE_EVENT_SUTURE_PLACED] == 3, "three stitches");
+    check(counts[TISSUE_EVENT_OTHER] == 0 && counts[15] == 0, "no event without its kind");
+}
+
 }  // namespace
 
 int main() {
     surgery();
+    demonstration();
     force_loop();
     std::printf("%d failures\n", failures);
     return failures == 0 ? 0 : 1;

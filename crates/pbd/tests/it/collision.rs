@@ -11,8 +11,8 @@ use common::{bunny, fixture, Rng};
 use glam::{DVec3, Quat, Vec3, Vec3A};
 use tissue_mesh::{tet_box, TetMesh, TriMesh};
 use tissue_pbd::{
-    ColliderShape, ContactParams, ContactSource, Material, OrientedBox, PbdError, Pose, SoftBody,
-    StepSettings, ToolShape, VolumeConstraintKind, VoxelCollider,
+    ColliderShape, ContactParams, ContactSource, Material, OrientedBox, PbdError, PbdParam, Pose,
+    SoftBody, StepSettings, ToolShape, VolumeConstraintKind, VoxelCollider,
 };
 
 /// A 40 × 40 cm tray, 2 cm thick, top at `y = top`, as a voxel collider of 0.5 cm cells.
@@ -578,13 +578,16 @@ fn bad_collider_and_tool_input_is_refused_naming_where() {
     let b = OrientedBox::tray(0.0, 0.0, 0.0, 10.0, 10.0, 1.0);
     assert!(matches!(
         VoxelCollider::new(&[], 0.5, 0.5),
-        Err(PbdError::InvalidParameter { name: "shapes", .. })
+        Err(PbdError::InvalidParameter {
+            param: PbdParam::Shapes,
+            ..
+        })
     ));
     for cell in [0.0, -1.0, f32::NAN] {
         assert!(matches!(
             VoxelCollider::from_box(b, cell),
             Err(PbdError::InvalidParameter {
-                name: "cell_size",
+                param: PbdParam::CellSize,
                 ..
             })
         ));
@@ -630,7 +633,7 @@ fn bad_collider_and_tool_input_is_refused_naming_where() {
     assert!(matches!(
         e,
         PbdError::InvalidParameter {
-            name: "margin + detection",
+            param: PbdParam::ContactReach,
             ..
         }
     ));
@@ -643,7 +646,7 @@ fn bad_collider_and_tool_input_is_refused_naming_where() {
             }
         ),
         Err(PbdError::InvalidParameter {
-            name: "static_friction",
+            param: PbdParam::StaticFriction,
             ..
         })
     ));

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use tissue_mesh::tet_box;
-use tissue_pbd::{Material, PbdError, SoftBody, StepSettings};
+use tissue_pbd::{Material, PbdError, PbdParam, SoftBody, StepSettings};
 
 fn corners() -> Vec<Vec3> {
     vec![
@@ -25,7 +25,7 @@ fn bad_input_is_refused_naming_the_element() {
     assert!(matches!(
         SoftBody::from_tets(&corners(), &[[0, 1, 2, 3]], &bad_k),
         Err(PbdError::InvalidParameter {
-            name: "distance_stiffness",
+            param: PbdParam::DistanceStiffness,
             ..
         })
     ));
@@ -36,7 +36,7 @@ fn bad_input_is_refused_naming_the_element() {
     assert!(matches!(
         SoftBody::from_tets(&corners(), &[[0, 1, 2, 3]], &bad_k),
         Err(PbdError::InvalidParameter {
-            name: "volume_stiffness",
+            param: PbdParam::VolumeStiffness,
             ..
         })
     ));
@@ -64,32 +64,32 @@ fn bad_input_is_refused_naming_the_element() {
                 dt: 0.0,
                 ..StepSettings::default()
             },
-            "dt",
+            PbdParam::Dt,
         ),
         (
             StepSettings {
                 dt: -1.0,
                 ..StepSettings::default()
             },
-            "dt",
+            PbdParam::Dt,
         ),
         (
             StepSettings {
                 iterations: 0,
                 ..StepSettings::default()
             },
-            "iterations",
+            PbdParam::Iterations,
         ),
         (
             StepSettings {
                 damping: 2.0,
                 ..StepSettings::default()
             },
-            "damping",
+            PbdParam::Damping,
         ),
     ] {
         assert!(
-            matches!(body.set_settings(settings), Err(PbdError::InvalidParameter { name: n, .. }) if n == name)
+            matches!(body.set_settings(settings), Err(PbdError::InvalidParameter { param, .. }) if param == name)
         );
     }
     assert!(matches!(

@@ -5,7 +5,7 @@
 use glam::Vec3;
 use tissue_mesh::{tet_box, TetMesh};
 use tissue_pbd::{
-    ContactParams, Material, OrientedBox, PbdError, Pose, SoftBody, Solver, StepSettings,
+    ContactParams, Material, OrientedBox, PbdError, PbdParam, Pose, SoftBody, Solver, StepSettings,
     ToolShape, VolumeConstraintKind, VoxelCollider,
 };
 
@@ -138,7 +138,7 @@ fn zero_substeps_are_refused() {
     assert!(matches!(
         err,
         PbdError::InvalidParameter {
-            name: "substeps",
+            param: PbdParam::Substeps,
             ..
         }
     ));

@@ -7,7 +7,6 @@ mod common;
 
 mod cut;
 mod geometry;
-mod moving_body;
 mod robustness;
 mod suture;
 mod tip;

@@ -3,8 +3,8 @@
 
 use glam::Vec3;
 use tissue_scenes::{
-    Organ, SceneError, Session, SessionOptions, ShippedOrgan, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS,
-    SUTURE_SPACING_CM,
+    Organ, PressPlan, SceneError, SceneErrorKind, Session, SessionOptions, ShippedOrgan,
+    TrainerEventKind as K, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS, SUTURE_SPACING_CM,
 };
 
 type Result<T = ()> = std::result::Result<T, Box<dyn std::error::Error>>;
@@ -13,7 +13,10 @@ type Result<T = ()> = std::result::Result<T, Box<dyn std::error::Error>>;
 #[allow(clippy::panic)]
 fn tool_error<T: std::fmt::Debug>(r: std::result::Result<T, SceneError>) -> String {
     match r {
-        Err(SceneError::Tool(text)) => text,
+        Err(e @ SceneError::Tool(_)) => {
+            assert_eq!(e.kind(), SceneErrorKind::Tool);
+            e.to_string()
+        }
         other => panic!("expected a tool error, got {other:?}"),
     }
 }
@@ -65,7 +68,7 @@ fn a_cut_across_the_appendix_opens_it_and_a_suture_closes_the_wound() -> Result 
     for _ in 0..segments + 5 {
         kinds.extend(s.step()?.into_iter().map(|e| e.kind));
     }
-    assert!(kinds.contains(&"cut_advanced"), "{kinds:?}");
+    assert!(kinds.contains(&K::CutAdvanced), "{kinds:?}");
     assert!(
         s.surface().len() > triangles,
         "{} → {}",
@@ -77,7 +80,7 @@ fn a_cut_across_the_appendix_opens_it_and_a_suture_closes_the_wound() -> Result 
     let a = top(&s, -0.3, 0.0);
     let b = top(&s, 0.3, 0.0);
     let sutured = s.suture(a, b)?;
-    assert_eq!(sutured.kind, "suture_placed", "{}", sutured.text);
+    assert_eq!(sutured.kind, K::SuturePlaced, "{}", sutured.text);
     // The same two clicks again, nearly, or less than SUTURE_SPACING_CM (0.5 cm) along the
     // wound: a second stitch at the same place is refused and nothing is placed.
     let placed = s.surface_version();
@@ -98,10 +101,10 @@ fn a_cut_across_the_appendix_opens_it_and_a_suture_closes_the_wound() -> Result 
     // The next stitch along the wound, 0.8 cm away, is a new one.
     let far = 1.6 * SUTURE_SPACING_CM;
     let next = s.suture(top(&s, -0.3, far), top(&s, 0.3, far))?;
-    assert_eq!(next.kind, "suture_placed", "{}", next.text);
+    assert_eq!(next.kind, K::SuturePlaced, "{}", next.text);
     // Away from any wound the needle misses, and says so.
     let missed = s.suture(top(&s, -2.0, 0.0), top(&s, -1.5, 0.0))?;
-    assert_eq!(missed.kind, "suture_missed");
+    assert_eq!(missed.kind, K::SutureMissed);
     for _ in 0..30 {
         s.step()?;
     }
@@ -118,7 +121,7 @@ fn the_probe_lifts_the_appendix_tip_and_lets_go() -> Result {
     }
     let (t, p) = surface_near(&s, Vec3::new(3.5, 3.0, 0.0));
     let grabbed = s.grab(p, t)?;
-    assert_eq!(grabbed.kind, "grabbed");
+    assert_eq!(grabbed.kind, K::Grabbed);
     let lift = Vec3::new(0.0, 1.5, 0.0);
     for i in 1..=30 {
         s.drag(p + lift * (i as f32 / 30.0));
@@ -134,7 +137,7 @@ fn the_probe_lifts_the_appendix_tip_and_lets_go() -> Result {
     eprintln!("probe force lifting the appendix tip 1.5 cm: {f} N");
     assert!(f.y < -0.001 && f.length() < 0.32, "{f} N");
     let released = s.release()?.map(|e| e.kind);
-    assert_eq!(released, Some("released"));
+    assert_eq!(released, Some(K::Released));
     assert_eq!(s.tool_tip(), None);
     assert!(
         s.grab(p, usize::MAX).is_err(),
@@ -216,12 +219,12 @@ fn the_appendix_demonstration_cuts_the_tip_off_and_sutures_the_incision() -> Res
     let organ = Organ::shipped(ShippedOrgan::Appendix)?;
     let mut session = Session::new(&organ, SessionOptions::default())?;
     let started = session.play()?;
-    assert_eq!(started.kind, "demo_started");
+    assert_eq!(started.kind, K::DemoStarted);
     assert!(session.play().is_err(), "a second demonstration is refused");
     let p = top(&session, 0.0, 0.0);
     let refused = session.cut(&[p, p + Vec3::Z], Vec3::NEG_Y);
     assert!(refused.is_err(), "the scalpel waits for the demonstration");
-    let mut kinds: Vec<(&str, String)> = Vec::new();
+    let mut kinds: Vec<(K, String)> = Vec::new();
     let mut steps = 0;
     while session.playing() {
         for e in session.step()? {
@@ -231,13 +234,13 @@ fn the_appendix_demonstration_cuts_the_tip_off_and_sutures_the_incision() -> Res
         assert!(steps <= 200, "the demonstration did not end");
     }
     assert_eq!(steps, 200);
-    assert_eq!(kinds.last().map(|k| k.0), Some("demo_finished"));
-    let sutures = kinds.iter().filter(|k| k.0 == "suture_placed").count();
+    assert_eq!(kinds.last().map(|k| k.0), Some(K::DemoFinished));
+    let sutures = kinds.iter().filter(|k| k.0 == K::SuturePlaced).count();
     assert_eq!(sutures, 3, "{kinds:?}");
     // The tip: the largest detached piece, from its event's text ("… tets, V cm³").
     let largest = kinds
         .iter()
-        .filter(|k| k.0 == "piece_detached")
+        .filter(|k| k.0 == K::PieceDetached)
         .filter_map(|k| {
             k.1.rsplit(", ")
                 .next()?
@@ -258,7 +261,7 @@ fn the_appendix_demonstration_cuts_the_tip_off_and_sutures_the_incision() -> Res
     // The organ is the trainee's again.
     let p = top(&session, -3.0, 0.0);
     let (t, q) = surface_near(&session, p);
-    assert_eq!(session.grab(q, t)?.kind, "grabbed");
+    assert_eq!(session.grab(q, t)?.kind, K::Grabbed);
     Ok(())
 }
 
@@ -275,9 +278,13 @@ fn the_tray_demonstration_presses_a_probe_in_and_parks_it_after() -> Result {
         session.step()?;
         largest = largest.max(session.tool_force().length());
         steps += 1;
-        assert!(steps <= 250, "the demonstration did not end");
+        assert!(
+            steps <= PressPlan::default().steps(),
+            "the demonstration did not end"
+        );
     }
-    assert_eq!(steps, 250);
+    // The headless `trainer`'s timeline too (its defaults are PressPlan::default()).
+    assert_eq!(steps, PressPlan::default().steps());
     assert!(largest > 0.01, "the probe met no resistance: {largest} N");
     assert_eq!(session.tool_force(), Vec3::ZERO);
     for _ in 0..5 {
@@ -409,5 +416,71 @@ fn cut_paths_are_bounded_in_points_and_in_queued_segments() -> Result {
     assert_eq!(s.queued_cuts(), 160);
     assert_eq!(s.cut(&across, Vec3::NEG_Y)?, 80);
     assert_eq!(s.queued_cuts(), 240);
+    Ok(())
+}
+
+/// Each front end maps a scene error by its kind: a file of an unknown type is input, an open
+/// surface cannot be meshed, a size is a parameter, a solver that refuses a material is a
+/// parameter, a tool action that cannot be done is a tool error.
+#[test]
+fn scene_errors_say_what_kind_of_failure_they_are() -> Result {
+    let kind = |r: std::result::Result<Organ, SceneError>| r.err().map(|e| e.kind());
+    assert_eq!(
+        kind(Organ::from_bytes(b"", "organ.txt", 1.0)),
+        Some(SceneErrorKind::Input)
+    );
+    let open = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    assert_eq!(
+        kind(Organ::from_bytes(open.as_bytes(), "open.obj", 1.0)),
+        Some(SceneErrorKind::Meshing)
+    );
+    let organ = Organ::shipped(ShippedOrgan::Appendix)?;
+    assert_eq!(
+        kind(organ.scaled_to(-1.0)),
+        Some(SceneErrorKind::Parameters)
+    );
+    let bad = SessionOptions {
+        material: tissue_pbd::Material {
+            density: -1.0,
+            ..tissue_pbd::Material::soft_tissue()
+        },
+        ..SessionOptions::default()
+    };
+    let refused = Session::new(&organ, bad).err().map(|e| e.kind());
+    assert_eq!(refused, Some(SceneErrorKind::Parameters));
+    let mut s = Session::new(&organ, SessionOptions::default())?;
+    let grab = s.grab(Vec3::ZERO, usize::MAX).err().map(|e| e.kind());
+    assert_eq!(grab, Some(SceneErrorKind::Tool));
+    Ok(())
+}
+
+/// The press-and-drag set-up written once: on a tray it adds the probe parked three organ
+/// extents up, plans the default path across the organ, and the run is PressPlan::default's.
+#[test]
+fn the_press_and_drag_set_up_parks_its_probe_and_plans_the_default_path() -> Result {
+    use tissue_scenes::{PressAndDrag, Script, Tray};
+    let organ = Organ::shipped(ShippedOrgan::Appendix)?;
+    let extent = organ.extent();
+    let options = SessionOptions::default();
+    let mut body = organ.body(
+        &options.material,
+        options.step,
+        options.contact,
+        Tray::for_extent(extent),
+    )?;
+    let script = PressAndDrag::on_tray(&mut body, extent, PressPlan::default(), options.contact)?;
+    let plan = script.plan();
+    assert_eq!(script.steps(), PressPlan::default().steps());
+    assert_eq!(
+        plan.waypoints,
+        vec![[-0.25 * extent, 0.0], [0.25 * extent, 0.0]]
+    );
+    assert!(plan.reach >= PressPlan::default().reach);
+    let parked = body.tool(script.tool())?.pose().translation;
+    assert_eq!(parked, Vec3::new(0.0, 3.0 * extent, 0.0));
+    // Played again, the same probe: no second tool.
+    let again = PressAndDrag::again(&mut body, script.tool(), extent, PressPlan::default())?;
+    assert_eq!(again.tool(), script.tool());
+    assert_eq!(again.plan(), plan);
     Ok(())
 }

@@ -1,0 +1,5 @@
+//! The integration tests of `tissue-scenes` in one binary, a module per area (each module's own
+//! doc says what it covers).
+
+mod moving_body;
+mod session;
