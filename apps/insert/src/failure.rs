@@ -6,37 +6,18 @@ use tissue_planner::{ErrorKind, PlanError};
 
 use crate::cli::flag_of;
 
-/// The exit codes: the table every tissue binary shares (see `insert --help`).
-pub use tissue_cli::Exit;
+/// The exit codes (the table every tissue binary shares, see `insert --help`) and the reason
+/// to stop, with its one-line message: tissue-cli's, the same as `trainer`'s.
+pub use tissue_cli::{Exit, Failure};
 
-/// A reason to stop with a non-zero exit code.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Failure {
-    /// The exit code.
-    pub code: Exit,
-    /// What went wrong and what to change, on one line.
-    pub message: String,
+/// The planner's errors as `insert` shows them.
+pub trait FromPlan {
+    /// The planner's error, its fields named by their flags, with the exit code of its kind.
+    fn from_plan(e: &PlanError) -> Self;
 }
 
-impl Failure {
-    /// A failure with `code` and `message`.
-    pub fn new(code: Exit, message: impl Into<String>) -> Self {
-        Failure {
-            code,
-            message: message.into(),
-        }
-    }
-
-    /// The message on one line.
-    pub fn line(&self) -> String {
-        self.message
-            .split_whitespace()
-            .collect::<Vec<_>>()
-            .join(" ")
-    }
-
-    /// The planner's error, its fields named by their flags.
-    pub fn from_plan(e: &PlanError) -> Self {
+impl FromPlan for Failure {
+    fn from_plan(e: &PlanError) -> Self {
         let code = match e.kind {
             ErrorKind::Usage => Exit::Usage,
             ErrorKind::Input => Exit::Input,
@@ -48,22 +29,6 @@ impl Failure {
             ErrorKind::Cancelled => Exit::Interrupted,
         };
         Failure::new(code, e.message_with(flag_of))
-    }
-
-    /// Writing an output failed.
-    pub fn output(what: &str, e: impl std::fmt::Display) -> Self {
-        Failure::new(
-            Exit::Output,
-            format!("cannot write the {what}: {e}; check the folder exists and is writable"),
-        )
-    }
-
-    /// Ctrl-C.
-    pub fn interrupted(steps: u64) -> Self {
-        Failure::new(
-            Exit::Interrupted,
-            format!("interrupted after {steps} steps; nothing was written"),
-        )
     }
 }
 

@@ -21,7 +21,7 @@ use clap::Parser;
 use tissue_planner::{Finished, JobMode, JobReport, Stopped, Tool};
 
 use crate::cli::Cli;
-use crate::failure::{Exit, Failure};
+use crate::failure::{Exit, Failure, FromPlan};
 use crate::output::Staged;
 use crate::progress::{Display, Interrupt};
 

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use tissue_planner::report::{Inputs, InverseReport, RunResult, ShapeInputs, StopReason};
 use tissue_planner::{Finished, JobReport};
 
-use crate::failure::Failure;
+use crate::failure::{Failure, FromPlan};
 
 /// What the job prints on stdout: a single run's summary, a sweep's table (failed runs as
 /// rows), a search's runs and answer, an expansion's weeks and flap.

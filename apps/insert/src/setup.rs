@@ -4,7 +4,7 @@
 use tissue_planner::{JobSpec, Patient, Scenario};
 
 use crate::cli::Cli;
-use crate::failure::Failure;
+use crate::failure::{Failure, FromPlan};
 
 /// The patient in cm and the placement of `spec`'s request.
 pub fn scenario(cli: &Cli, spec: &JobSpec) -> Result<Scenario, Failure> {

@@ -286,6 +286,7 @@ impl JobMessage {
 }
 
 #[cfg(test)]
+#[allow(clippy::panic)]
 mod tests {
     use super::*;
 

@@ -18,7 +18,7 @@ use tissue_scenes::{
 };
 use tokio::sync::{mpsc, watch};
 
-use crate::api::ErrorBody;
+use crate::messages::{ErrorBody, ErrorKind};
 use crate::serve::send_within;
 use crate::state::Studio;
 
@@ -242,23 +242,19 @@ pub enum Fault {
 /// An error's body: its kind (the one place a [`Fault`] is named for the page) and message.
 pub fn error_body(fault: Fault, message: impl Into<String>) -> ErrorBody {
     let kind = match fault {
-        Fault::Usage => "usage",
-        Fault::NotFound => "not_found",
-        Fault::Busy => "busy",
+        Fault::Usage => ErrorKind::Usage,
+        Fault::NotFound => ErrorKind::NotFound,
+        Fault::Busy => ErrorKind::Busy,
         Fault::Scene(kind) => match kind {
-            SceneErrorKind::Input => "input",
-            SceneErrorKind::Mesh | SceneErrorKind::Meshing => "mesh",
-            SceneErrorKind::TooLarge => "too_large",
-            SceneErrorKind::Parameters => "parameters",
-            SceneErrorKind::Tool => "usage",
-            SceneErrorKind::Simulation => "run",
+            SceneErrorKind::Input => ErrorKind::Input,
+            SceneErrorKind::Mesh | SceneErrorKind::Meshing => ErrorKind::Mesh,
+            SceneErrorKind::TooLarge => ErrorKind::TooLarge,
+            SceneErrorKind::Parameters => ErrorKind::Parameters,
+            SceneErrorKind::Tool => ErrorKind::Usage,
+            SceneErrorKind::Simulation => ErrorKind::Run,
         },
     };
-    ErrorBody {
-        kind: kind.to_owned(),
-        field: None,
-        message: message.into(),
-    }
+    ErrorBody::new(kind, message)
 }
 
 /// A command that failed: why and what to do.
@@ -872,10 +868,12 @@ mod tests {
     /// found, a tool the session refuses is a usage error, a failed step a run error.
     #[test]
     fn trainer_errors_have_their_own_kinds() {
-        let kind = |f: Fault| error_body(f, "").kind;
-        assert_eq!(Desk::default().not_live().body().kind, "usage");
+        // As the page reads them: the JSON name of the kind.
+        let name = |b: ErrorBody| serde_json::to_value(b.kind).unwrap_or_default();
+        let kind = |f: Fault| name(error_body(f, ""));
+        assert_eq!(name(Desk::default().not_live().body()), "usage");
         let unknown = Organs::default().get("u-gone").err().map(Refusal::body);
-        assert_eq!(unknown.map(|b| b.kind).as_deref(), Some("not_found"));
+        assert_eq!(unknown.map(name), Some("not_found".into()));
         assert_eq!(kind(Fault::Busy), "busy");
         assert_eq!(kind(Fault::Scene(SceneErrorKind::Tool)), "usage");
         assert_eq!(kind(Fault::Scene(SceneErrorKind::Simulation)), "run");

@@ -157,6 +157,7 @@ pub fn finish(
 }
 
 #[cfg(test)]
+#[allow(clippy::panic)]
 mod tests {
     use super::*;
     use crate::{JobSpec, Patient, Shipped};
