@@ -5,6 +5,7 @@
 //! ([`progress`]) → stdout, the mesh, picture and JSON report ([`modes`], [`output`],
 //! [`report`]: the tables on stdout; the JSON contract is the planner's). Every failure is one line on stderr and a documented exit code
 //! ([`failure`]); see `insert --help` and `apps/insert/README.md`.
+#![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod cli;
 mod failure;

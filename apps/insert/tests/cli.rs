@@ -4,6 +4,7 @@
 //!
 //! Small cases run on a coarse 12 cm plane of 17 × 17 vertices with a 4 cm implant (under a
 //! second per run); the default Table 2 run takes a few seconds.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::io::{BufRead, BufReader};
 use std::ops::ControlFlow;

@@ -45,12 +45,6 @@
 //! # Ok::<(), tissue_implant::ImplantError>(())
 //! ```
 #![forbid(unsafe_code)]
-#![warn(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::print_stdout,
-    clippy::print_stderr
-)]
 
 mod adjacency;
 mod bending;

@@ -1,5 +1,6 @@
 //! Runs through the worker against the library called directly, set-up errors, sweeps and
 //! inverse searches, the plane press, host jobs and panics.
+#![allow(clippy::panic)]
 
 use crate::common;
 

@@ -1,4 +1,5 @@
 //! The two-layer tissue model against the continuum slab it stands for.
+#![allow(clippy::unwrap_used)]
 
 use glam::{Vec3, Vec3A};
 use tissue_implant::{ImplantError, Layer, LayerParams, TissueLayers};

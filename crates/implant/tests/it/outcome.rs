@@ -1,6 +1,7 @@
 //! The result geometry through the public API: displacements and stretch against exact values
 //! for uniform scalings, lifts and a hand-computed square, the region put back into the patient
 //! bit for bit at its seam, and the errors.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 use glam::Vec3;
 use tissue_implant::{

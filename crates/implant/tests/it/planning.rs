@@ -1,4 +1,5 @@
 //! Tests of the planning helpers: the parallel sweep and the inverse volume search.
+#![allow(clippy::panic)]
 
 use std::cell::RefCell;
 

@@ -1,6 +1,7 @@
 //! Region selection and geodesic distances through the public API: against exact distances on a
 //! plane and a sphere, against edge-graph Dijkstra, the region's shape, the errors, and a real
 //! head scan.
+#![allow(clippy::unwrap_used)]
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;

@@ -1,5 +1,6 @@
 //! Implant (tissue expander) shapes: closed outward meshes at a target volume, flat and bent onto
 //! a curved body.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 use glam::{DVec3, Vec2, Vec3};
 use tissue_implant::{Implant, ImplantError, ImplantFrame, ImplantShape, ImplantSpec};

@@ -1,6 +1,6 @@
 //! Cuts through a block: a full cut makes two pieces that come apart; a partial incision opens
 //! the surface along its length and leaves one piece.
-#![allow(clippy::unwrap_used)]
+#![allow(clippy::unwrap_used, clippy::print_stderr)]
 
 use crate::common;
 
