@@ -48,6 +48,7 @@ use tissue_mss::{
 
 use crate::adjacency::VertexNeighbours;
 use crate::ImplantError;
+use crate::Param;
 
 /// Triangles of a lower [`shape_quality`] are slivers, whose turning over in the inward offset
 /// is not a fold of the surface (about 7° for the smallest angle of an isosceles sliver).
@@ -255,38 +256,38 @@ impl Default for LayerParams {
 
 impl LayerParams {
     fn check(&self) -> Result<(), ImplantError> {
-        let positive = |name: &'static str, value: f64| {
+        let positive = |param: Param, value: f64| {
             if value.is_finite() && value > 0.0 {
                 Ok(())
             } else {
                 Err(ImplantError::InvalidParameter {
-                    name,
+                    param,
                     value,
                     expected: "positive and finite".into(),
                 })
             }
         };
-        positive("young", self.young)?;
-        positive("skin_thickness", self.skin_thickness)?;
-        positive("density", self.density)?;
-        positive("depth", self.depth)?;
+        positive(Param::Young, self.young)?;
+        positive(Param::SkinThickness, self.skin_thickness)?;
+        positive(Param::Density, self.density)?;
+        positive(Param::Depth, self.depth)?;
         if !(0.0..1.0).contains(&self.min_thickness) {
             return Err(ImplantError::InvalidParameter {
-                name: "min_thickness",
+                param: Param::MinThickness,
                 value: self.min_thickness,
                 expected: "in [0, 1) (a fraction of the depth)".into(),
             });
         }
         if !(self.anchor_young.is_finite() && self.anchor_young >= 0.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "anchor_young",
+                param: Param::AnchorYoung,
                 value: self.anchor_young,
                 expected: "finite and ≥ 0".into(),
             });
         }
         if !(self.poisson.is_finite() && (0.0..0.5).contains(&self.poisson)) {
             return Err(ImplantError::InvalidParameter {
-                name: "poisson",
+                param: Param::Poisson,
                 value: self.poisson,
                 expected: "in [0, 0.5)".into(),
             });
@@ -294,7 +295,7 @@ impl LayerParams {
         if let Some(reach) = self.offset_reach {
             if !(reach.is_finite() && reach >= 0.0) {
                 return Err(ImplantError::InvalidParameter {
-                    name: "offset_reach",
+                    param: Param::OffsetReach,
                     value: reach,
                     expected: "finite and ≥ 0 (cm), or None for half the mean edge".into(),
                 });
@@ -365,7 +366,7 @@ impl TissueLayers {
             let [a, b, c] = region.corners(t);
             let at = (a + b + c) / 3.0;
             return Err(ImplantError::InvalidParameter {
-                name: "depth",
+                param: Param::Depth,
                 value: params.depth,
                 expected: format!(
                     "smaller: offsetting the region inward by it folds {} triangle(s) over, the \
@@ -638,7 +639,7 @@ impl TissueLayers {
         let triangles = self.outer.triangle_count();
         if theta_g.len() != triangles {
             return Err(ImplantError::InvalidParameter {
-                name: "theta_g",
+                param: Param::ThetaG,
                 value: theta_g.len() as f64,
                 expected: format!("one area growth per region triangle ({triangles})"),
             });
@@ -649,7 +650,7 @@ impl TissueLayers {
             .find(|(_, g)| !(g.is_finite() && **g >= 1.0))
         {
             return Err(ImplantError::InvalidParameter {
-                name: "theta_g",
+                param: Param::ThetaG,
                 value: g,
                 expected: format!("finite and ≥ 1 (skin does not resorb), at triangle {t}"),
             });
@@ -712,7 +713,7 @@ impl TissueLayers {
     pub fn scale_skin_stiffness(&mut self, factor: f64) -> Result<(), ImplantError> {
         if !(factor.is_finite() && factor > 0.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "stiffness",
+                param: Param::Stiffness,
                 value: factor,
                 expected: "a positive, finite factor".into(),
             });
@@ -837,14 +838,14 @@ impl TissueLayers {
     pub fn lift_by(&mut self, heights: &[f32]) -> Result<(), ImplantError> {
         if heights.len() != self.normals.len() {
             return Err(ImplantError::InvalidParameter {
-                name: "heights",
+                param: Param::Heights,
                 value: heights.len() as f64,
                 expected: format!("one height per region vertex ({})", self.normals.len()),
             });
         }
         if let Some(r) = heights.iter().position(|h| !h.is_finite()) {
             return Err(ImplantError::InvalidParameter {
-                name: "heights",
+                param: Param::Heights,
                 value: f64::from(heights[r]),
                 expected: format!("finite (region vertex {r})"),
             });

@@ -65,7 +65,7 @@ mod shape;
 mod walk;
 
 pub use contact_run::{ContactRun, RunParams, StepSummary};
-pub use error::{ImplantError, SearchedSurface};
+pub use error::{ImplantError, Param, ProtocolField, SearchedSurface};
 pub use expansion::{
     expand, Band, BandOptions, ExpansionMonitor, ExpansionOutcome, ExpansionProgress,
     ExpansionRecord, ExpansionSetup, ExpansionStage, Percentiles, SampleParams, SampleResult,
@@ -96,4 +96,10 @@ pub use scan::{
 pub use shape::{Implant, ImplantFrame, ImplantShape, ImplantSpec};
 /// The search hierarchy's error, carried by [`ImplantError::Search`].
 pub use tissue_bvh::BvhError;
+/// The broad phase of a run's collision detection ([`RunParams`]), so that callers need not
+/// depend on tissue-collide.
+pub use tissue_collide::BroadPhase;
+/// The tissue model's error ([`ImplantError::Model`]) and why a run stopped, so that callers
+/// need not depend on tissue-mss.
+pub use tissue_mss::{MssError, StopReason};
 pub use walk::{walk_on_surface, WalkEnd};

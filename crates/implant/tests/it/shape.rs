@@ -366,7 +366,7 @@ fn implant_bent_onto_a_sphere_lies_on_it_and_keeps_its_volume() {
 #[test]
 fn bad_inputs_are_errors_naming_the_parameter() {
     let name_of = |spec: ImplantSpec| match spec.build() {
-        Err(ImplantError::InvalidParameter { name, .. }) => name,
+        Err(ImplantError::InvalidParameter { param, .. }) => param.name(),
         other => panic!("{spec:?}: {other:?}"),
     };
     for volume in [0.0, -1.0, f64::NAN, f64::INFINITY] {
