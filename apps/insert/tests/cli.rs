@@ -592,7 +592,7 @@ fn help_documents_units_exit_codes_and_the_report() {
 }
 
 /// `--time-step`'s help gives the factor of the stability limit the library's automatic step
-/// uses (issue 22: it said half, the library used 0.8).
+/// uses (regression: it said half, the library used 0.8).
 #[test]
 fn help_gives_the_automatic_steps_factor_the_library_uses() {
     let factor = tissue_implant::InsertionParams::default().run.step_safety;

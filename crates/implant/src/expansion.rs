@@ -1,4 +1,4 @@
-//! Expansion over weeks (issue 21): an expander filled on a schedule under a skin region that
+//! Expansion over weeks: an expander filled on a schedule under a skin region that
 //! grows, then removed; the flap it leaves and how sure we are of it.
 //!
 //! ## The run ([`expand`])

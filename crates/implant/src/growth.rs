@@ -1,4 +1,4 @@
-//! Skin growth under a tissue expander (issue 21): the growth law, its calibrated parameters and
+//! Skin growth under a tissue expander (expansion over weeks): the growth law, its calibrated parameters and
 //! the fill protocol.
 //!
 //! ## The law (Han, Lee, …, Gosain, Buganza Tepole 2022, Acta Biomater 137:136)

@@ -490,7 +490,7 @@ impl Insertion {
     }
 
     /// The same tissue, where it is now (positions, pocket, rest metric), under another
-    /// implant (issue 21: the next fill of an expander): the implant is built for the new
+    /// implant (the next fill of an expander in an expansion over weeks): the implant is built for the new
     /// volume on the same base, and fills from where the previous one stood when both have the
     /// same vertices (from flat otherwise); the tissue starts at rest where it was. A warm
     /// start: the run then settles only the change.

@@ -325,7 +325,7 @@ pub struct TissueLayers {
     boundary: Vec<u32>,
     min_thickness: f32,
     /// The in-plane springs of both layers as `(spring, edge, rest length as built)`, found on
-    /// the first [`TissueLayers::grow`] (skin growth, issue 21).
+    /// the first [`TissueLayers::grow`] (skin growth in an expansion over weeks).
     growth_map: Option<Vec<(u32, u32, f32)>>,
 }
 
@@ -625,7 +625,7 @@ impl TissueLayers {
         moved
     }
 
-    /// Sets the rest metric of a grown skin (issue 21): `theta_g[t]` is region triangle `t`'s
+    /// Sets the rest metric of a grown skin (expansion over weeks): `theta_g[t]` is region triangle `t`'s
     /// area growth `θg ≥ 1` relative to its rest (scan) area. Every in-plane spring of both
     /// layers gets the rest length it had as built times `√θ̄g`, `θ̄g` the area-weighted mean of
     /// its edge's one or two triangles (in-plane isotropic growth, `Fg = √θg·I` in the plane);

@@ -1,4 +1,4 @@
-//! Tissue-expander shapes (issue 5): closed, outward-oriented meshes of a flat base and a dome,
+//! Tissue-expander shapes: closed, outward-oriented meshes of a flat base and a dome,
 //! sized to a target volume, optionally bent onto the curved surface they lie on.
 //!
 //! ## Construction

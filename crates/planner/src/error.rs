@@ -416,7 +416,7 @@ mod tests {
     }
 
     /// A search hierarchy that cannot be built is its own error, classified by its type
-    /// (issue 22: it was `InvalidParameter { name: "region" }`, classified by that string as a
+    /// (regression: it was once `InvalidParameter` named `region`, classified by that string as a
     /// placement at `at`).
     #[test]
     fn search_failures_are_classified_by_type() {
