@@ -34,10 +34,9 @@
 //! through the thickness lumps its mass, and each half is spread by eq. (2) on its layer's
 //! triangles (the thesis's region, whose counts include both layers, carries the mass on both).
 //! The end state of a run does not depend on the masses; its number of steps and its
-//! robustness do: with the skin's mass on layer 1 alone, layer 2 (a thin slab's share) set the
-//! stable step of the plane press at 0.30 µs instead of 0.67 µs, and expanders above about
-//! 165 cm³ on Table 2's 7 cm base ran away instead of settling. Particles on the region's
-//! boundary loops are fixed in both layers.
+//! robustness do: layer 2 must carry its share, or its light particles set a smaller stable
+//! step and large expanders do not settle (`docs/tuning-log.md`, "Masses shared by the
+//! layers"). Particles on the region's boundary loops are fixed in both layers.
 
 use glam::{Vec3, Vec3A};
 use tissue_mesh::TriMesh;
