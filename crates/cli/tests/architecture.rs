@@ -17,8 +17,8 @@ fn workspace_root() -> &'static Path {
     Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
 }
 
-/// The normal dependencies between workspace members, from `cargo metadata --no-deps`.
-fn cargo_graph() -> Graph {
+/// `cargo metadata --no-deps` of the workspace.
+fn metadata() -> serde_json::Value {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let output = Command::new(cargo)
         .args([
@@ -36,7 +36,12 @@ fn cargo_graph() -> Graph {
         "cargo metadata failed: {}",
         String::from_utf8_lossy(&output.stderr)
     );
-    let metadata: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    serde_json::from_slice(&output.stdout).unwrap()
+}
+
+/// The normal dependencies between workspace members.
+fn cargo_graph() -> Graph {
+    let metadata = metadata();
     let mut graph = Graph::new();
     for package in metadata["packages"].as_array().unwrap() {
         let name = package["name"].as_str().unwrap().to_owned();
@@ -125,4 +130,29 @@ fn missing_and_extra_edges_are_named() {
         ["a -> d", "c -> a", "e (the whole package)"]
     );
     assert_eq!(edges_missing_from(&documented, &actual), ["a -> b"]);
+}
+
+/// Every member inherits the workspace's lints (`[lints] workspace = true`), so the clippy
+/// levels set once in the root `Cargo.toml` hold everywhere.
+#[test]
+fn every_member_inherits_the_workspace_lints() {
+    let metadata = metadata();
+    let mut without = Vec::new();
+    for package in metadata["packages"].as_array().unwrap() {
+        let manifest = std::fs::read_to_string(package["manifest_path"].as_str().unwrap()).unwrap();
+        let lints = manifest
+            .split("\n[")
+            .find(|section| section.starts_with("lints]"))
+            .unwrap_or_default();
+        let inherits = lints
+            .lines()
+            .any(|l| l.split_whitespace().collect::<String>() == "workspace=true");
+        if !inherits {
+            without.push(package["name"].as_str().unwrap().to_owned());
+        }
+    }
+    assert!(
+        without.is_empty(),
+        "without `[lints] workspace = true`: {without:?}"
+    );
 }

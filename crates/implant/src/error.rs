@@ -282,13 +282,13 @@ pub enum Param {
     GainTolerance,
     /// `GrowthLaw::rate` (1/h).
     GrowthRate,
-    /// `GrowthParams`' growth step (h).
+    /// `GrowthParams::step_hours`: the growth step (h).
     GrowthStep,
     /// `GrowthLaw::threshold`: the elastic area stretch above which skin grows.
     GrowthThreshold,
     /// `TissueLayers::lift_by`'s heights (cm, one per vertex).
     Heights,
-    /// `ScanOptions`' smoothing iterations.
+    /// `ScanOptions::iterations`: the remeshing iterations.
     Iterations,
     /// An implant shape's length (cm).
     Length,
@@ -296,7 +296,7 @@ pub enum Param {
     Limit,
     /// `snap_to_surface`'s largest distance from the surface (cm).
     MaxDistance,
-    /// `ScanOptions`' largest hole filled (cm).
+    /// `ScanOptions::max_hole`: the largest hole filled (cm).
     MaxHole,
     /// `InverseOptions::max_runs`.
     MaxRuns,
@@ -336,11 +336,11 @@ pub enum Param {
     ShellYoung,
     /// `SimSurface::map_to_scan`: the simulation surface after the run does not match.
     SimAfter,
-    /// `ScanOptions`' simulation edge length (cm).
+    /// `ScanOptions::sim_edge`: the simulation edge length (cm).
     SimEdge,
     /// `LayerParams::skin_thickness` (cm).
     SkinThickness,
-    /// `ScanOptions`' smoothing weight.
+    /// `ScanOptions::smoothing`: the MLS smoothing radius (cm).
     Smoothing,
     /// `geodesic_distances`' source triangle (not of this mesh).
     SourceTriangle,
@@ -352,7 +352,7 @@ pub enum Param {
     Start,
     /// `RunParams::step_safety`, in (0, 1].
     StepSafety,
-    /// A skin stiffness factor (`GrowthParams`, `TissueLayers::scale_skin_stiffness`).
+    /// A skin stiffness factor (`GrowthParams::stiffness`, `TissueLayers::scale_skin_stiffness`).
     Stiffness,
     /// `ImplantFrame::new`'s tangent.
     Tangent,
