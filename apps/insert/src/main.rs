@@ -7,6 +7,7 @@
 //! then the tables on stdout ([`report`]) and the outputs, written together ([`output`]).
 //! Every failure is one line on stderr and a documented exit code ([`failure`]); see
 //! `insert --help` and `apps/insert/README.md`.
+#![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod cli;
 mod failure;

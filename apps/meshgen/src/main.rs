@@ -11,6 +11,7 @@
 //! no writer knows, 6 for a size out of range, 8 when the file cannot be written.
 //! Only clap's help and version go to stdout; a closed stdout ends the program by SIGPIPE without
 //! a message (status 141 in a shell).
+#![allow(clippy::print_stderr)]
 
 use std::path::PathBuf;
 use std::process::ExitCode;

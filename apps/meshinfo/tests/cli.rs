@@ -1,4 +1,5 @@
 //! Runs the real `meshinfo` binary on the fixtures, the real third-party meshes among them.
+#![allow(clippy::expect_used, clippy::panic)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,6 +1,7 @@
 //! `studio`: the planner and the trainer in a browser. Serves the page and its API (see
 //! `apps/studio/API.md`) on this computer, or with a token to others; everything else is in the
 //! library (tissue-studio). `apps/studio/SECURITY.md` is the threat model.
+#![allow(clippy::print_stdout, clippy::print_stderr)]
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::process::ExitCode;

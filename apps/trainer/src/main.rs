@@ -3,6 +3,7 @@
 //! Command line ([`cli`]) → the organ on the tray with a probe ([`scene`]) → settle, press, drag
 //! with per-step timing, volume drift and frames ([`run`]) → a summary on stdout. Every failure is
 //! one line on stderr and a documented exit code ([`failure`]); see `trainer --help`.
+#![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod appendix;
 mod cli;

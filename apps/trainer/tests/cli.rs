@@ -1,5 +1,6 @@
 //! The real `trainer` binary on a small generated box: the summary, the frames, and the exit code
 //! and one-line message of each kind of bad input.
+#![allow(clippy::panic)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -88,13 +88,6 @@
 //!
 //! Without threads, the same run is `tissue_app::plan(&job, |_| ControlFlow::Continue(()))`.
 #![forbid(unsafe_code)]
-#![warn(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::print_stdout,
-    clippy::print_stderr
-)]
 
 mod error;
 mod plan;

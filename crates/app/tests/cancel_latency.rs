@@ -1,5 +1,6 @@
 //! Cancel latency on Table 2's case (65² plane, 100 cm³ round 7 cm implant, default parameters):
 //! from `cancel()` to the `Cancelled` event, at most 50 ms.
+#![allow(clippy::panic)]
 
 mod common;
 

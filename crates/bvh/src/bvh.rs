@@ -175,6 +175,10 @@ impl Bvh {
     ///
     /// # Panics
     /// With a message naming the node or primitive at fault when an invariant does not hold.
+    #[allow(
+        clippy::panic,
+        reason = "a checker for tests, documented to panic naming the defect"
+    )]
     pub fn assert_well_formed<P: Primitives + ?Sized>(&self, prims: &P) {
         if let Some(defect) = self.defect(prims) {
             panic!("malformed BVH: {defect}");

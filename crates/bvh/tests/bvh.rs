@@ -1,6 +1,7 @@
 //! The public API of tissue-bvh against brute force on seeded scenes and the fixture meshes: build
 //! and refit invariants, the equal-area split, pairs between hierarchies, box / point / ray
 //! queries, errors.
+#![allow(clippy::unwrap_used)]
 
 use glam::{Vec3, Vec3A};
 use proptest::prelude::*;

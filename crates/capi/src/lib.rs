@@ -52,13 +52,6 @@
 // that check every pointer for NULL before use (the header states each one's contract), so
 // clippy's `not_unsafe_ptr_arg_deref` does not apply. Type names follow C (`tissue_status`).
 #![allow(unsafe_code, clippy::not_unsafe_ptr_arg_deref, non_camel_case_types)]
-#![warn(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::panic,
-    clippy::print_stdout,
-    clippy::print_stderr
-)]
 
 mod ffi;
 mod mesh;

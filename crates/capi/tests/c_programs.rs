@@ -3,6 +3,7 @@
 //! run (`libtissue.a`, from the crate's `staticlib` type), run, and checked by their exit status.
 //! Each program prints its figures; `cargo test -p tissue-capi --release --test c_programs --
 //! --nocapture` shows them.
+#![allow(clippy::panic, clippy::print_stdout)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,4 +1,7 @@
 //! Runs a real binary with its standard output closed under it (unix, feature `testing`).
+//!
+//! Test support only: a set-up that fails here is a failed test, so it panics with the reason.
+#![allow(clippy::expect_used, clippy::panic)]
 
 use std::io::{BufRead, BufReader, Read};
 use std::os::unix::process::ExitStatusExt;

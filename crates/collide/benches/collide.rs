@@ -4,6 +4,7 @@
 //!
 //! Target (issue): detection (broad + narrow) ≤ 0.3 ms per step when the sphere touches the
 //! region, by BVH vs BVH and by BVH vs voxels.
+#![allow(clippy::expect_used)]
 
 use std::time::Duration;
 

@@ -2,6 +2,7 @@
 //! on seeded soups, the fixture meshes and the plane-press scene (also after motion and refit);
 //! the edge–triangle cases; impulse conservation laws; position correction; a cloth dropped on a
 //! sphere; errors.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 use glam::{Vec3, Vec3A};
 use proptest::prelude::*;

@@ -2,7 +2,7 @@
 //!
 //! The one place in this crate with `unsafe`: a counting global allocator, which must implement
 //! the `unsafe` trait `GlobalAlloc`. It only forwards to `System`.
-#![allow(unsafe_code)]
+#![allow(unsafe_code, clippy::unwrap_used)]
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};

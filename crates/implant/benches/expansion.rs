@@ -1,4 +1,4 @@
-//! Expansion over weeks against Table 2, in the same run (issue 21's speed target: a 10-week
+//! Expansion over weeks against Table 2, in the same run (the speed target of expansion over weeks: a 10-week
 //! protocol with its band at most 40 × the Table 2 case).
 //!
 //! `cargo bench -p tissue-implant --bench expansion -- [repeats] [volume] [weeks] [samples]`

@@ -6,7 +6,7 @@
 //! `--membrane` adds, alternating with each default run, the same run without the skin's bending
 //! (`LayerParams::skin_bending`, the thesis's membrane) and prints the ratio of the medians: what
 //! the bending costs, measured in one run.
-#![allow(missing_docs)]
+#![allow(missing_docs, clippy::print_stdout)]
 
 use std::ops::ControlFlow;
 use std::time::Duration;

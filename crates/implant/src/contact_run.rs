@@ -28,6 +28,7 @@ use tissue_collide::{
 use tissue_mesh::TriMesh;
 use tissue_mss::{Integrator, MassSpringSystem, MssError, SettleDetector, StopCriterion};
 
+use crate::Param;
 use crate::{ImplantError, Layer, TissueLayers};
 
 /// How a run steps, damps, collides and stops. Units: s, cm.
@@ -114,45 +115,53 @@ impl Default for RunParams {
 
 impl RunParams {
     fn check(&self) -> Result<(), ImplantError> {
-        let bad = |name: &'static str, value: f64, expected: &str| {
+        let bad = |param: Param, value: f64, expected: &str| {
             Err(ImplantError::InvalidParameter {
-                name,
+                param,
                 value,
                 expected: expected.into(),
             })
         };
         if let Some(h) = self.time_step {
             if !(h.is_finite() && h > 0.0) {
-                return bad("time_step", f64::from(h), "positive and finite (s)");
+                return bad(Param::TimeStep, f64::from(h), "positive and finite (s)");
             }
         }
         if !(self.step_safety > 0.0 && self.step_safety <= 1.0) {
-            return bad("step_safety", f64::from(self.step_safety), "in (0, 1]");
+            return bad(Param::StepSafety, f64::from(self.step_safety), "in (0, 1]");
         }
         if !(self.damping_time.is_finite() && self.damping_time > 0.0) {
             return bad(
-                "damping_time",
+                Param::DampingTime,
                 f64::from(self.damping_time),
                 "positive and finite (s)",
             );
         }
         if let Some(d) = self.contact_distance {
             if !(d.is_finite() && d >= 0.0) {
-                return bad("contact_distance", f64::from(d), "finite and ≥ 0 (cm)");
+                return bad(Param::ContactDistance, f64::from(d), "finite and ≥ 0 (cm)");
             }
         }
         if !(self.contact_fraction.is_finite() && self.contact_fraction >= 0.0) {
             return bad(
-                "contact_fraction",
+                Param::ContactFraction,
                 f64::from(self.contact_fraction),
                 "finite and ≥ 0",
             );
         }
         if !(self.coherence.is_finite() && self.coherence >= 0.0) {
-            return bad("coherence", f64::from(self.coherence), "finite and ≥ 0");
+            return bad(
+                Param::Coherence,
+                f64::from(self.coherence),
+                "finite and ≥ 0",
+            );
         }
         if !(self.settle_speed.is_finite() && self.settle_speed >= 0.0) {
-            return bad("settle_speed", self.settle_speed, "finite and ≥ 0 (cm/s)");
+            return bad(
+                Param::SettleSpeed,
+                self.settle_speed,
+                "finite and ≥ 0 (cm/s)",
+            );
         }
         self.response.validate()?;
         Ok(())
@@ -224,7 +233,7 @@ impl ContactRun {
                     (Some(a), None) | (None, Some(a)) => a,
                     (None, None) => {
                         return Err(ImplantError::InvalidParameter {
-                            name: "time_step",
+                            param: Param::TimeStep,
                             value: 0.0,
                             expected: "given explicitly: no free particle has a spring to \
                                        derive a stable step from"
@@ -314,7 +323,7 @@ impl ContactRun {
         let particles = self.body.particles_mut();
         if start.len() != particles.len() {
             return Err(ImplantError::InvalidParameter {
-                name: "start",
+                param: Param::Start,
                 value: start.len() as f64,
                 expected: format!("one position per body particle ({})", particles.len()),
             });

@@ -5,10 +5,10 @@
 #[non_exhaustive]
 pub enum ImplantError {
     /// A parameter is out of range.
-    #[error("invalid parameter {name} = {value}: {expected}")]
+    #[error("invalid parameter {param} = {value}: {expected}")]
     InvalidParameter {
-        /// Parameter name.
-        name: &'static str,
+        /// The parameter at fault; [`Param::name`] is the name shown.
+        param: Param,
         /// The value given.
         value: f64,
         /// The accepted range, and how to fix it.
@@ -23,13 +23,12 @@ pub enum ImplantError {
         /// Its triangle count.
         triangles: usize,
     },
-    /// An expansion protocol cannot be run (issue 21): `field` is at fault, `problem` says
-    /// what is wrong and how to fix it.
+    /// An expansion protocol (expansion over weeks) cannot be run: `field` is at fault,
+    /// `problem` says what is wrong and how to fix it.
     #[error("protocol {field}: {problem}")]
     InvalidProtocol {
-        /// The protocol field at fault (`fills`, `expand_weeks`, `hold_weeks`, `leakage`,
-        /// `overfill`, `volume`).
-        field: &'static str,
+        /// The protocol field at fault.
+        field: ProtocolField,
         /// What is wrong, and how to fix it.
         problem: String,
     },
@@ -226,5 +225,391 @@ impl std::fmt::Display for SearchedSurface {
             SearchedSurface::ImplantBase => "implant's base",
             SearchedSurface::SimulationSurface => "simulation surface",
         })
+    }
+}
+
+/// The parameter an [`ImplantError::InvalidParameter`] names.
+///
+/// Not `#[non_exhaustive]` on purpose: a front end maps every parameter to its own field with an
+/// exhaustive `match`, so a new parameter fails to compile there instead of losing its field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Param {
+    /// `check_same_mesh`/measurements: the surface after the run does not match the one before.
+    After,
+    /// `LayerParams::anchor_young`: Young's modulus of the anchoring springs (g/(cm·s²)).
+    AnchorYoung,
+    /// The expansion band's ladder of reference volumes (count of rungs).
+    BandRungs,
+    /// The expansion band's sample count.
+    BandSamples,
+    /// `vertex_stretch`: the surface before the run does not match the one after.
+    Before,
+    /// `ImplantShape::Crescent`'s bend radius (cm).
+    BendRadius,
+    /// `volume_for_gain`: the upper end of the volume bracket (cm³).
+    BracketHigh,
+    /// `volume_for_gain`: the lower end of the volume bracket (cm³).
+    BracketLow,
+    /// `RunParams::coherence`.
+    Coherence,
+    /// `RunParams::contact_distance` (cm).
+    ContactDistance,
+    /// `RunParams::contact_fraction`.
+    ContactFraction,
+    /// `ImplantShape::Rectangular`'s corner radius (cm).
+    CornerRadius,
+    /// `RunParams::damping_time` (s).
+    DampingTime,
+    /// `LayerParams::density`: the tissue's density (g/cm³).
+    Density,
+    /// The tissue model's depth (`LayerParams::depth`, cm), or the plane press's depth.
+    Depth,
+    /// `ImplantShape::Round`'s diameter (cm).
+    Diameter,
+    /// `ImplantParams::fill_bulk_modulus`.
+    FillBulkModulus,
+    /// `ImplantParams::fill_density` (g/cm³).
+    FillDensity,
+    /// `Insertion::new`'s fill time (s).
+    FillTime,
+    /// `GrowthParams::flap_release`.
+    FlapRelease,
+    /// `default_radius`'s footprint radius of the implant (cm).
+    FootprintRadius,
+    /// `volume_for_gain`: the area gain a run returned (cm²).
+    Gain,
+    /// `InverseOptions::gain_tolerance` (cm²).
+    GainTolerance,
+    /// `GrowthLaw::rate` (1/h).
+    GrowthRate,
+    /// `GrowthParams::step_hours`: the growth step (h).
+    GrowthStep,
+    /// `GrowthLaw::threshold`: the elastic area stretch above which skin grows.
+    GrowthThreshold,
+    /// `TissueLayers::lift_by`'s heights (cm, one per vertex).
+    Heights,
+    /// `ScanOptions::iterations`: the remeshing iterations.
+    Iterations,
+    /// An implant shape's length (cm).
+    Length,
+    /// `geodesic_distances`' distance limit (cm).
+    Limit,
+    /// `snap_to_surface`'s largest distance from the surface (cm).
+    MaxDistance,
+    /// `ScanOptions::max_hole`: the largest hole filled (cm).
+    MaxHole,
+    /// `InverseOptions::max_runs`.
+    MaxRuns,
+    /// `LayerParams::min_thickness` (a fraction of the depth).
+    MinThickness,
+    /// `ImplantFrame::new`'s normal.
+    Normal,
+    /// `LayerParams::offset_reach` (cm).
+    OffsetReach,
+    /// `ImplantFrame::new`'s origin (cm).
+    Origin,
+    /// The patient surface passed with a result is not the job's.
+    Patient,
+    /// `Insertion::new`'s pocket margin (cm).
+    PocketMargin,
+    /// `snap_to_surface`'s point (cm).
+    Point,
+    /// `LayerParams::poisson`: the tissue's Poisson ratio.
+    Poisson,
+    /// `GrowthLaw::prestretch` (area prestretch).
+    Prestretch,
+    /// `ImplantParams::radial_modulus`.
+    RadialModulus,
+    /// `select_region_with`'s region radius (cm).
+    Radius,
+    /// `replace_region`: the region after the run does not match the region.
+    RegionAfter,
+    /// `default_sim_edge`'s region radius (cm).
+    RegionRadius,
+    /// `RunParams::settle_speed` (cm/s).
+    SettleSpeed,
+    /// `ImplantParams::shell_poisson`.
+    ShellPoisson,
+    /// `ImplantParams::shell_thickness` (cm).
+    ShellThickness,
+    /// `ImplantParams::shell_young` (g/(cm·s²)).
+    ShellYoung,
+    /// `SimSurface::map_to_scan`: the simulation surface after the run does not match.
+    SimAfter,
+    /// `ScanOptions::sim_edge`: the simulation edge length (cm).
+    SimEdge,
+    /// `LayerParams::skin_thickness` (cm).
+    SkinThickness,
+    /// `ScanOptions::smoothing`: the MLS smoothing radius (cm).
+    Smoothing,
+    /// `geodesic_distances`' source triangle (not of this mesh).
+    SourceTriangle,
+    /// The plane press's speed (cm/s).
+    Speed,
+    /// The plane press's sphere radius (cm).
+    SphereRadius,
+    /// `fill_body`'s start positions (one per particle).
+    Start,
+    /// `RunParams::step_safety`, in (0, 1].
+    StepSafety,
+    /// A skin stiffness factor (`GrowthParams::stiffness`, `TissueLayers::scale_skin_stiffness`).
+    Stiffness,
+    /// `ImplantFrame::new`'s tangent.
+    Tangent,
+    /// `volume_for_gain`'s target area gain (cm²).
+    TargetGain,
+    /// `TissueLayers::grow`'s growth stretches θg (one per vertex, ≥ 1).
+    ThetaG,
+    /// `RunParams::time_step` (s).
+    TimeStep,
+    /// `ImplantSpec`'s vertex budget for the implant mesh.
+    VertexBudget,
+    /// `ImplantSpec`'s volume (cm³).
+    VolumeCm3,
+    /// `ImplantParams::volume_coupling`, in (0, 1).
+    VolumeCoupling,
+    /// `InverseOptions::volume_tolerance` (cm³).
+    VolumeTolerance,
+    /// An implant shape's width (cm).
+    Width,
+    /// `LayerParams::young`: the tissue's Young's modulus (g/(cm·s²)).
+    Young,
+}
+
+impl Param {
+    /// Every parameter, in name order: for tests and front ends that map each one.
+    pub const ALL: &'static [Param] = &[
+        Param::After,
+        Param::AnchorYoung,
+        Param::BandRungs,
+        Param::BandSamples,
+        Param::Before,
+        Param::BendRadius,
+        Param::BracketHigh,
+        Param::BracketLow,
+        Param::Coherence,
+        Param::ContactDistance,
+        Param::ContactFraction,
+        Param::CornerRadius,
+        Param::DampingTime,
+        Param::Density,
+        Param::Depth,
+        Param::Diameter,
+        Param::FillBulkModulus,
+        Param::FillDensity,
+        Param::FillTime,
+        Param::FlapRelease,
+        Param::FootprintRadius,
+        Param::Gain,
+        Param::GainTolerance,
+        Param::GrowthRate,
+        Param::GrowthStep,
+        Param::GrowthThreshold,
+        Param::Heights,
+        Param::Iterations,
+        Param::Length,
+        Param::Limit,
+        Param::MaxDistance,
+        Param::MaxHole,
+        Param::MaxRuns,
+        Param::MinThickness,
+        Param::Normal,
+        Param::OffsetReach,
+        Param::Origin,
+        Param::Patient,
+        Param::PocketMargin,
+        Param::Point,
+        Param::Poisson,
+        Param::Prestretch,
+        Param::RadialModulus,
+        Param::Radius,
+        Param::RegionAfter,
+        Param::RegionRadius,
+        Param::SettleSpeed,
+        Param::ShellPoisson,
+        Param::ShellThickness,
+        Param::ShellYoung,
+        Param::SimAfter,
+        Param::SimEdge,
+        Param::SkinThickness,
+        Param::Smoothing,
+        Param::SourceTriangle,
+        Param::Speed,
+        Param::SphereRadius,
+        Param::Start,
+        Param::StepSafety,
+        Param::Stiffness,
+        Param::Tangent,
+        Param::TargetGain,
+        Param::ThetaG,
+        Param::TimeStep,
+        Param::VertexBudget,
+        Param::VolumeCm3,
+        Param::VolumeCoupling,
+        Param::VolumeTolerance,
+        Param::Width,
+        Param::Young,
+    ];
+
+    /// The name shown in messages (as it was when errors carried it as a string).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Param::After => "after",
+            Param::AnchorYoung => "anchor_young",
+            Param::BandRungs => "band rungs",
+            Param::BandSamples => "band samples",
+            Param::Before => "before",
+            Param::BendRadius => "bend_radius",
+            Param::BracketHigh => "bracket.high",
+            Param::BracketLow => "bracket.low",
+            Param::Coherence => "coherence",
+            Param::ContactDistance => "contact_distance",
+            Param::ContactFraction => "contact_fraction",
+            Param::CornerRadius => "corner_radius",
+            Param::DampingTime => "damping_time",
+            Param::Density => "density",
+            Param::Depth => "depth",
+            Param::Diameter => "diameter",
+            Param::FillBulkModulus => "fill_bulk_modulus",
+            Param::FillDensity => "fill_density",
+            Param::FillTime => "fill_time",
+            Param::FlapRelease => "flap_release",
+            Param::FootprintRadius => "footprint_radius",
+            Param::Gain => "gain",
+            Param::GainTolerance => "gain_tolerance",
+            Param::GrowthRate => "growth rate",
+            Param::GrowthStep => "growth step",
+            Param::GrowthThreshold => "growth threshold",
+            Param::Heights => "heights",
+            Param::Iterations => "iterations",
+            Param::Length => "length",
+            Param::Limit => "limit",
+            Param::MaxDistance => "max_distance",
+            Param::MaxHole => "max_hole",
+            Param::MaxRuns => "max_runs",
+            Param::MinThickness => "min_thickness",
+            Param::Normal => "normal",
+            Param::OffsetReach => "offset_reach",
+            Param::Origin => "origin",
+            Param::Patient => "patient",
+            Param::PocketMargin => "pocket_margin",
+            Param::Point => "point",
+            Param::Poisson => "poisson",
+            Param::Prestretch => "prestretch",
+            Param::RadialModulus => "radial_modulus",
+            Param::Radius => "radius",
+            Param::RegionAfter => "region_after",
+            Param::RegionRadius => "region_radius",
+            Param::SettleSpeed => "settle_speed",
+            Param::ShellPoisson => "shell_poisson",
+            Param::ShellThickness => "shell_thickness",
+            Param::ShellYoung => "shell_young",
+            Param::SimAfter => "sim_after",
+            Param::SimEdge => "sim_edge",
+            Param::SkinThickness => "skin_thickness",
+            Param::Smoothing => "smoothing",
+            Param::SourceTriangle => "source.triangle",
+            Param::Speed => "speed",
+            Param::SphereRadius => "sphere_radius",
+            Param::Start => "start",
+            Param::StepSafety => "step_safety",
+            Param::Stiffness => "stiffness",
+            Param::Tangent => "tangent",
+            Param::TargetGain => "target_gain",
+            Param::ThetaG => "theta_g",
+            Param::TimeStep => "time_step",
+            Param::VertexBudget => "vertex_budget",
+            Param::VolumeCm3 => "volume_cm3",
+            Param::VolumeCoupling => "volume_coupling",
+            Param::VolumeTolerance => "volume_tolerance",
+            Param::Width => "width",
+            Param::Young => "young",
+        }
+    }
+}
+
+impl std::fmt::Display for Param {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The expansion protocol field an [`ImplantError::InvalidProtocol`] names.
+///
+/// Not `#[non_exhaustive]`, for the same reason as [`Param`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ProtocolField {
+    /// The weeks of fills.
+    ExpandWeeks,
+    /// The fills (day, volume).
+    Fills,
+    /// The weeks held after the last fill.
+    HoldWeeks,
+    /// The fraction of a fill lost between fills.
+    Leakage,
+    /// The overfill beyond the nominal volume.
+    Overfill,
+    /// The nominal volume (cm³).
+    Volume,
+}
+
+impl ProtocolField {
+    /// Every protocol field, in name order: for tests and front ends that map each one.
+    pub const ALL: &'static [ProtocolField] = &[
+        ProtocolField::ExpandWeeks,
+        ProtocolField::Fills,
+        ProtocolField::HoldWeeks,
+        ProtocolField::Leakage,
+        ProtocolField::Overfill,
+        ProtocolField::Volume,
+    ];
+
+    /// The name shown in messages (as it was when errors carried it as a string).
+    pub const fn name(self) -> &'static str {
+        match self {
+            ProtocolField::ExpandWeeks => "expand_weeks",
+            ProtocolField::Fills => "fills",
+            ProtocolField::HoldWeeks => "hold_weeks",
+            ProtocolField::Leakage => "leakage",
+            ProtocolField::Overfill => "overfill",
+            ProtocolField::Volume => "volume",
+        }
+    }
+}
+
+impl std::fmt::Display for ProtocolField {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The names are the strings the errors carried before they were typed: distinct, in the
+    /// order of `ALL`, and shown unchanged.
+    #[test]
+    fn names_are_distinct_and_messages_unchanged() {
+        for all in [
+            Param::ALL.iter().map(|p| p.name()).collect::<Vec<_>>(),
+            ProtocolField::ALL.iter().map(|f| f.name()).collect(),
+        ] {
+            assert!(all.windows(2).all(|w| w[0] < w[1]), "{all:?}");
+        }
+        let e = ImplantError::InvalidParameter {
+            param: Param::BandSamples,
+            value: 3.0,
+            expected: "8 to 4096".into(),
+        };
+        assert_eq!(
+            e.to_string(),
+            "invalid parameter band samples = 3: 8 to 4096"
+        );
+        let e = ImplantError::InvalidProtocol {
+            field: ProtocolField::HoldWeeks,
+            problem: "give 0 or more".into(),
+        };
+        assert_eq!(e.to_string(), "protocol hold_weeks: give 0 or more");
     }
 }

@@ -1,4 +1,4 @@
-//! Expansion over weeks (issue 21): an expander filled on a schedule under a skin region that
+//! Expansion over weeks: an expander filled on a schedule under a skin region that
 //! grows, then removed; the flap it leaves and how sure we are of it.
 //!
 //! ## The run ([`expand`])
@@ -47,6 +47,7 @@ use crate::{
     place_implant, Implant, ImplantError, ImplantSpec, Insertion, InsertionParams, Layer,
     TissueLayers,
 };
+use crate::{Param, ProtocolField};
 
 /// Where the expander goes on a simulation surface, and the mechanics.
 #[derive(Debug, Clone)]
@@ -405,14 +406,14 @@ pub fn expand(
     if let Some(b) = band {
         if !(8..=4096).contains(&b.samples) {
             return Err(ImplantError::InvalidParameter {
-                name: "band samples",
+                param: Param::BandSamples,
                 value: b.samples as f64,
                 expected: "8 to 4096 (32 for the issue's band)".into(),
             });
         }
         if !(2..=16).contains(&b.rungs) {
             return Err(ImplantError::InvalidParameter {
-                name: "band rungs",
+                param: Param::BandRungs,
                 value: b.rungs as f64,
                 expected: "2 to 16 reference volumes".into(),
             });
@@ -605,7 +606,7 @@ fn nominal_run(
         insertion = Some(ins);
     }
     let mut ins = insertion.ok_or_else(|| ImplantError::InvalidProtocol {
-        field: "fills",
+        field: ProtocolField::Fills,
         problem: "no fill: give at least one (day, volume)".into(),
     })?;
     advance(
@@ -703,7 +704,7 @@ fn reference_runs(
         insertion = Some(ins);
     }
     let ins = insertion.ok_or_else(|| ImplantError::InvalidParameter {
-        name: "band rungs",
+        param: Param::BandRungs,
         value: 0.0,
         expected: "at least 1".into(),
     })?;

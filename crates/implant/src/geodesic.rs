@@ -9,6 +9,7 @@ use glam::{DVec2, DVec3, Vec3, Vec3A};
 use tissue_mesh::{TriMesh, NO_TRIANGLE};
 
 use crate::ImplantError;
+use crate::Param;
 
 /// Fraction of the bounding-box diagonal that [`default_snap_distance`] allows between a query
 /// point and the surface.
@@ -96,14 +97,14 @@ pub fn snap_to_surface(
         tracing::debug_span!("snap_to_surface", triangles = mesh.triangle_count()).entered();
     if let Some(&c) = point.to_array().iter().find(|c| !c.is_finite()) {
         return Err(ImplantError::InvalidParameter {
-            name: "point",
+            param: Param::Point,
             value: f64::from(c),
             expected: format!("finite coordinates (got {point})"),
         });
     }
     if max_distance.is_nan() || max_distance < 0.0 {
         return Err(ImplantError::InvalidParameter {
-            name: "max_distance",
+            param: Param::MaxDistance,
             value: max_distance,
             expected: "a distance ≥ 0 in cm (f64::INFINITY for no limit)".to_string(),
         });
@@ -220,7 +221,7 @@ pub fn geodesic_distances(
 ) -> Result<Vec<f64>, ImplantError> {
     if source.triangle as usize >= mesh.triangle_count() {
         return Err(ImplantError::InvalidParameter {
-            name: "source.triangle",
+            param: Param::SourceTriangle,
             value: f64::from(source.triangle),
             expected: format!(
                 "a triangle of this mesh (it has {}): snap the point to this mesh",
@@ -230,7 +231,7 @@ pub fn geodesic_distances(
     }
     if limit.is_nan() {
         return Err(ImplantError::InvalidParameter {
-            name: "limit",
+            param: Param::Limit,
             value: limit,
             expected: "a distance in cm, or f64::INFINITY for the whole surface".to_string(),
         });
@@ -767,7 +768,7 @@ mod tests {
         assert!(matches!(
             err,
             ImplantError::InvalidParameter {
-                name: "source.triangle",
+                param: Param::SourceTriangle,
                 ..
             }
         ));

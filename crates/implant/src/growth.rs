@@ -1,4 +1,4 @@
-//! Skin growth under a tissue expander (issue 21): the growth law, its calibrated parameters and
+//! Skin growth under a tissue expander (expansion over weeks): the growth law, its calibrated parameters and
 //! the fill protocol.
 //!
 //! ## The law (Han, Lee, …, Gosain, Buganza Tepole 2022, Acta Biomater 137:136)
@@ -30,6 +30,7 @@
 //! Units: days and hours as named, cm³.
 
 use crate::ImplantError;
+use crate::{Param, ProtocolField};
 
 /// The most a protocol may inject beyond the expander's nominal volume, as a fraction of it:
 /// a series ended at +41 % on average (Agrawal 2019) and over-filling is routine (Hallock 1995);
@@ -61,30 +62,30 @@ impl GrowthLaw {
     /// # Errors
     /// [`ImplantError::InvalidParameter`] naming the parameter.
     pub fn check(&self) -> Result<(), ImplantError> {
-        let bad = |name: &'static str, value: f64, expected: &str| {
+        let bad = |param: Param, value: f64, expected: &str| {
             Err(ImplantError::InvalidParameter {
-                name,
+                param,
                 value,
                 expected: expected.into(),
             })
         };
         if !(self.rate.is_finite() && self.rate >= 0.0) {
             return bad(
-                "growth rate",
+                Param::GrowthRate,
                 self.rate,
                 "finite and ≥ 0 (1/h; median 0.045)",
             );
         }
         if !(self.prestretch.is_finite() && self.prestretch > 0.0) {
             return bad(
-                "prestretch",
+                Param::Prestretch,
                 self.prestretch,
                 "positive and finite (area prestretch; 1.198 in pigs)",
             );
         }
         if !(self.threshold.is_finite() && (1.0..=4.0).contains(&self.threshold)) {
             return bad(
-                "growth threshold",
+                Param::GrowthThreshold,
                 self.threshold,
                 "in [1, 4] (the elastic area stretch above which skin grows)",
             );
@@ -197,21 +198,21 @@ impl GrowthParams {
         self.law.check()?;
         if !(self.step_hours.is_finite() && self.step_hours > 0.0 && self.step_hours <= 24.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "growth step",
+                param: Param::GrowthStep,
                 value: self.step_hours,
                 expected: "in (0, 24] hours: the mechanics re-settle at least daily".into(),
             });
         }
         if !(self.flap_release.is_finite() && self.flap_release >= 1.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "flap_release",
+                param: Param::FlapRelease,
                 value: self.flap_release,
                 expected: "finite and ≥ 1 (an area factor)".into(),
             });
         }
         if !(self.stiffness.is_finite() && (0.5..=2.0).contains(&self.stiffness)) {
             return Err(ImplantError::InvalidParameter {
-                name: "stiffness",
+                param: Param::Stiffness,
                 value: self.stiffness,
                 expected: "in [0.5, 2] (a factor of the skin's modulus)".into(),
             });
@@ -250,7 +251,7 @@ pub struct Protocol {
     pub nominal_volume: f64,
 }
 
-fn invalid(field: &'static str, problem: String) -> ImplantError {
+fn invalid(field: ProtocolField, problem: String) -> ImplantError {
     ImplantError::InvalidProtocol { field, problem }
 }
 
@@ -271,19 +272,19 @@ impl Protocol {
     ) -> Result<Protocol, ImplantError> {
         if !(1..=52).contains(&weeks) {
             return Err(invalid(
-                "expand_weeks",
+                ProtocolField::ExpandWeeks,
                 format!("{weeks} weeks: give 1 to 52 weeks of fills (usually 8–12)"),
             ));
         }
         if !(hold_weeks.is_finite() && hold_weeks >= 0.0) {
             return Err(invalid(
-                "hold_weeks",
+                ProtocolField::HoldWeeks,
                 format!("{hold_weeks}: give a hold of 0 or more weeks (usually 1)"),
             ));
         }
         if !(overfill.is_finite() && (0.0..=MAX_OVERFILL).contains(&overfill)) {
             return Err(invalid(
-                "overfill",
+                ProtocolField::Overfill,
                 format!(
                     "{overfill}: give a fraction of the nominal volume in [0, {MAX_OVERFILL}] \
                      (0.41 is the +41 % of a clinical series)"
@@ -316,7 +317,7 @@ impl Protocol {
     pub fn validate(&self) -> Result<(), ImplantError> {
         if !(self.nominal_volume.is_finite() && self.nominal_volume > 0.0) {
             return Err(invalid(
-                "volume",
+                ProtocolField::Volume,
                 format!(
                     "{} cm³: the expander's nominal volume must be positive",
                     self.nominal_volume
@@ -325,7 +326,7 @@ impl Protocol {
         }
         if self.fills.is_empty() {
             return Err(invalid(
-                "fills",
+                ProtocolField::Fills,
                 "no fill: give at least one (day, volume)".into(),
             ));
         }
@@ -333,13 +334,13 @@ impl Protocol {
         for (i, f) in self.fills.iter().enumerate() {
             if !(f.day.is_finite() && f.day >= 0.0) {
                 return Err(invalid(
-                    "fills",
+                    ProtocolField::Fills,
                     format!("fill {i} is on day {}: days are finite and ≥ 0", f.day),
                 ));
             }
             if f.day <= last {
                 return Err(invalid(
-                    "fills",
+                    ProtocolField::Fills,
                     format!(
                         "fill {i} on day {} is not after the fill before it (day {last}): give \
                          the fills in order, one per day at most",
@@ -349,7 +350,7 @@ impl Protocol {
             }
             if !(f.volume.is_finite() && f.volume > 0.0) {
                 return Err(invalid(
-                    "fills",
+                    ProtocolField::Fills,
                     format!("fill {i} injects {} cm³: give a positive volume", f.volume),
                 ));
             }
@@ -357,7 +358,7 @@ impl Protocol {
         }
         if !(self.removal_day.is_finite() && self.removal_day >= last) {
             return Err(invalid(
-                "hold_weeks",
+                ProtocolField::HoldWeeks,
                 format!(
                     "removal on day {} is before the last fill (day {last})",
                     self.removal_day
@@ -366,7 +367,7 @@ impl Protocol {
         }
         if self.removal_day > MAX_PROTOCOL_DAYS {
             return Err(invalid(
-                "expand_weeks",
+                ProtocolField::ExpandWeeks,
                 format!(
                     "the expander would stay {} days: at most {MAX_PROTOCOL_DAYS} are simulated",
                     self.removal_day
@@ -375,7 +376,7 @@ impl Protocol {
         }
         if !(self.leakage.is_finite() && (0.0..=0.9).contains(&self.leakage)) {
             return Err(invalid(
-                "leakage",
+                ProtocolField::Leakage,
                 format!(
                     "{}: give the fraction of each fill that leaks, in [0, 0.9] (in vivo about \
                      0.29)",
@@ -387,7 +388,7 @@ impl Protocol {
         let most = (1.0 + MAX_OVERFILL) * self.nominal_volume;
         if injected > most * (1.0 + 1e-9) {
             return Err(invalid(
-                "overfill",
+                ProtocolField::Overfill,
                 format!(
                     "{injected:.1} cm³ injected into a {:.1} cm³ expander: at most {most:.1} \
                      (+{:.0} %); lower the fills or the over-fill",

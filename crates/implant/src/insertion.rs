@@ -28,6 +28,7 @@ use tissue_mss::{
 use crate::contact_run::{ContactRun, RunParams, StepSummary};
 use crate::outcome::{replace_region, vertex_displacements, vertex_stretch};
 use crate::walk::{walk_on_surface, WalkEnd};
+use crate::Param;
 use crate::{
     Implant, ImplantError, ImplantFrame, ImplantSpec, Layer, LayerParams, RegionSelection,
     SearchedSurface, TissueLayers,
@@ -78,16 +79,16 @@ impl Default for ImplantParams {
 
 impl ImplantParams {
     fn check(&self) -> Result<(), ImplantError> {
-        for (name, value) in [
-            ("shell_young", self.shell_young),
-            ("shell_thickness", self.shell_thickness),
-            ("fill_density", self.fill_density),
-            ("fill_bulk_modulus", self.fill_bulk_modulus),
-            ("radial_modulus", self.radial_modulus),
+        for (param, value) in [
+            (Param::ShellYoung, self.shell_young),
+            (Param::ShellThickness, self.shell_thickness),
+            (Param::FillDensity, self.fill_density),
+            (Param::FillBulkModulus, self.fill_bulk_modulus),
+            (Param::RadialModulus, self.radial_modulus),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(ImplantError::InvalidParameter {
-                    name,
+                    param,
                     value,
                     expected: "positive and finite".into(),
                 });
@@ -95,14 +96,14 @@ impl ImplantParams {
         }
         if !(0.0..0.5).contains(&self.shell_poisson) {
             return Err(ImplantError::InvalidParameter {
-                name: "shell_poisson",
+                param: Param::ShellPoisson,
                 value: self.shell_poisson,
                 expected: "in [0, 0.5)".into(),
             });
         }
         if !(self.volume_coupling > 0.0 && self.volume_coupling < 1.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "volume_coupling",
+                param: Param::VolumeCoupling,
                 value: self.volume_coupling,
                 expected: "in (0, 1)".into(),
             });
@@ -460,14 +461,14 @@ impl Insertion {
             tracing::info_span!("insertion_setup", vertices = region.vertex_count()).entered();
         if !(params.pocket_margin.is_finite() && params.pocket_margin >= 0.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "pocket_margin",
+                param: Param::PocketMargin,
                 value: f64::from(params.pocket_margin),
                 expected: "finite and ≥ 0 (cm)".into(),
             });
         }
         if !(params.fill_time.is_finite() && params.fill_time >= 0.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "fill_time",
+                param: Param::FillTime,
                 value: f64::from(params.fill_time),
                 expected: "finite and ≥ 0 (s)".into(),
             });
@@ -489,7 +490,7 @@ impl Insertion {
     }
 
     /// The same tissue, where it is now (positions, pocket, rest metric), under another
-    /// implant (issue 21: the next fill of an expander): the implant is built for the new
+    /// implant (the next fill of an expander in an expansion over weeks): the implant is built for the new
     /// volume on the same base, and fills from where the previous one stood when both have the
     /// same vertices (from flat otherwise); the tissue starts at rest where it was. A warm
     /// start: the run then settles only the change.

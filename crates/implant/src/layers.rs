@@ -34,10 +34,9 @@
 //! through the thickness lumps its mass, and each half is spread by eq. (2) on its layer's
 //! triangles (the thesis's region, whose counts include both layers, carries the mass on both).
 //! The end state of a run does not depend on the masses; its number of steps and its
-//! robustness do: with the skin's mass on layer 1 alone, layer 2 (a thin slab's share) set the
-//! stable step of the plane press at 0.30 µs instead of 0.67 µs, and expanders above about
-//! 165 cm³ on Table 2's 7 cm base ran away instead of settling. Particles on the region's
-//! boundary loops are fixed in both layers.
+//! robustness do: layer 2 must carry its share, or its light particles set a smaller stable
+//! step and large expanders do not settle (`docs/tuning-log.md`, "Masses shared by the
+//! layers"). Particles on the region's boundary loops are fixed in both layers.
 
 use glam::{Vec3, Vec3A};
 use tissue_mesh::TriMesh;
@@ -48,6 +47,7 @@ use tissue_mss::{
 
 use crate::adjacency::VertexNeighbours;
 use crate::ImplantError;
+use crate::Param;
 
 /// Triangles of a lower [`shape_quality`] are slivers, whose turning over in the inward offset
 /// is not a fold of the surface (about 7° for the smallest angle of an isosceles sliver).
@@ -255,38 +255,38 @@ impl Default for LayerParams {
 
 impl LayerParams {
     fn check(&self) -> Result<(), ImplantError> {
-        let positive = |name: &'static str, value: f64| {
+        let positive = |param: Param, value: f64| {
             if value.is_finite() && value > 0.0 {
                 Ok(())
             } else {
                 Err(ImplantError::InvalidParameter {
-                    name,
+                    param,
                     value,
                     expected: "positive and finite".into(),
                 })
             }
         };
-        positive("young", self.young)?;
-        positive("skin_thickness", self.skin_thickness)?;
-        positive("density", self.density)?;
-        positive("depth", self.depth)?;
+        positive(Param::Young, self.young)?;
+        positive(Param::SkinThickness, self.skin_thickness)?;
+        positive(Param::Density, self.density)?;
+        positive(Param::Depth, self.depth)?;
         if !(0.0..1.0).contains(&self.min_thickness) {
             return Err(ImplantError::InvalidParameter {
-                name: "min_thickness",
+                param: Param::MinThickness,
                 value: self.min_thickness,
                 expected: "in [0, 1) (a fraction of the depth)".into(),
             });
         }
         if !(self.anchor_young.is_finite() && self.anchor_young >= 0.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "anchor_young",
+                param: Param::AnchorYoung,
                 value: self.anchor_young,
                 expected: "finite and ≥ 0".into(),
             });
         }
         if !(self.poisson.is_finite() && (0.0..0.5).contains(&self.poisson)) {
             return Err(ImplantError::InvalidParameter {
-                name: "poisson",
+                param: Param::Poisson,
                 value: self.poisson,
                 expected: "in [0, 0.5)".into(),
             });
@@ -294,7 +294,7 @@ impl LayerParams {
         if let Some(reach) = self.offset_reach {
             if !(reach.is_finite() && reach >= 0.0) {
                 return Err(ImplantError::InvalidParameter {
-                    name: "offset_reach",
+                    param: Param::OffsetReach,
                     value: reach,
                     expected: "finite and ≥ 0 (cm), or None for half the mean edge".into(),
                 });
@@ -324,7 +324,7 @@ pub struct TissueLayers {
     boundary: Vec<u32>,
     min_thickness: f32,
     /// The in-plane springs of both layers as `(spring, edge, rest length as built)`, found on
-    /// the first [`TissueLayers::grow`] (skin growth, issue 21).
+    /// the first [`TissueLayers::grow`] (skin growth in an expansion over weeks).
     growth_map: Option<Vec<(u32, u32, f32)>>,
 }
 
@@ -365,7 +365,7 @@ impl TissueLayers {
             let [a, b, c] = region.corners(t);
             let at = (a + b + c) / 3.0;
             return Err(ImplantError::InvalidParameter {
-                name: "depth",
+                param: Param::Depth,
                 value: params.depth,
                 expected: format!(
                     "smaller: offsetting the region inward by it folds {} triangle(s) over, the \
@@ -624,7 +624,7 @@ impl TissueLayers {
         moved
     }
 
-    /// Sets the rest metric of a grown skin (issue 21): `theta_g[t]` is region triangle `t`'s
+    /// Sets the rest metric of a grown skin (expansion over weeks): `theta_g[t]` is region triangle `t`'s
     /// area growth `θg ≥ 1` relative to its rest (scan) area. Every in-plane spring of both
     /// layers gets the rest length it had as built times `√θ̄g`, `θ̄g` the area-weighted mean of
     /// its edge's one or two triangles (in-plane isotropic growth, `Fg = √θg·I` in the plane);
@@ -638,7 +638,7 @@ impl TissueLayers {
         let triangles = self.outer.triangle_count();
         if theta_g.len() != triangles {
             return Err(ImplantError::InvalidParameter {
-                name: "theta_g",
+                param: Param::ThetaG,
                 value: theta_g.len() as f64,
                 expected: format!("one area growth per region triangle ({triangles})"),
             });
@@ -649,7 +649,7 @@ impl TissueLayers {
             .find(|(_, g)| !(g.is_finite() && **g >= 1.0))
         {
             return Err(ImplantError::InvalidParameter {
-                name: "theta_g",
+                param: Param::ThetaG,
                 value: g,
                 expected: format!("finite and ≥ 1 (skin does not resorb), at triangle {t}"),
             });
@@ -712,7 +712,7 @@ impl TissueLayers {
     pub fn scale_skin_stiffness(&mut self, factor: f64) -> Result<(), ImplantError> {
         if !(factor.is_finite() && factor > 0.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "stiffness",
+                param: Param::Stiffness,
                 value: factor,
                 expected: "a positive, finite factor".into(),
             });
@@ -837,14 +837,14 @@ impl TissueLayers {
     pub fn lift_by(&mut self, heights: &[f32]) -> Result<(), ImplantError> {
         if heights.len() != self.normals.len() {
             return Err(ImplantError::InvalidParameter {
-                name: "heights",
+                param: Param::Heights,
                 value: heights.len() as f64,
                 expected: format!("one height per region vertex ({})", self.normals.len()),
             });
         }
         if let Some(r) = heights.iter().position(|h| !h.is_finite()) {
             return Err(ImplantError::InvalidParameter {
-                name: "heights",
+                param: Param::Heights,
                 value: f64::from(heights[r]),
                 expected: format!("finite (region vertex {r})"),
             });

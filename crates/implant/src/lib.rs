@@ -19,16 +19,27 @@
 //!   per-vertex displacement and stretch, the patient with the region replaced.
 //! - [`sweep`] and [`volume_for_gain`]: series of runs in parallel and the inverse question
 //!   "which volume gives this area gain".
-//! - [`prepare_scan`] and [`SimSurface`]: planning on a real scan (issue 17) — its small holes
+//! - [`prepare_scan`] and [`SimSurface`]: planning on a real scan — its small holes
 //!   filled, the region refused where it reaches an open border
 //!   ([`ImplantError::RegionReachesBorder`]), remeshed into a simulation surface of its own
 //!   (edge [`default_sim_edge`], smoothed below it), every scan vertex of the region bound to
 //!   it and moved with it afterwards ([`SimSurface::map_to_scan`], [`ScanResult`]).
-//! - [`expand`]: expansion over weeks (issue 21) — a fill [`Protocol`], skin growth by the
+//! - [`expand`]: expansion over weeks — a fill [`Protocol`], skin growth by the
 //!   calibrated law ([`GrowthLaw`], [`GrowthParams`]) re-settled at least daily from the
 //!   previous state, removal, the flap ([`ExpansionOutcome`]) and its band ([`Band`]).
 //! - [`walk_on_surface`]: straightest geodesics, the exponential map that wraps an expander's
 //!   base onto the body ([`ImplantSpec::build_wrapped`], [`place_implant`]).
+//!
+//! How the pieces fit on a real scan: the expander's base is wrapped onto layer 2 by the
+//! exponential map and lowered where layer 2 dips between its vertices; layer 2 is offset along
+//! normals averaged over a length of the model ([`SimSurface::offset_reach`]), so a fold
+//! narrower than the depth is untangled, and the smoothing and offset lengths do not shrink with
+//! the simulation edge (halving it samples the same model). Layer 1 bends as a plate
+//! (discrete-shell hinges; off for Table 1's press). A run stops by the thesis's criterion or
+//! when layer 1's area has stopped moving (the plateau rule). An expansion refills the expander
+//! under the tissue where it is and re-settles both layers on the grown
+//! rest metric ([`TissueLayers::grow`]) after every growth step (at most 24 h). Validation
+//! status: `docs/validation.md`.
 //!
 //! Pure scenario logic on top of `tissue-mesh`, `tissue-mss`, `tissue-bvh` and `tissue-collide`:
 //! no threads of its own (a sweep uses rayon's pool), no terminal, no file I/O. Units: cm, g, s.
@@ -45,12 +56,6 @@
 //! # Ok::<(), tissue_implant::ImplantError>(())
 //! ```
 #![forbid(unsafe_code)]
-#![warn(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::print_stdout,
-    clippy::print_stderr
-)]
 
 mod adjacency;
 mod bending;
@@ -71,7 +76,7 @@ mod shape;
 mod walk;
 
 pub use contact_run::{ContactRun, RunParams, StepSummary};
-pub use error::{ImplantError, SearchedSurface};
+pub use error::{ImplantError, Param, ProtocolField, SearchedSurface};
 pub use expansion::{
     expand, Band, BandOptions, ExpansionMonitor, ExpansionOutcome, ExpansionProgress,
     ExpansionRecord, ExpansionSetup, ExpansionStage, Percentiles, SampleParams, SampleResult,
@@ -102,4 +107,10 @@ pub use scan::{
 pub use shape::{Implant, ImplantFrame, ImplantShape, ImplantSpec};
 /// The search hierarchy's error, carried by [`ImplantError::Search`].
 pub use tissue_bvh::BvhError;
+/// The broad phase of a run's collision detection ([`RunParams`]), so that callers need not
+/// depend on tissue-collide.
+pub use tissue_collide::BroadPhase;
+/// The tissue model's error ([`ImplantError::Model`]) and why a run stopped, so that callers
+/// need not depend on tissue-mss.
+pub use tissue_mss::{MssError, StopReason};
 pub use walk::{walk_on_surface, WalkEnd};

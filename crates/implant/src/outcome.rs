@@ -9,6 +9,7 @@
 use glam::Vec3;
 use tissue_mesh::TriMesh;
 
+use crate::Param;
 use crate::{ImplantError, RegionSelection};
 
 /// Checks that `after` is a deformed state of `before`: the same vertex count and the same
@@ -16,7 +17,7 @@ use crate::{ImplantError, RegionSelection};
 fn check_same_mesh(before: &TriMesh, after: &TriMesh) -> Result<(), ImplantError> {
     if before.vertex_count() != after.vertex_count() {
         return Err(ImplantError::InvalidParameter {
-            name: "after",
+            param: Param::After,
             value: after.vertex_count() as f64,
             expected: format!(
                 "the same vertex count as `before` ({} vertices), but `after` has {}: compare two \
@@ -28,7 +29,7 @@ fn check_same_mesh(before: &TriMesh, after: &TriMesh) -> Result<(), ImplantError
     }
     if before.triangle_count() != after.triangle_count() {
         return Err(ImplantError::InvalidParameter {
-            name: "after",
+            param: Param::After,
             value: after.triangle_count() as f64,
             expected: format!(
                 "the same triangle count as `before` ({} triangles), but `after` has {}: compare \
@@ -46,7 +47,7 @@ fn check_same_mesh(before: &TriMesh, after: &TriMesh) -> Result<(), ImplantError
     {
         let (b, a) = (before.triangles()[t], after.triangles()[t]);
         return Err(ImplantError::InvalidParameter {
-            name: "after",
+            param: Param::After,
             value: t as f64,
             expected: format!(
                 "the same triangles as `before`, but triangle {t} is {a:?} in `after` and {b:?} in \
@@ -132,7 +133,7 @@ pub fn vertex_stretch(before: &TriMesh, after: &TriMesh) -> Result<Vec<f32>, Imp
             stretch.push((a / b) as f32);
         } else {
             return Err(ImplantError::InvalidParameter {
-                name: "before",
+                param: Param::Before,
                 value: b,
                 expected: format!(
                     "a positive area around every vertex, but vertex {v} has zero tributary area \
@@ -182,7 +183,7 @@ pub fn replace_region(
     let region_to_patient = selection.region_to_patient();
     if region_after.len() != region_to_patient.len() {
         return Err(ImplantError::InvalidParameter {
-            name: "region_after",
+            param: Param::RegionAfter,
             value: region_after.len() as f64,
             expected: format!(
                 "one position per region vertex ({}), but {} were given",
@@ -199,7 +200,7 @@ pub fn replace_region(
             .find(|c| !c.is_finite())
             .unwrap_or(f32::NAN);
         return Err(ImplantError::InvalidParameter {
-            name: "region_after",
+            param: Param::RegionAfter,
             value: f64::from(bad),
             expected: format!(
                 "finite positions, but region vertex {i} (patient vertex {}) is {:?}: the run \
@@ -231,7 +232,7 @@ pub fn replace_region(
 fn check_patient(patient: &TriMesh, selection: &RegionSelection) -> Result<(), ImplantError> {
     let n = patient.vertex_count();
     let mismatch = |what: String| ImplantError::InvalidParameter {
-        name: "patient",
+        param: Param::Patient,
         value: n as f64,
         expected: format!(
             "the patient mesh the region was selected from, but {what}: select the region again \

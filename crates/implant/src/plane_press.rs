@@ -33,6 +33,7 @@ use tissue_mesh::{volume_between, TriMesh};
 use tissue_mss::{masses_from_triangles, MassSpringSystem, Particles, WATER_DENSITY};
 
 use crate::contact_run::{mean_edge_length, ContactRun, RunParams};
+use crate::Param;
 use crate::{
     default_radius, select_region_with, ImplantError, Layer, LayerParams, Progress, RegionOptions,
     RegionRule, RegionSelection, TissueLayers,
@@ -96,14 +97,14 @@ impl Default for PlanePressParams {
 
 impl PlanePressParams {
     fn check(&self) -> Result<(), ImplantError> {
-        for (name, value) in [
-            ("sphere_radius", f64::from(self.sphere_radius)),
-            ("speed", f64::from(self.speed)),
-            ("depth", self.depth),
+        for (param, value) in [
+            (Param::SphereRadius, f64::from(self.sphere_radius)),
+            (Param::Speed, f64::from(self.speed)),
+            (Param::Depth, self.depth),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(ImplantError::InvalidParameter {
-                    name,
+                    param,
                     value,
                     expected: "positive and finite".into(),
                 });
@@ -251,7 +252,7 @@ pub fn plane_press(
     let max_steps = params.run.stop.max_steps;
     if steps > max_steps as f64 {
         return Err(ImplantError::InvalidParameter {
-            name: "speed",
+            param: Param::Speed,
             value: f64::from(params.speed),
             expected: format!(
                 "at least {:.3} cm/s: the travel of {travel:.4} cm at h = {h:e} s takes {steps} \

@@ -37,6 +37,7 @@
 use rayon::prelude::*;
 
 use crate::ImplantError;
+use crate::Param;
 
 /// Runs `run` on every input in parallel and returns the results in input order.
 ///
@@ -83,22 +84,22 @@ impl Default for InverseOptions {
 
 impl InverseOptions {
     fn check(&self) -> Result<(), ImplantError> {
-        let positive = |name: &'static str, value: f64, unit: &str| {
+        let positive = |param: Param, value: f64, unit: &str| {
             if value.is_finite() && value > 0.0 {
                 Ok(())
             } else {
                 Err(ImplantError::InvalidParameter {
-                    name,
+                    param,
                     value,
                     expected: format!("positive and finite, in {unit}"),
                 })
             }
         };
-        positive("gain_tolerance", self.gain_tolerance, "cm²")?;
-        positive("volume_tolerance", self.volume_tolerance, "cm³")?;
+        positive(Param::GainTolerance, self.gain_tolerance, "cm²")?;
+        positive(Param::VolumeTolerance, self.volume_tolerance, "cm³")?;
         if self.max_runs < 2 {
             return Err(ImplantError::InvalidParameter {
-                name: "max_runs",
+                param: Param::MaxRuns,
                 value: self.max_runs as f64,
                 expected: "at least 2 (the two bracket ends are run first)".into(),
             });
@@ -174,7 +175,7 @@ impl Point {
 /// # Errors
 /// - [`ImplantError::InvalidParameter`] when `target_gain` is not finite, the bracket is not
 ///   `0 < low < high` with finite ends, `options` are not positive and finite (`max_runs` ≥ 2),
-///   or a run returns a gain that is not finite (`name` is `"gain"`);
+///   or a run returns a gain that is not finite ([`Param::Gain`]);
 /// - [`ImplantError::TargetNotBracketed`] when the gains at the two ends are both above or both
 ///   below the target (by more than `gain_tolerance`), with both ends' volumes and gains;
 /// - any error of `run`, unchanged (the search stops at the first).
@@ -190,7 +191,7 @@ where
     options.check()?;
     if !target_gain.is_finite() {
         return Err(ImplantError::InvalidParameter {
-            name: "target_gain",
+            param: Param::TargetGain,
             value: target_gain,
             expected: "a finite area gain in cm²".into(),
         });
@@ -198,14 +199,14 @@ where
     let (low, high) = bracket;
     if !(low.is_finite() && low > 0.0) {
         return Err(ImplantError::InvalidParameter {
-            name: "bracket.low",
+            param: Param::BracketLow,
             value: low,
             expected: "a positive, finite volume in cm³".into(),
         });
     }
     if !(high.is_finite() && high > low) {
         return Err(ImplantError::InvalidParameter {
-            name: "bracket.high",
+            param: Param::BracketHigh,
             value: high,
             expected: format!("a finite volume in cm³ above the lower end {low}"),
         });
@@ -217,7 +218,7 @@ where
         let gain = run(volume)?;
         if !gain.is_finite() {
             return Err(ImplantError::InvalidParameter {
-                name: "gain",
+                param: Param::Gain,
                 value: gain,
                 expected: format!(
                     "a finite area gain in cm² from the run at volume {volume} cm³ (run {})",

@@ -10,6 +10,7 @@ pub use crate::geodesic::{
     default_snap_distance, geodesic_distances, snap_to_surface, SurfacePoint, DEFAULT_SNAP_FRACTION,
 };
 use crate::ImplantError;
+use crate::Param;
 
 /// [`default_radius`] is this many times the implant footprint radius.
 pub const DEFAULT_RADIUS_FACTOR: f64 = 1.5;
@@ -83,7 +84,7 @@ pub struct RegionOptions {
 pub fn default_radius(footprint_radius: f64) -> Result<f64, ImplantError> {
     if !(footprint_radius.is_finite() && footprint_radius > 0.0) {
         return Err(ImplantError::InvalidParameter {
-            name: "footprint_radius",
+            param: Param::FootprintRadius,
             value: footprint_radius,
             expected: "a finite radius > 0 cm (half the implant's base diameter)".to_string(),
         });
@@ -169,7 +170,7 @@ pub fn select_region_with(
     .entered();
     if !(radius.is_finite() && radius > 0.0) {
         return Err(ImplantError::InvalidParameter {
-            name: "radius",
+            param: Param::Radius,
             value: radius,
             expected: "a finite region radius > 0 cm (see default_radius)".to_string(),
         });
@@ -474,7 +475,7 @@ mod tests {
             assert!(matches!(
                 default_radius(bad),
                 Err(ImplantError::InvalidParameter {
-                    name: "footprint_radius",
+                    param: Param::FootprintRadius,
                     ..
                 })
             ));

@@ -44,6 +44,7 @@ use tissue_mesh::{volume_between, TriMesh};
 use tissue_remesh::{fill_holes, remesh, Hole, RemeshOptions, RemeshStats};
 
 use crate::adjacency::VertexNeighbours;
+use crate::Param;
 use crate::{
     select_region_with, vertex_stretch, ImplantError, RegionOptions, RegionSelection,
     SearchedSurface,
@@ -69,7 +70,7 @@ pub const DEFAULT_MAX_HOLE: f64 = 1.5;
 pub fn default_sim_edge(region_radius: f64) -> Result<f64, ImplantError> {
     if !(region_radius.is_finite() && region_radius > 0.0) {
         return Err(ImplantError::InvalidParameter {
-            name: "region_radius",
+            param: Param::RegionRadius,
             value: region_radius,
             expected: "a finite region radius > 0 cm".into(),
         });
@@ -115,7 +116,7 @@ impl ScanOptions {
         if let Some(h) = self.sim_edge {
             if !(h.is_finite() && h > 0.0) {
                 return Err(ImplantError::InvalidParameter {
-                    name: "sim_edge",
+                    param: Param::SimEdge,
                     value: h,
                     expected: "a finite simulation edge > 0 cm (or none for the default)".into(),
                 });
@@ -123,21 +124,21 @@ impl ScanOptions {
         }
         if !(self.max_hole.is_finite() && self.max_hole >= 0.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "max_hole",
+                param: Param::MaxHole,
                 value: self.max_hole,
                 expected: "a finite hole size ≥ 0 cm".into(),
             });
         }
         if !(self.smoothing.is_finite() && self.smoothing >= 0.0) {
             return Err(ImplantError::InvalidParameter {
-                name: "smoothing",
+                param: Param::Smoothing,
                 value: self.smoothing,
                 expected: "a finite smoothing radius ≥ 0, in simulation edges".into(),
             });
         }
         if self.iterations == 0 {
             return Err(ImplantError::InvalidParameter {
-                name: "iterations",
+                param: Param::Iterations,
                 value: 0.0,
                 expected: "at least 1 remeshing iteration".into(),
             });
@@ -407,7 +408,7 @@ fn bind(region: &TriMesh, sim: &TriMesh) -> Result<Vec<Binding>, ImplantError> {
         }
         let Some(hit) = bvh.closest_point(&triangles, p.into(), f32::INFINITY, &mut ws) else {
             return Err(ImplantError::InvalidParameter {
-                name: "sim_edge",
+                param: Param::SimEdge,
                 value: 0.0,
                 expected: "a simulation surface with triangles".into(),
             });
@@ -512,7 +513,7 @@ impl SimSurface {
             || selection.mesh().vertex_count() != self.binding.len()
         {
             return Err(ImplantError::InvalidParameter {
-                name: "patient",
+                param: Param::Patient,
                 value: patient.vertex_count() as f64,
                 expected: format!(
                     "the scan of {} vertices and the region of {} vertices this simulation \
@@ -547,7 +548,7 @@ impl SimSurface {
         }
         if let Some(r) = region_after.iter().position(|p| !p.is_finite()) {
             return Err(ImplantError::InvalidParameter {
-                name: "sim_after",
+                param: Param::SimAfter,
                 value: f64::NAN,
                 expected: format!(
                     "finite positions, but region vertex {r} maps to a non-finite one: the run \

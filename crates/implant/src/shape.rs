@@ -1,4 +1,4 @@
-//! Tissue-expander shapes (issue 5): closed, outward-oriented meshes of a flat base and a dome,
+//! Tissue-expander shapes: closed, outward-oriented meshes of a flat base and a dome,
 //! sized to a target volume, optionally bent onto the curved surface they lie on.
 //!
 //! ## Construction
@@ -49,6 +49,7 @@ use glam::{DVec3, Vec3};
 use tissue_mesh::TriMesh;
 
 use crate::ImplantError;
+use crate::Param;
 use outline::Grid;
 
 /// The base outline of a tissue expander, in its local frame (plan `z = 0`, centred at the
@@ -112,12 +113,12 @@ impl ImplantShape {
     /// # Errors
     /// [`ImplantError::InvalidParameter`] naming the first dimension out of range and the range.
     pub fn validate(&self) -> Result<(), ImplantError> {
-        let dimension = |name: &'static str, value: f32| {
+        let dimension = |param: Param, value: f32| {
             if value.is_finite() && (Self::MIN_DIMENSION..=Self::MAX_DIMENSION).contains(&value) {
                 Ok(())
             } else {
                 Err(invalid(
-                    name,
+                    param,
                     value,
                     format!(
                         "a finite size in cm between {} and {}",
@@ -127,12 +128,12 @@ impl ImplantShape {
                 ))
             }
         };
-        let aspect = |name: &'static str, long: f32, short: f32| {
+        let aspect = |param: Param, long: f32, short: f32| {
             if long <= Self::MAX_ASPECT * short {
                 Ok(())
             } else {
                 Err(invalid(
-                    name,
+                    param,
                     long,
                     format!(
                         "at most {} times the other side ({short} cm); make the base less elongated",
@@ -142,22 +143,22 @@ impl ImplantShape {
             }
         };
         match *self {
-            ImplantShape::Round { diameter } => dimension("diameter", diameter),
+            ImplantShape::Round { diameter } => dimension(Param::Diameter, diameter),
             ImplantShape::Rectangular {
                 length,
                 width,
                 corner_radius,
             } => {
-                dimension("length", length)?;
-                dimension("width", width)?;
-                aspect("length", length, width)?;
-                aspect("width", width, length)?;
+                dimension(Param::Length, length)?;
+                dimension(Param::Width, width)?;
+                aspect(Param::Length, length, width)?;
+                aspect(Param::Width, width, length)?;
                 let max = 0.5 * length.min(width);
                 if corner_radius.is_finite() && (0.0..=max).contains(&corner_radius) {
                     Ok(())
                 } else {
                     Err(invalid(
-                        "corner_radius",
+                        Param::CornerRadius,
                         corner_radius,
                         format!("between 0 and half the shorter side ({max} cm)"),
                     ))
@@ -168,25 +169,25 @@ impl ImplantShape {
                 width,
                 bend_radius,
             } => {
-                dimension("length", length)?;
-                dimension("width", width)?;
-                dimension("bend_radius", bend_radius)?;
+                dimension(Param::Length, length)?;
+                dimension(Param::Width, width)?;
+                dimension(Param::BendRadius, bend_radius)?;
                 if length < width {
                     return Err(invalid(
-                        "length",
+                        Param::Length,
                         length,
                         format!(
                             "at least the width ({width} cm): the length includes the round ends"
                         ),
                     ));
                 }
-                aspect("length", length, width)?;
+                aspect(Param::Length, length, width)?;
                 // Tighter bites fold the bent grid over itself at small vertex budgets (found
                 // by the shape property test: at 1.25 × the width, budgets up to 167 failed; from
                 // 1.5 × none of 50–1500 did).
                 if 1.5 * width > bend_radius {
                     return Err(invalid(
-                        "width",
+                        Param::Width,
                         width,
                         format!(
                             "at most 2/3 of the bend radius ({bend_radius} cm); raise \
@@ -246,9 +247,9 @@ impl ImplantShape {
     }
 }
 
-fn invalid(name: &'static str, value: impl Into<f64>, expected: String) -> ImplantError {
+fn invalid(param: Param, value: impl Into<f64>, expected: String) -> ImplantError {
     ImplantError::InvalidParameter {
-        name,
+        param,
         value: value.into(),
         expected,
     }
@@ -282,21 +283,25 @@ impl ImplantFrame {
     /// [`ImplantError::InvalidParameter`] when a vector is not finite, the normal is zero, or the
     /// tangent is (nearly) parallel to the normal.
     pub fn new(origin: Vec3, normal: Vec3, tangent: Vec3) -> Result<Self, ImplantError> {
-        for (name, v) in [("origin", origin), ("normal", normal), ("tangent", tangent)] {
+        for (param, v) in [
+            (Param::Origin, origin),
+            (Param::Normal, normal),
+            (Param::Tangent, tangent),
+        ] {
             if !v.is_finite() {
-                return Err(invalid(name, v.length(), "a finite vector".into()));
+                return Err(invalid(param, v.length(), "a finite vector".into()));
             }
         }
         let n = normal.as_dvec3();
         if n.length() == 0.0 {
-            return Err(invalid("normal", 0.0, "a non-zero vector".into()));
+            return Err(invalid(Param::Normal, 0.0, "a non-zero vector".into()));
         }
         let n = n.normalize();
         let t = tangent.as_dvec3();
         let across = t - t.dot(n) * n;
         if t.length() == 0.0 || across.length() <= 1e-6 * t.length() {
             return Err(invalid(
-                "tangent",
+                Param::Tangent,
                 t.length(),
                 "a non-zero vector not parallel to the normal".into(),
             ));
@@ -565,14 +570,14 @@ impl ImplantSpec {
         self.shape.validate()?;
         if !(self.volume_cm3.is_finite() && self.volume_cm3 > 0.0) {
             return Err(invalid(
-                "volume_cm3",
+                Param::VolumeCm3,
                 self.volume_cm3,
                 "a finite, positive volume in cm³".into(),
             ));
         }
         if !(Self::MIN_VERTEX_BUDGET..=Self::MAX_VERTEX_BUDGET).contains(&self.vertex_budget) {
             return Err(invalid(
-                "vertex_budget",
+                Param::VertexBudget,
                 self.vertex_budget,
                 format!(
                     "between {} and {} vertices",

@@ -1,4 +1,5 @@
 //! Validation + topology build and the f64 measures on the thesis's plane sizes.
+#![allow(clippy::expect_used)]
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use tissue_mesh::{grid, TriMesh};

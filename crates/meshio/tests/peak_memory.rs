@@ -7,7 +7,7 @@
 //!
 //! The one place in the crate with `unsafe`: the counting allocator must implement the `unsafe`
 //! trait `GlobalAlloc`. It only forwards to `System`.
-#![allow(unsafe_code, clippy::unwrap_used)]
+#![allow(unsafe_code, clippy::unwrap_used, clippy::print_stderr)]
 
 #[path = "support/bombs.rs"]
 mod bombs;

@@ -1,6 +1,7 @@
 //! One mass–spring step (forces + integration) on the thesis's two-layer regions of the 65², 129²
 //! and 257² planes, serial and on rayon pools of 1 and 2 threads. Throughput is in springs, so
 //! criterion's "elem/s" gives ns/spring as its inverse.
+#![allow(clippy::expect_used)]
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use glam::Vec3;

@@ -55,12 +55,6 @@
 //! # Ok::<(), tissue_mss::MssError>(())
 //! ```
 #![forbid(unsafe_code)]
-#![warn(
-    clippy::unwrap_used,
-    clippy::expect_used,
-    clippy::print_stdout,
-    clippy::print_stderr
-)]
 
 mod adaptive;
 mod error;

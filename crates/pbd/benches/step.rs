@@ -5,7 +5,7 @@
 //! constraint projections (constraints × K), so criterion's "elem/s" inverts to ns/projection;
 //! a table of medians in ms/step and ns/projection (over `SUMMARY_STEPS` steps each, measured
 //! back to back after criterion's runs) closes the output.
-#![allow(missing_docs, clippy::print_stderr)]
+#![allow(missing_docs, clippy::print_stderr, clippy::expect_used, clippy::panic)]
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use tissue_mesh::TetMesh;

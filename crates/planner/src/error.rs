@@ -7,7 +7,7 @@
 
 use serde::Serialize;
 use tissue_app::AppError;
-use tissue_implant::{BvhError, ImplantError, SearchedSurface};
+use tissue_implant::{BvhError, ImplantError, Param, ProtocolField, SearchedSurface};
 use tissue_meshio::MeshIoError;
 
 /// What kind of thing went wrong: a front end maps it to an exit code or an HTTP status.
@@ -153,23 +153,7 @@ impl PlanError {
             ),
             E::Search { surface, source } => search_kind(*surface, source),
             E::NoMeanNormal { .. } => (K::Placement, Some("at"), " (`at`, `vertex`)"),
-            E::InvalidParameter { name, .. } => match *name {
-                "point" | "max_distance" => (K::Placement, Some("at"), ""),
-                "radius" | "region_radius" => (K::Placement, Some("region_radius_cm"), ""),
-                "depth" => (K::Parameters, Some("depth_cm"), " (`depth_cm`)"),
-                "young" => (
-                    K::Parameters,
-                    Some("young_kpa"),
-                    " (`young_kpa`, here in g/(cm·s²) = 0.1 Pa)",
-                ),
-                "poisson" => (K::Parameters, Some("poisson"), " (`poisson`)"),
-                "skin_thickness" => (K::Parameters, Some("thickness_cm"), " (`thickness_cm`)"),
-                "density" => (K::Parameters, Some("density_g_cm3"), " (`density_g_cm3`)"),
-                "time_step" => (K::Parameters, Some("time_step_s"), " (`time_step_s`)"),
-                "sim_edge" => (K::Parameters, Some("sim_edge_cm"), " (`sim_edge_cm`)"),
-                "max_hole" => (K::Parameters, Some("max_hole_cm"), " (`max_hole_cm`)"),
-                _ => (K::Parameters, None, ""),
-            },
+            E::InvalidParameter { param, .. } => param_kind(*param),
             E::ShapeNotMeshable { .. }
             | E::VolumeOutOfRange { .. }
             | E::VolumeNotReached { .. }
@@ -178,19 +162,11 @@ impl PlanError {
                 Some("volume_cm3"),
                 "; change `volume_cm3` or the implant's size",
             ),
-            E::InvalidProtocol { field, .. } => match *field {
-                "fills" | "expand_weeks" => {
-                    (K::Parameters, Some("expand_weeks"), " (`expand_weeks`)")
-                }
-                "hold_weeks" => (K::Parameters, Some("hold_weeks"), " (`hold_weeks`)"),
-                "leakage" => (K::Parameters, Some("leakage"), " (`leakage`)"),
-                "overfill" => (K::Parameters, Some("overfill"), " (`overfill`)"),
-                _ => (K::Parameters, Some("volume_cm3"), " (`volume_cm3`)"),
-            },
+            E::InvalidProtocol { field, .. } => protocol_kind(*field),
             E::TargetNotBracketed { .. } => {
                 (K::Parameters, Some("bracket_cm3"), " (`bracket_cm3`)")
             }
-            E::Model(tissue_mss::MssError::InvalidSpring { .. }) => (
+            E::Model(tissue_implant::MssError::InvalidSpring { .. }) => (
                 K::Placement,
                 Some("at"),
                 "; the skin or the implant's base bent onto it has badly shaped (obtuse) \
@@ -238,6 +214,129 @@ impl PlanError {
             ErrorKind::Cancelled,
             format!("cancelled after {steps} steps; nothing was written"),
         )
+    }
+}
+
+/// The kind, request field and hint of a library parameter out of range: the request field
+/// that sets it (a [`PlanRequest`](crate::PlanRequest) or [`JobSpec`](crate::JobSpec) key), or
+/// none where no request field does. Exhaustive on purpose: a new [`Param`] must be placed here.
+fn param_kind(param: Param) -> (ErrorKind, Option<&'static str>, &'static str) {
+    use ErrorKind as K;
+    use Param as P;
+    match param {
+        // Where the implant goes: `at` (or `vertex`) picks the point, its normal and the frame.
+        P::Point | P::MaxDistance | P::Origin | P::Normal => (K::Placement, Some("at"), ""),
+        P::Tangent => (K::Placement, Some("tangent"), " (`tangent`)"),
+        P::Radius | P::RegionRadius => (K::Placement, Some("region_radius_cm"), ""),
+        // The implant.
+        P::Diameter => (K::Parameters, Some("diameter_cm"), " (`diameter_cm`)"),
+        P::Length => (K::Parameters, Some("length_cm"), " (`length_cm`)"),
+        P::Width => (K::Parameters, Some("width_cm"), " (`width_cm`)"),
+        P::CornerRadius => (
+            K::Parameters,
+            Some("corner_radius_cm"),
+            " (`corner_radius_cm`)",
+        ),
+        P::BendRadius => (K::Parameters, Some("bend_radius_cm"), " (`bend_radius_cm`)"),
+        P::VolumeCm3 => (K::Parameters, Some("volume_cm3"), " (`volume_cm3`)"),
+        P::VertexBudget => (
+            K::Parameters,
+            Some("implant_vertices"),
+            " (`implant_vertices`)",
+        ),
+        // The tissue.
+        P::Depth => (K::Parameters, Some("depth_cm"), " (`depth_cm`)"),
+        P::Young => (
+            K::Parameters,
+            Some("young_kpa"),
+            " (`young_kpa`, here in g/(cm·s²) = 0.1 Pa)",
+        ),
+        P::Poisson => (K::Parameters, Some("poisson"), " (`poisson`)"),
+        P::SkinThickness => (K::Parameters, Some("thickness_cm"), " (`thickness_cm`)"),
+        P::Density => (K::Parameters, Some("density_g_cm3"), " (`density_g_cm3`)"),
+        // The simulation mesh and the run.
+        P::SimEdge => (K::Parameters, Some("sim_edge_cm"), " (`sim_edge_cm`)"),
+        P::MaxHole => (K::Parameters, Some("max_hole_cm"), " (`max_hole_cm`)"),
+        P::TimeStep => (K::Parameters, Some("time_step_s"), " (`time_step_s`)"),
+        // Expansion over weeks.
+        P::BandSamples => (K::Parameters, Some("band_samples"), " (`band_samples`)"),
+        P::GrowthStep => (K::Parameters, Some("growth_step_h"), " (`growth_step_h`)"),
+        // The inverse search (job keys).
+        P::TargetGain => (
+            K::Parameters,
+            Some("target_gain_cm2"),
+            " (`target_gain_cm2`)",
+        ),
+        P::BracketLow | P::BracketHigh => (K::Parameters, Some("bracket_cm3"), " (`bracket_cm3`)"),
+        P::GainTolerance => (
+            K::Parameters,
+            Some("gain_tolerance_cm2"),
+            " (`gain_tolerance_cm2`)",
+        ),
+        // No request field sets these: the planner passes the library's defaults (layers,
+        // implant, contact run, growth law, scan smoothing, search options, band rungs), or they
+        // are values computed during a run (heights, θg, start positions, gains, the surfaces
+        // compared after a run, a geodesic's source and limit) or by the planner itself (the
+        // footprint radius, the patient). A request cannot put them out of range, so this is a
+        // failed run to report.
+        P::AnchorYoung
+        | P::MinThickness
+        | P::OffsetReach
+        | P::ShellYoung
+        | P::ShellThickness
+        | P::ShellPoisson
+        | P::FillDensity
+        | P::FillBulkModulus
+        | P::RadialModulus
+        | P::VolumeCoupling
+        | P::PocketMargin
+        | P::FillTime
+        | P::StepSafety
+        | P::DampingTime
+        | P::ContactDistance
+        | P::ContactFraction
+        | P::Coherence
+        | P::SettleSpeed
+        | P::GrowthRate
+        | P::Prestretch
+        | P::GrowthThreshold
+        | P::FlapRelease
+        | P::Stiffness
+        | P::Smoothing
+        | P::Iterations
+        | P::VolumeTolerance
+        | P::MaxRuns
+        | P::BandRungs
+        | P::Heights
+        | P::ThetaG
+        | P::Start
+        | P::Gain
+        | P::Before
+        | P::After
+        | P::RegionAfter
+        | P::SimAfter
+        | P::SourceTriangle
+        | P::Limit
+        | P::FootprintRadius
+        | P::Patient => (K::Run, None, "; report this"),
+        // Not run by the planner at all: the plane-press experiment.
+        P::SphereRadius | P::Speed => (K::Run, None, "; report this"),
+    }
+}
+
+/// The kind, request field and hint of an expansion protocol that cannot be run, by the field
+/// at fault. Exhaustive on purpose, as [`param_kind`].
+fn protocol_kind(field: ProtocolField) -> (ErrorKind, Option<&'static str>, &'static str) {
+    use ErrorKind as K;
+    use ProtocolField as F;
+    match field {
+        // The fills are made from `expand_weeks` (one per week).
+        F::Fills | F::ExpandWeeks => (K::Parameters, Some("expand_weeks"), " (`expand_weeks`)"),
+        F::HoldWeeks => (K::Parameters, Some("hold_weeks"), " (`hold_weeks`)"),
+        F::Leakage => (K::Parameters, Some("leakage"), " (`leakage`)"),
+        F::Overfill => (K::Parameters, Some("overfill"), " (`overfill`)"),
+        // The protocol's nominal volume is the request's volume.
+        F::Volume => (K::Parameters, Some("volume_cm3"), " (`volume_cm3`)"),
     }
 }
 
@@ -308,7 +407,7 @@ mod tests {
         };
         assert_eq!(PlanError::from_implant(&d).kind, ErrorKind::Run);
         let v = ImplantError::InvalidParameter {
-            name: "depth",
+            param: Param::Depth,
             value: -1.0,
             expected: "positive".into(),
         };
@@ -317,7 +416,7 @@ mod tests {
     }
 
     /// A search hierarchy that cannot be built is its own error, classified by its type
-    /// (issue 22: it was `InvalidParameter { name: "region" }`, classified by that string as a
+    /// (regression: it was once `InvalidParameter` named `region`, classified by that string as a
     /// placement at `at`).
     #[test]
     fn search_failures_are_classified_by_type() {
@@ -381,5 +480,91 @@ mod tests {
     fn unknown_fields_lose_their_backticks_and_a_lone_backtick_stays() {
         let p = PlanError::new(ErrorKind::Usage, "give `at` or `vertex` (a ` here)");
         assert_eq!(p.message_with(|_| None), "give at or vertex (a ` here)");
+    }
+
+    /// The JSON keys a request can carry: every [`crate::PlanRequest`] field (its default,
+    /// serialized) and the job keys of the inverse search, which [`crate::JobSpec`] accepts.
+    fn request_keys() -> Vec<String> {
+        let request = serde_json::to_value(crate::PlanRequest::default()).unwrap();
+        let mut keys: Vec<String> = request.as_object().unwrap().keys().cloned().collect();
+        for key in ["target_gain_cm2", "bracket_cm3", "gain_tolerance_cm2"] {
+            // `JobSpec` refuses unknown keys; a known one fails on the value's type instead.
+            let parsed = serde_json::from_str::<crate::JobSpec>(&format!(r#"{{"{key}": "x"}}"#));
+            let message = parsed.err().map(|e| e.to_string()).unwrap_or_default();
+            assert!(!message.contains("unknown field"), "{key}: {message}");
+            keys.push(key.to_owned());
+        }
+        keys
+    }
+
+    /// Every library parameter maps to a kind and, where a request field sets it, to that
+    /// field's JSON key: a parameter whose name is the start of a request key (`depth` →
+    /// `depth_cm`) must not lose its field, as the string match's `_ =>` arm once did.
+    #[test]
+    fn every_library_parameter_maps_to_a_real_request_field() {
+        let keys = request_keys();
+        for &param in Param::ALL {
+            let e = ImplantError::InvalidParameter {
+                param,
+                value: -1.0,
+                expected: "positive".into(),
+            };
+            let p = PlanError::from_implant(&e);
+            assert_eq!((p.kind, p.field), {
+                let (kind, field, _) = param_kind(param);
+                (kind, field)
+            });
+            assert!(p.message.contains(param.name()), "{param:?}: {}", p.message);
+            if let Some(field) = p.field {
+                assert!(
+                    keys.iter().any(|k| k == field),
+                    "{param:?} → {field}: not a request key"
+                );
+                assert!(
+                    matches!(p.kind, ErrorKind::Placement | ErrorKind::Parameters),
+                    "{param:?}: a request field is the user's to fix, not {:?}",
+                    p.kind
+                );
+            }
+            // The key named after the parameter, with or without its unit (`depth` → `depth_cm`).
+            let name = param.name().replace(' ', "_");
+            let named = |k: &&String| {
+                k.strip_prefix(&name).is_some_and(|unit| {
+                    ["", "_cm", "_cm2", "_cm3", "_s", "_h", "_kpa", "_g_cm3"].contains(&unit)
+                })
+            };
+            if let Some(key) = keys.iter().find(named) {
+                assert!(
+                    p.field.is_some(),
+                    "{param:?} is set by `{key}` but maps to no field"
+                );
+            }
+        }
+    }
+
+    /// The same for the fields of an expansion protocol.
+    #[test]
+    fn every_protocol_field_maps_to_a_real_request_field() {
+        let keys = request_keys();
+        for &field in ProtocolField::ALL {
+            let e = ImplantError::InvalidProtocol {
+                field,
+                problem: "wrong".into(),
+            };
+            let p = PlanError::from_implant(&e);
+            assert_eq!(p.kind, ErrorKind::Parameters, "{field:?}");
+            let key = p
+                .field
+                .unwrap_or_else(|| panic!("{field:?} maps to no field"));
+            assert!(
+                keys.iter().any(|k| k == key),
+                "{field:?} → {key}: not a request key"
+            );
+            assert!(
+                p.message.contains(&format!("protocol {field}: wrong")),
+                "{}",
+                p.message
+            );
+        }
     }
 }

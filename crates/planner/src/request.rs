@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 use tissue_app::SimMesh;
-use tissue_collide::BroadPhase;
+use tissue_implant::BroadPhase;
 use tissue_implant::{ImplantShape, ImplantSpec, InsertionParams, LayerParams, ScanOptions};
 
 use crate::error::{ErrorKind, PlanError};

@@ -1,5 +1,5 @@
 //! Remeshing an 80k-triangle, 0.05 cm noisy plane patch to L = 0.3 cm.
-#![allow(missing_docs)]
+#![allow(missing_docs, clippy::unwrap_used)]
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use tissue_remesh::{remesh, scenes, RemeshOptions};

@@ -1,5 +1,5 @@
 //! A line chart: axes with ticks and labels, polylines, a legend, and whiskers (P5–P95 with the
-//! median marked) at chosen abscissae — the weekly figures of an expansion (issue 21).
+//! median marked) at chosen abscissae — the weekly figures of an expansion over weeks.
 
 use crate::font::{draw_text, text_width, GLYPH_HEIGHT};
 use crate::{Image, RenderError, Rgb};

@@ -1,4 +1,5 @@
 //! Rendering checked against analytic values and the documented behaviour.
+#![allow(clippy::unwrap_used)]
 
 use std::collections::HashSet;
 use std::f64::consts::PI;

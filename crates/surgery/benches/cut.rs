@@ -1,7 +1,7 @@
 //! A cut advancing through about twenty wall triangles of the bunny per step (42k tets), and the
 //! step of the body around it. Inputs are built outside the timed closures; each iteration cuts
 //! a fresh clone, so every sample is the same cut.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::{Quat, Vec3};

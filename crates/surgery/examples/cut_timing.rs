@@ -11,7 +11,7 @@
 //! `cargo run --release -p tissue-surgery --example cut_timing [-- STEP_CM [EDGE_CM [faces]
 //! [parallel]]]` (`faces`: face separation only, `SurgerySettings::split_tets` off; default on;
 //! `parallel`: `StepSettings::parallel` on, on rayon's global pool; default serial).
-#![allow(clippy::unwrap_used, clippy::print_stdout)]
+#![allow(clippy::unwrap_used, clippy::print_stdout, clippy::panic)]
 
 use std::hash::{DefaultHasher, Hash, Hasher};
 use std::time::Instant;

@@ -1,7 +1,7 @@
 //! `tetrahedralize` end to end on the bunny of `fixtures/` (10 000 triangles → about
 //! 40 000 tets with the default options); a generated sphere of similar size when the folder is
 //! missing. Also the sphere at the default and at a finer spacing, to see how time scales.
-#![allow(missing_docs, clippy::print_stderr)]
+#![allow(missing_docs, clippy::print_stderr, clippy::expect_used, clippy::panic)]
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use tissue_mesh::{uv_sphere, TriMesh};

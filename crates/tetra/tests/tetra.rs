@@ -1,5 +1,6 @@
 //! The public API of tissue-tetra: generated surfaces, the bunny and liver of `fixtures/`, and every
 //! error a user can cause.
+#![allow(clippy::unwrap_used)]
 
 use std::path::PathBuf;
 

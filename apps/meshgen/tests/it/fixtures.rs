@@ -1,6 +1,7 @@
 //! Every generated fixture is exactly what `fixtures/generate.sh` makes: each `gen …` line of the
 //! script is run through the real `meshgen` binary into a temporary folder and the bytes are
 //! compared with the committed file.
+#![allow(clippy::unwrap_used)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

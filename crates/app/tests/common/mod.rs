@@ -1,5 +1,5 @@
 //! Shared scenes and helpers of the integration tests.
-#![allow(dead_code)]
+#![allow(dead_code, clippy::expect_used, clippy::panic)]
 
 use std::time::{Duration, Instant};
 

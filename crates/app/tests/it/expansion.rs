@@ -1,6 +1,6 @@
 //! The expansion job on the worker (issue 21): progress tagged with days, the result equal to
 //! the thread-free call, and a cancel.
-#![allow(missing_docs)]
+#![allow(missing_docs, clippy::panic)]
 
 use std::ops::ControlFlow;
 use std::time::Duration;

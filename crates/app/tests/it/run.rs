@@ -1,5 +1,6 @@
 //! Runs through the worker against the library called directly, set-up errors, sweeps and
 //! inverse searches, the plane press, host jobs and panics.
+#![allow(clippy::panic)]
 
 use crate::common;
 
@@ -13,8 +14,8 @@ use tissue_app::{
 };
 use tissue_implant::{
     place_implant, plane_press, plane_press_region, select_region_with, ImplantError, ImplantShape,
-    ImplantSpec, Insertion, InsertionOutcome, InsertionParams, InverseOptions, PlanePressParams,
-    TissueLayers,
+    ImplantSpec, Insertion, InsertionOutcome, InsertionParams, InverseOptions, Param,
+    PlanePressParams, TissueLayers,
 };
 
 use common::{drain, small_job, touches_vertex};
@@ -123,8 +124,8 @@ fn set_up_errors_come_back_as_failed() {
         let (progress, terminal) = drain(&mut handle, LIMIT);
         assert!(progress.is_empty());
         match terminal {
-            Event::Failed(AppError::Implant(ImplantError::InvalidParameter { name, .. })) => {
-                assert_eq!(name, "volume_cm3")
+            Event::Failed(AppError::Implant(ImplantError::InvalidParameter { param, .. })) => {
+                assert_eq!(param, Param::VolumeCm3)
             }
             other => panic!("expected an invalid volume, got {other:?}"),
         }

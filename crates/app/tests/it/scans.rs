@@ -6,6 +6,7 @@
 //! seam continuous.
 //!
 //! The scans are built by `tissue-testscans` from the MakeHuman meshes shipped in `fixtures/`.
+#![allow(clippy::expect_used, clippy::panic, clippy::print_stderr)]
 
 use std::ops::ControlFlow;
 

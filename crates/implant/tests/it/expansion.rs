@@ -1,4 +1,4 @@
-//! Expansion over weeks (issue 21): the growth law against its exact solution, the growth step
+//! Expansion over weeks: the growth law against its exact solution, the growth step
 //! halved, the pig data, round against crescent, the clinical targets and the band's surrogate
 //! against full runs. Coarse planes (generated), few samples: docs/validation.md has the full
 //! band on Table 2's plane.

@@ -19,6 +19,7 @@
 //! The top of the forehead, the vertex farthest along `(0, 1, 1)`, has the finest scalp-like
 //! region: 90 vertices, 1.4 cm edges. There the default parameters work unchanged and the slab
 //! keeps about 0.9 of its thickness.
+#![allow(clippy::unwrap_used)]
 
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};

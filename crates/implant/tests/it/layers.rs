@@ -1,7 +1,8 @@
 //! The two-layer tissue model against the continuum slab it stands for.
+#![allow(clippy::unwrap_used)]
 
 use glam::{Vec3, Vec3A};
-use tissue_implant::{ImplantError, Layer, LayerParams, TissueLayers};
+use tissue_implant::{ImplantError, Layer, LayerParams, Param, TissueLayers};
 use tissue_mesh::{disc, uv_sphere, TriMesh};
 use tissue_mss::{Integrator, StopCriterion, StopReason};
 
@@ -229,7 +230,13 @@ fn offset_folding_on_a_tight_curve_is_an_error() {
     )
     .unwrap_err();
     assert!(
-        matches!(err, ImplantError::InvalidParameter { name: "depth", .. }),
+        matches!(
+            err,
+            ImplantError::InvalidParameter {
+                param: Param::Depth,
+                ..
+            }
+        ),
         "{err}"
     );
     // A closed surface has no boundary to hold.

@@ -1,6 +1,7 @@
 //! The result geometry through the public API: displacements and stretch against exact values
 //! for uniform scalings, lifts and a hand-computed square, the region put back into the patient
 //! bit for bit at its seam, and the errors.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 use glam::Vec3;
 use tissue_implant::{
@@ -32,7 +33,9 @@ fn boundary_flags(region: &RegionSelection) -> Vec<bool> {
 /// The message of an `InvalidParameter` error, after checking its name.
 fn invalid_parameter<T: std::fmt::Debug>(result: Result<T, ImplantError>, name: &str) -> String {
     match result {
-        Err(err @ ImplantError::InvalidParameter { name: n, .. }) if n == name => err.to_string(),
+        Err(err @ ImplantError::InvalidParameter { param: n, .. }) if n.name() == name => {
+            err.to_string()
+        }
         other => panic!("expected InvalidParameter named {name}, got {other:?}"),
     }
 }

@@ -194,7 +194,7 @@ fn bad_parameters_are_refused() {
         ),
     ] {
         match plane_press(region.mesh(), &params, never) {
-            Err(ImplantError::InvalidParameter { name: got, .. }) => assert_eq!(got, name),
+            Err(ImplantError::InvalidParameter { param: got, .. }) => assert_eq!(got.name(), name),
             other => panic!("{name}: expected InvalidParameter, got {other:?}"),
         }
     }

@@ -1,9 +1,10 @@
 //! Tests of the planning helpers: the parallel sweep and the inverse volume search.
+#![allow(clippy::panic)]
 
 use std::cell::RefCell;
 
 use tissue_implant::{
-    sweep, volume_for_gain, ImplantError, InverseOptions, InverseSearch, PlanningRun,
+    sweep, volume_for_gain, ImplantError, InverseOptions, InverseSearch, Param, PlanningRun,
 };
 
 /// An analytic gain, its exact inverse, and a bracket and target for it.
@@ -426,7 +427,10 @@ fn non_finite_gains_are_refused() {
         assert!(
             matches!(
                 result,
-                Err(ImplantError::InvalidParameter { name: "gain", .. })
+                Err(ImplantError::InvalidParameter {
+                    param: Param::Gain,
+                    ..
+                })
             ),
             "{result:?}"
         );
@@ -505,7 +509,7 @@ fn invalid_options_and_brackets_are_refused() {
     for (expected, options) in &bad_options {
         let result = volume_for_gain(30.0, (10.0, 400.0), options, never);
         assert!(
-            matches!(result, Err(ImplantError::InvalidParameter { name, .. }) if name == *expected),
+            matches!(result, Err(ImplantError::InvalidParameter { param, .. }) if param.name() == *expected),
             "{options:?}: {result:?}"
         );
     }
@@ -523,7 +527,7 @@ fn invalid_options_and_brackets_are_refused() {
     for (expected, bracket) in bad_brackets {
         let result = volume_for_gain(30.0, bracket, &default, never);
         assert!(
-            matches!(result, Err(ImplantError::InvalidParameter { name, .. }) if name == expected),
+            matches!(result, Err(ImplantError::InvalidParameter { param, .. }) if param.name() == expected),
             "{bracket:?}: {result:?}"
         );
     }
@@ -534,7 +538,7 @@ fn invalid_options_and_brackets_are_refused() {
             matches!(
                 result,
                 Err(ImplantError::InvalidParameter {
-                    name: "target_gain",
+                    param: Param::TargetGain,
                     ..
                 })
             ),

@@ -1,6 +1,7 @@
 //! Region selection and geodesic distances through the public API: against exact distances on a
 //! plane and a sphere, against edge-graph Dijkstra, the region's shape, the errors, and a real
 //! head scan.
+#![allow(clippy::unwrap_used)]
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -9,7 +10,7 @@ use std::f64::consts::PI;
 use glam::Vec3;
 use tissue_implant::{
     default_radius, geodesic_distances, select_region, select_region_with, snap_to_surface,
-    ImplantError, RegionOptions, RegionRule, RegionSelection, NOT_IN_REGION,
+    ImplantError, Param, RegionOptions, RegionRule, RegionSelection, NOT_IN_REGION,
 };
 use tissue_mesh::TriMesh;
 
@@ -330,14 +331,23 @@ fn radius_must_be_positive_and_finite() {
     for r in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         let err = select_region(&plane, Vec3::ZERO, r).unwrap_err();
         assert!(
-            matches!(err, ImplantError::InvalidParameter { name: "radius", .. }),
+            matches!(
+                err,
+                ImplantError::InvalidParameter {
+                    param: Param::Radius,
+                    ..
+                }
+            ),
             "{r}: {err:?}"
         );
     }
     let err = select_region(&plane, Vec3::new(f32::NAN, 0.0, 0.0), 1.0).unwrap_err();
     assert!(matches!(
         err,
-        ImplantError::InvalidParameter { name: "point", .. }
+        ImplantError::InvalidParameter {
+            param: Param::Point,
+            ..
+        }
     ));
 }
 

@@ -1,5 +1,6 @@
 //! Implant (tissue expander) shapes: closed outward meshes at a target volume, flat and bent onto
 //! a curved body.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 use glam::{DVec3, Vec2, Vec3};
 use tissue_implant::{Implant, ImplantError, ImplantFrame, ImplantShape, ImplantSpec};
@@ -365,7 +366,7 @@ fn implant_bent_onto_a_sphere_lies_on_it_and_keeps_its_volume() {
 #[test]
 fn bad_inputs_are_errors_naming_the_parameter() {
     let name_of = |spec: ImplantSpec| match spec.build() {
-        Err(ImplantError::InvalidParameter { name, .. }) => name,
+        Err(ImplantError::InvalidParameter { param, .. }) => param.name(),
         other => panic!("{spec:?}: {other:?}"),
     };
     for volume in [0.0, -1.0, f64::NAN, f64::INFINITY] {

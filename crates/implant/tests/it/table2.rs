@@ -4,6 +4,7 @@
 //! between the skin before and after 1.00–1.15 × the implant's; the implant's volume within 2 %;
 //! no layer-2 edge through the implant, the boundary unchanged, everything finite. The numbers
 //! are printed (run with `--nocapture`) and recorded in docs/validation.md.
+#![allow(clippy::unwrap_used)]
 
 use std::ops::ControlFlow;
 

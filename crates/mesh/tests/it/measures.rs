@@ -2,6 +2,7 @@
 //! the UV sphere against its polyhedral volume and area derived independently below, the volume
 //! between a disc and a spherical cap against the cap formula with a derived discretisation bound
 //! and its second-order convergence, and invariance under rigid motions.
+#![allow(clippy::expect_used)]
 
 use std::f64::consts::PI;
 

@@ -1,5 +1,6 @@
 //! Tetrahedral meshes: the generated box against its closed-form volume and boundary, face
 //! adjacency, and every defect kind of `diagnose_tets` naming the right element.
+#![allow(clippy::expect_used)]
 
 use glam::Vec3;
 use tissue_mesh::{diagnose_tets, tet_box, MeshError, TetMesh, NO_TET, TET_FACES};

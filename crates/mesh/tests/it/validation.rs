@@ -1,5 +1,6 @@
 //! Every defect kind of a triangle surface is detected and names the right element; the topology
 //! of valid meshes (edges, boundary loops, components) matches hand counts.
+#![allow(clippy::unwrap_used)]
 
 use glam::Vec3;
 use tissue_mesh::{diagnose, MeshError, TriMesh, NO_TRIANGLE};

@@ -1,4 +1,4 @@
-//! Hostile inputs: every reader bounds the work a file can cause (security issue 29). The
+//! Hostile inputs: every reader bounds the work a file can cause (the studio's uploads reach them from the network). The
 //! `.vtu` bombs come from `support/bombs.rs`; the memory they cost is measured by the
 //! `peak_memory` binary, their errors here.
 

@@ -1,6 +1,6 @@
 //! The public API of tissue-meshio: round trips, format details, error locations, atomic writes,
 //! and the real third-party meshes shipped in `fixtures/`.
-
+#![allow(clippy::panic)]
 // Test code: a failed unwrap is a failed test; the skip notice goes to stderr.
 #![allow(clippy::unwrap_used, clippy::print_stderr)]
 

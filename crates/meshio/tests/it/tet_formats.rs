@@ -1,6 +1,6 @@
 //! The `.vtu` and `.msh` tetrahedral readers on files written by other tools (Gmsh, meshio,
 //! pyevtk: see `fixtures/tets/README.md`), and their errors.
-
+#![allow(clippy::panic)]
 // Test code: a failed unwrap is a failed test.
 #![allow(clippy::unwrap_used)]
 

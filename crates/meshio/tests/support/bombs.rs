@@ -4,6 +4,7 @@
 //! The bombs are zlib blocks of zeros as `vtkZLibDataCompressor` writes them: 1 MiB of zeros
 //! compresses to about 1 KiB, within the reader's 1100:1 check per block, so 400 blocks make a
 //! file of about 400 KiB whose arrays claim 400 MiB.
+#![allow(clippy::unwrap_used)]
 
 use std::io::Write;
 

@@ -1,4 +1,5 @@
 //! Van Gelder stiffness (eq. 3) against hand computation; masses (eqs. 1, 2) sum to the total.
+#![allow(clippy::unwrap_used)]
 
 use glam::Vec3;
 use tissue_mesh::{grid, tet_box, TriMesh};

@@ -1,4 +1,5 @@
 //! One spring, one free mass: the analytic harmonic oscillator against each integrator.
+#![allow(clippy::unwrap_used)]
 
 use glam::Vec3;
 use tissue_mss::{Integrator, MassSpringSystem, Particles, Spring};

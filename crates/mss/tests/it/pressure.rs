@@ -1,4 +1,5 @@
 //! The enclosed fill's pressure against closed-form answers.
+#![allow(clippy::unwrap_used)]
 
 use glam::Vec3A;
 use tissue_mesh::uv_sphere;

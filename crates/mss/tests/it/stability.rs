@@ -1,4 +1,5 @@
 //! `stable_time_step` against the exact limit of symplectic Euler on one spring.
+#![allow(clippy::unwrap_used)]
 
 use glam::Vec3;
 use tissue_mss::{Integrator, MassSpringSystem, Particles, Spring};

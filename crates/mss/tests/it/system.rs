@@ -1,4 +1,5 @@
 //! Conservation, statics, determinism, divergence and validation of the whole system.
+#![allow(clippy::unwrap_used)]
 
 use glam::{Vec3, Vec3A};
 use tissue_mss::scenes::two_layer_region;

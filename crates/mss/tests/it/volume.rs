@@ -1,5 +1,6 @@
 //! The thesis's volume check (SPEC A.2): a closed 2 cm cube (386 vertices, 8 cm³) whose top is
 //! pressed down keeps its volume with the Vassilev–Spanlang springs and loses it without them.
+#![allow(clippy::unwrap_used)]
 
 use glam::Vec3;
 use tissue_mesh::subdivided_cube;

@@ -1,5 +1,5 @@
 //! Shared test scenes and helpers.
-#![allow(dead_code, clippy::print_stderr)]
+#![allow(dead_code, clippy::print_stderr, clippy::expect_used)]
 
 use glam::{DVec3, Vec3};
 use tissue_mesh::TetMesh;

@@ -1,4 +1,4 @@
-//! Contacts with static voxel colliders and kinematic tools (issue 7, "Collisions"): resting,
+//! Contacts with static voxel colliders and kinematic tools ("Collisions"): resting,
 //! volume on a tray, friction on a slope, tools pushing and dragging, no tunnelling, the distance
 //! field against brute force, and bad input.
 #![allow(clippy::print_stderr, clippy::unwrap_used)]

@@ -144,7 +144,7 @@ fn pins_and_attachments_move_as_told() {
 }
 
 /// Freeing one attached node leaves the other attachments' ids pointing at their own nodes
-/// (issue 22: `unpin` used to remove with `retain`, shifting the later ids onto other nodes).
+/// (regression: `unpin` used to remove with `retain`, shifting the later ids onto other nodes).
 #[test]
 fn unpinning_one_attachment_keeps_the_others_ids() {
     let mesh = tet_box(4, 1, 1, Vec3::new(4.0, 1.0, 1.0)).unwrap();

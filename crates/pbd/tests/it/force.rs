@@ -1,4 +1,4 @@
-//! Reaction forces (issue 19, "Tool force") against cases whose answer statics gives exactly: a
+//! Reaction forces ("Tool force") against cases whose answer statics gives exactly: a
 //! block resting on a tool weighs on it with `m g`; a block on a tray pressed by a probe
 //! pushes the probe up with a force growing with the depth while tray and probe together carry
 //! the weight; nothing away from the tissue; a block hanging from a grasper pulls it with `m g`.

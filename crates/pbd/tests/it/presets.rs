@@ -1,4 +1,4 @@
-//! The step presets (issue 19): the real-time preset keeps a pressed organ's volume, the legacy
+//! The step presets (the real-time preset, "physics defaults that hold"): the real-time preset keeps a pressed organ's volume, the legacy
 //! scheme is still there, substeps are validated and move tools along their path.
 #![allow(clippy::print_stderr, clippy::unwrap_used)]
 

@@ -32,11 +32,11 @@ impl StopReason {
     }
 }
 
-impl From<tissue_mss::StopReason> for StopReason {
-    fn from(reason: tissue_mss::StopReason) -> Self {
+impl From<tissue_implant::StopReason> for StopReason {
+    fn from(reason: tissue_implant::StopReason) -> Self {
         match reason {
-            tissue_mss::StopReason::Settled => StopReason::Settled,
-            tissue_mss::StopReason::StepLimit => StopReason::StepLimit,
+            tissue_implant::StopReason::Settled => StopReason::Settled,
+            tissue_implant::StopReason::StepLimit => StopReason::StepLimit,
         }
     }
 }

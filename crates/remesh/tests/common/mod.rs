@@ -1,5 +1,5 @@
 //! Checks shared by the integration tests.
-#![allow(dead_code)]
+#![allow(dead_code, clippy::unwrap_used)]
 
 use glam::{Vec3, Vec3A};
 use tissue_bvh::{BuildOptions, Bvh, BvhWorkspace, Triangles};

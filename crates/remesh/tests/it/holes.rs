@@ -1,4 +1,5 @@
 //! fill_holes on punched noisy surfaces, small and closed inputs, non-planar and long loops.
+#![allow(clippy::unwrap_used)]
 
 use glam::Vec3;
 use tissue_mesh::TriMesh;

@@ -1,6 +1,7 @@
 //! The public API of tissue-remesh on seeded and real surfaces: the output's invariants
 //! (validity, topology, orientation, closeness to the input, edge lengths), smoothing, errors,
 //! determinism.
+#![allow(clippy::unwrap_used, clippy::print_stdout)]
 
 use crate::common;
 

@@ -1,5 +1,5 @@
 //! Set-ups the cut tests share.
-#![allow(dead_code)]
+#![allow(dead_code, clippy::unwrap_used)]
 
 use glam::{DVec3, Quat, Vec3};
 use tissue_mesh::tet_box;

@@ -1,6 +1,6 @@
 //! Cuts through a block: a full cut makes two pieces that come apart; a partial incision opens
 //! the surface along its length and leaves one piece.
-#![allow(clippy::unwrap_used)]
+#![allow(clippy::unwrap_used, clippy::print_stderr)]
 
 use crate::common;
 
@@ -204,7 +204,7 @@ fn partial_incision(geometric: bool) {
     }
 }
 
-/// A state refuses another body of the same size (issue 22: the check compared counts only),
+/// A state refuses another body of the same size (regression: the check compared counts only),
 /// leaving both bodies untouched, and takes a clone of its own body (a snapshot of it).
 #[test]
 fn a_state_refuses_another_body_of_the_same_size() {

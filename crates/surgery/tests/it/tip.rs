@@ -1,7 +1,12 @@
 //! The cut's ends on the surface: an incision that stops in the middle of the block's top
 //! splits the top triangle where the blade's front crosses the surface (the tip split), and
 //! the opening on the top ends exactly at the tip; continued, it goes on from there.
-#![allow(clippy::unwrap_used)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::print_stderr
+)]
 
 use crate::common;
 
