@@ -32,7 +32,7 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
         .map_err(|e| Failure::new(Exit::Meshing, format!("the appendix: {e}")))?;
     let (material, mut settings) = cli.physics();
     if cli.scheme == Scheme::Legacy {
-        // The scenario's own damping before issue 19 (the library's default step).
+        // The scenario's own damping before the real-time preset (the library's default step).
         settings.damping = StepSettings::default().damping;
     }
     let tray = Tray::for_extent(organ.extent());

@@ -83,7 +83,7 @@ pub enum Scheme {
     /// tissue-pbd's real-time preset: 9 substeps of one iteration per 10 ms step, classic
     /// volume, k = 1.
     Realtime,
-    /// The scheme before issue 19: one 10 ms step of K = 10 linearised-PBD iterations.
+    /// The scheme before the real-time preset: one 10 ms step of K = 10 linearised-PBD iterations.
     Legacy,
 }
 
@@ -147,7 +147,7 @@ pub struct Cli {
     #[arg(long, value_name = "CM", default_value_t = 10.0)]
     pub size: f32,
     /// Time-stepping scheme: `realtime` (library preset, 9 substeps of 1 iteration) or
-    /// `legacy` (one step of K = 10 PBD iterations, as before issue 19).
+    /// `legacy` (one step of K = 10 PBD iterations, as before the real-time preset).
     #[arg(long, value_enum, default_value_t = Scheme::Realtime)]
     pub scheme: Scheme,
     /// Time step per frame (s) [default: 0.01, both schemes].

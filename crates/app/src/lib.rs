@@ -7,7 +7,7 @@
 //!   ([`InsertionJob`]), a sweep over implant volumes run in parallel ([`SweepJob`]), the
 //!   inverse search for the volume of a target area gain ([`InverseJob`]), the plane press
 //!   ([`PlanePressJob`]), an expansion over weeks with skin growth and its band
-//!   ([`ExpansionJob`], issue 21; progress per settle, tagged with the protocol day), or a host's own work ([`Job::custom`], reporting through a
+//!   ([`ExpansionJob`]; progress per settle, tagged with the protocol day), or a host's own work ([`Job::custom`], reporting through a
 //!   [`ProgressSink`]).
 //! - The handle delivers [`Event`]s: [`Event::Progress`] ([`ProgressEvent`]: run, step, step
 //!   limit, the last step's summed displacement, how close the stop criterion is, elapsed time),

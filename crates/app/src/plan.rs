@@ -525,7 +525,7 @@ pub fn plan(
     prepare(job)?.run(progress)
 }
 
-/// An expansion over weeks (issue 21): the insertion's patient, placement, expander shape
+/// An expansion over weeks: the insertion's patient, placement, expander shape
 /// and parameters, a fill protocol, growth, and the band.
 #[derive(Debug, Clone)]
 pub struct ExpansionJob {

@@ -13,7 +13,7 @@
 //! over a step the tangential correction is at most `μ_k` times the normal one, as Coulomb's law
 //! for impulses. A collider or tool has no mass: only the node moves.
 //!
-//! ## Reaction forces (issue 19)
+//! ## Reaction forces
 //! Every correction a contact makes to a node (normal and friction parts alike, and the push-out
 //! of [`ContactState::resolve_remaining`]) is a position change `Δx` of a node of mass `m`
 //! within a (sub)step of length `h`; its velocity `(p − x)/h` so changes by `Δx/h`, an impulse

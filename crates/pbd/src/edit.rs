@@ -1,4 +1,4 @@
-//! Local topology edits for cutting and suturing (issue 8): nodes appended, tets relabelled,
+//! Local topology edits for cutting and suturing: nodes appended, tets relabelled,
 //! distance constraints added, relabelled or removed, masses set — without rebuilding the
 //! domain decomposition.
 //!

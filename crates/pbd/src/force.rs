@@ -1,4 +1,4 @@
-//! Reaction forces on what touches or holds the body (issue 19, "Tool force"), for a haptic loop:
+//! Reaction forces on what touches or holds the body (the tool force), for a haptic loop:
 //! read after each step, in the library's units (dyn = g·cm/s²; [`DYN_PER_NEWTON`]).
 //!
 //! - Tools and colliders ([`SoftBody::tool_force`], [`SoftBody::collider_force`]) and the

@@ -1,4 +1,4 @@
-//! The force on a tool between physics steps, for a haptic loop (issue 20): a local linear model
+//! The force on a tool between physics steps, for a haptic loop: a local linear model
 //! of the last step's contacts, evaluated at the tool's newest position.
 //!
 //! A haptic device is rendered at 1 kHz or more while the body steps at 60–100 Hz. Holding the

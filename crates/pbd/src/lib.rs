@@ -12,7 +12,7 @@
 //! - [`StepSettings`] / [`Solver`]: `Δt`, `K` Gauss–Seidel iterations, PBD with raw or linearised
 //!   stiffness (`k' = 1 − (1 − k)^{1/K}`), or XPBD (compliance `α`, `α̃ = α/Δt²`), gravity,
 //!   rigid-mode damping, serial or parallel projection (same result).
-//! - Contacts (issue 7, "Collisions"): [`VoxelCollider`], a static collider (tray, table, other
+//! - Contacts (collisions): [`VoxelCollider`], a static collider (tray, table, other
 //!   organs) as signed distances on a uniform voxel grid, built from closed [`tissue_mesh::TriMesh`]es
 //!   and [`OrientedBox`]es ([`ColliderShape`]); contacts are looked up only in occupied cells.
 //!   Kinematic [`Tool`]s of a [`ToolShape`] (a capsule: needle, shaft; a thick triangle: scalpel
@@ -21,17 +21,17 @@
 //!   meets, an inequality `n·(p − q) − margin ≥ 0` projected in every iteration after the body's
 //!   own constraints, with static and kinetic friction ([`ContactParams`]; Macklin et al. 2014).
 //!   Contacts are per node: a tool thinner than the node spacing can pass between nodes.
-//! - Reaction forces (issue 19, "Tool force"), after each step, in dyn (g·cm/s²; 1 N =
+//! - Reaction forces (the tool force), after each step, in dyn (g·cm/s²; 1 N =
 //!   [`DYN_PER_NEWTON`] dyn): [`SoftBody::tool_force`], [`SoftBody::collider_force`] and
 //!   [`SoftBody::floor_force`] from the source's own position corrections, averaged over the
 //!   step of length `T = Σ h` over its (sub)steps of length `h`:
 //!   `F = −(1/T) Σ_substeps (1/h) Σ m Δx` (normal and friction corrections; `−Σ m Δx / h²` for
 //!   one step); [`SoftBody::holding_force`] on the attachments and pins together, from the
 //!   momentum balance of the nodes (see the method).
-//! - Between steps, for a haptic loop (issue 20): [`ContactForceModel`], the force on a tool as
+//! - Between steps, for a haptic loop: [`ContactForceModel`], the force on a tool as
 //!   a local linear model of the last step's contacts (normals, loads, the tissue's normal
 //!   stiffness from a [`StiffnessEstimator`]), evaluated at the tool's newest position (N).
-//! - Topology edits for cutting and suturing (issue 8, used by `tissue-surgery`):
+//! - Topology edits for cutting and suturing (used by `tissue-surgery`):
 //!   [`SoftBody::duplicate_nodes`], [`SoftBody::set_tet_nodes`],
 //!   [`SoftBody::add_distance_constraint`], [`SoftBody::add_link_constraint`] (sutures),
 //!   [`SoftBody::set_distance_nodes`],

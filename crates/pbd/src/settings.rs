@@ -149,7 +149,7 @@ impl StepSettings {
         }
     }
 
-    /// The real-time preset (issue 19, "physics defaults that hold"), for the trainer and the
+    /// The real-time preset ("physics defaults that hold"), for the trainer and the
     /// studio at 60 steps/s and below: a 10 ms step as [`StepSettings::REALTIME_SUBSTEPS`]
     /// substeps of one iteration each (small steps, Macklin et al. 2019), linearised PBD (with
     /// [`Material::soft_tissue`]'s `k = 1` the same projection as XPBD with zero compliance, at

@@ -66,7 +66,7 @@ pub struct PlanRequest {
     pub max_steps: u64,
     /// The time step, s [default: automatic].
     pub time_step_s: Option<f32>,
-    /// Expansion over weeks (issue 21): this many weekly fills to `volume_cm3`, with skin
+    /// Expansion over weeks: this many weekly fills to `volume_cm3`, with skin
     /// growth [default: none, one insertion].
     pub expand_weeks: Option<u32>,
     /// Expansion: weeks the expander is held full before removal.
