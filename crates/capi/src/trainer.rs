@@ -829,4 +829,44 @@ mod tests {
             assert_eq!(other, kind == TrainerEventKind::Surgery, "{kind}");
         }
     }
+
+    /// A tray's demonstration adds its probe as a tool: the host's tools keep the session's ids
+    /// (the next capsule is tool 1, and moving it moves it, not the probe).
+    #[test]
+    fn a_tray_demonstration_probe_keeps_the_hosts_tool_ids() {
+        let cube = ::tissue_mesh::tet_box(3, 3, 3, Vec3::splat(4.0)).unwrap();
+        let organ = Organ::from_tets(&cube, "cube").unwrap();
+        let body: *mut tissue_body = into_handle(tissue_body::new(&organ).unwrap());
+        assert_eq!(tissue_body_play(body), tissue_status::TISSUE_OK);
+        let (a, b) = ([0.0f32; 3], [0.0f32, 1.0, 0.0]);
+        let pose = tissue_pose {
+            rotation: [0.0, 0.0, 0.0, 1.0],
+            translation: [5.0, 1.0, 0.0],
+        };
+        let mut id = u32::MAX;
+        let added = tissue_body_add_capsule(body, a.as_ptr(), b.as_ptr(), 0.2, &pose, &mut id);
+        assert_eq!(added, tissue_status::TISSUE_OK);
+        assert_eq!(id, 1, "the probe is tool 0");
+        assert_eq!(
+            tissue_body_step(body, std::ptr::null_mut()),
+            tissue_status::TISSUE_OK
+        );
+        let mut info = tissue_body_info::default();
+        assert_eq!(
+            tissue_body_get_info(body, &mut info),
+            tissue_status::TISSUE_OK
+        );
+        assert_eq!(info.tools, 2);
+        // SAFETY: a live body.
+        let sim = unsafe { &*body }.sim().unwrap();
+        let at = |tool| sim.session.body().tool(tool).unwrap().pose().translation;
+        assert_eq!(at(1), Vec3::from_array(pose.translation));
+        assert!(
+            at(0).y > 4.0,
+            "the probe is still parked above the cube: {}",
+            at(0)
+        );
+        drop(sim);
+        tissue_body_free(body);
+    }
 }

@@ -419,7 +419,9 @@ impl Session {
     /// Starts the demonstration of the organ's setting, from the next step on: on the
     /// appendix the procedure ([`AppendixProcedure`]: grasp and lift, incise, cut off, suture;
     /// 200 steps), on a tray a probe pressed 1.5 cm into the organ's top and dragged across it
-    /// ([`PressAndDrag`]: 250 steps). It is meant for a fresh session (the procedure grasps the
+    /// ([`PressAndDrag::on_tray`] with [`PressPlan::default`]: 250 steps, the headless
+    /// `trainer`'s timeline; the probe is a contact tool, added at the first play, parked above
+    /// the organ after each). It is meant for a fresh session (the procedure grasps the
     /// appendix's tip where it lies). While it plays, the trainee's tools are refused; its
     /// events come from [`Session::step`], the last one `demo_finished`.
     ///
