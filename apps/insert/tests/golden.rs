@@ -1,6 +1,7 @@
 //! The golden reports: `insert --job` on each golden job writes the golden report (volatile
 //! fields masked), as the studio and the C ABI do for the same job; and the flags that make
 //! Table 2 (none) write the same report as its job.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::path::PathBuf;
 use std::process::Command;

@@ -2,6 +2,7 @@
 //! finishes with the golden report (volatile fields masked), as `insert --job` and the studio's
 //! socket do for the same job; and a sweep's rows follow the one sweep policy (a failed run has
 //! its own status, the others their numbers).
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 use std::ffi::CString;
 use std::ptr;
