@@ -165,16 +165,7 @@ fn run_job(
     let finished = planned.run(&scenario, Tool::Studio, &running.cancel, |p| {
         if last.is_none_or(|t| t.elapsed() >= PROGRESS_EVERY) {
             last = Some(Instant::now());
-            let _ = tx.send(JobMessage::Progress {
-                job: running.id.clone(),
-                run: p.run,
-                runs: runs.max(p.run + 1),
-                step: p.step,
-                max_steps: p.max_steps,
-                settle: p.settle,
-                elapsed_s: p.elapsed.as_secs_f64(),
-                day: p.day,
-            });
+            let _ = tx.send(JobMessage::progress(&running.id, runs, p));
         }
     })?;
     let dir = studio

@@ -272,6 +272,20 @@ pub enum JobMessage {
 }
 
 impl JobMessage {
+    /// The progress of `job` (of `runs` runs known ahead) at `p`.
+    pub fn progress(job: &str, runs: usize, p: &tissue_planner::ProgressEvent) -> Self {
+        JobMessage::Progress {
+            job: job.to_owned(),
+            run: p.run,
+            runs: runs.max(p.run + 1),
+            step: p.step,
+            max_steps: p.max_steps,
+            settle: p.settle,
+            elapsed_s: p.elapsed.as_secs_f64(),
+            day: p.day,
+        }
+    }
+
     /// The job a terminal message ends (`finished`, `cancelled`, `failed`), if it is one.
     pub fn ended_job(&self) -> Option<&str> {
         match self {
