@@ -147,7 +147,7 @@ mod tests {
         let c: Value = serde_json::from_str(
             r#"{"tool": "(masked)", "runs": [{"wall_time_s": "(masked)", "x": 1.1}], "n": 3}"#,
         )?;
-        assert_eq!(differences(&a, &c), ["runs[0].x: 1.0 != 1.1"]);
+        assert_eq!(differences(&a, &c), [".runs[0].x: 1.0 != 1.1"]);
         let d: Value = serde_json::from_str(r#"{"tool": "(masked)", "n": 3}"#)?;
         assert_eq!(differences(&a, &d).len(), 1, "a member less");
         Ok(())
