@@ -13,7 +13,9 @@
 //!   limit, the last step's summed displacement, how close the stop criterion is, elapsed time),
 //!   then one of [`Event::Finished`] ([`Outcome`]), [`Event::Cancelled`], [`Event::Failed`]
 //!   ([`AppError`]). Poll with [`Handle::try_event`] from a UI loop, block with
-//!   [`Handle::recv`] / [`Handle::events`], or just [`Handle::wait`] for the result.
+//!   [`Handle::recv`] / [`Handle::events`], or just [`Handle::wait`] for the result; or
+//!   [`Handle::run`] with a progress callback, cancelled from any thread through the
+//!   [`CancelToken`] given to [`Handle::start_cancellable`].
 //! - The mechanics run on a simulation surface of their own by default ([`SimMesh::Remeshed`]:
 //!   the region of a real scan filled, remeshed and smoothed, the result mapped back onto the
 //!   patient's vertices by [`PlannedInsertion::on_patient`]), or on the patient's own triangles

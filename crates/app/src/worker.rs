@@ -449,14 +449,9 @@ impl Handle {
         self.cancel.is_cancelled()
     }
 
-    /// The handle's own cancel token: cancelling it (from any thread) is [`Handle::cancel`].
-    pub fn cancel_token(&self) -> CancelToken {
-        self.cancel.own.clone()
-    }
-
     /// Blocks until the job ends, handing every progress event to `on_progress` on this thread
     /// (no polling: the call sleeps until the worker reports). Cancel it from another thread
-    /// through [`Handle::cancel_token`] or the token the job was started with.
+    /// through the token the job was started with ([`Handle::start_cancellable`]).
     ///
     /// # Errors
     /// As [`Handle::wait`]: [`AppError::Cancelled`] with the steps done for a cancelled job,

@@ -2,7 +2,7 @@
 //! and results, the same for every front end.
 //!
 //! [`PlannedJob::run`] runs the job on tissue-app's worker (blocking, progress handed to a
-//! callback on the calling thread, cancelled through a [`CancelToken`]); [`PlannedJob::finish`]
+//! callback on the calling thread, cancelled through a [`CancelToken`]); [`finish`]
 //! turns the worker's [`Outcome`] into a [`Finished`] job: its [`JobReport`], the deformed
 //! patient of a single run, and a sweep's runs in order. Here, and only here:
 //! - **divergence** is checked (positions not finite: [`report::diverged`], one message);
@@ -59,7 +59,7 @@ impl From<Stopped> for PlanError {
 }
 
 impl PlannedJob {
-    /// Runs the job on tissue-app's worker to its end and finishes it ([`PlannedJob::finish`]).
+    /// Runs the job on tissue-app's worker to its end and finishes it ([`finish`]).
     /// Blocks; `on_progress` is called on this thread for each progress event (some are
     /// dropped while it is slow; the run never waits for it). `cancel` (cancelled from any
     /// thread) ends the job within one step.
@@ -83,19 +83,6 @@ impl PlannedJob {
                 None => Stopped::Failed(PlanError::from_app(&e)),
             })?;
         Ok(finish(&kind, outcome, scenario, tool)?)
-    }
-
-    /// Finishes the job from the worker's `outcome` of its [`PlannedJob::job`].
-    ///
-    /// # Errors
-    /// As [`finish`].
-    pub fn finish(
-        &self,
-        outcome: Outcome,
-        scenario: &Scenario,
-        tool: Tool,
-    ) -> Result<Finished, PlanError> {
-        finish(&self.kind, outcome, scenario, tool)
     }
 }
 
@@ -225,7 +212,7 @@ mod tests {
     /// A diverged single run fails as a run error naming the time step (whether the library
     /// saw it during the run or the finish found positions that are not finite).
     #[test]
-    fn a_diverged_run_fails_with_the_one_message() -> Result<(), Stopped> {
+    fn a_diverged_run_fails_as_a_run_error_naming_the_time_step() -> Result<(), Stopped> {
         let e = run(r#"{"request": {"time_step_s": 0.005, "max_steps": 400}}"#).err();
         match e {
             Some(Stopped::Failed(e)) => {

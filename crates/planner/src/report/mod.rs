@@ -140,26 +140,6 @@ pub enum JobReport {
 }
 
 impl JobReport {
-    /// Its mode.
-    pub fn mode(&self) -> JobMode {
-        match self {
-            JobReport::Single(r) => r.mode,
-            JobReport::Sweep(r) => r.mode,
-            JobReport::TargetGain(r) => r.mode,
-            JobReport::Expansion(r) => r.mode,
-        }
-    }
-
-    /// Its inputs.
-    pub fn inputs(&self) -> &Inputs {
-        match self {
-            JobReport::Single(r) => &r.inputs,
-            JobReport::Sweep(r) => &r.inputs,
-            JobReport::TargetGain(r) => &r.inputs,
-            JobReport::Expansion(r) => &r.inputs,
-        }
-    }
-
     /// The JSON every front end writes: pretty-printed, one object, a final newline.
     ///
     /// # Errors
