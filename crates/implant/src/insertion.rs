@@ -112,9 +112,36 @@ impl ImplantParams {
     }
 }
 
+/// How a run reaches the tissue's rest state over the filled expander.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Solver {
+    /// Solves for the static equilibrium directly (`crate::quasi_static`): a prefactored
+    /// local/global iteration with Anderson acceleration, stopped on a force tolerance.
+    #[default]
+    QuasiStatic,
+    /// Steps the thesis's explicit (symplectic) Euler until the stop criterion fires: the
+    /// reference the quasi-static solver is checked against.
+    Explicit,
+}
+
+impl Solver {
+    /// Every solver, the default first.
+    pub const ALL: [Solver; 2] = [Solver::QuasiStatic, Solver::Explicit];
+
+    /// The solver's name in reports and on command lines: `"quasi_static"`, `"explicit"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Solver::QuasiStatic => "quasi_static",
+            Solver::Explicit => "explicit",
+        }
+    }
+}
+
 /// Everything a run needs besides its geometry: one parameter set serves every scenario.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InsertionParams {
+    /// How the rest state is found.
+    pub solver: Solver,
     /// The tissue.
     pub layers: LayerParams,
     /// The implant.
@@ -136,6 +163,7 @@ impl Default for InsertionParams {
     /// a wider pocket lets more of the free tissue around the expander rise).
     fn default() -> Self {
         InsertionParams {
+            solver: Solver::default(),
             layers: LayerParams::default(),
             implant: ImplantParams::default(),
             run: RunParams::default(),
@@ -724,6 +752,9 @@ impl Insertion {
             max_penetration,
             boundary_unchanged,
             steps: self.run.steps(),
+            solver: Solver::Explicit,
+            iterations: self.run.steps(),
+            residual_n: None,
             stop_reason: if self.run.settled() || self.plateau {
                 StopReason::Settled
             } else {
@@ -766,8 +797,15 @@ pub struct InsertionOutcome {
     pub max_penetration: f32,
     /// Whether every boundary vertex is where it started, bit for bit.
     pub boundary_unchanged: bool,
-    /// Steps taken.
+    /// Steps taken (the explicit solver's; the quasi-static solver's iterations).
     pub steps: u64,
+    /// The solver that found this state.
+    pub solver: Solver,
+    /// The solver's iterations: explicit steps, or quasi-static local/global iterations.
+    pub iterations: u64,
+    /// The quasi-static solver's final residual: the largest net force on a free particle (N),
+    /// with the contacts' forces; `None` for the explicit solver, whose contacts are impulses.
+    pub residual_n: Option<f64>,
     /// Why the run ended.
     pub stop_reason: StopReason,
     /// The time step used (s).

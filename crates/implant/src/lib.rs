@@ -89,7 +89,8 @@ pub use growth::{
 };
 pub use insertion::{
     dissect_pocket, implant_system, place_implant, rim_border_clearance, ImplantParams, Insertion,
-    InsertionOutcome, InsertionParams, Progress, PLATEAU_HALF, PLATEAU_TOLERANCE, RUNAWAY_FACTOR,
+    InsertionOutcome, InsertionParams, Progress, Solver, PLATEAU_HALF, PLATEAU_TOLERANCE,
+    RUNAWAY_FACTOR,
 };
 pub use layers::{Layer, LayerParams, TissueLayers};
 pub use outcome::{replace_region, vertex_displacements, vertex_stretch, FieldRange};
