@@ -171,9 +171,9 @@ impl RunParams {
 /// A kinematic phase of the body: particles moving at constant velocity from where they are to
 /// `end` over `steps` steps, then released to the forces.
 #[derive(Debug, Clone)]
-struct Fill {
-    particles: Vec<u32>,
-    end: Vec<Vec3A>,
+pub(crate) struct Fill {
+    pub(crate) particles: Vec<u32>,
+    pub(crate) end: Vec<Vec3A>,
     steps: u64,
 }
 
@@ -203,14 +203,22 @@ pub struct ContactRun {
     previous_tissue: Vec<Vec3A>,
     previous_body: Vec<Vec3A>,
     h: f32,
-    contact_distance: f32,
+    pub(crate) contact_distance: f32,
     params: RunParams,
     detector: SettleDetector,
     /// The stop criterion's speed floor (summed displacement per step, cm).
     floor: f64,
-    fill: Option<Fill>,
-    settled: bool,
-    steps: u64,
+    pub(crate) fill: Option<Fill>,
+    pub(crate) settled: bool,
+    pub(crate) steps: u64,
+    /// The body's surface (vertex `v` is body particle `v`) and which of its vertices were free
+    /// when the run was built (the expander's dome; none of the press's sphere).
+    pub(crate) body_triangles: Vec<[u32; 3]>,
+    pub(crate) dome_vertex: Vec<bool>,
+    /// Layer 2's mean edge length at rest (cm).
+    pub(crate) mean_edge: f32,
+    /// How deep below the contact distance the quasi-static solver looks for contacts (cm).
+    pub(crate) static_reach: f32,
 }
 
 impl ContactRun {
@@ -263,9 +271,16 @@ impl ContactRun {
             .map(|t| t.map(|r| TissueLayers::particle(Layer::Inner, r)))
             .collect();
         let surface = TriMesh::new(tissue_positions, triangles)?;
-        let contact_distance = params.contact_distance.unwrap_or_else(|| {
-            params.contact_fraction * mean_edge_length(layers.rest(Layer::Inner))
-        });
+        let mean_edge = mean_edge_length(layers.rest(Layer::Inner));
+        let contact_distance = params
+            .contact_distance
+            .unwrap_or(params.contact_fraction * mean_edge);
+        let body_inverse = body.particles().inverse_masses();
+        let any_free = body_inverse.iter().any(|&w| w > 0.0);
+        let dome_vertex: Vec<bool> = body_inverse
+            .iter()
+            .map(|&w| w > 0.0 || !any_free)
+            .collect();
         let body_now: Vec<glam::Vec3> = body
             .particles()
             .positions()
@@ -313,6 +328,10 @@ impl ContactRun {
             fill: None,
             settled: false,
             steps: 0,
+            body_triangles: body_mesh.triangles().to_vec(),
+            dome_vertex,
+            mean_edge,
+            static_reach: 0.0,
         })
     }
 

@@ -362,6 +362,12 @@ pub enum Param {
     ThetaG,
     /// `RunParams::time_step` (s).
     TimeStep,
+    /// `StaticParams::tolerance` or `load_tolerance`: the quasi-static solver's residual.
+    Tolerance,
+    /// `StaticParams::load_steps`.
+    LoadSteps,
+    /// `StaticParams::contact_stiffness`.
+    ContactStiffness,
     /// `ImplantSpec`'s vertex budget for the implant mesh.
     VertexBudget,
     /// `ImplantSpec`'s volume (cm³).
@@ -390,6 +396,7 @@ impl Param {
         Param::Coherence,
         Param::ContactDistance,
         Param::ContactFraction,
+        Param::ContactStiffness,
         Param::CornerRadius,
         Param::DampingTime,
         Param::Density,
@@ -409,6 +416,7 @@ impl Param {
         Param::Iterations,
         Param::Length,
         Param::Limit,
+        Param::LoadSteps,
         Param::MaxDistance,
         Param::MaxHole,
         Param::MaxRuns,
@@ -443,6 +451,7 @@ impl Param {
         Param::TargetGain,
         Param::ThetaG,
         Param::TimeStep,
+        Param::Tolerance,
         Param::VertexBudget,
         Param::VolumeCm3,
         Param::VolumeCoupling,
@@ -518,6 +527,9 @@ impl Param {
             Param::TargetGain => "target_gain",
             Param::ThetaG => "theta_g",
             Param::TimeStep => "time_step",
+            Param::Tolerance => "tolerance",
+            Param::LoadSteps => "load_steps",
+            Param::ContactStiffness => "contact_stiffness",
             Param::VertexBudget => "vertex_budget",
             Param::VolumeCm3 => "volume_cm3",
             Param::VolumeCoupling => "volume_coupling",

@@ -26,6 +26,7 @@ use tissue_mss::{
 };
 
 use crate::contact_run::{ContactRun, RunParams, StepSummary};
+use crate::quasi_static::{StaticParams, StaticReport};
 use crate::outcome::{replace_region, vertex_displacements, vertex_stretch};
 use crate::walk::{walk_on_surface, WalkEnd};
 use crate::Param;
@@ -142,6 +143,8 @@ impl Solver {
 pub struct InsertionParams {
     /// How the rest state is found.
     pub solver: Solver,
+    /// The quasi-static solver's tolerance, load steps and limits (unused by the explicit one).
+    pub statics: StaticParams,
     /// The tissue.
     pub layers: LayerParams,
     /// The implant.
@@ -164,6 +167,7 @@ impl Default for InsertionParams {
     fn default() -> Self {
         InsertionParams {
             solver: Solver::default(),
+            statics: StaticParams::default(),
             layers: LayerParams::default(),
             implant: ImplantParams::default(),
             run: RunParams::default(),
@@ -446,6 +450,10 @@ pub struct Insertion {
     areas: Vec<f64>,
     /// Whether the plateau rule ended the run.
     plateau: bool,
+    solver: Solver,
+    statics: StaticParams,
+    /// The last quasi-static solve's report.
+    solved: Option<StaticReport>,
 }
 
 /// The plateau rule: the run has also settled when the mean of layer 1's area over the last
@@ -514,6 +522,9 @@ impl Insertion {
             dome_height: implant.dome_height(),
             areas: Vec::with_capacity(2 * PLATEAU_HALF),
             plateau: false,
+            solver: params.solver,
+            statics: params.statics.clone(),
+            solved: None,
         })
     }
 
@@ -561,6 +572,9 @@ impl Insertion {
             dome_height: implant.dome_height(),
             areas: Vec::with_capacity(2 * PLATEAU_HALF),
             plateau: false,
+            solver: params.solver,
+            statics: params.statics.clone(),
+            solved: None,
         })
     }
 
@@ -602,6 +616,10 @@ impl Insertion {
         self.run.restart_settle();
         self.areas.clear();
         self.plateau = false;
+        if self.solver == Solver::QuasiStatic {
+            let report = self.solve_static(budget, &mut progress)?;
+            return Ok((report.iterations, report.converged));
+        }
         let first = self.run.steps();
         let window = self.run.stop_window().max(1) as u64;
         let floor = self.run.speed_floor();
@@ -659,7 +677,14 @@ impl Insertion {
         let start = Instant::now();
         let max_steps = self.run.max_steps();
         let window = self.run.stop_window().max(1) as u64;
-        while !self.run.settled() && !self.plateau && self.run.steps() < max_steps {
+        if self.solver == Solver::QuasiStatic {
+            self.solve_static(self.statics.max_iterations, &mut progress)?;
+        }
+        while self.solver == Solver::Explicit
+            && !self.run.settled()
+            && !self.plateau
+            && self.run.steps() < max_steps
+        {
             let last = self.run.step()?;
             if !self.run.filling() && self.run.steps() % window == 0 {
                 self.plateau = self.sample_plateau();
@@ -696,6 +721,33 @@ impl Insertion {
             });
         }
         Ok(outcome)
+    }
+
+    /// The quasi-static solve of the current load (module `quasi_static`), at most `budget`
+    /// iterations.
+    fn solve_static(
+        &mut self,
+        budget: u64,
+        progress: &mut impl FnMut(&Progress) -> ControlFlow<()>,
+    ) -> Result<StaticReport, ImplantError> {
+        let params = StaticParams {
+            max_iterations: budget.min(self.statics.max_iterations),
+            ..self.statics.clone()
+        };
+        let max_steps = params.max_iterations;
+        let report = self.run.solve_static(&params, true, |steps, last| {
+            let report = Progress {
+                steps,
+                max_steps,
+                last,
+            };
+            match progress(&report) {
+                ControlFlow::Break(()) => Err(ImplantError::Cancelled { steps }),
+                ControlFlow::Continue(()) => Ok(()),
+            }
+        })?;
+        self.solved = Some(report);
+        Ok(report)
     }
 
     /// Samples layer 1's area for the plateau rule ([`PLATEAU_TOLERANCE`]); true when it holds.
@@ -752,9 +804,9 @@ impl Insertion {
             max_penetration,
             boundary_unchanged,
             steps: self.run.steps(),
-            solver: Solver::Explicit,
-            iterations: self.run.steps(),
-            residual_n: None,
+            solver: self.solver,
+            iterations: self.solved.map_or(self.run.steps(), |r| r.iterations),
+            residual_n: self.solved.map(|r| r.residual_n),
             stop_reason: if self.run.settled() || self.plateau {
                 StopReason::Settled
             } else {

@@ -312,9 +312,9 @@ pub struct TissueLayers {
     inner: TriMesh,
     normals: Vec<Vec3>,
     /// The slab's shear stiffness `G·Aᵢ/depth` per region vertex.
-    shear: Vec<f32>,
+    pub(crate) shear: Vec<f32>,
     /// Layer 1's bending hinges (module `bending`).
-    hinges: Vec<crate::bending::Hinge>,
+    pub(crate) hinges: Vec<crate::bending::Hinge>,
     /// Layer 2's current vertex normals (unnormalised), scratch of `add_slab_shear` and
     /// `hold_thickness`.
     inner_normals: Vec<Vec3A>,
@@ -579,6 +579,54 @@ impl TissueLayers {
     /// The thinnest the slab may be (cm): [`LayerParams::min_thickness`] × depth.
     pub fn min_thickness(&self) -> f32 {
         self.min_thickness
+    }
+
+    /// The thickness guard as a penalty, for the quasi-static solver: every free layer-1
+    /// particle closer than [`TissueLayers::min_thickness`] to layer 2 along layer 2's current
+    /// normal is pushed out by `k·(min − gap)` and its layer-2 partner back, `k = factor ×
+    /// diagonal[outer]`; adds the forces to `r` (per particle), the stiffness of each pair to
+    /// `active`; returns how many pairs.
+    pub(crate) fn thickness_forces(
+        &mut self,
+        factor: f64,
+        diagonal: &[f64],
+        r: &mut [glam::DVec3],
+        active: &mut Vec<crate::quasi_static::Contact>,
+    ) -> u32 {
+        let min = self.min_thickness;
+        if min <= 0.0 {
+            return 0;
+        }
+        let particles = self.system.particles();
+        let (position, inverse_mass) = (particles.positions(), particles.inverse_masses());
+        accumulate_inner_normals(&self.inner, position, &mut self.inner_normals);
+        let mut count = 0;
+        for (v, normal) in self.inner_normals.iter().enumerate() {
+            let outer = Self::particle(Layer::Outer, v as u32);
+            let inner = Self::particle(Layer::Inner, v as u32);
+            if inverse_mass[outer as usize] == 0.0 {
+                continue;
+            }
+            let normal = normal.normalize_or_zero();
+            let gap = (position[outer as usize] - position[inner as usize]).dot(normal);
+            if gap < min {
+                let k = factor * diagonal[outer as usize];
+                let f = normal.as_dvec3() * (k * f64::from(min - gap));
+                r[outer as usize] += f;
+                let held = inverse_mass[inner as usize] > 0.0;
+                if held {
+                    r[inner as usize] -= f;
+                }
+                active.push(crate::quasi_static::Contact {
+                    particles: [outer, inner, 0, 0],
+                    c: [1.0, if held { -1.0 } else { 0.0 }, 0.0, 0.0],
+                    normal: normal.as_dvec3(),
+                    k,
+                });
+                count += 1;
+            }
+        }
+        count
     }
 
     /// Keeps layer 1 at least [`TissueLayers::min_thickness`] above layer 2, measured along

@@ -69,6 +69,7 @@ mod layers;
 mod outcome;
 mod plane_press;
 mod planning;
+mod quasi_static;
 mod region;
 mod scan;
 
@@ -94,6 +95,7 @@ pub use insertion::{
 };
 pub use layers::{Layer, LayerParams, TissueLayers};
 pub use outcome::{replace_region, vertex_displacements, vertex_stretch, FieldRange};
+pub use quasi_static::{StaticParams, StaticReport};
 pub use plane_press::{plane_press, plane_press_region, PlanePressOutcome, PlanePressParams};
 pub use planning::{sweep, volume_for_gain, InverseOptions, InverseSearch, PlanningRun};
 pub use region::{

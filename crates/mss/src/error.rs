@@ -58,6 +58,12 @@ pub enum MssError {
     /// The mesh given for masses, springs or volume preservation is not usable for it.
     #[error("mesh: {0}")]
     Mesh(#[from] tissue_mesh::MeshError),
+    /// A quasi-static solve's stiffness matrix has no Cholesky factor.
+    #[error("the stiffness matrix is not positive definite ({what}); fix some particle or anchor every free one")]
+    NotPositiveDefinite {
+        /// What the factorisation found.
+        what: String,
+    },
     /// A non-finite position or velocity appeared: the step is too large for the stiffness, or the
     /// input forces are not finite. The particle keeps its last finite state.
     #[error("diverged at step {step}: particle {particle} became non-finite; reduce the time step or the stiffness")]

@@ -82,6 +82,17 @@ impl VolumePressure {
         self.rest
     }
 
+    /// The bulk modulus (g/(cm·s²)).
+    pub fn bulk_modulus(&self) -> f64 {
+        self.bulk_modulus
+    }
+
+    /// `out[i] += ∇ᵢV` at `positions` (cm²) for every particle of the fill: the pressure's
+    /// force is `K·(V₀ − V)/V₀·∇V`, its stiffness `K/V₀·∇V ∇Vᵀ` (rank one).
+    pub fn add_gradient(&self, positions: &[Vec3A], out: &mut [Vec3A]) {
+        accumulate_gradient(&self.triangles, positions, 0, 1.0, out);
+    }
+
     /// The enclosed volume at `positions` (cm³).
     pub fn volume(&self, positions: &[Vec3A]) -> f64 {
         let origin = self

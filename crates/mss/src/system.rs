@@ -181,6 +181,21 @@ impl MassSpringSystem {
         self.rearrange();
     }
 
+    /// The anchors as `(particle, stiffness)` (g/s²), in storage order.
+    pub fn anchor_stiffnesses(&self) -> impl Iterator<Item = (u32, f32)> + '_ {
+        self.anchors.iter().map(|a| (a.particle, a.k))
+    }
+
+    /// The volume preservations (eq. 5) added to the system.
+    pub fn volume_preservations(&self) -> &[VolumePreservation] {
+        &self.volumes
+    }
+
+    /// The fills' pressures added to the system.
+    pub fn volume_pressures(&self) -> &[VolumePressure] {
+        &self.pressures
+    }
+
     /// The anchors' particles, in storage order.
     pub fn anchored_particles(&self) -> impl Iterator<Item = u32> + '_ {
         self.anchors.iter().map(|a| a.particle)

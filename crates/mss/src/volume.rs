@@ -99,6 +99,44 @@ impl VolumePreservation {
         })
     }
 
+    /// Each particle's own stiffness under eq. (5), `cᵢ·k_v·(C + cᵢ/3)` (g/s²): the diagonal
+    /// of its Jacobian along the radial direction, for a quasi-static solve's matrix.
+    pub fn diagonal_stiffness(&self) -> impl Iterator<Item = (u32, f64)> + '_ {
+        self.particles.iter().zip(&self.weight).map(|(&p, &c)| {
+            let c = f64::from(c);
+            (p, c * f64::from(self.k_v) * (f64::from(self.c) + c / 3.0))
+        })
+    }
+
+    /// `k_v` (g/s²) and `C` of eq. (5).
+    pub fn constants(&self) -> (f64, f64) {
+        (f64::from(self.k_v), f64::from(self.c))
+    }
+
+    /// `out` = `(particle, cᵢ·uᵢ)` at `positions` (`uᵢ` the unit direction from the
+    /// mass-weighted centre): eq. (5)'s Jacobian is `k_v·(⅓ w wᵀ + C·Σᵢ cᵢ² uᵢuᵢᵀ)` with
+    /// `w = (cᵢ uᵢ)`, its centre held (what a quasi-static solve's Newton step uses).
+    pub fn weighted_directions(
+        &self,
+        position: &[Vec3A],
+        mass: &[f32],
+        out: &mut Vec<(u32, glam::DVec3)>,
+    ) {
+        out.clear();
+        let mut weighted = DVec3::ZERO;
+        let mut total = 0.0f64;
+        for &p in &self.particles {
+            let m = f64::from(mass[p as usize]);
+            weighted += Vec3::from(position[p as usize]).as_dvec3() * m;
+            total += m;
+        }
+        let centre = weighted / total.max(f64::MIN_POSITIVE);
+        for (&p, &c) in self.particles.iter().zip(&self.weight) {
+            let u = (Vec3::from(position[p as usize]).as_dvec3() - centre).normalize_or_zero();
+            out.push((p, u * f64::from(c)));
+        }
+    }
+
     /// The particles this acts on.
     pub fn particles(&self) -> &[u32] {
         &self.particles

@@ -12,3 +12,4 @@ mod planning;
 mod region;
 mod shape;
 mod table2;
+mod quasi_static;
