@@ -4,7 +4,7 @@
 //! the studio and the C ABI cannot drift apart:
 //!
 //! - **Units** ([`Unit`]: the mesh file's unit; inside everything is cm, g, s) and the
-//!   request's named choices ([`Shape`], [`Rule`], [`Detect`], [`ColorBy`]).
+//!   request's named choices ([`Shape`], [`Rule`], [`Detect`], [`Solver`], [`ColorBy`]).
 //! - **The patient** ([`Patient`]): read from a file or bytes in its unit and scaled to cm, or a
 //!   [`Shipped`] mesh (the Table 2 plane, the chest, the head); its [`MeshSummary`].
 //! - **The request** ([`PlanRequest`]): one flat record, JSON names with their units, every
@@ -85,4 +85,4 @@ pub use result::{is_mesh_path, PatientResult};
 pub use run::{finish, Finished, Stopped};
 pub use scenario::{default_gain_tolerance, Preview, Scenario, FOOTPRINT_LIFT_CM};
 pub use tissue_app::{CancelToken, Event, Handle, Job, Outcome, ProgressEvent};
-pub use units::{ColorBy, Detect, Rule, Shape, Unit, KPA};
+pub use units::{ColorBy, Detect, Rule, Shape, Solver, Unit, KPA};
