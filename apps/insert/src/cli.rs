@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use clap::Parser;
-use tissue_planner::{ColorBy, Detect, JobMode, JobSpec, PlanRequest, Rule, Shape, Unit};
+use tissue_planner::{ColorBy, Detect, JobMode, JobSpec, PlanRequest, Rule, Shape, Solver, Unit};
 
 use crate::failure::{Exit, Failure};
 
@@ -340,6 +340,12 @@ pub struct Cli {
     #[arg(long, value_enum, default_value_t = defaults().detect, help_heading = "Run")]
     pub detect: Detect,
 
+    /// How a run finds the tissue's rest state: quasi_static solves for the static equilibrium
+    /// directly; explicit steps the thesis's explicit Euler until the tissue settles (the
+    /// reference). Every mode (--sweep, --target-gain, --expand-weeks) uses it.
+    #[arg(long, value_enum, default_value_t = defaults().solver, help_heading = "Run")]
+    pub solver: Solver,
+
     /// Step limit of a run (at most 500000).
     #[arg(long, value_name = "N", default_value_t = default_max_steps(), help_heading = "Run")]
     pub max_steps: u64,
@@ -419,7 +425,6 @@ pub struct Cli {
     )]
     pub chart: Option<PathBuf>,
 
-    /// Write every result and its inputs as JSON (see the contract in --help).
     /// Run this job: a JSON file in the planner's job shape (`{"mode": …, "request": {…},
     /// "volumes_cm3": […], …}`, the studio's and the C ABI's), in place of the request and
     /// mode flags (--mesh and --unit still give the patient).
@@ -427,6 +432,7 @@ pub struct Cli {
           help_heading = "Run")]
     pub job: Option<PathBuf>,
 
+    /// Write every result and its inputs as JSON (see the contract in --help).
     #[arg(long, value_name = "FILE", help_heading = "Outputs")]
     pub report: Option<PathBuf>,
 
@@ -536,6 +542,7 @@ impl Cli {
             thickness_cm: self.thickness,
             density_g_cm3: self.density,
             detect: self.detect,
+            solver: self.solver,
             max_steps: self.max_steps,
             time_step_s: self.time_step,
             expand_weeks: self.expand_weeks,
@@ -578,6 +585,7 @@ pub fn flag_of(field: &str) -> Option<&'static str> {
         "thickness_cm" => "--thickness",
         "density_g_cm3" => "--density",
         "detect" => "--detect",
+        "solver" => "--solver",
         "max_steps" => "--max-steps",
         "time_step_s" => "--time-step",
         "target_gain_cm2" => "--target-gain",
@@ -629,6 +637,20 @@ mod tests {
         assert_eq!(sweep.job_spec().volumes_cm3, [50.0, 100.0]);
         let weeks = Cli::try_parse_from(["insert", "--expand-weeks", "4"]).unwrap();
         assert_eq!(weeks.job_spec().mode, JobMode::Expansion);
+    }
+
+    /// `--solver` takes the JSON names, defaults to the library's solver and sets the request's.
+    #[test]
+    fn the_solver_flag_takes_the_json_names() {
+        let default = Cli::try_parse_from(["insert"]).unwrap();
+        assert_eq!(default.request().solver, Solver::QuasiStatic);
+        for s in Solver::ALL {
+            let cli = Cli::try_parse_from(["insert", "--solver", s.name()]).unwrap();
+            assert_eq!(cli.request().solver, s);
+            assert_eq!(cli.job_spec().request.params().solver, s.into());
+        }
+        assert!(Cli::try_parse_from(["insert", "--solver", "quasi-static"]).is_err());
+        assert!(Cli::try_parse_from(["insert", "--solver", "implicit"]).is_err());
     }
 
     #[test]

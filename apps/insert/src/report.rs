@@ -120,7 +120,15 @@ fn summary(inputs: &Inputs, r: &RunResult) -> String {
         StopReason::Settled => "settled",
         StopReason::StepLimit => "step limit reached: not settled",
     };
-    let rows: [(&str, String); 12] = [
+    let solver = match r.residual_n {
+        Some(residual) => format!(
+            "{}: {} iterations, residual {residual:.4e} N",
+            inputs.solver.name(),
+            r.iterations
+        ),
+        None => format!("{}: {} iterations", inputs.solver.name(), r.iterations),
+    };
+    let rows: [(&str, String); 13] = [
         (
             "region",
             format!(
@@ -152,6 +160,7 @@ fn summary(inputs: &Inputs, r: &RunResult) -> String {
             "steps",
             format!("{} of at most {} ({stop})", r.steps, r.max_steps),
         ),
+        ("solver", solver),
         ("time step", format!("{:.4e} s", r.time_step_s)),
         ("wall time", format!("{:.3} s", r.wall_time_s)),
     ];

@@ -155,6 +155,12 @@ fn assert_report_matches(report: &Value, planned: &PlannedInsertion) {
             .unwrap_or_else(|| panic!("report has no number {name}: {report}"))
     };
     assert_eq!(report["steps"].as_u64(), Some(o.steps));
+    assert_eq!(report["iterations"].as_u64(), Some(o.iterations));
+    assert_eq!(report["residual_n"].as_f64(), o.residual_n);
+    assert!(
+        report.get("residual_n").is_some(),
+        "residual_n is always written"
+    );
     for (name, value) in [
         ("area_before_cm2", o.area_before),
         ("area_after_cm2", o.area_after),
@@ -266,7 +272,105 @@ fn the_default_run_is_table_2_and_matches_the_library() {
     assert_eq!(inputs["shape"]["diameter_cm"], 7.0);
     assert_eq!(inputs["normal"], serde_json::json!([0.0, 0.0, 1.0]));
     assert_eq!(inputs["tangent"], serde_json::json!([1.0, 0.0, 0.0]));
+    assert_eq!(inputs["solver"], "quasi_static", "the default solver");
     assert_eq!(files_in(&dir), vec!["table2.json"]);
+}
+
+/// `--solver explicit` reaches the run and the report: the report's `inputs.solver`, the run's
+/// iterations (the explicit solver's steps) and its null residual; the summary names the
+/// solver. Beside `--job` the flag is refused, as every request flag is.
+#[test]
+fn the_solver_flag_reaches_the_report_and_is_refused_beside_a_job() {
+    let dir = scratch("solver");
+    let (mesh, patient) = small_plane(&dir);
+    let report = dir.join("explicit.json");
+    let mut args = vec!["--mesh", mesh.to_str().unwrap()];
+    args.extend(SMALL_ARGS);
+    args.extend([
+        "--max-steps",
+        "60",
+        "--solver",
+        "explicit",
+        "--report",
+        report.to_str().unwrap(),
+    ]);
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(0), "stderr: {}", stderr(&o));
+    let json = read_json(&report);
+    assert_eq!(json["inputs"]["solver"], "explicit");
+    assert_eq!(json["steps"], 60);
+    assert_eq!(
+        json["iterations"], 60,
+        "the explicit solver's iterations are its steps"
+    );
+    assert!(json["residual_n"].is_null(), "{}", json["residual_n"]);
+    // The library's run of the same job with the explicit solver, field by field.
+    let mut job = small_job(patient, 10.0);
+    job.params.solver = tissue_implant::Solver::Explicit;
+    job.params.run.stop.max_steps = 60;
+    let planned = plan(&job);
+    assert_eq!(planned.outcome.solver, tissue_implant::Solver::Explicit);
+    assert_report_matches(&json, &planned);
+    let out = stdout(&o);
+    assert!(
+        out.contains("solver               explicit: 60 iterations"),
+        "{out}"
+    );
+
+    // A sweep runs with it too: every row has its iterations.
+    let sweep_report = dir.join("sweep.json");
+    let mut sweep = vec!["--mesh", mesh.to_str().unwrap()];
+    sweep.extend(SMALL_ARGS);
+    sweep.extend([
+        "--max-steps",
+        "40",
+        "--solver",
+        "explicit",
+        "--sweep",
+        "5,10",
+        "--report",
+        sweep_report.to_str().unwrap(),
+    ]);
+    let o = run(&sweep);
+    assert_eq!(o.status.code(), Some(0), "stderr: {}", stderr(&o));
+    let json = read_json(&sweep_report);
+    assert_eq!(json["inputs"]["solver"], "explicit");
+    let runs = json["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2);
+    for r in runs {
+        assert_eq!(r["iterations"], 40, "{r}");
+        assert!(r["residual_n"].is_null(), "{r}");
+    }
+
+    // Beside --job, the flag is refused (the job file carries its own "solver").
+    let job_file = dir.join("job.json");
+    std::fs::write(&job_file, r#"{"request": {"solver": "explicit"}}"#).unwrap();
+    assert_fails(
+        &["--job", job_file.to_str().unwrap(), "--solver", "explicit"],
+        Exit::Usage,
+        &["--job takes the whole job"],
+    );
+    // An unknown solver is clap's usage error, with the names it takes.
+    let o = run(&["--solver", "implicit"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(
+        err.contains("quasi_static") && err.contains("explicit"),
+        "{err}"
+    );
+    // In a job file, an unknown solver is refused naming the field and the names.
+    std::fs::write(&job_file, r#"{"request": {"solver": "implicit"}}"#).unwrap();
+    assert_fails(
+        &["--job", job_file.to_str().unwrap()],
+        Exit::Usage,
+        &["`solver`", "`quasi_static` or `explicit`"],
+    );
+    let mut written = files_in(&dir);
+    written.sort();
+    assert_eq!(
+        written,
+        vec!["explicit.json", "job.json", "plane_dm.obj", "sweep.json"]
+    );
 }
 
 #[test]
@@ -592,6 +696,33 @@ fn help_documents_units_exit_codes_and_the_report() {
         "at least 1.5 × the width",
     ] {
         assert!(help.contains(needle), "--help lacks {needle:?}");
+    }
+}
+
+/// `--solver` lists its values, in the JSON's names, in the short and the long help, with the
+/// default.
+#[test]
+fn help_lists_the_solvers() {
+    for flag in ["-h", "--help"] {
+        let help = stdout(&run(&[flag]));
+        let section = help
+            .lines()
+            .skip_while(|l| !l.contains("--solver <SOLVER>"))
+            .take_while(|l| !l.contains("--max-steps"))
+            .collect::<Vec<_>>()
+            .join(" ");
+        for needle in [
+            "quasi_static",
+            "explicit",
+            "[default: quasi_static]",
+            "every mode",
+        ] {
+            assert!(
+                section.to_lowercase().contains(&needle.to_lowercase()),
+                "{flag}: the --solver help lacks {needle:?}: {section}"
+            );
+        }
+        assert!(!section.contains("quasi-static"), "{flag}: {section}");
     }
 }
 

@@ -100,7 +100,8 @@ pub use error::AppError;
 pub use plan::{
     footprint_radius, plan, plan_expansion, plan_inverse, plan_sweep, prepare, ExpansionJob,
     InsertionJob, InverseJob, PatientAfter, Placement, PlanePressJob, PlannedExpansion,
-    PlannedInsertion, PreparedInsertion, SimMesh, SweepJob, SweepResult, SweepRun,
+    PlannedInsertion, PlannedInverse, PreparedInsertion, SimMesh, SolverFigures, SweepJob,
+    SweepResult, SweepRun,
 };
 pub use worker::{
     CancelToken, CustomJob, Event, Events, Handle, HandleOptions, Job, Outcome, ProgressEvent,

@@ -14,7 +14,7 @@ use tissue_implant::{
     sweep, volume_for_gain, BandOptions, ExpansionOutcome, ExpansionProgress, ExpansionSetup,
     GrowthParams, Implant, ImplantError, ImplantShape, ImplantSpec, InsertionOutcome,
     InsertionParams, InverseOptions, InverseSearch, Progress, Protocol, RegionOptions,
-    RegionSelection, ScanOptions, ScanResult, SimSurface, TissueLayers,
+    RegionSelection, ScanOptions, ScanResult, SimSurface, Solver, StopReason, TissueLayers,
 };
 use tissue_mesh::TriMesh;
 
@@ -702,6 +702,45 @@ where
     })
 }
 
+/// How the solver ended one run: what a report repeats of a run it keeps no outcome of.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverFigures {
+    /// The solver that found the run's state ([`InsertionOutcome::solver`]).
+    pub solver: Solver,
+    /// Steps taken ([`InsertionOutcome::steps`]).
+    pub steps: u64,
+    /// The solver's iterations ([`InsertionOutcome::iterations`]).
+    pub iterations: u64,
+    /// The quasi-static solver's final residual, N ([`InsertionOutcome::residual_n`]); `None`
+    /// for the explicit solver.
+    pub residual_n: Option<f64>,
+    /// Why the run ended.
+    pub stop_reason: StopReason,
+}
+
+impl SolverFigures {
+    /// The figures of `outcome`.
+    pub fn of(outcome: &InsertionOutcome) -> Self {
+        SolverFigures {
+            solver: outcome.solver,
+            steps: outcome.steps,
+            iterations: outcome.iterations,
+            residual_n: outcome.residual_n,
+            stop_reason: outcome.stop_reason,
+        }
+    }
+}
+
+/// The result of an inverse search: the search, and how the solver ended each of its runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlannedInverse {
+    /// The volume found and every run taken ([`volume_for_gain`]).
+    pub search: InverseSearch,
+    /// One per run of [`InverseSearch::runs`], in the same order: the search's runs are
+    /// exactly the runs that returned (a run that failed fails the search).
+    pub runs: Vec<SolverFigures>,
+}
+
 /// Searches the volume of [`InverseJob::bracket`] whose run gives [`InverseJob::target_gain`]
 /// ([`volume_for_gain`]: sequential, each run depends on the ones before); `progress(run, p)` is
 /// called after every step of run `run` (0 for the first run of the search) and cancels the
@@ -713,7 +752,7 @@ where
 pub fn plan_inverse(
     job: &InverseJob,
     mut progress: impl FnMut(usize, &Progress) -> ControlFlow<()>,
-) -> Result<InverseSearch, ImplantError> {
+) -> Result<PlannedInverse, ImplantError> {
     inverse_with(job, &|| false, |event| match event {
         RunEvent::Start(..) => ControlFlow::Continue(()),
         RunEvent::Step(run, p) => progress(run, p),
@@ -733,11 +772,12 @@ pub(crate) fn inverse_with(
     job: &InverseJob,
     cancelled: &dyn Fn() -> bool,
     mut observe: impl FnMut(RunEvent<'_>) -> ControlFlow<()>,
-) -> Result<InverseSearch, ImplantError> {
+) -> Result<PlannedInverse, ImplantError> {
     let _span = tracing::info_span!("app_inverse", target = job.target_gain).entered();
     let scene = scene(&job.base, cancelled)?;
     let mut run = 0usize;
-    volume_for_gain(job.target_gain, job.bracket, &job.options, |volume| {
+    let mut figures: Vec<SolverFigures> = Vec::new();
+    let search = volume_for_gain(job.target_gain, job.bracket, &job.options, |volume| {
         let _span = tracing::info_span!("app_inverse_run", run, volume).entered();
         let spec = ImplantSpec {
             volume_cm3: volume,
@@ -750,9 +790,13 @@ pub(crate) fn inverse_with(
         if observe(RunEvent::Start(this, floor)).is_break() {
             return Err(ImplantError::Cancelled { steps: 0 });
         }
-        Ok(insertion
-            .run(|p| observe(RunEvent::Step(this, p)))?
-            .area_gain)
+        let outcome = insertion.run(|p| observe(RunEvent::Step(this, p)))?;
+        figures.push(SolverFigures::of(&outcome));
+        Ok(outcome.area_gain)
+    })?;
+    Ok(PlannedInverse {
+        search,
+        runs: figures,
     })
 }
 

@@ -11,14 +11,14 @@ use std::time::{Duration, Instant};
 
 use crossbeam_channel::{bounded, Receiver, RecvTimeoutError, Sender, TryRecvError};
 use tissue_implant::{
-    plane_press, ExpansionProgress, ExpansionStage, ImplantError, InverseSearch, PlanePressOutcome,
-    Progress, RunParams,
+    plane_press, ExpansionProgress, ExpansionStage, ImplantError, PlanePressOutcome, Progress,
+    RunParams,
 };
 
 use crate::plan::{
     expansion_with, inverse_with, prepare_with, saturating_elapsed, sweep_with, ExpansionJob,
-    InsertionJob, InverseJob, PlanePressJob, PlannedExpansion, PlannedInsertion, RunEvent,
-    SweepJob, SweepResult,
+    InsertionJob, InverseJob, PlanePressJob, PlannedExpansion, PlannedInsertion, PlannedInverse,
+    RunEvent, SweepJob, SweepResult,
 };
 use crate::settle::SettleMeter;
 use crate::AppError;
@@ -95,8 +95,8 @@ pub enum Outcome {
     Insertion(Box<PlannedInsertion>),
     /// Of [`Job::Sweep`]: one run per volume, in input order.
     Sweep(Box<SweepResult>),
-    /// Of [`Job::Inverse`]: the volume found and every run taken.
-    Inverse(InverseSearch),
+    /// Of [`Job::Inverse`]: the volume found, every run taken and how each ended.
+    Inverse(Box<PlannedInverse>),
     /// Of [`Job::PlanePress`].
     PlanePress(Box<PlanePressOutcome>),
     /// Of [`Job::Expansion`].
@@ -123,9 +123,9 @@ impl Outcome {
     }
 
     /// The inverse search, if this is one.
-    pub fn into_inverse(self) -> Option<InverseSearch> {
+    pub fn into_inverse(self) -> Option<PlannedInverse> {
         match self {
-            Outcome::Inverse(s) => Some(s),
+            Outcome::Inverse(s) => Some(*s),
             _ => None,
         }
     }
@@ -705,7 +705,7 @@ fn execute(job: Job, sink: &ProgressSink) -> Result<Outcome, AppError> {
                 },
             });
             match result {
-                Ok(search) => Ok(Outcome::Inverse(search)),
+                Ok(search) => Ok(Outcome::Inverse(Box::new(search))),
                 Err(ImplantError::Cancelled { .. }) => Err(AppError::Cancelled {
                     steps: sink.steps(),
                 }),

@@ -190,10 +190,11 @@ typedef struct tissue_mesh tissue_mesh;
 typedef struct tissue_patient tissue_patient;
 
 // The common fields of a planning request (the planner's `PlanRequest`; every other field at
-// the library's default: use the JSON entry points for those). Fill it with
-// `tissue_plan_options_default` first, then change what you need. Enum-valued fields are
-// `uint32_t` holding the named enum's values. Lengths in cm; a size of 0 means "not given"
-// (the library's default or, for a rectangle's or crescent's sizes, a `TISSUE_USAGE` error).
+// the library's default, the solver `quasi_static` among them: use the JSON entry points for
+// those). Fill it with `tissue_plan_options_default` first, then change what you need.
+// Enum-valued fields are `uint32_t` holding the named enum's values. Lengths in cm; a size of
+// 0 means "not given" (the library's default or, for a rectangle's or crescent's sizes, a
+// `TISSUE_USAGE` error).
 // Bounds (`TISSUE_PARAMETERS` naming the field beyond them; `TISSUE_PLACEMENT` for the region
 // radius): lengths at most 100 cm, `volume_cm3` at most 5000, `depth_cm` at most 10,
 // `max_steps` 1 to 500000.
@@ -553,8 +554,12 @@ enum tissue_status tissue_inverse_start(const struct tissue_patient *patient,
 // names, as `insert --report` and the studio take it (`docs/c-api.md`):
 //
 // `{"mode": "single" | "sweep" | "target-gain" | "expansion", "request": {"vertex": 2277,
-// "volume_cm3": 50, "sim_edge_cm": 0.3, ...}, "volumes_cm3": [..], "target_gain_cm2": 30,
-// "bracket_cm3": [lo, hi], "gain_tolerance_cm2": 0.5}` (tissue-planner's `JobSpec`)
+// "volume_cm3": 50, "sim_edge_cm": 0.3, "solver": "explicit", ...}, "volumes_cm3": [..],
+// "target_gain_cm2": 30, "bracket_cm3": [lo, hi], "gain_tolerance_cm2": 0.5}` (tissue-planner's
+// `JobSpec`)
+//
+// `"solver"` is `"quasi_static"` (the default) or `"explicit"`; the report gives it as
+// `inputs.solver`, with every run's `iterations` and `residual_n` (null for `"explicit"`).
 //
 // Every member is optional (`{}` is Table 2's single run on the Table 2 plane); unknown members
 // are refused. An expansion (`"mode": "expansion"` with `"expand_weeks"` in the request) gives

@@ -4,11 +4,12 @@
 //! the studio and the C ABI cannot drift apart:
 //!
 //! - **Units** ([`Unit`]: the mesh file's unit; inside everything is cm, g, s) and the
-//!   request's named choices ([`Shape`], [`Rule`], [`Detect`], [`ColorBy`]).
+//!   request's named choices ([`Shape`], [`Rule`], [`Detect`], [`Solver`], [`ColorBy`]).
 //! - **The patient** ([`Patient`]): read from a file or bytes in its unit and scaled to cm, or a
 //!   [`Shipped`] mesh (the Table 2 plane, the chest, the head); its [`MeshSummary`].
 //! - **The request** ([`PlanRequest`]): one flat record, JSON names with their units, every
-//!   field defaulting to the library's value (`{}` is Table 2). [`PlanRequest::check`] refuses a
+//!   field defaulting to the library's value (`{}` is Table 2), the solver among them
+//!   (`"solver": "quasi_static" | "explicit"`, [`Solver`]; every mode's runs use it). [`PlanRequest::check`] refuses a
 //!   value that cannot be right, naming the field, and bounds every size and count so that a
 //!   request's work is bounded: [`MAX_STEPS`] steps a run, [`MAX_SWEEP_VOLUMES`] volumes a sweep,
 //!   lengths up to [`MAX_LENGTH_CM`], volumes up to [`MAX_VOLUME_CM3`], depth and thickness up
@@ -22,7 +23,8 @@
 //! - **The result on the patient** ([`PatientResult`]): the deformed patient in the file's unit
 //!   with its fields (displacement, stretch, in-region), as mesh files and a picture.
 //! - **The report** ([`report`]): the JSON contract, with [`report::SCHEMA_VERSION`]; field
-//!   names are only ever added.
+//!   names are only ever added. Every report names the solver its runs were asked to use
+//!   (`inputs.solver`) and every run its solver's `iterations` and final `residual_n`.
 //! - **What to run** ([`JobSpec`]): a single run, a sweep, the inverse search or an expansion
 //!   over weeks, as one JSON shape (the studio's run message, the C ABI's job JSON, the flags
 //!   of `insert`), planned on a [`Scenario`] into the worker's job ([`JobSpec::plan`]).
@@ -85,4 +87,4 @@ pub use result::{is_mesh_path, PatientResult};
 pub use run::{finish, Finished, Stopped};
 pub use scenario::{default_gain_tolerance, Preview, Scenario, FOOTPRINT_LIFT_CM};
 pub use tissue_app::{CancelToken, Event, Handle, Job, Outcome, ProgressEvent};
-pub use units::{ColorBy, Detect, Rule, Shape, Unit, KPA};
+pub use units::{ColorBy, Detect, Rule, Shape, Solver, Unit, KPA};

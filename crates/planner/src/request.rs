@@ -8,7 +8,7 @@ use tissue_implant::BroadPhase;
 use tissue_implant::{ImplantShape, ImplantSpec, InsertionParams, LayerParams, ScanOptions};
 
 use crate::error::{ErrorKind, PlanError};
-use crate::units::{Detect, Rule, Shape, KPA};
+use crate::units::{Detect, Rule, Shape, Solver, KPA};
 
 /// One planning request. Lengths in cm unless the name says otherwise; `at` and `tangent` in
 /// the mesh's unit and frame.
@@ -62,6 +62,9 @@ pub struct PlanRequest {
     pub density_g_cm3: f64,
     /// The collision broad phase.
     pub detect: Detect,
+    /// How a run finds the rest state: `quasi_static` (the default) or `explicit` (the
+    /// thesis's stepping, the reference). Every mode runs with it.
+    pub solver: Solver,
     /// A run's step limit.
     pub max_steps: u64,
     /// The time step, s [default: automatic].
@@ -110,6 +113,7 @@ impl Default for PlanRequest {
             thickness_cm: layers.skin_thickness,
             density_g_cm3: layers.density,
             detect: Detect::Bvh,
+            solver: Solver::from(InsertionParams::default().solver),
             max_steps: InsertionParams::default().run.stop.max_steps,
             time_step_s: None,
             expand_weeks: None,
@@ -492,7 +496,10 @@ impl PlanRequest {
 
     /// The library's parameters (its defaults for everything the request does not name).
     pub fn params(&self) -> InsertionParams {
-        let mut params = InsertionParams::default();
+        let mut params = InsertionParams {
+            solver: self.solver.into(),
+            ..InsertionParams::default()
+        };
         params.layers.young = self.young_kpa * KPA;
         params.layers.poisson = self.poisson;
         params.layers.skin_thickness = self.thickness_cm;
@@ -649,6 +656,66 @@ mod tests {
         );
         let unknown: Result<PlanRequest, _> = serde_json::from_str(r#"{"volume": 3}"#);
         assert!(unknown.is_err(), "unknown fields are refused");
+    }
+
+    /// `solver`: the library's default when left out, either name taken and passed to the
+    /// library's parameters, an unknown name refused naming the field and both names.
+    #[test]
+    fn the_solver_defaults_to_quasi_static_and_reaches_the_parameters() {
+        use tissue_implant::Solver as Library;
+        let empty = request(serde_json::json!({}));
+        assert_eq!(empty.solver, Solver::QuasiStatic);
+        assert_eq!(empty.params().solver, Library::QuasiStatic);
+        assert_eq!(empty.params().solver, InsertionParams::default().solver);
+        for (name, solver, library) in [
+            ("quasi_static", Solver::QuasiStatic, Library::QuasiStatic),
+            ("explicit", Solver::Explicit, Library::Explicit),
+        ] {
+            let r = request(serde_json::json!({ "solver": name }));
+            assert_eq!(r.solver, solver, "{name}");
+            assert_eq!(r.params().solver, library, "{name}");
+            assert!(r.check().is_ok());
+            assert_eq!(
+                serde_json::to_value(&r).ok().map(|v| v["solver"].clone()),
+                Some(serde_json::json!(name))
+            );
+        }
+        // Only the solver changes: every other parameter is the same for both.
+        let explicit = request(serde_json::json!({ "solver": "explicit" })).params();
+        assert_eq!(
+            InsertionParams {
+                solver: Library::QuasiStatic,
+                ..explicit
+            },
+            empty.params()
+        );
+        for bad in [
+            serde_json::json!({ "solver": "implicit" }),
+            serde_json::json!({ "solver": "Explicit" }),
+            serde_json::json!({ "solver": 1 }),
+        ] {
+            let e = serde_json::from_value::<PlanRequest>(bad.clone())
+                .err()
+                .map(|e| e.to_string())
+                .unwrap_or_default();
+            if bad["solver"].is_string() {
+                assert!(e.contains("`solver`"), "{bad}: {e}");
+                assert!(e.contains("`quasi_static` or `explicit`"), "{bad}: {e}");
+            } else {
+                assert!(!e.is_empty(), "{bad} is refused");
+            }
+        }
+        // Through a job too, with the parser's position.
+        let e = serde_json::from_str::<crate::JobSpec>(r#"{"request": {"solver": "newton"}}"#)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains(
+                "unknown variant `newton` of `solver`, expected `quasi_static` or `explicit`"
+            ) && e.contains("line 1"),
+            "{e}"
+        );
     }
 
     fn request(json: serde_json::Value) -> PlanRequest {

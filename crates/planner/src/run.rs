@@ -197,6 +197,60 @@ mod tests {
         Ok(())
     }
 
+    /// The request's solver reaches every mode's runs and report: `inputs.solver` in each,
+    /// and every run's `iterations` (the explicit solver's steps) and `residual_n` (null for
+    /// it) in a single run, a sweep's rows and a search's runs.
+    #[test]
+    fn every_mode_reports_its_solver_and_every_runs_iterations() -> Result<(), Stopped> {
+        let value = |finished: &Finished| finished.report.to_value();
+        for solver in crate::Solver::ALL {
+            let name = solver.name();
+            let single = value(&run(&format!(
+                r#"{{"request": {{"solver": "{name}", "max_steps": 12}}}}"#
+            ))?)?;
+            assert_eq!(single["inputs"]["solver"], name);
+            assert_eq!(single["iterations"], 12, "{name}");
+            assert!(single.get("residual_n").is_some(), "{name}");
+
+            let sweep = value(&run(&format!(
+                r#"{{"mode": "sweep", "volumes_cm3": [20, 30],
+                    "request": {{"solver": "{name}", "max_steps": 10}}}}"#
+            ))?)?;
+            assert_eq!(sweep["inputs"]["solver"], name);
+            let rows = sweep["runs"].as_array().map_or(0, Vec::len);
+            assert_eq!(rows, 2, "{sweep}");
+            for i in 0..rows {
+                assert_eq!(sweep["runs"][i]["iterations"], 10, "{name}");
+                assert!(sweep["runs"][i].get("residual_n").is_some(), "{name}");
+            }
+
+            // Both ends are within the (wide) tolerance: two runs, the search's figures.
+            let search = value(&run(&format!(
+                r#"{{"mode": "target-gain", "target_gain_cm2": 0, "gain_tolerance_cm2": 1000,
+                    "bracket_cm3": [20, 30], "request": {{"solver": "{name}", "max_steps": 8}}}}"#
+            ))?)?;
+            assert_eq!(search["inputs"]["solver"], name);
+            let runs = search["runs"].as_array().map_or(0, Vec::len);
+            assert_eq!(runs, 2, "{search}");
+            for i in 0..runs {
+                assert_eq!(search["runs"][i]["iterations"], 8, "{name}");
+                assert!(search["runs"][i].get("residual_n").is_some(), "{name}");
+            }
+        }
+        // Asked for, the explicit solver has no residual anywhere.
+        let explicit = value(&run(
+            r#"{"mode": "sweep", "volumes_cm3": [20], "request": {"solver": "explicit", "max_steps": 6}}"#,
+        )?)?;
+        assert!(explicit["runs"][0]["residual_n"].is_null(), "{explicit}");
+        // An expansion runs with it too and says so.
+        let expansion = value(&run(
+            r#"{"mode": "expansion", "request": {"solver": "explicit", "expand_weeks": 1,
+                "band_samples": 0, "growth_step_h": 24, "max_steps": 6}}"#,
+        )?)?;
+        assert_eq!(expansion["inputs"]["solver"], "explicit");
+        Ok(())
+    }
+
     /// A cancelled token ends the job as cancelled, not failed.
     #[test]
     fn a_cancelled_token_stops_the_job() -> Result<(), PlanError> {

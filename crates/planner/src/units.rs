@@ -1,5 +1,5 @@
 //! Units and the request's named choices: the mesh file's unit, the implant's outline, the
-//! region rule, the broad phase and the field a picture is coloured by.
+//! region rule, the broad phase, the solver and the field a picture is coloured by.
 //!
 //! Inside, everything runs in centimetres, grams and seconds; a patient file is scaled to cm on
 //! load and outputs go back to its unit ([`Unit::cm_per_unit`]).
@@ -124,6 +124,75 @@ impl Detect {
     }
 }
 
+/// How a run finds the tissue's rest state over the filled expander (`solver`): the request's
+/// choice, `inputs.solver` in the report, `insert --solver`. [`tissue_implant::Solver`] in the
+/// planner's JSON names.
+///
+/// Read from JSON by name only; an unknown name is refused naming the field and the names
+/// (`` unknown variant `x` of `solver`, expected `quasi_static` or `explicit` ``).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[cfg_attr(feature = "clap", value(rename_all = "snake_case"))]
+#[serde(rename_all = "snake_case")]
+pub enum Solver {
+    /// Solves for the static equilibrium directly (the default).
+    #[default]
+    QuasiStatic,
+    /// Steps the thesis's explicit Euler until the stop criterion fires (the reference).
+    Explicit,
+}
+
+impl Solver {
+    /// Every solver, the default first.
+    pub const ALL: [Solver; 2] = [Solver::QuasiStatic, Solver::Explicit];
+
+    /// The solver's name, as the JSON and the command line have it: `quasi_static`, `explicit`.
+    pub fn name(self) -> &'static str {
+        tissue_implant::Solver::from(self).name()
+    }
+
+    /// The solver of `name`, or `None`.
+    pub fn from_name(name: &str) -> Option<Solver> {
+        Solver::ALL.into_iter().find(|s| s.name() == name)
+    }
+}
+
+impl From<Solver> for tissue_implant::Solver {
+    fn from(solver: Solver) -> Self {
+        match solver {
+            Solver::QuasiStatic => tissue_implant::Solver::QuasiStatic,
+            Solver::Explicit => tissue_implant::Solver::Explicit,
+        }
+    }
+}
+
+impl From<tissue_implant::Solver> for Solver {
+    /// Exhaustive on purpose: a new library solver must be given its JSON name here.
+    fn from(solver: tissue_implant::Solver) -> Self {
+        match solver {
+            tissue_implant::Solver::QuasiStatic => Solver::QuasiStatic,
+            tissue_implant::Solver::Explicit => Solver::Explicit,
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Solver {
+    /// By name, refusing an unknown one with the field's name and the names it takes.
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(deserializer)?;
+        Solver::from_name(&name).ok_or_else(|| {
+            let names: Vec<String> = Solver::ALL
+                .iter()
+                .map(|s| format!("`{}`", s.name()))
+                .collect();
+            serde::de::Error::custom(format!(
+                "unknown variant `{name}` of `solver`, expected {}",
+                names.join(" or ")
+            ))
+        })
+    }
+}
+
 /// The per-vertex field that colours a picture of the result.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
@@ -151,5 +220,35 @@ mod tests {
         assert_eq!(Unit::from_symbol("inch"), None);
         let rule: Result<Rule, _> = serde_json::from_str("\"touches-vertex\"");
         assert_eq!(rule.ok(), Some(Rule::TouchesVertex));
+    }
+
+    /// The solver's names are the library's, both ways, and an unknown one is refused naming
+    /// the field and every name.
+    #[test]
+    fn solver_names_are_the_librarys_and_an_unknown_one_names_the_field() {
+        for s in Solver::ALL {
+            let library = tissue_implant::Solver::from(s);
+            assert_eq!(Solver::from(library), s);
+            assert_eq!(s.name(), library.name());
+            let json = serde_json::to_string(&s).unwrap_or_default();
+            assert_eq!(json, format!("\"{}\"", s.name()));
+            let back: Result<Solver, _> = serde_json::from_str(&json);
+            assert_eq!(back.ok(), Some(s));
+        }
+        assert_eq!(Solver::default(), Solver::QuasiStatic);
+        assert_eq!(
+            tissue_implant::Solver::from(Solver::default()),
+            tissue_implant::Solver::default()
+        );
+        assert_eq!(Solver::ALL.map(Solver::name), ["quasi_static", "explicit"]);
+        let unknown = serde_json::from_str::<Solver>("\"quasi-static\"")
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            unknown.contains("`quasi-static` of `solver`, expected `quasi_static` or `explicit`"),
+            "{unknown}"
+        );
+        assert!(serde_json::from_str::<Solver>("1").is_err());
     }
 }

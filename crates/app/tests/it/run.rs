@@ -213,10 +213,16 @@ fn an_inverse_search_returns_its_runs() {
         },
     );
     let (progress, terminal) = drain(&mut handle, LIMIT);
-    let search = match terminal {
+    let planned = match terminal {
         Event::Finished(outcome) => outcome.into_inverse().expect("an inverse search"),
         other => panic!("expected an inverse search, got {other:?}"),
     };
+    // How the solver ended every run, one per run of the search, in order.
+    assert_eq!(planned.runs.len(), planned.search.runs.len());
+    for figures in &planned.runs {
+        assert!(figures.steps > 0 && figures.iterations > 0, "{figures:?}");
+    }
+    let search = planned.search;
     assert!(search.runs.len() >= 2 && search.runs.len() <= options.max_runs);
     assert_eq!(search.runs[0].volume, 20.0);
     assert_eq!(search.runs[1].volume, 60.0);

@@ -2,7 +2,7 @@
 //! search.
 
 use serde::Serialize;
-use tissue_implant::InverseSearch;
+use tissue_app::PlannedInverse;
 
 use super::{Inputs, Report, Tool};
 use crate::job::JobMode;
@@ -17,6 +17,11 @@ pub struct SearchRun {
     pub volume_cm3: f64,
     /// The area gain it gave, cm².
     pub area_gain_cm2: f64,
+    /// The solver's iterations: the explicit solver's steps, or the quasi-static solver's
+    /// iterations.
+    pub iterations: u64,
+    /// The quasi-static solver's final residual, N; null for the explicit solver.
+    pub residual_n: Option<f64>,
 }
 
 /// The search's answer.
@@ -42,8 +47,9 @@ pub(crate) fn inverse(
     mut inputs: Inputs,
     target: f64,
     bracket: (f64, f64),
-    search: &InverseSearch,
+    planned: &PlannedInverse,
 ) -> InverseReport {
+    let search = &planned.search;
     inputs.target_gain_cm2 = Some(target);
     inputs.bracket_cm3 = Some([bracket.0, bracket.1]);
     let body = InverseBody {
@@ -52,12 +58,16 @@ pub(crate) fn inverse(
         volume_cm3: search.volume,
         area_gain_cm2: search.gain,
         converged: search.converged,
+        // One figure per run, in order (tissue-app's `PlannedInverse`).
         runs: search
             .runs
             .iter()
-            .map(|r| SearchRun {
+            .zip(&planned.runs)
+            .map(|(r, f)| SearchRun {
                 volume_cm3: r.volume,
                 area_gain_cm2: r.gain,
+                iterations: f.iterations,
+                residual_n: f.residual_n,
             })
             .collect(),
     };

@@ -6,13 +6,17 @@
 //! that is not an addition raises [`SCHEMA_VERSION`]. Units are in the names (`_cm`, `_cm2`,
 //! `_cm3`, `_s`, `_kpa`); everything is in cm whatever the mesh's unit. Every report has
 //! `schema_version`, `tool` (the front end: [`Tool`]), `version`, `mode` and
-//! `inputs` ([`Inputs`]).
+//! `inputs` ([`Inputs`]), whose `solver` ([`Solver`]: `"quasi_static"` or `"explicit"`) is
+//! the solver every run of the job was asked to use.
 //!
 //! - `mode: "single"` ([`SingleReport`]): the fields of [`RunResult`] at the top level:
 //!   `area_before_cm2`, `area_after_cm2`, `area_gain_cm2`, `volume_difference_cm3`,
 //!   `implant_volume_cm3`, `implant_volume_end_cm3`, `implant_compression` (a fraction),
 //!   `dome_height_cm`, `max_displacement_cm`, `max_penetration_cm`, `boundary_unchanged`,
 //!   `region_vertices`, `region_triangles`, `region_radius_cm`, `steps`, `max_steps`,
+//!   `iterations` (the solver's: the explicit solver's steps, the quasi-static solver's
+//!   iterations), `residual_n` (the quasi-static solver's final residual, the largest net force
+//!   on a free particle in N; null for the explicit solver),
 //!   `stop_reason` ([`StopReason`]: `"settled"` or `"step_limit"`), `time_step_s`, `wall_time_s`,
 //!   `measured_on` ([`MeasuredOn`]: `"simulation_surface"` or `"patient_region"`), `scan_region_vertices`, and
 //!   on a remeshed run `scan` ([`ScanFigures`]: the areas and volume on the scan itself).
@@ -24,8 +28,8 @@
 //!   away, so a sweep fails as a whole only when every run failed (every front end follows
 //!   this, [`crate::PlannedJob::run`]).
 //! - `mode: "target-gain"` ([`InverseReport`]): `target_gain_cm2`, `bracket_cm3`, `volume_cm3`
-//!   (the answer), `area_gain_cm2` (its gain), `converged`, `runs` (`volume_cm3`,
-//!   `area_gain_cm2` of every run, in order).
+//!   (the answer), `area_gain_cm2` (its gain), `converged`, `runs` ([`SearchRun`]: `volume_cm3`,
+//!   `area_gain_cm2`, `iterations`, `residual_n` of every run, in order).
 //! - `mode: "expansion"` ([`ExpansionReport`]: asked by `mode: "expansion"` with `expand_weeks`): `protocol`
 //!   (`fills` as `day`/`volume_cm3`, `removal_day`, `leakage`, `nominal_volume_cm3`,
 //!   `injected_cm3`), `growth` (`rate_per_h`, `prestretch`, `threshold`, `step_h`,
@@ -53,7 +57,7 @@ use tissue_implant::ImplantShape;
 use crate::error::{ErrorKind, PlanError};
 use crate::job::JobMode;
 use crate::scenario::Scenario;
-use crate::units::{Detect, Rule, Unit, KPA};
+use crate::units::{Detect, Rule, Solver, Unit, KPA};
 
 mod expansion;
 mod inverse;
@@ -256,6 +260,8 @@ pub struct Inputs {
     pub density_g_cm3: f64,
     /// `bvh` or `voxels`.
     pub detect: Detect,
+    /// The solver asked for: `quasi_static` or `explicit` (every run of the job used it).
+    pub solver: Solver,
     /// The step limit.
     pub max_steps: u64,
     /// The time step asked for, s, or null for automatic.
@@ -397,6 +403,7 @@ impl Inputs {
             thickness_cm: job.params.layers.skin_thickness,
             density_g_cm3: job.params.layers.density,
             detect: request.detect,
+            solver: job.params.solver.into(),
             max_steps: job.params.run.stop.max_steps,
             time_step_s: job.params.run.time_step,
             fill_time_s: job
@@ -479,6 +486,11 @@ mod tests {
                 json!("touches-vertex"),
             ),
             (serde_json::to_value(Detect::Voxels)?, json!("voxels")),
+            (
+                serde_json::to_value(Solver::QuasiStatic)?,
+                json!("quasi_static"),
+            ),
+            (serde_json::to_value(Solver::Explicit)?, json!("explicit")),
             (
                 serde_json::to_value(SimMeshKind::PatientTriangles)?,
                 json!("patient_triangles"),

@@ -106,6 +106,12 @@ pub struct RunResult {
     pub steps: u64,
     /// The step limit.
     pub max_steps: u64,
+    /// The solver's iterations: the explicit solver's steps (as `steps`), or the quasi-static
+    /// solver's iterations.
+    pub iterations: u64,
+    /// The quasi-static solver's final residual: the largest net force on a free particle, N;
+    /// null for the explicit solver.
+    pub residual_n: Option<f64>,
     /// `settled` or `step_limit`.
     pub stop_reason: StopReason,
     /// The time step, s.
@@ -186,6 +192,8 @@ impl RunResult {
             region_radius_cm: selection.radius(),
             steps: outcome.steps,
             max_steps,
+            iterations: outcome.iterations,
+            residual_n: outcome.residual_n,
             stop_reason: outcome.stop_reason.into(),
             time_step_s: outcome.time_step,
             wall_time_s: outcome.wall_time.as_secs_f64(),
@@ -240,6 +248,15 @@ mod tests {
         assert_eq!(json["tool"], "studio");
         assert_eq!(json["mode"], "single");
         assert_eq!(json["steps"], 5);
+        // The solver asked for (the default), the run's iterations and residual.
+        assert_eq!(json["inputs"]["solver"], "quasi_static");
+        assert_eq!(json["iterations"], planned.outcome.iterations);
+        assert!(json["iterations"].as_u64().is_some_and(|i| i > 0));
+        assert_eq!(
+            json["residual_n"].as_f64(),
+            planned.outcome.residual_n,
+            "null exactly when the run has no residual"
+        );
         assert_eq!(json["inputs"]["region_radius_cm"], 5.25);
         assert_eq!(json["inputs"]["rotation_deg"], 30.0);
         assert_eq!(json["inputs"]["sim_mesh"], "patient_triangles");
@@ -252,6 +269,36 @@ mod tests {
             .unwrap_or(0.0)
             .atan2(t[0].as_f64().unwrap_or(0.0));
         assert!((angle.to_degrees() - 30.0).abs() < 1e-4, "{t}");
+        Ok(())
+    }
+
+    /// The explicit solver, asked for, is the report's input; its run has iterations (its steps)
+    /// and no residual (`residual_n` is written, as null).
+    #[test]
+    fn an_explicit_run_reports_its_solver_iterations_and_a_null_residual() -> Result<(), PlanError>
+    {
+        let request = PlanRequest {
+            max_steps: 4,
+            solver: crate::Solver::Explicit,
+            ..PlanRequest::default()
+        };
+        let scenario = Scenario::new(Patient::shipped(Shipped::Table2)?, request)?;
+        assert_eq!(scenario.job.params.solver, tissue_implant::Solver::Explicit);
+        let planned = tissue_app::plan(&scenario.job, |_| std::ops::ControlFlow::Continue(()))
+            .map_err(|e| PlanError::from_implant(&e))?;
+        let report = single(
+            Tool::Insert,
+            Inputs::new(&scenario)?,
+            RunResult::of(&planned, None, 4),
+        );
+        let json = serde_json::to_value(&report)
+            .map_err(|e| PlanError::new(ErrorKind::Output, e.to_string()))?;
+        assert_eq!(json["inputs"]["solver"], "explicit");
+        assert_eq!(json["iterations"], 4);
+        assert_eq!(json["iterations"], json["steps"]);
+        let body = json.as_object().map(|o| o.contains_key("residual_n"));
+        assert_eq!(body, Some(true), "residual_n is always written");
+        assert!(json["residual_n"].is_null());
         Ok(())
     }
 }
