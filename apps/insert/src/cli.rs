@@ -643,7 +643,7 @@ mod tests {
     #[test]
     fn the_solver_flag_takes_the_json_names() {
         let default = Cli::try_parse_from(["insert"]).unwrap();
-        assert_eq!(default.request().solver, Solver::QuasiStatic);
+        assert_eq!(default.request().solver, Solver::Explicit);
         for s in Solver::ALL {
             let cli = Cli::try_parse_from(["insert", "--solver", s.name()]).unwrap();
             assert_eq!(cli.request().solver, s);

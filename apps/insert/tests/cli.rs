@@ -272,7 +272,7 @@ fn the_default_run_is_table_2_and_matches_the_library() {
     assert_eq!(inputs["shape"]["diameter_cm"], 7.0);
     assert_eq!(inputs["normal"], serde_json::json!([0.0, 0.0, 1.0]));
     assert_eq!(inputs["tangent"], serde_json::json!([1.0, 0.0, 0.0]));
-    assert_eq!(inputs["solver"], "quasi_static", "the default solver");
+    assert_eq!(inputs["solver"], "explicit", "the default solver");
     assert_eq!(files_in(&dir), vec!["table2.json"]);
 }
 
@@ -363,7 +363,7 @@ fn the_solver_flag_reaches_the_report_and_is_refused_beside_a_job() {
     assert_fails(
         &["--job", job_file.to_str().unwrap()],
         Exit::Usage,
-        &["`solver`", "`quasi_static` or `explicit`"],
+        &["`solver`", "`explicit` or `quasi_static`"],
     );
     let mut written = files_in(&dir);
     written.sort();
@@ -714,7 +714,7 @@ fn help_lists_the_solvers() {
         for needle in [
             "quasi_static",
             "explicit",
-            "[default: quasi_static]",
+            "[default: explicit]",
             "every mode",
         ] {
             assert!(

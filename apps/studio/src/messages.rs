@@ -111,6 +111,7 @@ pub fn label_of(field: &str) -> Option<&'static str> {
         "thickness_cm" => "skin thickness",
         "density_g_cm3" => "tissue density",
         "detect" => "contact detection",
+        "solver" => "solver",
         "max_steps" => "step limit",
         "time_step_s" => "time step",
         "target_gain_cm2" => "target skin gain",

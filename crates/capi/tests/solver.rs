@@ -1,6 +1,6 @@
 //! The request's `solver` through the C ABI's JSON entry point: the job runs with the solver
 //! asked for and its report says so (`inputs.solver`) with the run's `iterations` and
-//! `residual_n`; the default is `quasi_static`; an unknown solver is refused as `TISSUE_USAGE`
+//! `residual_n`; the default is `explicit`; an unknown solver is refused as `TISSUE_USAGE`
 //! naming the field and the solvers.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
@@ -84,7 +84,7 @@ fn the_solver_of_a_json_request_runs_and_is_reported() {
 
     // Left out, the solver is the default, and the report says which.
     let (default, _) = run(patient, r#"{"request": {"max_steps": 40}}"#);
-    assert_eq!(default["inputs"]["solver"], "quasi_static");
+    assert_eq!(default["inputs"]["solver"], "explicit");
     assert!(default["iterations"].as_u64().is_some_and(|i| i > 0));
     assert!(default.get("residual_n").is_some(), "always written");
 
@@ -98,7 +98,7 @@ fn the_solver_of_a_json_request_runs_and_is_reported() {
     assert!(job.is_null());
     let message = last_error();
     assert!(
-        message.contains("`solver`") && message.contains("`quasi_static` or `explicit`"),
+        message.contains("`solver`") && message.contains("`explicit` or `quasi_static`"),
         "{message}"
     );
     tissue_patient_free(patient);

@@ -79,7 +79,7 @@ pub use spring::{
     spring_force, springs_from_triangles, springs_from_triangles_floored, van_gelder, Anchor,
     SheetMaterial, Spring,
 };
-pub use statics::{Anderson, Preconditioner, StiffnessBuilder};
+pub use statics::{Preconditioner, StiffnessBuilder};
 pub use stop::{RunReport, SettleDetector, StopCriterion, StopReason};
 pub use system::{Integrator, MassSpringSystem, StepReport};
 pub use volume::VolumePreservation;

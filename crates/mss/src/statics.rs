@@ -1,16 +1,15 @@
-//! The building blocks of a quasi-static solve: a constant stiffness matrix factored once
-//! ([`StiffnessBuilder`], [`Preconditioner`]) and Anderson acceleration ([`Anderson`]).
+//! The building block of a quasi-static solve: a constant stiffness matrix factored once
+//! ([`StiffnessBuilder`], [`Preconditioner`]).
 //!
 //! A static equilibrium `r(x) = 0` (`r` the net force on every free particle) of a mass–spring
 //! system is the fixed point of the local/global map of Liu et al. (2013), "Fast simulation of
 //! mass-spring systems": `x ← x + P⁻¹ r(x)`, `P = Σₛ kₛ (eₐ − e_b)(eₐ − e_b)ᵀ + …` the springs'
 //! Laplacian (plus anchors and whatever else a caller adds). For springs alone this is exactly
 //! the projective-dynamics iteration (the local step projects each spring to its rest length,
-//! the global step solves with `P`), it decreases the energy monotonically, and `P` does not
-//! depend on `x`, so it is factored once (sparse Cholesky, faer) and each iteration costs one
-//! back-substitution of three right-hand sides. [`Anderson`] mixes the last few iterates
-//! (Walker & Ni 2011; Peng et al. 2018 for geometry processing), which cuts the iterations by
-//! about an order of magnitude on stretched membranes.
+//! the global step solves with `P`), and `P` does not depend on `x`, so it is factored once
+//! (sparse Cholesky, faer) and each application costs one back-substitution of three
+//! right-hand sides. It is also a good preconditioner for conjugate gradients on the true
+//! Hessian (Newton steps), which is how `tissue-implant`'s quasi-static solver uses it.
 //!
 //! `P` is scalar (the same for x, y, z): `n × n` for `n` free particles, solved for three
 //! columns. Fixed particles have no row. A caller may change the diagonal between iterations
@@ -289,152 +288,6 @@ impl Preconditioner {
     }
 }
 
-/// Anderson acceleration of a fixed-point map `x ← G(x)` in `ℝᵈ` (type II, the last `depth`
-/// differences, Tikhonov-regularised normal equations): given `xₖ` and `G(xₖ)` it returns
-/// `xₖ₊₁ = G(xₖ) − ΔG γ`, `γ = argmin |fₖ − ΔF γ|`, `f = G(x) − x`. Nothing allocates after
-/// [`Anderson::new`].
-#[derive(Debug, Clone)]
-pub struct Anderson {
-    depth: usize,
-    dim: usize,
-    /// Ring of `Δf` and `Δg` columns.
-    df: Vec<Vec<f64>>,
-    dg: Vec<Vec<f64>>,
-    stored: usize,
-    next: usize,
-    previous_f: Vec<f64>,
-    previous_g: Vec<f64>,
-    have_previous: bool,
-    normal: Vec<f64>,
-    gamma: Vec<f64>,
-}
-
-impl Anderson {
-    /// Acceleration over the last `depth` (≥ 1) iterates in `dim` dimensions.
-    pub fn new(depth: usize, dim: usize) -> Self {
-        let depth = depth.max(1);
-        Anderson {
-            depth,
-            dim,
-            df: vec![vec![0.0; dim]; depth],
-            dg: vec![vec![0.0; dim]; depth],
-            stored: 0,
-            next: 0,
-            previous_f: vec![0.0; dim],
-            previous_g: vec![0.0; dim],
-            have_previous: false,
-            normal: vec![0.0; depth * depth],
-            gamma: vec![0.0; depth],
-        }
-    }
-
-    /// Forgets the history (after the map changed: a new load step, a refactored `P`).
-    pub fn reset(&mut self) {
-        self.stored = 0;
-        self.next = 0;
-        self.have_previous = false;
-    }
-
-    /// One accelerated step: `x` holds `xₖ` on entry and `xₖ₊₁` on return; `g` is `G(xₖ)`.
-    /// Slices shorter than the dimension are a caller error and leave `x` at `g`.
-    pub fn step(&mut self, x: &mut [f64], g: &[f64]) {
-        let d = self.dim;
-        if x.len() != d || g.len() != d {
-            let n = x.len().min(g.len());
-            x[..n].copy_from_slice(&g[..n]);
-            return;
-        }
-        if self.have_previous {
-            let slot = self.next;
-            for i in 0..d {
-                let f = g[i] - x[i];
-                self.df[slot][i] = f - self.previous_f[i];
-                self.dg[slot][i] = g[i] - self.previous_g[i];
-            }
-            self.next = (self.next + 1) % self.depth;
-            self.stored = (self.stored + 1).min(self.depth);
-        }
-        for i in 0..d {
-            self.previous_f[i] = g[i] - x[i];
-            self.previous_g[i] = g[i];
-        }
-        self.have_previous = true;
-        x.copy_from_slice(g);
-        let m = self.stored;
-        if m == 0 {
-            return;
-        }
-        // Normal equations (ΔFᵀΔF + λ I) γ = ΔFᵀ f.
-        let mut scale = 0.0f64;
-        for a in 0..m {
-            for b in 0..=a {
-                let dot: f64 = self.df[a].iter().zip(&self.df[b]).map(|(p, q)| p * q).sum();
-                self.normal[a * m + b] = dot;
-                self.normal[b * m + a] = dot;
-            }
-            scale = scale.max(self.normal[a * m + a]);
-            self.gamma[a] = self.df[a]
-                .iter()
-                .zip(&self.previous_f)
-                .map(|(p, q)| p * q)
-                .sum();
-        }
-        if !(scale.is_finite() && scale > 0.0) {
-            return;
-        }
-        for a in 0..m {
-            self.normal[a * m + a] += 1e-10 * scale;
-        }
-        if !solve_dense(&mut self.normal[..m * m], &mut self.gamma[..m], m) {
-            self.reset();
-            return;
-        }
-        for (col, &gamma) in self.dg[..m].iter().zip(&self.gamma[..m]) {
-            for (xi, dgi) in x.iter_mut().zip(col) {
-                *xi -= gamma * dgi;
-            }
-        }
-    }
-}
-
-/// Solves the symmetric positive definite `m × m` system `a·x = b` in place (Cholesky, `b`
-/// becomes `x`); false when `a` is not positive definite.
-fn solve_dense(a: &mut [f64], b: &mut [f64], m: usize) -> bool {
-    for j in 0..m {
-        let mut d = a[j * m + j];
-        for k in 0..j {
-            d -= a[j * m + k] * a[j * m + k];
-        }
-        if !(d.is_finite() && d > 0.0) {
-            return false;
-        }
-        let d = d.sqrt();
-        a[j * m + j] = d;
-        for i in j + 1..m {
-            let mut s = a[i * m + j];
-            for k in 0..j {
-                s -= a[i * m + k] * a[j * m + k];
-            }
-            a[i * m + j] = s / d;
-        }
-    }
-    for i in 0..m {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= a[i * m + k] * b[k];
-        }
-        b[i] = s / a[i * m + i];
-    }
-    for i in (0..m).rev() {
-        let mut s = b[i];
-        for k in i + 1..m {
-            s -= a[k * m + i] * b[k];
-        }
-        b[i] = s / a[i * m + i];
-    }
-    true
-}
-
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::panic)]
 mod tests {
@@ -485,43 +338,5 @@ mod tests {
         let mut x = vec![DVec3::ZERO; 2];
         pre.solve(&[DVec3::X, DVec3::ZERO], &mut x);
         assert!((x[0].x - 4.0 / 7.0).abs() < 1e-12 && (x[1].x - 1.0 / 7.0).abs() < 1e-12);
-    }
-
-    #[test]
-    fn anderson_solves_a_linear_fixed_point_far_faster_than_plain_iteration() {
-        // G(x) = M x + c with a contraction of spectral radius 0.99 in 20 dimensions.
-        let n = 20;
-        let g = |x: &[f64], out: &mut [f64]| {
-            for i in 0..n {
-                let rho = 0.5 + 0.49 * i as f64 / (n - 1) as f64;
-                out[i] = rho * x[i] + (1.0 - rho) * (i as f64);
-            }
-        };
-        let solve = |depth: usize| {
-            let mut aa = Anderson::new(depth, n);
-            let mut x = vec![0.0; n];
-            let mut gx = vec![0.0; n];
-            for it in 0..5000 {
-                g(&x, &mut gx);
-                let err = x
-                    .iter()
-                    .enumerate()
-                    .map(|(i, v)| (v - i as f64).abs())
-                    .fold(0.0, f64::max);
-                if err < 1e-8 {
-                    return it;
-                }
-                if depth == 0 {
-                    x.copy_from_slice(&gx);
-                } else {
-                    aa.step(&mut x, &gx);
-                }
-            }
-            5000
-        };
-        let plain = solve(0);
-        let accelerated = solve(8);
-        assert!(plain > 1000, "{plain}");
-        assert!(accelerated < plain / 10, "{accelerated} vs {plain}");
     }
 }

@@ -297,6 +297,9 @@ fn param_kind(param: Param) -> (ErrorKind, Option<&'static str>, &'static str) {
         | P::ContactFraction
         | P::Coherence
         | P::SettleSpeed
+        | P::Tolerance
+        | P::LoadSteps
+        | P::ContactStiffness
         | P::GrowthRate
         | P::Prestretch
         | P::GrowthThreshold

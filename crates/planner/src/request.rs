@@ -62,7 +62,7 @@ pub struct PlanRequest {
     pub density_g_cm3: f64,
     /// The collision broad phase.
     pub detect: Detect,
-    /// How a run finds the rest state: `quasi_static` (the default) or `explicit` (the
+    /// How a run finds the rest state: `explicit` (the default) or `quasi_static` (the
     /// thesis's stepping, the reference). Every mode runs with it.
     pub solver: Solver,
     /// A run's step limit.
@@ -661,11 +661,11 @@ mod tests {
     /// `solver`: the library's default when left out, either name taken and passed to the
     /// library's parameters, an unknown name refused naming the field and both names.
     #[test]
-    fn the_solver_defaults_to_quasi_static_and_reaches_the_parameters() {
+    fn the_solver_defaults_to_explicit_and_reaches_the_parameters() {
         use tissue_implant::Solver as Library;
         let empty = request(serde_json::json!({}));
-        assert_eq!(empty.solver, Solver::QuasiStatic);
-        assert_eq!(empty.params().solver, Library::QuasiStatic);
+        assert_eq!(empty.solver, Solver::Explicit);
+        assert_eq!(empty.params().solver, Library::Explicit);
         assert_eq!(empty.params().solver, InsertionParams::default().solver);
         for (name, solver, library) in [
             ("quasi_static", Solver::QuasiStatic, Library::QuasiStatic),
@@ -681,11 +681,11 @@ mod tests {
             );
         }
         // Only the solver changes: every other parameter is the same for both.
-        let explicit = request(serde_json::json!({ "solver": "explicit" })).params();
+        let statics = request(serde_json::json!({ "solver": "quasi_static" })).params();
         assert_eq!(
             InsertionParams {
-                solver: Library::QuasiStatic,
-                ..explicit
+                solver: Library::Explicit,
+                ..statics
             },
             empty.params()
         );
@@ -700,7 +700,7 @@ mod tests {
                 .unwrap_or_default();
             if bad["solver"].is_string() {
                 assert!(e.contains("`solver`"), "{bad}: {e}");
-                assert!(e.contains("`quasi_static` or `explicit`"), "{bad}: {e}");
+                assert!(e.contains("`explicit` or `quasi_static`"), "{bad}: {e}");
             } else {
                 assert!(!e.is_empty(), "{bad} is refused");
             }
@@ -712,7 +712,7 @@ mod tests {
             .unwrap_or_default();
         assert!(
             e.contains(
-                "unknown variant `newton` of `solver`, expected `quasi_static` or `explicit`"
+                "unknown variant `newton` of `solver`, expected `explicit` or `quasi_static`"
             ) && e.contains("line 1"),
             "{e}"
         );

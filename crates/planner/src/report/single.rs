@@ -249,7 +249,7 @@ mod tests {
         assert_eq!(json["mode"], "single");
         assert_eq!(json["steps"], 5);
         // The solver asked for (the default), the run's iterations and residual.
-        assert_eq!(json["inputs"]["solver"], "quasi_static");
+        assert_eq!(json["inputs"]["solver"], "explicit");
         assert_eq!(json["iterations"], planned.outcome.iterations);
         assert!(json["iterations"].as_u64().is_some_and(|i| i > 0));
         assert_eq!(
