@@ -22,7 +22,7 @@ use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use tissue_app::{CancelToken, SimMesh};
 use tissue_implant::ScanOptions;
 
@@ -91,7 +91,7 @@ pub fn coarse(mut scenario: Scenario) -> Result<Scenario, PlanError> {
 }
 
 /// A preview: the area gain and the dome to draw.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DomePreview {
     /// The region's area gain, cm² (the report's `area_gain_cm2`, on the coarse mesh).
     pub gain_cm2: f64,
