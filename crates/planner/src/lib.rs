@@ -19,10 +19,6 @@
 //!   vertex normals), the tangent (given or +x, turned by `rotation_deg`), the
 //!   [`tissue_app::InsertionJob`]; [`Scenario::preview`] draws the footprint and the region and
 //!   runs the set-up, so that a placement that cannot run is refused before Run.
-//! - **The live preview** ([`Previewer`], [`coarse`]): the request placed as a run's, then run
-//!   coarse and short ([`PREVIEW_COARSENING`] × the default edge, at most [`PREVIEW_MAX_STEPS`]
-//!   steps and [`PREVIEW_IMPLANT_VERTICES`] implant vertices) for a front end to draw while the
-//!   planner drags the expander: the dome and its gain ([`DomePreview`]), the last one reused.
 //! - **The result on the patient** ([`PatientResult`]): the deformed patient in the file's unit
 //!   with its fields (displacement, stretch, in-region), as mesh files and a picture.
 //! - **The report** ([`report`]): the JSON contract, with [`report::SCHEMA_VERSION`]; field
