@@ -36,13 +36,13 @@ async function main() {
     await page.mouse.click(centre.x, centre.y);
     await page.waitForFunction(() => {
       const p = window.tissueStudio.planner;
-      return p.placement && p.preview && p.preview.ok === true;
+      return p.placement && p.check && p.check.ok === true;
     }, null, { timeout: 30000 });
     const placement = await planner(page, () => window.tissueStudio.planner.placement);
     const dist = Math.hypot(...placement.point);
     check(dist < 0.5, `the click placed the expander within 0.5 cm of (0, 0, 0): ${dist.toFixed(3)} cm, vertex ${placement.vertex}`);
     check(Number.isInteger(placement.vertex), 'the placement names a vertex');
-    const footprint = await planner(page, () => window.tissueStudio.planner.preview.footprint.length);
+    const footprint = await planner(page, () => window.tissueStudio.planner.check.footprint.length);
     check(footprint > 2, `the preview gives a footprint (${footprint} points)`);
     await shot(page, '2-placement.png');
 
@@ -155,7 +155,7 @@ async function main() {
     check(await page.isDisabled('#run'), 'Run waits for a depth the server takes');
     await shot(page, '4d-depth-at-input.png');
     await page.fill('#depth', '0.25');
-    await page.waitForFunction(() => window.tissueStudio.planner.preview?.ok === true && !document.getElementById('depth-error'),
+    await page.waitForFunction(() => window.tissueStudio.planner.check?.ok === true && !document.getElementById('depth-error'),
       null, { timeout: 30000 });
     ok('a depth of 0.25 cm clears the message and the preview is ok again');
 

@@ -79,7 +79,7 @@ async function main() {
     await page.waitForFunction(() => window.tissueStudio?.planner?.ready === true, null, { timeout: 120000 });
     ok('the planner loaded the default patient (fetch with the cookie)');
     await page.evaluate(() => window.tissueStudio.planner.placeAt([0, 0, 0]));
-    await page.waitForFunction(() => window.tissueStudio.planner.preview?.ok === true, null, { timeout: 30000 });
+    await page.waitForFunction(() => window.tissueStudio.planner.check?.ok === true, null, { timeout: 30000 });
     await page.click('#tab-3');
     await page.getByRole('button', { name: 'Run', exact: true }).click();
     await page.waitForFunction(() => {

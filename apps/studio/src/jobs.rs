@@ -1,6 +1,7 @@
 //! The job socket: one WebSocket per tab; `run` starts a job on the planner's front door (one at
 //! a time on the server), `cancel` or a closed socket cancels it; progress, then one terminal
-//! message, go back on the socket ([`JobMessage`]).
+//! message, go back on the socket ([`JobMessage`]). `preview` asks for a live preview
+//! ([`crate::preview`]), answered on the same socket.
 
 use std::time::{Duration, Instant};
 
@@ -53,6 +54,7 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
     let mut shutdown = studio.on_shutdown();
     let send_timeout = studio.limits().send_timeout;
     let mut mine = Owned::default();
+    let previews = crate::preview::Previews::start(studio.clone(), tx.clone());
     loop {
         tokio::select! {
             incoming = socket.recv() => {
@@ -63,6 +65,7 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
                 };
                 match serde_json::from_str::<ClientMessage>(&text) {
                     Ok(ClientMessage::Cancel) => mine.cancel(),
+                    Ok(ClientMessage::Preview(p)) => previews.request(*p),
                     Ok(ClientMessage::Run(run)) => match start(&studio, *run, tx.clone()) {
                         Ok(r) => mine.started(r),
                         Err(error) => {
@@ -96,8 +99,9 @@ pub async fn serve_socket(studio: Studio, mut socket: WebSocket) {
             _ = shutdown.changed() => break,
         }
     }
-    // The tab is gone (or the server stops): its job is cancelled.
+    // The tab is gone (or the server stops): its job and its preview are cancelled.
     mine.cancel();
+    drop(previews);
 }
 
 /// Starts `run` on a thread of its own, unless a job runs.

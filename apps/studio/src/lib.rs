@@ -19,7 +19,10 @@
 //! ## Policies
 //! - **One job at a time.** The simulation uses every core; a second run, from the same tab or
 //!   another, is refused (`refused`, kind `busy`) with a message that says a job is running and
-//!   how far. Previews (the set-up without the run) are not jobs and are always answered.
+//!   how far. Previews are not jobs: the placement check (the set-up without the run) is
+//!   always answered, and a live preview (the `preview` message: a coarse, capped run, one in
+//!   flight per tab, the newest, at most [`Limits::previews`] at once on the server) is
+//!   answered beside a running job.
 //! - **Closing the tab cancels its job**: a job belongs to its WebSocket; when the socket closes
 //!   the job is cancelled (within one simulation step).
 //! - **Only its own page.** Every request must name this server in `Host`; WebSocket upgrades and
@@ -72,6 +75,7 @@ mod api;
 pub mod assets;
 mod jobs;
 pub mod messages;
+mod preview;
 mod serve;
 mod state;
 pub mod trainer;

@@ -3,7 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
-use tissue_planner::{ErrorKind as PlanKind, JobMode, JobSpec, PlanError};
+use tissue_planner::{
+    DomePreview, ErrorKind as PlanKind, JobMode, JobSpec, PlanError, PlanRequest,
+};
 
 /// What went wrong, as the page and a script see it (`error.kind`): the planner's kinds and the
 /// server's own.
@@ -139,6 +141,24 @@ pub enum ClientMessage {
     Run(Box<RunMessage>),
     /// Cancel this tab's job.
     Cancel,
+    /// Preview the dome of a request, coarse and quick (tissue-planner's [`tissue_planner::Previewer`]);
+    /// it replaces the tab's preview in progress, which is cancelled.
+    Preview(Box<PreviewMessage>),
+}
+
+/// A live preview: the patient, the page's sequence number (echoed in the answer, so that the
+/// page draws only the newest) and the planning request, as a run would send it.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PreviewMessage {
+    /// The id an upload or a shipped patient returned.
+    pub patient: String,
+    /// The page's number for this preview (any; the page counts up).
+    #[serde(default)]
+    pub seq: u64,
+    /// What to plan; made coarse by the planner.
+    #[serde(default)]
+    pub request: PlanRequest,
 }
 
 /// A run: the patient's id and what to run, tissue-planner's [`JobSpec`] (the C ABI's job
@@ -270,6 +290,19 @@ pub enum JobMessage {
         /// Why.
         error: ErrorBody,
     },
+    /// A live preview's answer: the dome and its gain, or why the request cannot run. Only the
+    /// newest preview of a tab is answered: one replaced while it ran is dropped.
+    Preview {
+        /// The page's `seq` of the preview message.
+        seq: u64,
+        /// Previews this socket has run to their end so far (replaced ones and repeats of the
+        /// last are not counted).
+        computed: u64,
+        /// The preview, when it ran.
+        preview: Option<Box<DomePreview>>,
+        /// Why not (the request field at fault named as in a run's error).
+        error: Option<ErrorBody>,
+    },
 }
 
 impl JobMessage {
@@ -295,7 +328,8 @@ impl JobMessage {
             | JobMessage::Failed { job, .. } => Some(job),
             JobMessage::Accepted { .. }
             | JobMessage::Progress { .. }
-            | JobMessage::Refused { .. } => None,
+            | JobMessage::Refused { .. }
+            | JobMessage::Preview { .. } => None,
         }
     }
 }
@@ -337,6 +371,34 @@ mod tests {
         assert!(matches!(again, ClientMessage::Run(r) if r.spec.volumes_cm3 == [50.0]));
         let unknown = r#"{"type": "run", "patient": "p1", "volume": 50}"#;
         assert!(serde_json::from_str::<ClientMessage>(unknown).is_err());
+        Ok(())
+    }
+
+    #[test]
+    fn a_preview_message_round_trips_and_unknown_members_are_refused(
+    ) -> Result<(), serde_json::Error> {
+        let text =
+            r#"{"type": "preview", "patient": "p1", "seq": 7, "request": {"volume_cm3": 90}}"#;
+        let ClientMessage::Preview(p) = serde_json::from_str(text)? else {
+            panic!("not a preview");
+        };
+        assert_eq!(
+            (p.patient.as_str(), p.seq, p.request.volume_cm3),
+            ("p1", 7, 90.0)
+        );
+        let again: ClientMessage =
+            serde_json::from_value(serde_json::to_value(ClientMessage::Preview(p))?)?;
+        assert!(matches!(again, ClientMessage::Preview(p) if p.seq == 7));
+        for unknown in [
+            r#"{"type": "preview", "patient": "p1", "volume": 50}"#,
+            r#"{"type": "preview", "patient": "p1", "request": {"volume": 50}}"#,
+            r#"{"type": "preview", "seq": 1}"#,
+        ] {
+            assert!(
+                serde_json::from_str::<ClientMessage>(unknown).is_err(),
+                "{unknown}"
+            );
+        }
         Ok(())
     }
 }

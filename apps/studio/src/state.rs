@@ -40,6 +40,10 @@ pub struct Limits {
     pub send_timeout: Duration,
     /// After a stop, open connections get this long to finish: 3 s.
     pub shutdown_grace: Duration,
+    /// Live previews computed at once on the server, from every tab together (each also has at
+    /// most one in flight, the newest): 2, the cores of a small workstation. A tab's preview
+    /// waits for a place; a newer one replaces it while it waits.
+    pub previews: usize,
 }
 
 impl Default for Limits {
@@ -52,6 +56,7 @@ impl Default for Limits {
             max_connections: 256,
             send_timeout: Duration::from_secs(10),
             shutdown_grace: Duration::from_secs(3),
+            previews: 2,
         }
     }
 }
@@ -91,6 +96,7 @@ pub struct Studio {
     limits: Arc<Limits>,
     uploads: Arc<Semaphore>,
     sockets: Arc<Semaphore>,
+    previews: Arc<Semaphore>,
 }
 
 impl Studio {
@@ -123,6 +129,7 @@ impl Studio {
             shutdown,
             uploads: Arc::new(Semaphore::new(limits.uploads.max(1))),
             sockets: Arc::new(Semaphore::new(JOB_SOCKETS)),
+            previews: Arc::new(Semaphore::new(limits.previews.max(1))),
             limits: Arc::new(limits),
         })
     }
@@ -130,6 +137,12 @@ impl Studio {
     /// A place for one job socket, or `None` when [`JOB_SOCKETS`] are open.
     pub fn socket_slot(&self) -> Option<OwnedSemaphorePermit> {
         Arc::clone(&self.sockets).try_acquire_owned().ok()
+    }
+
+    /// The server-wide places of live previews ([`Limits::previews`]): take one with
+    /// `acquire_owned` before computing a preview.
+    pub fn preview_slots(&self) -> Arc<Semaphore> {
+        Arc::clone(&self.previews)
     }
 
     /// The limits it runs with.

@@ -9,6 +9,8 @@ const SKIN = 0xe2b49a;
 const FOOTPRINT = 0x1257c7;
 const REGION = 0x138a5a;
 const MARKER = 0x0b3d91;
+/** The live preview's dome: a colour of its own, so that it is not taken for a result. */
+export const DOME_PREVIEW = 0xd9480f;
 
 /** Viridis, five stops: the colour bar's CSS gradient uses the same ones. */
 export const RAMP = ['#440154', '#3b528b', '#21918c', '#5ec962', '#fde725'];
@@ -64,6 +66,17 @@ export class PlannerView {
     this.scene.add(this.overlay);
     this.basePositions = null;
     this.size = 1;
+    // The live preview's dome (the coarse simulation surface after its run): its own mesh,
+    // translucent, drawn over the skin in the placement view.
+    this.dome = null;
+    this.domeMaterial = new THREE.MeshPhongMaterial({
+      color: DOME_PREVIEW, transparent: true, opacity: 0.55, side: THREE.DoubleSide, shininess: 30,
+      // In front of the skin where the two lie flat on each other (the region's rim).
+      depthWrite: false, polygonOffset: true, polygonOffsetFactor: -2, polygonOffsetUnits: -4,
+    });
+    this.domeEdges = new THREE.MeshBasicMaterial({
+      color: DOME_PREVIEW, wireframe: true, transparent: true, opacity: 0.6, depthWrite: false,
+    });
 
     this.controls = new OrbitControls(this.camera, this.canvas);
     this.controls.enableDamping = false;
@@ -104,6 +117,7 @@ export class PlannerView {
       this.mesh.geometry.dispose();
     }
     this.clearOverlay();
+    this.setDome(null);
     this.basePositions = Float32Array.from(positions);
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.BufferAttribute(Float32Array.from(positions), 3));
@@ -177,6 +191,31 @@ export class PlannerView {
     this.mesh.geometry.computeVertexNormals();
     this.mesh.geometry.computeBoundingSphere();
     this.mesh.geometry.computeBoundingBox();
+    this.requestRender();
+  }
+
+  /**
+   * The live preview's dome: the coarse surface `positions` (flat cm) with `triangles` (flat
+   * indices), drawn translucent in the preview colour with its edges; null removes it.
+   */
+  setDome(positions, triangles) {
+    if (this.dome) {
+      this.scene.remove(this.dome);
+      this.dome.geometry.dispose();
+      this.dome = null;
+    }
+    if (positions && triangles && triangles.length) {
+      const geometry = new THREE.BufferGeometry();
+      geometry.setAttribute('position', new THREE.BufferAttribute(Float32Array.from(positions), 3));
+      geometry.setIndex(new THREE.BufferAttribute(Uint32Array.from(triangles), 1));
+      geometry.computeVertexNormals();
+      geometry.computeBoundingSphere();
+      this.dome = new THREE.Mesh(geometry, this.domeMaterial);
+      this.dome.add(new THREE.Mesh(geometry, this.domeEdges));
+      this.dome.renderOrder = 1;
+      this.dome.visible = this.overlay.visible;
+      this.scene.add(this.dome);
+    }
     this.requestRender();
   }
 
@@ -282,6 +321,7 @@ export class PlannerView {
 
   showOverlay(on) {
     this.overlay.visible = on;
+    if (this.dome) this.dome.visible = on;
     this.requestRender();
   }
 

@@ -19,7 +19,8 @@ const state = {
   job: { state: 'idle', step: 0, settle: 0 }, // + run, runs, max_steps, job, mode, cancel_ms
   result: null, // the last finished report
   error: null, // the message in #error
-  preview: null, // the last preview answer
+  check: null, // the last placement check (POST /api/preview) answer
+  preview: null, // the live preview: { ms, gain, edge_cm, stale, seq, steps, computed }
   // The errors shown at the inputs, by request field: the page's own (a number field holding
   // something that is not a number), and the server's for the last run (until the input is edited).
   inputErrors: {},
@@ -113,8 +114,8 @@ function buildRequest(extra = {}) {
 /** The field errors at the inputs: the page's own, the preview's (when current), the last run's. */
 function renderErrors() {
   const errors = { ...state.runErrors };
-  const e = state.preview?.error;
-  if (!state.previewPending && state.preview && !state.preview.ok && e?.field && inputOf(e.field)) errors[e.field] = e.message;
+  const e = state.check?.error;
+  if (!state.previewPending && state.check && !state.check.ok && e?.field && inputOf(e.field)) errors[e.field] = e.message;
   Object.assign(errors, state.inputErrors);
   for (const [field, message] of Object.entries(errors)) {
     const details = inputOf(field) && $(inputOf(field))?.closest('details');
@@ -183,7 +184,8 @@ async function loadPatient(fetcher, source, what) {
 }
 
 function setPatient(answer) {
-  Object.assign(state, { patient: answer, placement: null, preview: null, previewPending: false, runErrors: {} });
+  Object.assign(state, { patient: answer, placement: null, check: null, preview: null, previewPending: false, runErrors: {} });
+  resetLive();
   state.previewSeq++;
   clearTimeout(state.previewTimer);
   view.setMesh(answer.mesh.positions, answer.mesh.triangles);
@@ -245,12 +247,26 @@ function canPlace() {
   return state.ready && !!state.patient && state.job.state !== 'running' && state.showing === 'placement';
 }
 
-function setPlacement(p) {
+function setPlacement(p, t = performance.now()) {
   state.placement = { point: p.point.slice(), vertex: p.vertex, normal: p.normal };
   view.setOverlay({ point: p.point, normal: p.normal });
   renderPlacement();
   if (state.step === 1) showStep(2);
   schedulePreview();
+  livePreview(t, true);
+}
+
+/**
+ * A drag of the expander over the skin, at event time `t`: the marker follows, the preview too
+ * (`last`: the expander let go there).
+ */
+function dragPlacement(hit, t, last = false) {
+  if (!canPlace()) return;
+  state.placement = { point: hit.point.slice(), vertex: hit.vertex, normal: hit.normal };
+  view.setOverlay({ point: hit.point, normal: hit.normal });
+  renderPlacement();
+  schedulePreview();
+  livePreview(t, last);
 }
 
 function renderPlacement() {
@@ -290,11 +306,20 @@ function nearestVertex(point) {
 
 // ---------------------------------------------------------------- the preview
 
+// The sliders beside number inputs, and the input each sets.
+const SLIDERS = { 'volume-slider': 'volume', 'depth-slider': 'depth' };
+
 function onParamsChanged(e) {
+  const id = e?.target?.id;
+  if (SLIDERS[id]) $(SLIDERS[id]).value = e.target.value;
+  for (const [slider, input] of Object.entries(SLIDERS)) {
+    if (id === input && e.target.value.trim() !== '' && !e.target.validity?.badInput) $(slider).value = e.target.value;
+  }
   setText('rotation-out', `${$('rotation').value}°`);
   renderRunSummary();
   schedulePreview();
-  if (e?.target?.id) onInputEdited(e.target.id);
+  livePreview(e?.timeStamp);
+  if (id) onInputEdited(SLIDERS[id] || id);
 }
 
 function onShapeChange() {
@@ -317,7 +342,7 @@ async function runPreview() {
   Object.assign(state.inputErrors, errors);
   if (Object.keys(errors).length || !state.placement) {
     state.previewPending = false;
-    state.preview = null;
+    state.check = null;
     renderPreview();
     return;
   }
@@ -331,7 +356,7 @@ async function runPreview() {
   }
   if (seq !== state.previewSeq) return; // a newer preview is on its way
   state.previewPending = false;
-  state.preview = answer;
+  state.check = answer;
   if (answer.placement?.normal) state.placement.normal = answer.placement.normal;
   view.setOverlay({
     footprint: answer.footprint || [],
@@ -344,7 +369,7 @@ async function runPreview() {
 
 /** The preview's answer: its figures, or its error (at the input it names, or in the box). */
 function renderPreview() {
-  const a = state.previewPending ? null : state.preview;
+  const a = state.previewPending ? null : state.check;
   const atInput = !!(a?.error?.field && inputOf(a.error.field));
   const box = $('preview-error');
   box.hidden = !a || a.ok || atInput;
@@ -360,10 +385,107 @@ function renderPreview() {
   renderRunControls();
 }
 
+// ---------------------------------------------------------------- the live preview
+//
+// While the expander is dragged or a parameter moves, the server runs the request coarse
+// (tissue-planner's Previewer) and the page draws the dome and its gain, marked "preview". One
+// preview is in flight at a time; inputs meanwhile only mark the newest as queued, and it is sent
+// when the one in flight answers. `state.preview.ms` is from the input event that the drawn
+// preview answers (the newest one folded into its request) to the preview drawn.
+
+const live = { seq: 0, inFlight: null, queued: null };
+
+function resetLive() {
+  Object.assign(live, { inFlight: null, queued: null });
+  state.preview = null;
+  view.setDome(null);
+  renderLivePreview();
+}
+
+/**
+ * An input that changes the dome, at event time `t` (performance.now()'s clock). `last`: the
+ * gesture's end (the expander let go): sent at once, the server cancels the one in flight.
+ */
+function livePreview(t, last = false) {
+  if (!state.patient || !state.placement || state.job.state === 'running') return;
+  live.queued = { t0: Number.isFinite(t) && t > 0 ? t : performance.now() };
+  state.preview = { ms: null, gain: null, edge_cm: null, ...state.preview, stale: true };
+  renderLivePreview();
+  if (!live.inFlight || last) sendLivePreview();
+}
+
+async function sendLivePreview() {
+  const queued = live.queued;
+  live.queued = null;
+  if (!queued || !state.patient || !state.placement) return;
+  const { request, errors } = buildRequest();
+  if (Object.keys(errors).length) {
+    state.preview = { ...state.preview, stale: false };
+    renderLivePreview();
+    return;
+  }
+  const json = JSON.stringify(request);
+  if (live.inFlight?.json === json) {
+    // The one in flight is this request already (the pointer let go where it last moved): its
+    // answer answers this input too.
+    live.inFlight.t0 = queued.t0;
+    return;
+  }
+  const seq = ++live.seq;
+  live.inFlight = { seq, t0: queued.t0, sent: performance.now(), json };
+  try {
+    await socket.send({ type: 'preview', patient: state.patient.patient, seq, request });
+  } catch (e) {
+    live.inFlight = null;
+    state.preview = { ...state.preview, stale: false, error: e.message };
+    renderLivePreview();
+  }
+}
+
+function onLivePreview(msg) {
+  if (!live.inFlight || msg.seq !== live.inFlight.seq) return; // not the one in flight
+  const { t0, sent } = live.inFlight;
+  const arrived = performance.now();
+  live.inFlight = null;
+  const p = msg.preview;
+  if (p && state.job.state !== 'running') {
+    view.setDome(p.positions, p.triangles);
+    view.renderNow();
+  } else {
+    view.setDome(null);
+  }
+  const ms = performance.now() - t0;
+  state.preview = {
+    ms, gain: p ? p.gain_cm2 : null, edge_cm: p ? p.edge_cm : null, stale: !!live.queued,
+    seq: msg.seq, steps: p?.steps ?? null, settled: p?.settled ?? null, computed: msg.computed,
+    compute_ms: p?.compute_ms ?? null,
+    // Where the time went: input to sent, sent to answer, answer to drawn.
+    parts_ms: [Math.max(0, sent - t0), arrived - Math.max(sent, t0), performance.now() - arrived],
+    error: msg.error?.message || null,
+  };
+  renderLivePreview();
+  if (live.queued) sendLivePreview();
+}
+
+function renderLivePreview() {
+  const box = $('live-preview');
+  const p = state.preview;
+  box.hidden = !p || state.showing !== 'placement';
+  if (box.hidden) return;
+  let text;
+  if (p.error) text = `Preview: ${p.error}`;
+  else if (p.gain == null) text = 'Preview: computing…';
+  else text = `Preview: gain ${fmt(p.gain, 1)} cm² (coarse, edge ${fmt(p.edge_cm, 2)} cm, ${fmtInt(Math.round(p.ms))} ms)`;
+  if (p.stale && p.gain != null) text += ' · updating…';
+  box.textContent = text;
+  box.classList.toggle('stale', !!p.stale);
+}
+
 // ---------------------------------------------------------------- views
 
 function showPlacementView() {
   state.showing = 'placement';
+  renderLivePreview();
   view.setPositions(null);
   view.setColors(null);
   view.showOverlay(true);
@@ -376,6 +498,7 @@ function showResultView() {
   const run = state.lastRun;
   state.showing = 'result';
   view.showOverlay(false);
+  $('live-preview').hidden = true;
   $('legend').hidden = true;
   view.setPositions(state.before ? null : run.fields.after);
   applyColormap();
@@ -392,7 +515,7 @@ function applyColormap() {
 // ---------------------------------------------------------------- jobs
 
 function canRun() {
-  return !!state.patient && state.ready && !!state.placement && !state.previewPending && !!state.preview?.ok
+  return !!state.patient && state.ready && !!state.placement && !state.previewPending && !!state.check?.ok
     && !requestInputErrors() && state.job.state !== 'running';
 }
 
@@ -402,7 +525,7 @@ function runBlocked() {
   if (!state.patient) return 'Load a patient first (step 1).';
   if (!state.placement) return 'Place the expander first: click the skin in step 2.';
   if (requestInputErrors()) return 'Correct the inputs marked in step 2.';
-  const e = !state.previewPending && state.preview && !state.preview.ok ? state.preview.error : null;
+  const e = !state.previewPending && state.check && !state.check.ok ? state.check.error : null;
   if (e) return `${e.field && inputOf(e.field) ? 'Step 2' : 'Placement problem'}: ${e.message || 'the placement cannot be used.'}`;
   return null;
 }
@@ -524,12 +647,20 @@ function onSocketMessage(msg) {
     case 'refused':
       if (state.job.state === 'running') endJob('refused', msg.error);
       break;
+    case 'preview':
+      onLivePreview(msg);
+      break;
     default:
       break;
   }
 }
 
 function onSocketClosed() {
+  if (live.inFlight) {
+    // Lost with the socket: the newest input is sent again on the next one.
+    live.queued = live.queued || { t0: live.inFlight.t0 };
+    live.inFlight = null;
+  }
   if (state.job.state === 'running') endJob('failed', { message: 'The connection to the studio server was lost, and with it the run.' });
 }
 
@@ -670,7 +801,8 @@ function main() {
   wire();
   setupPointer(view, {
     canPlace,
-    place: (hit) => setPlacement(hit),
+    place: (hit, t) => setPlacement(hit, t),
+    drag: (hit, t, last) => dragPlacement(hit, t, last),
     clickRefused: () => {
       if (state.showing === 'result') setText('job-status', 'To move the expander, go back to step 2 (Placement).');
     },

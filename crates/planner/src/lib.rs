@@ -64,6 +64,7 @@ mod error;
 pub mod golden;
 mod job;
 mod patient;
+mod preview;
 pub mod report;
 mod request;
 mod result;
@@ -76,6 +77,10 @@ pub use job::{JobKind, JobMode, JobSpec, PlannedJob};
 pub use patient::{
     BoxSummary, DefectSummary, LoopSummary, MeshSummary, Patient, Shipped, TABLE2_SIDE_CM,
     TABLE2_VERTICES_PER_SIDE,
+};
+pub use preview::{
+    coarse, preview_edge_cm, DomePreview, Previewer, PREVIEW_COARSENING, PREVIEW_IMPLANT_VERTICES,
+    PREVIEW_MAX_STEPS,
 };
 pub use report::{JobReport, Tool};
 pub use request::{

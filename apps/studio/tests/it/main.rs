@@ -4,6 +4,7 @@
 
 mod api;
 mod golden;
+mod preview;
 mod security;
 mod trainer;
 
