@@ -5,19 +5,25 @@
 //! the steps, the stop reason and the results (area gain, volume difference, compression).
 //! `--membrane` adds, alternating with each default run, the same run without the skin's bending
 //! (`LayerParams::skin_bending`, the thesis's membrane) and prints the ratio of the medians: what
-//! the bending costs, measured in one run.
+//! the bending costs, measured in one run. `--quasi-static` adds, alternating likewise, the same
+//! run with the quasi-static solver and prints both end-to-end medians (setup included), their
+//! ratio, the solver's iterations and residual and its results.
 #![allow(missing_docs, clippy::print_stdout)]
 
 use std::ops::ControlFlow;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use tissue_implant::{
     default_radius, place_implant, select_region_with, ImplantShape, ImplantSpec, Insertion,
-    InsertionOutcome, InsertionParams, RegionOptions, RegionRule, TissueLayers,
+    InsertionOutcome, InsertionParams, RegionOptions, RegionRule, Solver, TissueLayers,
 };
 
-fn table2_run(volume: f64, bending: bool) -> Result<InsertionOutcome, Box<dyn std::error::Error>> {
+fn table2_run(
+    volume: f64,
+    bending: bool,
+    solver: Solver,
+) -> Result<InsertionOutcome, Box<dyn std::error::Error>> {
     let patient = tissue_mesh::grid(65, 20.0)?;
     let selection = select_region_with(
         &patient,
@@ -28,7 +34,10 @@ fn table2_run(volume: f64, bending: bool) -> Result<InsertionOutcome, Box<dyn st
             ..RegionOptions::default()
         },
     )?;
-    let mut params = InsertionParams::default();
+    let mut params = InsertionParams {
+        solver,
+        ..InsertionParams::default()
+    };
     params.layers.skin_bending = bending;
     let layers = TissueLayers::new(selection.mesh(), &params.layers)?;
     let spec = ImplantSpec::new(ImplantShape::Round { diameter: 7.0 }, volume);
@@ -45,6 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let repeats = numbers.first().map_or(5, |&n| n.max(1.0) as usize);
     let membrane = std::env::args().any(|a| a == "--membrane");
+    let statics = std::env::args().any(|a| a == "--quasi-static");
     let volumes = if numbers.len() > 1 {
         numbers[1..].to_vec()
     } else {
@@ -55,17 +65,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for &volume in &volumes {
         let mut times: Vec<Duration> = Vec::new();
         let mut membrane_times: Vec<Duration> = Vec::new();
+        let (mut whole, mut static_whole) = (Vec::new(), Vec::new());
         let mut last = None;
+        let mut last_static = None;
         for _ in 0..repeats {
-            let out = table2_run(volume, true)?;
+            let start = Instant::now();
+            let out = table2_run(volume, true, Solver::Explicit)?;
+            whole.push(start.elapsed());
             times.push(out.wall_time);
             last = Some(out);
             if membrane {
-                membrane_times.push(table2_run(volume, false)?.wall_time);
+                membrane_times.push(table2_run(volume, false, Solver::Explicit)?.wall_time);
+            }
+            if statics {
+                let start = Instant::now();
+                last_static = Some(table2_run(volume, true, Solver::QuasiStatic)?);
+                static_whole.push(start.elapsed());
             }
         }
         times.sort();
         membrane_times.sort();
+        whole.sort();
+        static_whole.sort();
         if let Some(out) = last {
             let median = times[times.len() / 2].as_secs_f64();
             println!(
@@ -77,6 +98,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 out.volume_difference,
                 100.0 * out.implant_compression
             );
+            if let (Some(q), Some(e), Some(o)) = (
+                static_whole.get(static_whole.len() / 2),
+                whole.get(whole.len() / 2),
+                &last_static,
+            ) {
+                println!(
+                    "        end to end: explicit {:.3} s, quasi-static {:.3} s (× {:.2} faster); \
+                     quasi-static {} iterations, residual {:.3e} N, {:?}, gain {:.2}, vol.diff \
+                     {:.2}, penetration {:.4}",
+                    e.as_secs_f64(),
+                    q.as_secs_f64(),
+                    e.as_secs_f64() / q.as_secs_f64(),
+                    o.iterations,
+                    o.residual_n.unwrap_or(f64::NAN),
+                    o.stop_reason,
+                    o.area_gain,
+                    o.volume_difference,
+                    o.max_penetration
+                );
+            }
             if let Some(m) = membrane_times.get(membrane_times.len() / 2) {
                 println!(
                     "        without bending {:.3} s: bending costs × {:.3}",
