@@ -277,10 +277,7 @@ impl ContactRun {
             .unwrap_or(params.contact_fraction * mean_edge);
         let body_inverse = body.particles().inverse_masses();
         let any_free = body_inverse.iter().any(|&w| w > 0.0);
-        let dome_vertex: Vec<bool> = body_inverse
-            .iter()
-            .map(|&w| w > 0.0 || !any_free)
-            .collect();
+        let dome_vertex: Vec<bool> = body_inverse.iter().map(|&w| w > 0.0 || !any_free).collect();
         let body_now: Vec<glam::Vec3> = body
             .particles()
             .positions()

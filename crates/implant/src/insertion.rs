@@ -26,8 +26,8 @@ use tissue_mss::{
 };
 
 use crate::contact_run::{ContactRun, RunParams, StepSummary};
-use crate::quasi_static::{StaticParams, StaticReport};
 use crate::outcome::{replace_region, vertex_displacements, vertex_stretch};
+use crate::quasi_static::{StaticParams, StaticReport};
 use crate::walk::{walk_on_surface, WalkEnd};
 use crate::Param;
 use crate::{

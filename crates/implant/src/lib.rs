@@ -95,9 +95,9 @@ pub use insertion::{
 };
 pub use layers::{Layer, LayerParams, TissueLayers};
 pub use outcome::{replace_region, vertex_displacements, vertex_stretch, FieldRange};
-pub use quasi_static::{StaticParams, StaticReport};
 pub use plane_press::{plane_press, plane_press_region, PlanePressOutcome, PlanePressParams};
 pub use planning::{sweep, volume_for_gain, InverseOptions, InverseSearch, PlanningRun};
+pub use quasi_static::{StaticParams, StaticReport};
 pub use region::{
     default_radius, default_snap_distance, geodesic_distances, select_region, select_region_with,
     snap_to_surface, RegionOptions, RegionRule, RegionSelection, SurfacePoint,

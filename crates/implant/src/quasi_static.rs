@@ -240,8 +240,10 @@ struct Scratch {
     contacts: Vec<Contact>,
     hessian: Hessian,
     free: Vec<bool>,
+    /// The contacts' stiffness on the preconditioner's diagonal.
+    extra: Vec<(u32, f64)>,
     /// Conjugate-gradient vectors.
-    cg: [Vec<DVec3>; 4],
+    cg: [Vec<DVec3>; 5],
 }
 
 /// One phase of the solve: which body particles are free, and the factored matrix for them.
@@ -282,7 +284,7 @@ fn vertex_normals(triangles: &[[u32; 3]], positions: &[Vec3A], stride: u32, out:
 const MIN_STEP: f64 = 1.0 / 16.0;
 
 /// The conjugate-gradient iterations of one step, at most.
-const CG_ITERATIONS: u32 = 30;
+const CG_ITERATIONS: u32 = 200;
 
 /// A step's linear solve stops when its residual has fallen by this factor.
 const CG_FORCING: f64 = 0.05;
@@ -419,15 +421,11 @@ impl ContactRun {
             .zip(tissue.inverse_masses())
             .enumerate()
         {
-            s.r[i] = if w > 0.0 {
-                Vec3A::from(*f).as_dvec3()
-            } else {
-                DVec3::ZERO
-            };
+            s.r[i] = if w > 0.0 { f.as_dvec3() } else { DVec3::ZERO };
         }
         for (v, (f, &w)) in body.forces().iter().zip(body.inverse_masses()).enumerate() {
             s.r[t + v] = if body_free && w > 0.0 {
-                Vec3A::from(*f).as_dvec3()
+                f.as_dvec3()
             } else {
                 DVec3::ZERO
             };
@@ -505,9 +503,10 @@ impl ContactRun {
                 if body_w[v] == 0.0 {
                     continue;
                 }
-                let Some(hit) = surfaces
-                    .inner_bvh
-                    .closest_point(&inner, x, reach, &mut surfaces.ws)
+                let Some(hit) =
+                    surfaces
+                        .inner_bvh
+                        .closest_point(&inner, x, reach, &mut surfaces.ws)
                 else {
                     continue;
                 };
@@ -548,6 +547,56 @@ impl ContactRun {
             .layers
             .thickness_forces(kc, &s.diagonal, &mut s.r, &mut s.contacts);
         Ok((contacts, thinned))
+    }
+
+    /// The load step's predictor: every free layer-2 particle closer than the contact distance
+    /// to the body (or inside it) is moved out along the body's normal to the contact
+    /// distance, and its layer-1 partner with it, so that a step starts with the tissue on the
+    /// body instead of through it. From inside a sphere the closest point is the radial one, so
+    /// the press's sheet keeps its order.
+    fn project_out(&mut self, surfaces: &mut Surfaces) -> Result<(), ImplantError> {
+        let d0 = self.contact_distance;
+        let reach = d0 + self.static_reach;
+        let body_p = self.body.particles().positions();
+        surfaces
+            .dome_bvh
+            .refit(&Triangles::new(body_p, &surfaces.dome).map_err(search)?)
+            .map_err(search)?;
+        vertex_normals(&surfaces.dome, body_p, 1, &mut surfaces.dome_normals);
+        let dome = Triangles::new(body_p, &surfaces.dome).map_err(search)?;
+        let n = self.layers.rest(Layer::Inner).vertex_count() as u32;
+        let tissue = self.layers.system_mut().particles_mut();
+        let (position, _, inverse_mass) = tissue.state_mut();
+        for r in 0..n {
+            let p = TissueLayers::particle(Layer::Inner, r) as usize;
+            if inverse_mass[p] == 0.0 {
+                continue;
+            }
+            let x = position[p];
+            let Some(hit) = surfaces
+                .dome_bvh
+                .closest_point(&dome, x, reach, &mut surfaces.ws)
+            else {
+                continue;
+            };
+            let tri = surfaces.dome[hit.primitive as usize];
+            let [a, b, c] = tri.map(|v| body_p[v as usize]);
+            let (q, bary) = closest_point_on_triangle(x, a, b, c);
+            let normal = (0..3)
+                .map(|i| surfaces.dome_normals[tri[i] as usize] * bary[i])
+                .sum::<Vec3A>()
+                .normalize_or_zero();
+            let gap = (x - q).dot(normal);
+            if gap < d0 {
+                let shift = normal * (d0 - gap);
+                position[p] += shift;
+                let outer = TissueLayers::particle(Layer::Outer, r) as usize;
+                if inverse_mass[outer] > 0.0 {
+                    position[outer] += shift;
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Solves the current load for its equilibrium to `tolerance` (module docs), starting from
@@ -619,12 +668,12 @@ impl ContactRun {
             } else {
                 accepted = Some(norm);
                 alpha = 1.0;
-                self.newton_step(phase, s);
+                self.newton_step(phase, s)?;
                 // x and G(x) = x + dx, flat; `g` keeps the accepted point for a backtrack.
                 let tissue_p = self.layers.system().particles().positions();
                 let body_p = self.body.particles().positions();
                 for (i, p) in tissue_p.iter().chain(body_p).enumerate() {
-                    let p = Vec3A::from(*p).as_dvec3();
+                    let p = p.as_dvec3();
                     let d = s.dx[i];
                     s.g[3 * i..3 * i + 3].copy_from_slice(&p.to_array());
                     s.x[3 * i..3 * i + 3].copy_from_slice(&(p + d).to_array());
@@ -636,7 +685,11 @@ impl ContactRun {
                 let (pos, _, inv) = tissue.state_mut();
                 for (i, (p, &w)) in pos.iter_mut().zip(inv).enumerate() {
                     if w > 0.0 {
-                        let new = Vec3A::new(s.x[3 * i] as f32, s.x[3 * i + 1] as f32, s.x[3 * i + 2] as f32);
+                        let new = Vec3A::new(
+                            s.x[3 * i] as f32,
+                            s.x[3 * i + 1] as f32,
+                            s.x[3 * i + 2] as f32,
+                        );
                         moved += f64::from(new.distance(*p));
                         *p = new;
                     }
@@ -648,7 +701,11 @@ impl ContactRun {
                 for (v, (p, &w)) in pos.iter_mut().zip(inv).enumerate() {
                     let i = t + v;
                     if w > 0.0 {
-                        let new = Vec3A::new(s.x[3 * i] as f32, s.x[3 * i + 1] as f32, s.x[3 * i + 2] as f32);
+                        let new = Vec3A::new(
+                            s.x[3 * i] as f32,
+                            s.x[3 * i + 1] as f32,
+                            s.x[3 * i + 2] as f32,
+                        );
                         moved += f64::from(new.distance(*p));
                         *p = new;
                     }
@@ -678,9 +735,9 @@ impl ContactRun {
         let bp = self.body.particles().positions();
         let position = |p: u32| {
             if (p as usize) < t {
-                Vec3A::from(tp[p as usize]).as_dvec3()
+                tp[p as usize].as_dvec3()
             } else {
-                Vec3A::from(bp[p as usize - t]).as_dvec3()
+                bp[p as usize - t].as_dvec3()
             }
         };
         for (f, (i, &w)) in s.free.iter_mut().zip(
@@ -698,7 +755,11 @@ impl ContactRun {
             s.free[t..].iter_mut().for_each(|f| *f = false);
         }
         h.springs.clear();
-        let body_springs = self.body.springs().iter().map(|sp| (sp.a + t as u32, sp.b + t as u32, sp.rest, sp.k));
+        let body_springs = self
+            .body
+            .springs()
+            .iter()
+            .map(|sp| (sp.a + t as u32, sp.b + t as u32, sp.rest, sp.k));
         for (a, b, rest, k) in tissue
             .springs()
             .iter()
@@ -774,29 +835,64 @@ impl ContactRun {
     /// `s.dx ≈ A⁻¹ s.r` by conjugate gradients preconditioned with `P⁻¹`: `A = P + the
     /// contacts' Hessian (anisotropic, `k n nᵀ` on their relative normal displacement) + the
     /// fill's `α ∇V ∇Vᵀ`` (module docs). Returns the iterations.
-    fn newton_step(&self, phase: &mut Phase, s: &mut Scratch) -> u32 {
+    fn newton_step(&self, phase: &mut Phase, s: &mut Scratch) -> Result<u32, ImplantError> {
         self.hessian(phase.body_free, s);
-        let [res, z, p, ap] = &mut s.cg;
+        // The preconditioner: the Laplacian with every contact's stiffness on its particles'
+        // diagonals (refactored), and the fill's rank-one term by Sherman–Morrison.
+        s.extra.clear();
+        for c in &s.contacts {
+            for (&p, &ci) in c.particles.iter().zip(&c.c) {
+                if ci != 0.0 {
+                    s.extra.push((p, c.k * ci * ci));
+                }
+            }
+        }
+        phase.pre.refactor(&s.extra).map_err(ImplantError::Model)?;
+        let [res, z, p, ap, w] = &mut s.cg;
         let (hessian, contacts, free) = (&s.hessian, &s.contacts, &s.free);
-        let apply = |v: &[DVec3], out: &mut [DVec3], _: &Preconditioner| {
-            hessian.apply(contacts, free, v, out);
-        };
         let dot = |a: &[DVec3], b: &[DVec3]| a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum::<f64>();
+        let fill: &[(u32, DVec3)] = &hessian.fill;
+        let alpha = hessian.fill_k;
+        let mut wg = 0.0;
+        if !fill.is_empty() {
+            z.iter_mut().for_each(|v| *v = DVec3::ZERO);
+            for &(p, g) in fill {
+                if free[p as usize] {
+                    z[p as usize] = g;
+                }
+            }
+            phase.pre.solve(z, w);
+            wg = fill.iter().map(|&(p, g)| g.dot(w[p as usize])).sum();
+        }
+        let precondition = |pre: &mut Preconditioner, r: &[DVec3], out: &mut [DVec3]| {
+            pre.solve(r, out);
+            if !fill.is_empty() {
+                let gz: f64 = fill.iter().map(|&(p, g)| g.dot(out[p as usize])).sum();
+                let scale = alpha * gz / (1.0 + alpha * wg);
+                for (o, wi) in out.iter_mut().zip(w.iter()) {
+                    *o -= *wi * scale;
+                }
+            }
+        };
         s.dx.iter_mut().for_each(|d| *d = DVec3::ZERO);
         res.copy_from_slice(&s.r);
         let r0 = dot(res, res).sqrt();
-        phase.pre.solve(res, z);
+        precondition(&mut phase.pre, res, z);
         p.copy_from_slice(z);
         let mut rz = dot(res, z);
         let mut iterations = 0;
         while iterations < CG_ITERATIONS {
-            apply(p, ap, &phase.pre);
+            hessian.apply(contacts, free, p, ap);
             let pap = dot(p, ap);
-            if !(pap > 0.0) {
+            if pap.is_nan() || pap <= 0.0 {
                 break;
             }
             let a = rz / pap;
-            for ((d, r), (pi, api)) in s.dx.iter_mut().zip(res.iter_mut()).zip(p.iter().zip(ap.iter())) {
+            for ((d, r), (pi, api)) in
+                s.dx.iter_mut()
+                    .zip(res.iter_mut())
+                    .zip(p.iter().zip(ap.iter()))
+            {
                 *d += *pi * a;
                 *r -= *api * a;
             }
@@ -804,7 +900,7 @@ impl ContactRun {
             if dot(res, res).sqrt() <= CG_FORCING * r0 {
                 break;
             }
-            phase.pre.solve(res, z);
+            precondition(&mut phase.pre, res, z);
             let rz_new = dot(res, z);
             let beta = rz_new / rz;
             rz = rz_new;
@@ -812,7 +908,7 @@ impl ContactRun {
                 *pi = *zi + *pi * beta;
             }
         }
-        iterations
+        Ok(iterations)
     }
 
     /// Solves the run for its static equilibrium (module docs): the body's kinematic phase
@@ -847,6 +943,7 @@ impl ContactRun {
             contacts: Vec::new(),
             hessian: Hessian::default(),
             free: vec![false; t + m],
+            extra: Vec::new(),
             cg: std::array::from_fn(|_| vec![DVec3::ZERO; t + m]),
         };
         let mut last = (false, f64::INFINITY, f64::INFINITY);
@@ -879,6 +976,7 @@ impl ContactRun {
                         pos[i as usize] = a + (b - a) * f;
                     }
                 }
+                self.project_out(&mut surfaces)?;
                 let tolerance = if j == steps && !release {
                     params.tolerance
                 } else {
@@ -897,10 +995,12 @@ impl ContactRun {
             let particles = self.body.particles_mut();
             for &i in &fill.particles {
                 particles.velocities_mut()[i as usize] = Vec3A::ZERO;
-                particles.release(i)?;
+                if release {
+                    particles.release(i)?;
+                }
             }
         }
-        if release || iterations == 0 {
+        if release {
             self.static_reach = 4.0 * self.contact_distance;
             let (builder, diagonal) = self.stiffness(true);
             let mut phase = Phase {

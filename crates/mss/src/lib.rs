@@ -64,8 +64,8 @@ mod particles;
 mod pressure;
 #[doc(hidden)]
 pub mod scenes;
-pub mod statics;
 mod spring;
+pub mod statics;
 mod stop;
 mod system;
 mod volume;

@@ -21,11 +21,11 @@
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::prelude::Reborrow;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, LltRef, SymbolicCholesky, SymmetricOrdering,
 };
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
-use faer::prelude::Reborrow;
 use faer::{Conj, Mat, Par, Side};
 use glam::DVec3;
 
@@ -249,9 +249,8 @@ impl Preconditioner {
         for col in 0..self.particles.len() {
             let vc = at(col);
             let pc = self.particles[col] as usize;
-            for k in col_ptr[col]..col_ptr[col + 1] {
-                let row = row_idx[k];
-                let a = self.base[k];
+            let range = col_ptr[col]..col_ptr[col + 1];
+            for (&row, &a) in row_idx[range.clone()].iter().zip(&self.base[range]) {
                 let pr = self.particles[row] as usize;
                 if row == col {
                     out[pc] += vc * a;

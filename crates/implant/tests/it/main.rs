@@ -9,7 +9,7 @@ mod layers;
 mod outcome;
 mod plane_press;
 mod planning;
+mod quasi_static;
 mod region;
 mod shape;
 mod table2;
-mod quasi_static;

@@ -75,7 +75,10 @@ fn table_2_at_50_cm3_quasi_static_agrees_with_explicit() {
     assert!(statics.boundary_unchanged && statics.is_finite());
     assert_eq!(statics.max_penetration, 0.0);
     let close = |a: f64, b: f64, what: &str| {
-        assert!((a - b).abs() <= 0.02 * b.abs(), "{what}: {a} against explicit {b}");
+        assert!(
+            (a - b).abs() <= 0.02 * b.abs(),
+            "{what}: {a} against explicit {b}"
+        );
     };
     close(statics.area_gain, explicit.area_gain, "gain");
     close(
