@@ -16,7 +16,10 @@
 //!   mass–spring system with volume preservation, base held by the deeper tissue) in the thesis's
 //!   step order ([`ContactRun`]), the expander filled from flat, a progress callback that can
 //!   cancel — and its [`InsertionOutcome`]: areas, volume difference, implant compression,
-//!   per-vertex displacement and stretch, the patient with the region replaced.
+//!   per-vertex displacement and stretch, the patient with the region replaced. [`Solver`]
+//!   chooses how the rest state is found: the thesis's explicit stepping (the default), or the
+//!   experimental quasi-static solve of the same model ([`StaticParams`]: Newton–CG on the
+//!   Hessian, penalty contacts, load steps; its status in docs/validation.md).
 //! - [`sweep`] and [`volume_for_gain`]: series of runs in parallel and the inverse question
 //!   "which volume gives this area gain".
 //! - [`prepare_scan`] and [`SimSurface`]: planning on a real scan — its small holes

@@ -9,6 +9,11 @@
 //!   preservation ([`VolumePreservation`]) and an [`Integrator`]; [`MassSpringSystem::step`] in
 //!   the thesis's phase order, [`MassSpringSystem::step_adaptive`] with an [`AdaptiveStep`], and
 //!   [`MassSpringSystem::run`] until the [`StopCriterion`] fires.
+//! - [`statics`]: a constant stiffness matrix (the springs' Laplacian, anchors, couplings)
+//!   assembled by [`StiffnessBuilder`] and factored once by sparse Cholesky (faer) into a
+//!   [`Preconditioner`] (`P⁻¹` of three right-hand sides, `P·v`, refactoring with another
+//!   diagonal): the global step of a local/global solve and the preconditioner of a Newton–CG
+//!   one, for quasi-static solves.
 //!
 //! It knows nothing of implants, hierarchies or threads (beyond rayon inside a step with the
 //! `parallel` feature).
