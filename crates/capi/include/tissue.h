@@ -190,7 +190,7 @@ typedef struct tissue_mesh tissue_mesh;
 typedef struct tissue_patient tissue_patient;
 
 // The common fields of a planning request (the planner's `PlanRequest`; every other field at
-// the library's default, the solver `quasi_static` among them: use the JSON entry points for
+// the library's default, the solver `explicit` among them: use the JSON entry points for
 // those). Fill it with `tissue_plan_options_default` first, then change what you need.
 // Enum-valued fields are `uint32_t` holding the named enum's values. Lengths in cm; a size of
 // 0 means "not given" (the library's default or, for a rectangle's or crescent's sizes, a
@@ -558,7 +558,7 @@ enum tissue_status tissue_inverse_start(const struct tissue_patient *patient,
 // "target_gain_cm2": 30, "bracket_cm3": [lo, hi], "gain_tolerance_cm2": 0.5}` (tissue-planner's
 // `JobSpec`)
 //
-// `"solver"` is `"quasi_static"` (the default) or `"explicit"`; the report gives it as
+// `"solver"` is `"explicit"` (the default) or `"quasi_static"` (experimental); the report gives it as
 // `inputs.solver`, with every run's `iterations` and `residual_n` (null for `"explicit"`).
 //
 // Every member is optional (`{}` is Table 2's single run on the Table 2 plane); unknown members
