@@ -68,6 +68,15 @@ impl Topology {
     /// Builds the connectivity of triangles already known to be manifold and consistently wound.
     pub(crate) fn build(vertex_count: usize, triangles: &[[u32; 3]]) -> Topology {
         let half_edges = sorted_half_edges(triangles, |_| true);
+        Topology::from_half_edges(vertex_count, triangles, &half_edges)
+    }
+
+    /// [`Topology::build`] from the triangles' sides as [`sorted_half_edges`] gives them.
+    pub(crate) fn from_half_edges(
+        vertex_count: usize,
+        triangles: &[[u32; 3]],
+        half_edges: &[HalfEdge],
+    ) -> Topology {
         let mut edges = Vec::with_capacity(half_edges.len() / 2 + 1);
         let mut edge_triangles = Vec::with_capacity(half_edges.len() / 2 + 1);
         let mut triangle_edges = vec![[0u32; 3]; triangles.len()];

@@ -1,5 +1,7 @@
 //! The validated triangle surface and the checks that admit it.
 
+use std::sync::Arc;
+
 use glam::Vec3;
 
 use crate::topology::{sorted_half_edges, HalfEdge, Topology};
@@ -22,11 +24,14 @@ pub const ZERO_AREA_TOLERANCE: f64 = 1e-7;
 /// - [`TriMesh::topology`] describes exactly these triangles.
 ///
 /// Unreferenced vertices are allowed (a warning of [`diagnose`]); they have no triangles.
+///
+/// The triangles and the topology are shared between a mesh, its clones and its deformed states
+/// ([`TriMesh::with_positions`]): a copy costs its positions only.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TriMesh {
     positions: Vec<Vec3>,
-    triangles: Vec<[u32; 3]>,
-    topology: Topology,
+    triangles: Arc<Vec<[u32; 3]>>,
+    topology: Arc<Topology>,
 }
 
 impl TriMesh {
@@ -39,17 +44,24 @@ impl TriMesh {
             triangles = triangles.len()
         )
         .entered();
-        if let Some(err) = diagnose(&positions, &triangles)
-            .into_iter()
-            .find(|d| !d.is_warning())
-        {
-            return Err(err);
-        }
-        let topology = Topology::build(positions.len(), &triangles);
+        // The common case, a valid surface, in one pass and one sort; anything wrong is found
+        // and named by `diagnose`.
+        let topology = match valid_half_edges(&positions, &triangles) {
+            Some(half_edges) => Topology::from_half_edges(positions.len(), &triangles, &half_edges),
+            None => {
+                if let Some(err) = diagnose(&positions, &triangles)
+                    .into_iter()
+                    .find(|d| !d.is_warning())
+                {
+                    return Err(err);
+                }
+                Topology::build(positions.len(), &triangles)
+            }
+        };
         Ok(TriMesh {
             positions,
-            triangles,
-            topology,
+            triangles: Arc::new(triangles),
+            topology: Arc::new(topology),
         })
     }
 
@@ -130,7 +142,8 @@ impl TriMesh {
 
     /// Gives the data back.
     pub fn into_parts(self) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-        (self.positions, self.triangles)
+        let triangles = Arc::try_unwrap(self.triangles).unwrap_or_else(|shared| (*shared).clone());
+        (self.positions, triangles)
     }
 }
 
@@ -142,6 +155,48 @@ fn check_finite(positions: &[Vec3]) -> Result<(), MeshError> {
             position: positions[v].to_array(),
         }),
     }
+}
+
+/// The sorted half-edges of data that pass every hard check of [`diagnose`] (at least one vertex
+/// and triangle, fewer than `u32::MAX` vertices, finite coordinates, indices in range, no
+/// zero-area or duplicate triangle, manifold edges, consistent winding), or `None` when one
+/// fails: one pass over the triangles and one sort, for the common case of a valid surface.
+fn valid_half_edges(positions: &[Vec3], triangles: &[[u32; 3]]) -> Option<Vec<HalfEdge>> {
+    if positions.is_empty() || triangles.is_empty() || positions.len() >= u32::MAX as usize {
+        return None;
+    }
+    if !positions.iter().all(|p| p.is_finite()) {
+        return None;
+    }
+    let n = positions.len() as u32;
+    for tri in triangles {
+        if tri.iter().any(|&i| i >= n) || tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]
+        {
+            return None;
+        }
+        let (doubled, longest_sq) =
+            doubled_area_and_longest_edge_sq(tri.map(|i| positions[i as usize]));
+        if doubled <= ZERO_AREA_TOLERANCE * longest_sq {
+            return None;
+        }
+    }
+    let half_edges = sorted_half_edges(triangles, |_| true);
+    for group in half_edges.chunk_by(|x, y| x.key == y.key) {
+        match group {
+            [_] => {}
+            [x, y] => {
+                let (tx, ty) = (triangles[x.triangle as usize], triangles[y.triangle as usize]);
+                let [a, b] = HalfEdge::edge_of_key(x.key);
+                let third = |t: [u32; 3]| t.iter().copied().find(|&v| v != a && v != b);
+                // Same direction: inconsistent winding; same third vertex: a duplicate.
+                if x.forward == y.forward || third(tx) == third(ty) {
+                    return None;
+                }
+            }
+            _ => return None,
+        }
+    }
+    Some(half_edges)
 }
 
 /// Twice the area of a triangle and its longest edge squared, in `f64`.
