@@ -47,6 +47,51 @@ pub(crate) fn sorted_half_edges(
     half_edges
 }
 
+/// All sides of `triangles` (every index below `vertex_count`), sorted as [`sorted_half_edges`]
+/// sorts them, by a counting sort on the edges' smaller vertex and small sorts within each
+/// vertex's run: linear time, for the large surfaces of fine scans.
+pub(crate) fn sorted_half_edges_by_vertex(
+    vertex_count: usize,
+    triangles: &[[u32; 3]],
+) -> Vec<HalfEdge> {
+    let mut offsets = vec![0u32; vertex_count + 1];
+    for tri in triangles {
+        for side in 0..3 {
+            let lo = tri[side].min(tri[(side + 1) % 3]);
+            offsets[lo as usize + 1] += 1;
+        }
+    }
+    for v in 0..vertex_count {
+        offsets[v + 1] += offsets[v];
+    }
+    let mut fill = offsets.clone();
+    let empty = HalfEdge {
+        key: 0,
+        triangle: 0,
+        side: 0,
+        forward: false,
+    };
+    let mut half_edges = vec![empty; triangles.len() * 3];
+    for (t, tri) in triangles.iter().enumerate() {
+        for side in 0..3 {
+            let (a, b) = (tri[side], tri[(side + 1) % 3]);
+            let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+            let at = &mut fill[lo as usize];
+            half_edges[*at as usize] = HalfEdge {
+                key: (u64::from(lo) << 32) | u64::from(hi),
+                triangle: t as u32,
+                side: side as u8,
+                forward: a < b,
+            };
+            *at += 1;
+        }
+    }
+    for v in 0..vertex_count {
+        half_edges[offsets[v] as usize..offsets[v + 1] as usize].sort_unstable();
+    }
+    half_edges
+}
+
 /// Connectivity of a valid triangle surface (see [`crate::TriMesh`]'s invariants).
 ///
 /// Edges are numbered in increasing order of `(smaller vertex, larger vertex)`; that numbering is
@@ -67,7 +112,7 @@ pub struct Topology {
 impl Topology {
     /// Builds the connectivity of triangles already known to be manifold and consistently wound.
     pub(crate) fn build(vertex_count: usize, triangles: &[[u32; 3]]) -> Topology {
-        let half_edges = sorted_half_edges(triangles, |_| true);
+        let half_edges = sorted_half_edges_by_vertex(vertex_count, triangles);
         Topology::from_half_edges(vertex_count, triangles, &half_edges)
     }
 
@@ -275,4 +320,26 @@ fn components(triangle_count: usize, edge_triangles: &[[u32; 2]]) -> (Vec<u32>, 
         out[t as usize] = label[r as usize];
     }
     (out, count as usize)
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    /// The linear-time sort gives the comparison sort's order, on meshes whose triangles are
+    /// numbered in any order.
+    #[test]
+    fn half_edges_by_vertex_are_sorted_as_by_comparison() {
+        let sphere = crate::uv_sphere(12, 7, 1.0).unwrap();
+        let grid = crate::grid(9, 2.0).unwrap();
+        for mesh in [sphere, grid] {
+            let mut triangles = mesh.triangles().to_vec();
+            triangles.reverse();
+            triangles.rotate_left(5);
+            let expected = sorted_half_edges(&triangles, |_| true);
+            let got = sorted_half_edges_by_vertex(mesh.vertex_count(), &triangles);
+            assert_eq!(got, expected);
+        }
+    }
 }

@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use crate::topology::{sorted_half_edges, HalfEdge, Topology};
+use crate::topology::{sorted_half_edges, sorted_half_edges_by_vertex, HalfEdge, Topology};
 use crate::MeshError;
 
 /// A triangle counts as zero-area when twice its area is at most this fraction of its longest edge
@@ -180,7 +180,7 @@ fn valid_half_edges(positions: &[Vec3], triangles: &[[u32; 3]]) -> Option<Vec<Ha
             return None;
         }
     }
-    let half_edges = sorted_half_edges(triangles, |_| true);
+    let half_edges = sorted_half_edges_by_vertex(positions.len(), triangles);
     for group in half_edges.chunk_by(|x, y| x.key == y.key) {
         match group {
             [_] => {}

@@ -71,7 +71,7 @@ impl Hole {
 /// `O(n³)`, in `f64` about the loop's centroid), none of whose new edges is already an edge; loops
 /// of more than [`MAX_DP_LOOP`] vertices are ear-clipped (smallest interior angle first, an ear
 /// taken only when its triangle passes the same quality floor). Fill edges longer than 1.5 × the
-/// loop's mean edge are then split and the fill is made Delaunay by flips, the new vertices are
+/// loop's mean edge (or [`FILL_DIVISIONS`]th of the hole's diameter if longer) are then split and the fill is made Delaunay by flips, the new vertices are
 /// placed by harmonic (umbrella) fairing with the loop fixed, so the patch is a smooth membrane;
 /// flips again after fairing. Where the refined fill is not clearly sound (a triangle whose
 /// height is below 1e-4 of its longest edge, in the stored `f32` positions), the plain
@@ -104,12 +104,15 @@ pub fn fill_holes(surface: &TriMesh, max_diameter: f64) -> Result<HoleFill, Reme
     let mut filled = Vec::new();
     let mut open = Vec::new();
     for l in surface.topology().boundary_loops() {
-        let hole = Hole::measure(surface.positions(), l);
+        let hole = {
+            let _span = tracing::debug_span!("measure_loop", vertices = l.len()).entered();
+            Hole::measure(surface.positions(), l)
+        };
         if hole.diameter > max_diameter || l.len() < 3 {
             open.push(hole);
             continue;
         }
-        let Some(patch) = fill_loop(surface, &fills, l) else {
+        let Some(patch) = fill_loop(surface, &fills, l, hole.diameter) else {
             tracing::warn!(
                 vertices = l.len(),
                 "no triangulation without degenerate triangles for a hole; left open"
@@ -180,8 +183,9 @@ impl Fills {
 
 /// Fills the loop `l` on the patch of the triangles at its vertices (the surface's and earlier
 /// fills'); `None` when no triangulation is sound.
-fn fill_loop(surface: &TriMesh, fills: &Fills, l: &[u32]) -> Option<Patch> {
+fn fill_loop(surface: &TriMesh, fills: &Fills, l: &[u32], diameter: f64) -> Option<Patch> {
     let n = l.len();
+    let _span = tracing::debug_span!("fill_loop", vertices = n).entered();
     let mut sorted = l.to_vec();
     sorted.sort_unstable();
     if sorted.windows(2).any(|w| w[0] == w[1]) {
@@ -231,11 +235,16 @@ fn fill_loop(surface: &TriMesh, fills: &Fills, l: &[u32]) -> Option<Patch> {
     let (first_fill, first_new) = (tris.len(), globals.len());
     // The loop in local numbering is 0..n, in the surface's direction.
     let lp: Vec<u32> = (0..n as u32).collect();
-    let plain = triangulate(&m, &lp)?;
+    let plain = {
+        let _span = tracing::debug_span!("triangulate").entered();
+        triangulate(&m, &lp)?
+    };
     let perimeter: f64 = (0..n)
         .map(|i| (local_positions[(i + 1) % n].as_dvec3() - local_positions[i].as_dvec3()).length())
         .sum();
-    let tau = (perimeter / n as f64) as f32;
+    // The fill's edge: the loop's, but no finer than 1/FILL_DIVISIONS of the hole across, so that a
+    // fine scan's fill costs what a coarse one's does.
+    let tau = (perimeter / n as f64).max(diameter / FILL_DIVISIONS) as f32;
     for &tri in &plain {
         m.add_triangle(tri);
     }
@@ -248,6 +257,7 @@ fn fill_loop(surface: &TriMesh, fills: &Fills, l: &[u32]) -> Option<Patch> {
         .sum();
     // A bound on the refinement: four times the triangles of edge `tau` the fill's area holds.
     let cap = first_fill + 4 * (area / (0.433 * f64::from(tau).powi(2))) as usize + 4 * n + 16;
+    let _refine = tracing::debug_span!("refine_and_fair").entered();
     refine(&mut m, first_fill, tau, cap);
     fair(&mut m, first_new, first_fill);
     delaunay_flips(&mut m, first_fill);
@@ -286,6 +296,10 @@ fn fill_loop(surface: &TriMesh, fills: &Fills, l: &[u32]) -> Option<Patch> {
         first_new,
     })
 }
+
+/// A fill's edges are no shorter than its hole's diameter over this (about 800 triangles for a
+/// round hole, however fine the scan around it).
+pub const FILL_DIVISIONS: f64 = 32.0;
 
 /// Loops of up to this many vertices are triangulated optimally (`O(n³)` time, `O(n²)` memory:
 /// 0.1 s and 12 MB at the limit); longer ones by ear clipping.

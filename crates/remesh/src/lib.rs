@@ -96,6 +96,6 @@ mod remesh;
 pub mod scenes;
 
 pub use error::RemeshError;
-pub use holes::{fill_holes, Hole, HoleFill};
+pub use holes::{fill_holes, Hole, HoleFill, FILL_DIVISIONS, MAX_DP_LOOP};
 pub use quality::MeshQuality;
 pub use remesh::{remesh, RemeshOptions, RemeshStats, Remeshed, MAX_TRIANGLES};
