@@ -11,7 +11,13 @@
 //! 2. **selects the region** (geodesic, [`select_region_with`]) on the filled scan, and refuses
 //!    a region that reaches an open border ([`ImplantError::RegionReachesBorder`], saying how
 //!    far the border is, how small the region or the expander must be, and where a region of
-//!    this size would fit);
+//!    this size would fit). Steps 1 and 2 run on the part of the scan within reach of the
+//!    region (every triangle with a corner within `d + R + max_hole + 4 × the longest edge` of
+//!    the point, `d` its distance from the scan): a hole that touches the region lies in it
+//!    whole, and the part keeps the scan's order, so the region and its fills are the whole
+//!    scan's while a scan of millions of triangles costs one pass over it, not a fill, a
+//!    validation and a geodesic over all of it. Only a refused region is looked at again on the
+//!    whole scan, for where one would fit;
 //! 3. **remeshes the region** to a near-uniform edge `h` ([`ScanOptions::sim_edge`], by default
 //!    [`default_sim_edge`]): isotropic remeshing with every vertex projected onto a
 //!    moving-least-squares plane fit of the scan ([`ScanOptions::smoothing`]: 2 × the larger of

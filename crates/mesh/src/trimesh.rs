@@ -170,8 +170,7 @@ fn valid_half_edges(positions: &[Vec3], triangles: &[[u32; 3]]) -> Option<Vec<Ha
     }
     let n = positions.len() as u32;
     for tri in triangles {
-        if tri.iter().any(|&i| i >= n) || tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]
-        {
+        if tri.iter().any(|&i| i >= n) || tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0] {
             return None;
         }
         let (doubled, longest_sq) =
@@ -181,17 +180,29 @@ fn valid_half_edges(positions: &[Vec3], triangles: &[[u32; 3]]) -> Option<Vec<Ha
         }
     }
     let half_edges = sorted_half_edges_by_vertex(positions.len(), triangles);
+    // Two triangles on the same three vertices `lo < mid < hi` share the edges `lo–mid` and
+    // `lo–hi`, both filed under `lo`: a triangle pair seen twice among `lo`'s edges is a
+    // duplicate. The pairs of the current smaller vertex:
+    let mut pairs: Vec<(u32, u32)> = Vec::new();
+    let mut current = u32::MAX;
     for group in half_edges.chunk_by(|x, y| x.key == y.key) {
+        let [lo, _] = HalfEdge::edge_of_key(group[0].key);
+        if lo != current {
+            current = lo;
+            pairs.clear();
+        }
         match group {
             [_] => {}
             [x, y] => {
-                let (tx, ty) = (triangles[x.triangle as usize], triangles[y.triangle as usize]);
-                let [a, b] = HalfEdge::edge_of_key(x.key);
-                let third = |t: [u32; 3]| t.iter().copied().find(|&v| v != a && v != b);
-                // Same direction: inconsistent winding; same third vertex: a duplicate.
-                if x.forward == y.forward || third(tx) == third(ty) {
+                // Same direction: inconsistent winding.
+                if x.forward == y.forward {
                     return None;
                 }
+                let pair = (x.triangle.min(y.triangle), x.triangle.max(y.triangle));
+                if pairs.contains(&pair) {
+                    return None;
+                }
+                pairs.push(pair);
             }
             _ => return None,
         }
@@ -373,6 +384,28 @@ pub(crate) fn unreferenced_defects<const K: usize>(
 mod tests {
     use super::*;
 
+    /// The one-pass check agrees with `diagnose`: a duplicate in either orientation (the
+    /// opposite one passes every edge check), among other triangles, is refused as a duplicate.
+    #[test]
+    fn duplicates_in_either_orientation_are_refused_as_diagnose_names_them() {
+        let grid = crate::grid(5, 1.0).unwrap();
+        for flip in [false, true] {
+            let mut triangles = grid.triangles().to_vec();
+            let [a, b, c] = triangles[7];
+            triangles.push(if flip { [a, c, b] } else { [b, c, a] });
+            let expected = diagnose(grid.positions(), &triangles)
+                .into_iter()
+                .find(|d| !d.is_warning());
+            assert!(
+                matches!(expected, Some(MeshError::DuplicateTriangle { .. })),
+                "{expected:?}"
+            );
+            let got = TriMesh::new(grid.positions().to_vec(), triangles).err();
+            assert_eq!(got, expected);
+        }
+        let again = TriMesh::new(grid.positions().to_vec(), grid.triangles().to_vec()).unwrap();
+        assert_eq!(again, grid);
+    }
     /// Two triangles making the unit square, normal +z.
     fn square() -> (Vec<Vec3>, Vec<[u32; 3]>) {
         (

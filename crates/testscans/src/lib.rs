@@ -6,8 +6,8 @@
 //!   noise-free surface it came from.
 //! - Generators: [`noisy_face_scan`] (mm: a photogrammetric face with 0.2 mm noise, 0.5 mm
 //!   triangles and holes), [`tapered_tube`] (cm: an uneven open tube, generated),
-//!   [`forearm_from_body`] (dm: the left arm cut from the body, refined) and [`closed_body`]
-//!   (dm: the watertight body as it is), and [`fine_face_scan`] (the face subdivided to
+//!   [`forearm_from_body`] (dm: the left arm cut from the body, refined), [`closed_body`]
+//!   (dm: the watertight body as it is) and [`fine_face_scan`] (the face subdivided to
 //!   millions of triangles, far from the origin).
 //! - Building blocks for variants: [`Rng`] (splitmix64, Box–Muller), [`median_edge`],
 //!   [`subdivide_midpoint`], [`loop_subdivide`], [`add_normal_noise`], [`punch_hole`],
