@@ -353,7 +353,11 @@ fn near_region(
     let max_snap = region
         .max_snap_distance
         .unwrap_or_else(|| crate::default_snap_distance(patient));
-    let snapped = crate::snap_to_surface(patient, point, max_snap)?;
+    // On the scan without its fills: no nearer than on the filled one, so the part holds the
+    // nearest point of either (a point over a hole may be too far from this one only).
+    let Ok(snapped) = crate::snap_to_surface(patient, point, max_snap) else {
+        return Ok(None);
+    };
     let reach = snapped.distance() + radius + max_hole + 4.0 * longest_edge(patient);
     let Some(part) = Part::around(patient, point, reach)? else {
         return Ok(None);

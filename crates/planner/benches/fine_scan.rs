@@ -159,25 +159,6 @@ fn main() {
     let (vertex, triangles) = match tissue_testscans::fine_face_scan(1, subdivisions, offset) {
         Ok(scan) => {
             tissue_meshio::write_ply(&path, &scan.mesh).unwrap();
-            if std::env::var_os("FINE_SCAN_PROBE").is_some() {
-                for _ in 0..3 {
-                    let (p, t) = (
-                        scan.mesh.positions().to_vec(),
-                        scan.mesh.triangles().to_vec(),
-                    );
-                    let s = Instant::now();
-                    let m = tissue_mesh::TriMesh::new(p, t).unwrap();
-                    let a = s.elapsed();
-                    let s = Instant::now();
-                    let _ = tissue_meshio::read_surface(&path).unwrap();
-                    println!(
-                        "probe: TriMesh::new {:.3} s ({}), read_surface {:.3} s",
-                        a.as_secs_f64(),
-                        m.triangle_count(),
-                        s.elapsed().as_secs_f64()
-                    );
-                }
-            }
             let forehead = scan.points.iter().find(|p| p.name == "forehead").unwrap();
             (forehead.vertex, scan.mesh.triangle_count())
         }
