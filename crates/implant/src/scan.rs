@@ -12,9 +12,9 @@
 //!    a region that reaches an open border ([`ImplantError::RegionReachesBorder`], saying how
 //!    far the border is, how small the region or the expander must be, and where a region of
 //!    this size would fit). Steps 1 and 2 run on the part of the scan within reach of the
-//!    region (every triangle with a corner within `d + R + max_hole + 4 × the longest edge` of
-//!    the point, `d` its distance from the scan): a hole that touches the region lies in it
-//!    whole, and the part keeps the scan's order, so the region and its fills are the whole
+//!    region (every triangle with a corner within `d + R + 4 × the longest edge` of the point,
+//!    `d` its distance from the scan, or within any hole up to `max_hole` across that comes that
+//!    near): a hole that touches the region lies in it whole, and the part keeps the scan's order, so the region and its fills are the whole
 //!    scan's while a scan of millions of triangles costs one pass over it, not a fill, a
 //!    validation and a geodesic over all of it. Only a refused region is looked at again on the
 //!    whole scan, for where one would fit;
@@ -335,10 +335,11 @@ fn whole_scan_region(
 
 /// Steps 1 and 2 on the part of the scan within reach of the region only, for scans much larger
 /// than their region (a fine scan of millions of triangles): every triangle with a corner within
-/// `d + radius + max_hole + 4 × the longest edge` of `point` (`d`: how far `point` is from the
-/// scan). A hole that touches the region is at most `max_hole` across, so it lies in the part
-/// whole and is filled as on the whole scan; the part's cut lies farther than the region
-/// reaches. The part keeps the scan's order, so the region, its mesh and its fills are the
+/// `near = d + radius + 4 × the longest edge` of `point` (`d`: how far `point` is from the
+/// scan), or within the farthest vertex (plus the same margin) of a boundary loop that comes
+/// within `near` and spreads over at most `max_hole` (every hole that may be filled and touch
+/// the region), so such a hole lies in the part whole and is filled as on the whole scan; the
+/// part's cut lies farther than the region reaches. The part keeps the scan's order, so the region, its mesh and its fills are the
 /// whole scan's, bit for bit; the selection is renumbered to the whole scan (fill vertices and
 /// triangles after the scan's). `None` when the part would be the whole scan or when the region
 /// is refused there (the whole scan then gives the error, with where a region would fit).
@@ -358,7 +359,22 @@ fn near_region(
     let Ok(snapped) = crate::snap_to_surface(patient, point, max_snap) else {
         return Ok(None);
     };
-    let reach = snapped.distance() + radius + max_hole + 4.0 * longest_edge(patient);
+    // The region lies within `near` of the point; a hole that comes within it (its loop's
+    // distances from the point spread over at most `max_hole`) is taken whole.
+    let margin = 4.0 * longest_edge(patient);
+    let near = snapped.distance() + radius + margin;
+    let centre = point.as_dvec3();
+    let p = patient.positions();
+    let mut reach = near;
+    for l in patient.topology().boundary_loops() {
+        let (lo, hi) = l.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
+            let d = p[v as usize].as_dvec3().distance(centre);
+            (lo.min(d), hi.max(d))
+        });
+        if lo <= near && hi - lo <= max_hole {
+            reach = reach.max(hi + margin);
+        }
+    }
     let Some(part) = Part::around(patient, point, reach)? else {
         return Ok(None);
     };

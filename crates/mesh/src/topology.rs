@@ -92,6 +92,38 @@ pub(crate) fn sorted_half_edges_by_vertex(
     half_edges
 }
 
+/// Surfaces of at least this many triangles are checked and built on two threads.
+const PARALLEL_TRIANGLES: usize = 200_000;
+
+/// `(first(), second())`: `first` on a second thread when `triangles` is at least
+/// [`PARALLEL_TRIANGLES`] and the machine has more than one, else one after the other (also
+/// when the thread cannot be started). The results do not depend on which.
+pub(crate) fn both<A: Send, B>(
+    triangles: usize,
+    first: impl Fn() -> A + Sync,
+    second: impl FnOnce() -> B,
+) -> (A, B) {
+    let parallel = triangles >= PARALLEL_TRIANGLES
+        && std::thread::available_parallelism().is_ok_and(|n| n.get() > 1);
+    if !parallel {
+        return (first(), second());
+    }
+    std::thread::scope(|scope| {
+        let spawned = std::thread::Builder::new()
+            .name("tissue-mesh".into())
+            .spawn_scoped(scope, &first);
+        let b = second();
+        let a = match spawned {
+            // A panic of `first` is a bug: it goes on as it would have on this thread.
+            Ok(handle) => handle
+                .join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
+            Err(_) => first(),
+        };
+        (a, b)
+    })
+}
+
 /// Connectivity of a valid triangle surface (see [`crate::TriMesh`]'s invariants).
 ///
 /// Edges are numbered in increasing order of `(smaller vertex, larger vertex)`; that numbering is
@@ -122,44 +154,51 @@ impl Topology {
         triangles: &[[u32; 3]],
         half_edges: &[HalfEdge],
     ) -> Topology {
-        let mut edges = Vec::with_capacity(half_edges.len() / 2 + 1);
-        let mut edge_triangles = Vec::with_capacity(half_edges.len() / 2 + 1);
-        let mut triangle_edges = vec![[0u32; 3]; triangles.len()];
-        // Boundary sides directed as their triangle traverses them.
-        let mut boundary: Vec<(u32, u32)> = Vec::new();
-        for group in half_edges.chunk_by(|x, y| x.key == y.key) {
-            let e = edges.len() as u32;
-            edges.push(HalfEdge::edge_of_key(group[0].key));
-            let second = group.get(1).map_or(NO_TRIANGLE, |h| h.triangle);
-            edge_triangles.push([group[0].triangle, second]);
-            for h in group {
-                triangle_edges[h.triangle as usize][h.side as usize] = e;
+        let edges_of = || {
+            let mut edges = Vec::with_capacity(half_edges.len() / 2 + 1);
+            let mut edge_triangles = Vec::with_capacity(half_edges.len() / 2 + 1);
+            let mut triangle_edges = vec![[0u32; 3]; triangles.len()];
+            // Boundary sides directed as their triangle traverses them.
+            let mut boundary: Vec<(u32, u32)> = Vec::new();
+            for group in half_edges.chunk_by(|x, y| x.key == y.key) {
+                let e = edges.len() as u32;
+                edges.push(HalfEdge::edge_of_key(group[0].key));
+                let second = group.get(1).map_or(NO_TRIANGLE, |h| h.triangle);
+                edge_triangles.push([group[0].triangle, second]);
+                for h in group {
+                    triangle_edges[h.triangle as usize][h.side as usize] = e;
+                }
+                if group.len() == 1 {
+                    let tri = triangles[group[0].triangle as usize];
+                    let side = group[0].side as usize;
+                    boundary.push((tri[side], tri[(side + 1) % 3]));
+                }
             }
-            if group.len() == 1 {
-                let tri = triangles[group[0].triangle as usize];
-                let side = group[0].side as usize;
-                boundary.push((tri[side], tri[(side + 1) % 3]));
-            }
-        }
-
+            (edges, edge_triangles, triangle_edges, boundary)
+        };
         // Vertex -> triangles, compressed rows.
-        let mut offsets = vec![0u32; vertex_count + 1];
-        for tri in triangles {
-            for &v in tri {
-                offsets[v as usize + 1] += 1;
+        let vertex_rows = || {
+            let mut offsets = vec![0u32; vertex_count + 1];
+            for tri in triangles {
+                for &v in tri {
+                    offsets[v as usize + 1] += 1;
+                }
             }
-        }
-        for v in 0..vertex_count {
-            offsets[v + 1] += offsets[v];
-        }
-        let mut fill = offsets.clone();
-        let mut vertex_triangles = vec![0u32; triangles.len() * 3];
-        for (t, tri) in triangles.iter().enumerate() {
-            for &v in tri {
-                vertex_triangles[fill[v as usize] as usize] = t as u32;
-                fill[v as usize] += 1;
+            for v in 0..vertex_count {
+                offsets[v + 1] += offsets[v];
             }
-        }
+            let mut fill = offsets.clone();
+            let mut vertex_triangles = vec![0u32; triangles.len() * 3];
+            for (t, tri) in triangles.iter().enumerate() {
+                for &v in tri {
+                    vertex_triangles[fill[v as usize] as usize] = t as u32;
+                    fill[v as usize] += 1;
+                }
+            }
+            (offsets, vertex_triangles)
+        };
+        let ((offsets, vertex_triangles), (edges, edge_triangles, triangle_edges, boundary)) =
+            both(triangles.len(), vertex_rows, edges_of);
 
         let boundary_edge_count = boundary.len();
         let boundary_loops = trace_loops(boundary);
@@ -341,5 +380,32 @@ mod tests {
             let got = sorted_half_edges_by_vertex(mesh.vertex_count(), &triangles);
             assert_eq!(got, expected);
         }
+    }
+
+    /// A surface large enough to be checked and built on two threads has the topology a small
+    /// one's counts say it must have.
+    #[test]
+    fn a_large_surface_built_on_two_threads_has_its_topology() {
+        let n = 330u32;
+        let grid = crate::grid(n, 10.0).unwrap();
+        assert!(grid.triangle_count() >= PARALLEL_TRIANGLES);
+        let topo = grid.topology();
+        let cells = u64::from(n - 1);
+        assert_eq!(
+            topo.edges().len() as u64,
+            2 * cells * u64::from(n) + cells * cells
+        );
+        assert_eq!(topo.boundary_loops().len(), 1);
+        assert_eq!(topo.boundary_loops()[0].len() as u64, 4 * cells);
+        assert_eq!(topo.component_count(), 1);
+        let built = Topology::build(grid.vertex_count(), grid.triangles());
+        assert_eq!(&built, topo);
+        for v in [0, n * n / 2 + n / 2, n * n - 1] {
+            for &t in topo.vertex_triangles(v) {
+                assert!(grid.triangles()[t as usize].contains(&v));
+            }
+        }
+        let (a, b) = both(PARALLEL_TRIANGLES, || 1 + 1, || 3);
+        assert_eq!((a, b), (2, 3));
     }
 }

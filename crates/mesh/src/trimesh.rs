@@ -169,17 +169,26 @@ fn valid_half_edges(positions: &[Vec3], triangles: &[[u32; 3]]) -> Option<Vec<Ha
         return None;
     }
     let n = positions.len() as u32;
-    for tri in triangles {
-        if tri.iter().any(|&i| i >= n) || tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0] {
-            return None;
-        }
-        let (doubled, longest_sq) =
-            doubled_area_and_longest_edge_sq(tri.map(|i| positions[i as usize]));
-        if doubled <= ZERO_AREA_TOLERANCE * longest_sq {
-            return None;
-        }
+    if triangles.iter().any(|tri| {
+        tri.iter().any(|&i| i >= n) || tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]
+    }) {
+        return None;
     }
-    let half_edges = sorted_half_edges_by_vertex(positions.len(), triangles);
+    let areas_ok = || {
+        triangles.iter().all(|tri| {
+            let (doubled, longest_sq) =
+                doubled_area_and_longest_edge_sq(tri.map(|i| positions[i as usize]));
+            doubled > ZERO_AREA_TOLERANCE * longest_sq
+        })
+    };
+    // On a large surface the areas are checked on a second thread while the sides are sorted
+    // (each result is the same whatever the threads).
+    let (areas, half_edges) = crate::topology::both(triangles.len(), areas_ok, || {
+        sorted_half_edges_by_vertex(positions.len(), triangles)
+    });
+    if !areas {
+        return None;
+    }
     // Two triangles on the same three vertices `lo < mid < hi` share the edges `lo–mid` and
     // `lo–hi`, both filed under `lo`: a triangle pair seen twice among `lo`'s edges is a
     // duplicate. The pairs of the current smaller vertex:
