@@ -65,6 +65,12 @@ impl SurfacePoint {
     pub fn distance(&self) -> f64 {
         self.distance
     }
+
+    /// The same point in a surface whose triangles are renumbered: its triangle is `triangle`.
+    pub(crate) fn with_triangle(mut self, triangle: u32) -> SurfacePoint {
+        self.triangle = triangle;
+        self
+    }
 }
 
 /// The default largest distance from a query point to the surface: [`DEFAULT_SNAP_FRACTION`]

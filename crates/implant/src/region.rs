@@ -330,6 +330,48 @@ impl RegionSelection {
         })
     }
 
+    /// The same region of a larger surface of which the surface it was selected on is an
+    /// order-preserving part: its vertex `v` is the larger one's `vertex_map[v]`, its triangle
+    /// `t` the larger one's `triangle_map[t]` (both strictly increasing), and the larger one has
+    /// `vertex_count` vertices. Distances of the vertices outside the part are infinite.
+    pub(crate) fn renumbered(
+        self,
+        vertex_map: &[u32],
+        triangle_map: &[u32],
+        vertex_count: usize,
+    ) -> RegionSelection {
+        let region_to_patient: Vec<u32> = self
+            .region_to_patient
+            .iter()
+            .map(|&v| vertex_map[v as usize])
+            .collect();
+        let mut patient_to_region = vec![NOT_IN_REGION; vertex_count];
+        for (r, &v) in region_to_patient.iter().enumerate() {
+            patient_to_region[v as usize] = r as u32;
+        }
+        let mut patient_distances = vec![f64::INFINITY; vertex_count];
+        for (v, &d) in self.patient_distances.iter().enumerate() {
+            patient_distances[vertex_map[v] as usize] = d;
+        }
+        let centre_triangle = triangle_map[self.centre.triangle() as usize];
+        RegionSelection {
+            mesh: self.mesh,
+            region_to_patient,
+            patient_to_region,
+            triangle_to_patient: self
+                .triangle_to_patient
+                .iter()
+                .map(|&t| triangle_map[t as usize])
+                .collect(),
+            centre: self.centre.with_triangle(centre_triangle),
+            centre_triangle: self.centre_triangle,
+            radius: self.radius,
+            area: self.area,
+            distances: self.distances,
+            patient_distances,
+        }
+    }
+
     /// The region as a surface of its own (region vertex numbering).
     pub fn mesh(&self) -> &TriMesh {
         &self.mesh

@@ -11,7 +11,13 @@
 //! 2. **selects the region** (geodesic, [`select_region_with`]) on the filled scan, and refuses
 //!    a region that reaches an open border ([`ImplantError::RegionReachesBorder`], saying how
 //!    far the border is, how small the region or the expander must be, and where a region of
-//!    this size would fit);
+//!    this size would fit). Steps 1 and 2 run on the part of the scan within reach of the
+//!    region (every triangle with a corner within `d + R + 4 × the longest edge` of the point,
+//!    `d` its distance from the scan, or within any hole up to `max_hole` across that comes that
+//!    near): a hole that touches the region lies in it whole, and the part keeps the scan's order, so the region and its fills are the whole
+//!    scan's while a scan of millions of triangles costs one pass over it, not a fill, a
+//!    validation and a geodesic over all of it. Only a refused region is looked at again on the
+//!    whole scan, for where one would fit;
 //! 3. **remeshes the region** to a near-uniform edge `h` ([`ScanOptions::sim_edge`], by default
 //!    [`default_sim_edge`]): isotropic remeshing with every vertex projected onto a
 //!    moving-least-squares plane fit of the scan ([`ScanOptions::smoothing`]: 2 × the larger of
@@ -250,23 +256,10 @@ pub fn prepare_scan(
     let max_hole = options
         .max_hole
         .min(0.5 * f64::from(patient.bounding_box().size().length()));
-    let fill = {
-        let _span = tracing::info_span!("fill_holes").entered();
-        fill_holes(patient, max_hole)?
+    let (selection, holes_filled) = match near_region(patient, point, radius, max_hole, region)? {
+        Some(found) => found,
+        None => whole_scan_region(patient, point, radius, max_hole, region, options.max_hole)?,
     };
-    let filled = &fill.mesh;
-    let selection = select_region_with(filled, point, radius, region)?;
-    check_border(filled, &selection, &fill.open, radius, options.max_hole)?;
-    let holes_filled: Vec<Hole> = fill
-        .filled
-        .iter()
-        .filter(|h| {
-            h.vertices
-                .iter()
-                .any(|&v| selection.patient_to_region()[v as usize] != crate::NOT_IN_REGION)
-        })
-        .cloned()
-        .collect();
     // The smoothing is a length of the model, not of the mesh: the larger of the asked edge and
     // the default one, so a finer simulation surface is the same surface more finely sampled;
     // at least 1.5 × the depth; and at least COARSE_SMOOTHING scan edges, so a coarse scan's
@@ -306,11 +299,189 @@ pub fn prepare_scan(
             model_edge,
             binding,
             scan_vertices: patient.vertex_count(),
-            scan_triangles: fill.first_fill_triangle,
+            scan_triangles: patient.triangle_count(),
             holes_filled,
             stats: remeshed.stats,
         },
     ))
+}
+
+/// Steps 1 and 2 on the whole scan: its small holes filled, the region selected on it and
+/// refused when it reaches an open border (with where one would fit); the filled holes at the
+/// region.
+fn whole_scan_region(
+    patient: &TriMesh,
+    point: Vec3,
+    radius: f64,
+    max_hole: f64,
+    region: &RegionOptions,
+    asked_max_hole: f64,
+) -> Result<(RegionSelection, Vec<Hole>), ImplantError> {
+    let fill = fill_holes(patient, max_hole)?;
+    let filled = &fill.mesh;
+    let selection = select_region_with(filled, point, radius, region)?;
+    check_border(filled, &selection, &fill.open, radius, asked_max_hole)?;
+    let holes_filled: Vec<Hole> = fill
+        .filled
+        .into_iter()
+        .filter(|h| {
+            h.vertices
+                .iter()
+                .any(|&v| selection.patient_to_region()[v as usize] != crate::NOT_IN_REGION)
+        })
+        .collect();
+    Ok((selection, holes_filled))
+}
+
+/// Steps 1 and 2 on the part of the scan within reach of the region only, for scans much larger
+/// than their region (a fine scan of millions of triangles): every triangle with a corner within
+/// `near = d + radius + 4 × the longest edge` of `point` (`d`: how far `point` is from the
+/// scan), or within the farthest vertex (plus the same margin) of a boundary loop that comes
+/// within `near` and spreads over at most `max_hole` (every hole that may be filled and touch
+/// the region), so such a hole lies in the part whole and is filled as on the whole scan; the
+/// part's cut lies farther than the region reaches. The part keeps the scan's order, so the region, its mesh and its fills are the
+/// whole scan's, bit for bit; the selection is renumbered to the whole scan (fill vertices and
+/// triangles after the scan's). `None` when the part would be the whole scan or when the region
+/// is refused there (the whole scan then gives the error, with where a region would fit).
+fn near_region(
+    patient: &TriMesh,
+    point: Vec3,
+    radius: f64,
+    max_hole: f64,
+    region: &RegionOptions,
+) -> Result<Option<(RegionSelection, Vec<Hole>)>, ImplantError> {
+    let _span = tracing::info_span!("near_region").entered();
+    let max_snap = region
+        .max_snap_distance
+        .unwrap_or_else(|| crate::default_snap_distance(patient));
+    // On the scan without its fills: no nearer than on the filled one, so the part holds the
+    // nearest point of either (a point over a hole may be too far from this one only).
+    let Ok(snapped) = crate::snap_to_surface(patient, point, max_snap) else {
+        return Ok(None);
+    };
+    // The region lies within `near` of the point; a hole that comes within it (its loop's
+    // distances from the point spread over at most `max_hole`) is taken whole.
+    let margin = 4.0 * longest_edge(patient);
+    let near = snapped.distance() + radius + margin;
+    let centre = point.as_dvec3();
+    let p = patient.positions();
+    let mut reach = near;
+    for l in patient.topology().boundary_loops() {
+        let (lo, hi) = l.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
+            let d = p[v as usize].as_dvec3().distance(centre);
+            (lo.min(d), hi.max(d))
+        });
+        if lo <= near && hi - lo <= max_hole {
+            reach = reach.max(hi + margin);
+        }
+    }
+    let Some(part) = Part::around(patient, point, reach)? else {
+        return Ok(None);
+    };
+    let fill = fill_holes(&part.mesh, max_hole)?;
+    let options = RegionOptions {
+        max_snap_distance: Some(max_snap),
+        ..*region
+    };
+    let Ok(selection) = select_region_with(&fill.mesh, point, radius, &options) else {
+        return Ok(None);
+    };
+    if check_border(&fill.mesh, &selection, &fill.open, radius, max_hole).is_err() {
+        return Ok(None);
+    }
+    let (n, nt) = (patient.vertex_count(), patient.triangle_count());
+    let (part_n, part_t) = (part.mesh.vertex_count(), part.mesh.triangle_count());
+    let new_vertices = fill.mesh.vertex_count() - part_n;
+    let vertex_map: Vec<u32> = part
+        .vertices
+        .iter()
+        .copied()
+        .chain((0..new_vertices).map(|k| (n + k) as u32))
+        .collect();
+    let triangle_map: Vec<u32> = part
+        .triangles
+        .iter()
+        .copied()
+        .chain((0..fill.mesh.triangle_count() - part_t).map(|k| (nt + k) as u32))
+        .collect();
+    let selection = selection.renumbered(&vertex_map, &triangle_map, n + new_vertices);
+    let holes_filled = fill
+        .filled
+        .into_iter()
+        .map(|mut h| {
+            h.vertices
+                .iter_mut()
+                .for_each(|v| *v = vertex_map[*v as usize]);
+            h
+        })
+        .filter(|h| {
+            h.vertices
+                .iter()
+                .any(|&v| selection.patient_to_region()[v as usize] != crate::NOT_IN_REGION)
+        })
+        .collect();
+    Ok(Some((selection, holes_filled)))
+}
+
+/// The triangles of a scan with a corner within a distance of a point, as a surface of their
+/// own in the scan's order, with where its vertices and triangles are in the scan.
+struct Part {
+    mesh: TriMesh,
+    vertices: Vec<u32>,
+    triangles: Vec<u32>,
+}
+
+impl Part {
+    /// The part within `reach` of `point`; `None` when it is the whole scan.
+    fn around(patient: &TriMesh, point: Vec3, reach: f64) -> Result<Option<Part>, ImplantError> {
+        let _span = tracing::debug_span!("part", reach).entered();
+        let p = patient.positions();
+        let centre = point.as_dvec3();
+        let near: Vec<bool> = p
+            .iter()
+            .map(|x| x.as_dvec3().distance_squared(centre) <= reach * reach)
+            .collect();
+        let all = patient.triangles();
+        let triangles: Vec<u32> = (0..all.len() as u32)
+            .filter(|&t| all[t as usize].iter().any(|&v| near[v as usize]))
+            .collect();
+        if triangles.len() == all.len() {
+            return Ok(None);
+        }
+        let mut local = vec![u32::MAX; p.len()];
+        for &t in &triangles {
+            for v in all[t as usize] {
+                local[v as usize] = 0;
+            }
+        }
+        let mut vertices = Vec::new();
+        for (v, slot) in local.iter_mut().enumerate() {
+            if *slot != u32::MAX {
+                *slot = vertices.len() as u32;
+                vertices.push(v as u32);
+            }
+        }
+        let positions = vertices.iter().map(|&v| p[v as usize]).collect();
+        let tris = triangles
+            .iter()
+            .map(|&t| all[t as usize].map(|v| local[v as usize]))
+            .collect();
+        Ok(Some(Part {
+            mesh: TriMesh::new(positions, tris)?,
+            vertices,
+            triangles,
+        }))
+    }
+}
+
+/// The longest edge of a surface, in `f64`.
+fn longest_edge(mesh: &TriMesh) -> f64 {
+    let p = mesh.positions();
+    mesh.topology()
+        .edges()
+        .iter()
+        .map(|&[a, b]| f64::from(p[a as usize].distance(p[b as usize])))
+        .fold(0.0, f64::max)
 }
 
 /// The smoothing radius in the scan region's own median edges, at least: enough of its vertices

@@ -47,6 +47,83 @@ pub(crate) fn sorted_half_edges(
     half_edges
 }
 
+/// All sides of `triangles` (every index below `vertex_count`), sorted as [`sorted_half_edges`]
+/// sorts them, by a counting sort on the edges' smaller vertex and small sorts within each
+/// vertex's run: linear time, for the large surfaces of fine scans.
+pub(crate) fn sorted_half_edges_by_vertex(
+    vertex_count: usize,
+    triangles: &[[u32; 3]],
+) -> Vec<HalfEdge> {
+    let mut offsets = vec![0u32; vertex_count + 1];
+    for tri in triangles {
+        for side in 0..3 {
+            let lo = tri[side].min(tri[(side + 1) % 3]);
+            offsets[lo as usize + 1] += 1;
+        }
+    }
+    for v in 0..vertex_count {
+        offsets[v + 1] += offsets[v];
+    }
+    let mut fill = offsets.clone();
+    let empty = HalfEdge {
+        key: 0,
+        triangle: 0,
+        side: 0,
+        forward: false,
+    };
+    let mut half_edges = vec![empty; triangles.len() * 3];
+    for (t, tri) in triangles.iter().enumerate() {
+        for side in 0..3 {
+            let (a, b) = (tri[side], tri[(side + 1) % 3]);
+            let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+            let at = &mut fill[lo as usize];
+            half_edges[*at as usize] = HalfEdge {
+                key: (u64::from(lo) << 32) | u64::from(hi),
+                triangle: t as u32,
+                side: side as u8,
+                forward: a < b,
+            };
+            *at += 1;
+        }
+    }
+    for v in 0..vertex_count {
+        half_edges[offsets[v] as usize..offsets[v + 1] as usize].sort_unstable();
+    }
+    half_edges
+}
+
+/// Surfaces of at least this many triangles are checked and built on two threads.
+const PARALLEL_TRIANGLES: usize = 200_000;
+
+/// `(first(), second())`: `first` on a second thread when `triangles` is at least
+/// [`PARALLEL_TRIANGLES`] and the machine has more than one, else one after the other (also
+/// when the thread cannot be started). The results do not depend on which.
+pub(crate) fn both<A: Send, B>(
+    triangles: usize,
+    first: impl Fn() -> A + Sync,
+    second: impl FnOnce() -> B,
+) -> (A, B) {
+    let parallel = triangles >= PARALLEL_TRIANGLES
+        && std::thread::available_parallelism().is_ok_and(|n| n.get() > 1);
+    if !parallel {
+        return (first(), second());
+    }
+    std::thread::scope(|scope| {
+        let spawned = std::thread::Builder::new()
+            .name("tissue-mesh".into())
+            .spawn_scoped(scope, &first);
+        let b = second();
+        let a = match spawned {
+            // A panic of `first` is a bug: it goes on as it would have on this thread.
+            Ok(handle) => handle
+                .join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
+            Err(_) => first(),
+        };
+        (a, b)
+    })
+}
+
 /// Connectivity of a valid triangle surface (see [`crate::TriMesh`]'s invariants).
 ///
 /// Edges are numbered in increasing order of `(smaller vertex, larger vertex)`; that numbering is
@@ -67,45 +144,61 @@ pub struct Topology {
 impl Topology {
     /// Builds the connectivity of triangles already known to be manifold and consistently wound.
     pub(crate) fn build(vertex_count: usize, triangles: &[[u32; 3]]) -> Topology {
-        let half_edges = sorted_half_edges(triangles, |_| true);
-        let mut edges = Vec::with_capacity(half_edges.len() / 2 + 1);
-        let mut edge_triangles = Vec::with_capacity(half_edges.len() / 2 + 1);
-        let mut triangle_edges = vec![[0u32; 3]; triangles.len()];
-        // Boundary sides directed as their triangle traverses them.
-        let mut boundary: Vec<(u32, u32)> = Vec::new();
-        for group in half_edges.chunk_by(|x, y| x.key == y.key) {
-            let e = edges.len() as u32;
-            edges.push(HalfEdge::edge_of_key(group[0].key));
-            let second = group.get(1).map_or(NO_TRIANGLE, |h| h.triangle);
-            edge_triangles.push([group[0].triangle, second]);
-            for h in group {
-                triangle_edges[h.triangle as usize][h.side as usize] = e;
-            }
-            if group.len() == 1 {
-                let tri = triangles[group[0].triangle as usize];
-                let side = group[0].side as usize;
-                boundary.push((tri[side], tri[(side + 1) % 3]));
-            }
-        }
+        let half_edges = sorted_half_edges_by_vertex(vertex_count, triangles);
+        Topology::from_half_edges(vertex_count, triangles, &half_edges)
+    }
 
+    /// [`Topology::build`] from the triangles' sides as [`sorted_half_edges`] gives them.
+    pub(crate) fn from_half_edges(
+        vertex_count: usize,
+        triangles: &[[u32; 3]],
+        half_edges: &[HalfEdge],
+    ) -> Topology {
+        let edges_of = || {
+            let mut edges = Vec::with_capacity(half_edges.len() / 2 + 1);
+            let mut edge_triangles = Vec::with_capacity(half_edges.len() / 2 + 1);
+            let mut triangle_edges = vec![[0u32; 3]; triangles.len()];
+            // Boundary sides directed as their triangle traverses them.
+            let mut boundary: Vec<(u32, u32)> = Vec::new();
+            for group in half_edges.chunk_by(|x, y| x.key == y.key) {
+                let e = edges.len() as u32;
+                edges.push(HalfEdge::edge_of_key(group[0].key));
+                let second = group.get(1).map_or(NO_TRIANGLE, |h| h.triangle);
+                edge_triangles.push([group[0].triangle, second]);
+                for h in group {
+                    triangle_edges[h.triangle as usize][h.side as usize] = e;
+                }
+                if group.len() == 1 {
+                    let tri = triangles[group[0].triangle as usize];
+                    let side = group[0].side as usize;
+                    boundary.push((tri[side], tri[(side + 1) % 3]));
+                }
+            }
+            (edges, edge_triangles, triangle_edges, boundary)
+        };
         // Vertex -> triangles, compressed rows.
-        let mut offsets = vec![0u32; vertex_count + 1];
-        for tri in triangles {
-            for &v in tri {
-                offsets[v as usize + 1] += 1;
+        let vertex_rows = || {
+            let mut offsets = vec![0u32; vertex_count + 1];
+            for tri in triangles {
+                for &v in tri {
+                    offsets[v as usize + 1] += 1;
+                }
             }
-        }
-        for v in 0..vertex_count {
-            offsets[v + 1] += offsets[v];
-        }
-        let mut fill = offsets.clone();
-        let mut vertex_triangles = vec![0u32; triangles.len() * 3];
-        for (t, tri) in triangles.iter().enumerate() {
-            for &v in tri {
-                vertex_triangles[fill[v as usize] as usize] = t as u32;
-                fill[v as usize] += 1;
+            for v in 0..vertex_count {
+                offsets[v + 1] += offsets[v];
             }
-        }
+            let mut fill = offsets.clone();
+            let mut vertex_triangles = vec![0u32; triangles.len() * 3];
+            for (t, tri) in triangles.iter().enumerate() {
+                for &v in tri {
+                    vertex_triangles[fill[v as usize] as usize] = t as u32;
+                    fill[v as usize] += 1;
+                }
+            }
+            (offsets, vertex_triangles)
+        };
+        let ((offsets, vertex_triangles), (edges, edge_triangles, triangle_edges, boundary)) =
+            both(triangles.len(), vertex_rows, edges_of);
 
         let boundary_edge_count = boundary.len();
         let boundary_loops = trace_loops(boundary);
@@ -266,4 +359,53 @@ fn components(triangle_count: usize, edge_triangles: &[[u32; 2]]) -> (Vec<u32>, 
         out[t as usize] = label[r as usize];
     }
     (out, count as usize)
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    /// The linear-time sort gives the comparison sort's order, on meshes whose triangles are
+    /// numbered in any order.
+    #[test]
+    fn half_edges_by_vertex_are_sorted_as_by_comparison() {
+        let sphere = crate::uv_sphere(12, 7, 1.0).unwrap();
+        let grid = crate::grid(9, 2.0).unwrap();
+        for mesh in [sphere, grid] {
+            let mut triangles = mesh.triangles().to_vec();
+            triangles.reverse();
+            triangles.rotate_left(5);
+            let expected = sorted_half_edges(&triangles, |_| true);
+            let got = sorted_half_edges_by_vertex(mesh.vertex_count(), &triangles);
+            assert_eq!(got, expected);
+        }
+    }
+
+    /// A surface large enough to be checked and built on two threads has the topology a small
+    /// one's counts say it must have.
+    #[test]
+    fn a_large_surface_built_on_two_threads_has_its_topology() {
+        let n = 330u32;
+        let grid = crate::grid(n, 10.0).unwrap();
+        assert!(grid.triangle_count() >= PARALLEL_TRIANGLES);
+        let topo = grid.topology();
+        let cells = u64::from(n - 1);
+        assert_eq!(
+            topo.edges().len() as u64,
+            2 * cells * u64::from(n) + cells * cells
+        );
+        assert_eq!(topo.boundary_loops().len(), 1);
+        assert_eq!(topo.boundary_loops()[0].len() as u64, 4 * cells);
+        assert_eq!(topo.component_count(), 1);
+        let built = Topology::build(grid.vertex_count(), grid.triangles());
+        assert_eq!(&built, topo);
+        for v in [0, n * n / 2 + n / 2, n * n - 1] {
+            for &t in topo.vertex_triangles(v) {
+                assert!(grid.triangles()[t as usize].contains(&v));
+            }
+        }
+        let (a, b) = both(PARALLEL_TRIANGLES, || 1 + 1, || 3);
+        assert_eq!((a, b), (2, 3));
+    }
 }

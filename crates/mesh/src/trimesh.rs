@@ -1,8 +1,10 @@
 //! The validated triangle surface and the checks that admit it.
 
+use std::sync::Arc;
+
 use glam::Vec3;
 
-use crate::topology::{sorted_half_edges, HalfEdge, Topology};
+use crate::topology::{sorted_half_edges, sorted_half_edges_by_vertex, HalfEdge, Topology};
 use crate::MeshError;
 
 /// A triangle counts as zero-area when twice its area is at most this fraction of its longest edge
@@ -22,11 +24,14 @@ pub const ZERO_AREA_TOLERANCE: f64 = 1e-7;
 /// - [`TriMesh::topology`] describes exactly these triangles.
 ///
 /// Unreferenced vertices are allowed (a warning of [`diagnose`]); they have no triangles.
+///
+/// The triangles and the topology are shared between a mesh, its clones and its deformed states
+/// ([`TriMesh::with_positions`]): a copy costs its positions only.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TriMesh {
     positions: Vec<Vec3>,
-    triangles: Vec<[u32; 3]>,
-    topology: Topology,
+    triangles: Arc<Vec<[u32; 3]>>,
+    topology: Arc<Topology>,
 }
 
 impl TriMesh {
@@ -39,17 +44,24 @@ impl TriMesh {
             triangles = triangles.len()
         )
         .entered();
-        if let Some(err) = diagnose(&positions, &triangles)
-            .into_iter()
-            .find(|d| !d.is_warning())
-        {
-            return Err(err);
-        }
-        let topology = Topology::build(positions.len(), &triangles);
+        // The common case, a valid surface, in one pass and one sort; anything wrong is found
+        // and named by `diagnose`.
+        let topology = match valid_half_edges(&positions, &triangles) {
+            Some(half_edges) => Topology::from_half_edges(positions.len(), &triangles, &half_edges),
+            None => {
+                if let Some(err) = diagnose(&positions, &triangles)
+                    .into_iter()
+                    .find(|d| !d.is_warning())
+                {
+                    return Err(err);
+                }
+                Topology::build(positions.len(), &triangles)
+            }
+        };
         Ok(TriMesh {
             positions,
-            triangles,
-            topology,
+            triangles: Arc::new(triangles),
+            topology: Arc::new(topology),
         })
     }
 
@@ -130,7 +142,8 @@ impl TriMesh {
 
     /// Gives the data back.
     pub fn into_parts(self) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-        (self.positions, self.triangles)
+        let triangles = Arc::try_unwrap(self.triangles).unwrap_or_else(|shared| (*shared).clone());
+        (self.positions, triangles)
     }
 }
 
@@ -142,6 +155,68 @@ fn check_finite(positions: &[Vec3]) -> Result<(), MeshError> {
             position: positions[v].to_array(),
         }),
     }
+}
+
+/// The sorted half-edges of data that pass every hard check of [`diagnose`] (at least one vertex
+/// and triangle, fewer than `u32::MAX` vertices, finite coordinates, indices in range, no
+/// zero-area or duplicate triangle, manifold edges, consistent winding), or `None` when one
+/// fails: one pass over the triangles and one sort, for the common case of a valid surface.
+fn valid_half_edges(positions: &[Vec3], triangles: &[[u32; 3]]) -> Option<Vec<HalfEdge>> {
+    if positions.is_empty() || triangles.is_empty() || positions.len() >= u32::MAX as usize {
+        return None;
+    }
+    if !positions.iter().all(|p| p.is_finite()) {
+        return None;
+    }
+    let n = positions.len() as u32;
+    if triangles.iter().any(|tri| {
+        tri.iter().any(|&i| i >= n) || tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]
+    }) {
+        return None;
+    }
+    let areas_ok = || {
+        triangles.iter().all(|tri| {
+            let (doubled, longest_sq) =
+                doubled_area_and_longest_edge_sq(tri.map(|i| positions[i as usize]));
+            doubled > ZERO_AREA_TOLERANCE * longest_sq
+        })
+    };
+    // On a large surface the areas are checked on a second thread while the sides are sorted
+    // (each result is the same whatever the threads).
+    let (areas, half_edges) = crate::topology::both(triangles.len(), areas_ok, || {
+        sorted_half_edges_by_vertex(positions.len(), triangles)
+    });
+    if !areas {
+        return None;
+    }
+    // Two triangles on the same three vertices `lo < mid < hi` share the edges `lo–mid` and
+    // `lo–hi`, both filed under `lo`: a triangle pair seen twice among `lo`'s edges is a
+    // duplicate. The pairs of the current smaller vertex:
+    let mut pairs: Vec<(u32, u32)> = Vec::new();
+    let mut current = u32::MAX;
+    for group in half_edges.chunk_by(|x, y| x.key == y.key) {
+        let [lo, _] = HalfEdge::edge_of_key(group[0].key);
+        if lo != current {
+            current = lo;
+            pairs.clear();
+        }
+        match group {
+            [_] => {}
+            [x, y] => {
+                // Same direction: inconsistent winding.
+                if x.forward == y.forward {
+                    return None;
+                }
+                let pair = (x.triangle.min(y.triangle), x.triangle.max(y.triangle));
+                if pairs.contains(&pair) {
+                    return None;
+                }
+                pairs.push(pair);
+            }
+            _ => return None,
+        }
+    }
+    Some(half_edges)
 }
 
 /// Twice the area of a triangle and its longest edge squared, in `f64`.
@@ -318,6 +393,28 @@ pub(crate) fn unreferenced_defects<const K: usize>(
 mod tests {
     use super::*;
 
+    /// The one-pass check agrees with `diagnose`: a duplicate in either orientation (the
+    /// opposite one passes every edge check), among other triangles, is refused as a duplicate.
+    #[test]
+    fn duplicates_in_either_orientation_are_refused_as_diagnose_names_them() {
+        let grid = crate::grid(5, 1.0).unwrap();
+        for flip in [false, true] {
+            let mut triangles = grid.triangles().to_vec();
+            let [a, b, c] = triangles[7];
+            triangles.push(if flip { [a, c, b] } else { [b, c, a] });
+            let expected = diagnose(grid.positions(), &triangles)
+                .into_iter()
+                .find(|d| !d.is_warning());
+            assert!(
+                matches!(expected, Some(MeshError::DuplicateTriangle { .. })),
+                "{expected:?}"
+            );
+            let got = TriMesh::new(grid.positions().to_vec(), triangles).err();
+            assert_eq!(got, expected);
+        }
+        let again = TriMesh::new(grid.positions().to_vec(), grid.triangles().to_vec()).unwrap();
+        assert_eq!(again, grid);
+    }
     /// Two triangles making the unit square, normal +z.
     fn square() -> (Vec<Vec3>, Vec<[u32; 3]>) {
         (

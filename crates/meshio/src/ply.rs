@@ -258,13 +258,18 @@ pub fn parse_ply(bytes: &[u8], name: impl AsRef<Path>) -> Result<SurfaceData, Me
                             reason(&e)
                         ))
                     })?;
-                    take(kind, row, vertex_count, &mut out, &mut polygon).map_err(at)?;
+                    take(kind, &row, vertex_count, &mut out, &mut polygon).map_err(at)?;
                     line += 1;
                 }
             }
         }
         Encoding::BinaryLittleEndian | Encoding::BinaryBigEndian => {
             let little = header.encoding == Encoding::BinaryLittleEndian;
+            if fast_binary(rest, &header, little, vertex_count, &mut out, &mut polygon).is_some() {
+                return Ok(out);
+            }
+            out.positions.clear();
+            out.triangles.clear();
             for (name, def) in &header.elements {
                 if def.properties.is_empty() {
                     continue; // nothing stored, whatever the count
@@ -288,7 +293,7 @@ pub fn parse_ply(bytes: &[u8], name: impl AsRef<Path>) -> Result<SurfaceData, Me
                             bytes.len()
                         ))
                     })?;
-                    take(kind, row, vertex_count, &mut out, &mut polygon).map_err(at)?;
+                    take(kind, &row, vertex_count, &mut out, &mut polygon).map_err(at)?;
                 }
             }
         }
@@ -333,10 +338,107 @@ fn read_binary(
     }
 }
 
+/// The binary body read straight from the bytes, without ply-rs's per-record maps and strings
+/// (a fine scan has millions of records) into `out`: what reading the records one by one gives, or `None`
+/// at the first thing that is not plainly right (the file ends, an index is out of range, a
+/// face has fewer than 3 vertices), where the record-by-record reading then says what.
+fn fast_binary(
+    rest: &[u8],
+    header: &ply_rs::ply::Header,
+    little: bool,
+    vertex_count: usize,
+    out: &mut SurfaceData,
+    polygon: &mut Vec<u32>,
+) -> Option<()> {
+    let mut row = Row::default();
+    let mut at = 0usize;
+    for (name, def) in &header.elements {
+        if def.properties.is_empty() {
+            continue;
+        }
+        let kind = match name.as_str() {
+            "vertex" => Kind::Vertex,
+            "face" => Kind::Face,
+            _ => Kind::Other,
+        };
+        // What each property is to us: an axis (0–2), the index list (3) or nothing (4).
+        let properties: Vec<(usize, &PropertyType)> = def
+            .properties
+            .iter()
+            .map(|(name, p)| {
+                let role = match name.as_str() {
+                    "x" => 0,
+                    "y" => 1,
+                    "z" => 2,
+                    "vertex_indices" | "vertex_index" => 3,
+                    _ => 4,
+                };
+                (role, &p.data_type)
+            })
+            .collect();
+        for _ in 0..def.count {
+            for &(role, data_type) in &properties {
+                match data_type {
+                    PropertyType::Scalar(t) => {
+                        let v = binary_scalar(rest, &mut at, t, little)?;
+                        if let Some(axis) = row.xyz.get_mut(role) {
+                            *axis = v;
+                        }
+                    }
+                    PropertyType::List(count_type, item) => {
+                        let count = binary_scalar(rest, &mut at, count_type, little)?;
+                        if !(count >= 0.0 && count.fract() == 0.0) {
+                            return None;
+                        }
+                        let count = count as usize;
+                        if role == 3 {
+                            row.indices.clear();
+                            for _ in 0..count {
+                                let i = binary_scalar(rest, &mut at, item, little)?;
+                                row.indices.push(i as i64);
+                            }
+                        } else {
+                            at = at.checked_add(count.checked_mul(scalar_size(item))?)?;
+                            if at > rest.len() {
+                                return None;
+                            }
+                        }
+                    }
+                }
+            }
+            take(kind, &row, vertex_count, out, polygon).ok()?;
+        }
+    }
+    Some(())
+}
+
+/// One binary scalar at `*at` (which moves past it), widened to `f64` (exact for every PLY
+/// integer type); `None` past the end.
+fn binary_scalar(bytes: &[u8], at: &mut usize, t: &ScalarType, little: bool) -> Option<f64> {
+    fn take_n<const N: usize>(bytes: &[u8], at: &mut usize, little: bool) -> Option<[u8; N]> {
+        let mut raw: [u8; N] = bytes.get(*at..at.checked_add(N)?)?.try_into().ok()?;
+        *at += N;
+        if !little {
+            raw.reverse();
+        }
+        Some(raw)
+    }
+    Some(match t {
+        ScalarType::Char => f64::from(i8::from_le_bytes(take_n(bytes, at, little)?)),
+        ScalarType::UChar => f64::from(u8::from_le_bytes(take_n(bytes, at, little)?)),
+        ScalarType::Short => f64::from(i16::from_le_bytes(take_n(bytes, at, little)?)),
+        ScalarType::UShort => f64::from(u16::from_le_bytes(take_n(bytes, at, little)?)),
+        ScalarType::Int => f64::from(i32::from_le_bytes(take_n(bytes, at, little)?)),
+        ScalarType::UInt => f64::from(u32::from_le_bytes(take_n(bytes, at, little)?)),
+        ScalarType::Float => f64::from(f32::from_le_bytes(take_n(bytes, at, little)?)),
+        ScalarType::Double => f64::from_le_bytes(take_n(bytes, at, little)?),
+    })
+}
+
 /// Stores one element record; an error says what is wrong with it.
 fn take(
     kind: Kind,
-    row: Row,
+    row: &Row,
     vertex_count: usize,
     out: &mut SurfaceData,
     polygon: &mut Vec<u32>,

@@ -1,8 +1,10 @@
-//! Hole filling: ear clipping by smallest angle, refinement by edge splits and Delaunay flips,
+//! Hole filling: the max–min-quality triangulation of each loop, refinement by edge splits and Delaunay flips,
 //! harmonic (umbrella) fairing of the new vertices with the loop fixed.
 
+use std::collections::HashMap;
+
 use glam::{DVec3, Vec3};
-use tissue_mesh::TriMesh;
+use tissue_mesh::{TriMesh, ZERO_AREA_TOLERANCE};
 
 use crate::edit::{opposite, tri_cross, EditMesh, NONE};
 use crate::RemeshError;
@@ -63,12 +65,25 @@ impl Hole {
 /// Fills every boundary loop of `surface` whose diameter is at most `max_diameter` (mesh units)
 /// and reports the others.
 ///
-/// Each filled loop is triangulated by ear clipping (always the ear with the smallest interior
-/// angle, measured against the loop's Newell normal, whose new edge is not already an edge); fill
-/// edges longer than 1.5 × the loop's mean edge are split and the fill is made Delaunay by flips,
-/// then the new vertices are placed by harmonic (umbrella) fairing with the loop fixed, so the
-/// patch is a smooth membrane; flips again after fairing. The result is a valid, consistently
-/// oriented [`TriMesh`].
+/// Each filled loop is triangulated by the triangulation of its own vertices that maximises the
+/// smallest triangle quality (the sine of the smallest angle, weighted by how far the triangle
+/// faces the loop's Newell normal; dynamic programming over the loop, Barequet–Sharir / Liepa,
+/// `O(n³)`, in `f64` about the loop's centroid), none of whose new edges is already an edge; loops
+/// of more than [`MAX_DP_LOOP`] vertices are ear-clipped (smallest interior angle first, an ear
+/// taken only when its triangle passes the same quality floor). Fill edges longer than 1.5 × the
+/// loop's mean edge (or [`FILL_DIVISIONS`]th of the hole's diameter if longer) are then split and the fill is made Delaunay by flips, the new vertices are
+/// placed by harmonic (umbrella) fairing with the loop fixed, so the patch is a smooth membrane;
+/// flips again after fairing. Where the refined fill is not clearly sound (a triangle whose
+/// height is below 1e-4 of its longest edge, in the stored `f32` positions), the plain
+/// triangulation is kept.
+///
+/// No fill triangle is ever degenerate, whatever the loop's resolution and the coordinates'
+/// magnitude: a loop for which no triangulation has every smallest angle above about 0.06° (a
+/// loop through a vertex twice, or whose every triangulation would fold or duplicate an edge) is
+/// left open and reported in [`HoleFill::open`].
+///
+/// The work is local: each loop is filled on the triangles at its vertices only, so the cost is
+/// that of the holes plus one copy of the surface, whatever the surface's size.
 ///
 /// # Errors
 /// [`RemeshError::InvalidMaxDiameter`] for a negative or non-finite `max_diameter`.
@@ -80,47 +95,40 @@ pub fn fill_holes(surface: &TriMesh, max_diameter: f64) -> Result<HoleFill, Reme
     }
     let _span = tracing::info_span!("fill_holes", triangles = surface.triangle_count()).entered();
     let first_fill = surface.triangle_count();
-    let mut m = EditMesh::new(surface.positions(), surface.triangles());
+    let n0 = surface.vertex_count();
+    let mut fills = Fills {
+        positions: Vec::new(),
+        triangles: Vec::new(),
+        at_vertex: HashMap::new(),
+    };
     let mut filled = Vec::new();
     let mut open = Vec::new();
     for l in surface.topology().boundary_loops() {
-        let hole = Hole::measure(surface.positions(), l);
+        let hole = {
+            let _span = tracing::debug_span!("measure_loop", vertices = l.len()).entered();
+            Hole::measure(surface.positions(), l)
+        };
         if hole.diameter > max_diameter || l.len() < 3 {
             open.push(hole);
             continue;
         }
-        let Some(tris) = ear_clip(&m, l) else {
+        let Some(patch) = fill_loop(surface, &fills, l, hole.diameter) else {
             tracing::warn!(
                 vertices = l.len(),
-                "no valid ear clipping for a hole; left open"
+                "no triangulation without degenerate triangles for a hole; left open"
             );
             open.push(hole);
             continue;
         };
-        let (hole_tris, hole_vertices) = (m.tris.len(), m.pos.len());
-        let tau = (hole.perimeter / l.len() as f64) as f32;
-        for &tri in &tris {
-            m.add_triangle(tri);
-        }
-        refine(&mut m, hole_tris, tau);
-        fair(&mut m, hole_vertices, hole_tris);
-        delaunay_flips(&mut m, hole_tris);
-        fair(&mut m, hole_vertices, hole_tris);
-        if !sound(&m, hole_tris) {
-            // Refinement made a sliver (it can on loops with long straight runs): keep the plain
-            // ear clipping instead, which is sound by construction.
-            tracing::warn!(
-                vertices = l.len(),
-                "refined hole fill unsound; ear clipping kept"
-            );
-            m.truncate(hole_tris, hole_vertices);
-            for &tri in &tris {
-                m.add_triangle(tri);
-            }
-        }
+        fills.add(n0, patch);
         filled.push(hole);
     }
-    let (positions, triangles) = m.compact(true);
+    let mut positions = Vec::with_capacity(n0 + fills.positions.len());
+    positions.extend_from_slice(surface.positions());
+    positions.extend_from_slice(&fills.positions);
+    let mut triangles = Vec::with_capacity(first_fill + fills.triangles.len());
+    triangles.extend_from_slice(surface.triangles());
+    triangles.extend_from_slice(&fills.triangles);
     let mesh = TriMesh::new(positions, triangles)
         .map_err(|source| RemeshError::InvalidResult { source })?;
     Ok(HoleFill {
@@ -131,18 +139,228 @@ pub fn fill_holes(surface: &TriMesh, max_diameter: f64) -> Result<HoleFill, Reme
     })
 }
 
-/// Ear clipping of the loop `l` (as the surface traverses it): fill triangles traverse its edges
-/// the other way. `None` when the loop repeats a vertex or no ear is valid at some step.
-fn ear_clip(m: &EditMesh, l: &[u32]) -> Option<Vec<[u32; 3]>> {
+/// The fills made so far: new vertices and triangles (in the output's numbering), and the fill
+/// triangles at each vertex of a filled loop (so a later loop through the same vertex sees them).
+struct Fills {
+    positions: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+    at_vertex: HashMap<u32, Vec<u32>>,
+}
+
+/// One loop's fill on its local patch.
+struct Patch {
+    /// New vertices.
+    positions: Vec<Vec3>,
+    /// Fill triangles: below `first_new` an index into `globals`, from it on a new vertex.
+    triangles: Vec<[u32; 3]>,
+    /// The patch's vertices in the surface's numbering (the loop's first).
+    globals: Vec<u32>,
+    first_new: usize,
+}
+
+impl Fills {
+    fn add(&mut self, n0: usize, patch: Patch) {
+        let base = (n0 + self.positions.len()) as u32;
+        self.positions.extend_from_slice(&patch.positions);
+        for tri in patch.triangles {
+            let global = tri.map(|v| {
+                if (v as usize) < patch.first_new {
+                    patch.globals[v as usize]
+                } else {
+                    base + (v - patch.first_new as u32)
+                }
+            });
+            let index = self.triangles.len() as u32;
+            self.triangles.push(global);
+            for v in global {
+                if (v as usize) < n0 {
+                    self.at_vertex.entry(v).or_default().push(index);
+                }
+            }
+        }
+    }
+}
+
+/// Fills the loop `l` on the patch of the triangles at its vertices (the surface's and earlier
+/// fills'); `None` when no triangulation is sound.
+fn fill_loop(surface: &TriMesh, fills: &Fills, l: &[u32], diameter: f64) -> Option<Patch> {
     let n = l.len();
+    let _span = tracing::debug_span!("fill_loop", vertices = n).entered();
     let mut sorted = l.to_vec();
     sorted.sort_unstable();
     if sorted.windows(2).any(|w| w[0] == w[1]) {
         return None;
     }
-    // The fill polygon: the loop reversed.
+    let n0 = surface.vertex_count() as u32;
+    let topo = surface.topology();
+    // The patch: every triangle at a loop vertex, the surface's then earlier fills'.
+    let mut input: Vec<u32> = l
+        .iter()
+        .flat_map(|&v| topo.vertex_triangles(v).iter().copied())
+        .collect();
+    input.sort_unstable();
+    input.dedup();
+    let mut earlier: Vec<u32> = l
+        .iter()
+        .filter_map(|v| fills.at_vertex.get(v))
+        .flatten()
+        .copied()
+        .collect();
+    earlier.sort_unstable();
+    earlier.dedup();
+    let mut globals: Vec<u32> = l.to_vec();
+    let mut local: HashMap<u32, u32> = l.iter().enumerate().map(|(i, &v)| (v, i as u32)).collect();
+    let position = |v: u32| {
+        if v < n0 {
+            surface.positions()[v as usize]
+        } else {
+            fills.positions[(v - n0) as usize]
+        }
+    };
+    let tris: Vec<[u32; 3]> = input
+        .iter()
+        .map(|&t| surface.triangles()[t as usize])
+        .chain(earlier.iter().map(|&t| fills.triangles[t as usize]))
+        .map(|tri| {
+            tri.map(|v| {
+                *local.entry(v).or_insert_with(|| {
+                    globals.push(v);
+                    globals.len() as u32 - 1
+                })
+            })
+        })
+        .collect();
+    let local_positions: Vec<Vec3> = globals.iter().map(|&v| position(v)).collect();
+    let mut m = EditMesh::new(&local_positions, &tris);
+    let (first_fill, first_new) = (tris.len(), globals.len());
+    // The loop in local numbering is 0..n, in the surface's direction.
+    let lp: Vec<u32> = (0..n as u32).collect();
+    let plain = {
+        let _span = tracing::debug_span!("triangulate").entered();
+        triangulate(&m, &lp)?
+    };
+    let perimeter: f64 = (0..n)
+        .map(|i| (local_positions[(i + 1) % n].as_dvec3() - local_positions[i].as_dvec3()).length())
+        .sum();
+    // The fill's edge: the loop's, but no finer than 1/FILL_DIVISIONS of the hole across, so that a
+    // fine scan's fill costs what a coarse one's does.
+    let tau = (perimeter / n as f64).max(diameter / FILL_DIVISIONS) as f32;
+    for &tri in &plain {
+        m.add_triangle(tri);
+    }
+    let area: f64 = plain
+        .iter()
+        .map(|tri| {
+            let [a, b, c] = tri.map(|v| m.pos[v as usize].as_dvec3());
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    // A bound on the refinement: four times the triangles of edge `tau` the fill's area holds.
+    let cap = first_fill + 4 * (area / (0.433 * f64::from(tau).powi(2))) as usize + 4 * n + 16;
+    let _refine = tracing::debug_span!("refine_and_fair").entered();
+    refine(&mut m, first_fill, tau, cap);
+    fair(&mut m, first_new, first_fill);
+    delaunay_flips(&mut m, first_fill);
+    fair(&mut m, first_new, first_fill);
+    if !sound(&m, first_fill) {
+        // Refinement made a sliver (it can on loops with long straight runs): keep the plain
+        // triangulation instead, sound by construction.
+        tracing::debug!(
+            vertices = n,
+            "refined hole fill unsound; the plain one kept"
+        );
+        m.truncate(first_fill, first_new);
+        for &tri in &plain {
+            m.add_triangle(tri);
+        }
+    }
+    let triangles: Vec<[u32; 3]> = (first_fill..m.tris.len())
+        .filter(|&t| m.tri_alive[t])
+        .map(|t| m.tris[t])
+        .collect();
+    // Never emit what the mesh checks would call degenerate.
+    if triangles.iter().any(|tri| {
+        let [a, b, c] = tri.map(|v| m.pos[v as usize].as_dvec3());
+        let longest = (b - a)
+            .length_squared()
+            .max((c - b).length_squared())
+            .max((a - c).length_squared());
+        (b - a).cross(c - a).length() <= 10.0 * ZERO_AREA_TOLERANCE * longest
+    }) {
+        return None;
+    }
+    Some(Patch {
+        positions: m.pos[first_new..].to_vec(),
+        triangles,
+        globals,
+        first_new,
+    })
+}
+
+/// A fill's edges are no shorter than its hole's diameter over this (about 800 triangles for a
+/// round hole, however fine the scan around it).
+pub const FILL_DIVISIONS: f64 = 32.0;
+
+/// Loops of up to this many vertices are triangulated optimally (`O(n³)` time, `O(n²)` memory:
+/// 0.1 s and 12 MB at the limit); longer ones by ear clipping.
+pub const MAX_DP_LOOP: usize = 1000;
+
+/// The smallest quality a fill triangle may have: the sine of its smallest angle (times its
+/// facing factor), 1e-3 (0.06°). Its height is then at least 5e-4 of its longest edge: 5000 ×
+/// the mesh checks' zero-area tolerance, and 5 × the hole filler's own soundness floor.
+const MIN_FILL_QUALITY: f64 = 1e-3;
+
+/// The quality of triangle `abc` of a fill whose loop's normal is `normal` (unit): the sine of its
+/// smallest angle, times `(1 + cos θ)/2` for the angle θ between its normal and the loop's (1
+/// facing the same way, ½ across, 0 folded back). 0 for a degenerate triangle.
+fn quality(a: DVec3, b: DVec3, c: DVec3, normal: DVec3) -> f64 {
+    let cross = (b - a).cross(c - a);
+    let doubled = cross.length();
+    let (ab, bc, ca) = (
+        (b - a).length_squared(),
+        (c - b).length_squared(),
+        (a - c).length_squared(),
+    );
+    // The smallest angle is opposite the shortest side, between the two longer ones.
+    let (hi, mid) = if ab >= bc && ab >= ca {
+        (ab, bc.max(ca))
+    } else if bc >= ca {
+        (bc, ab.max(ca))
+    } else {
+        (ca, ab.max(bc))
+    };
+    let denominator = (hi * mid).sqrt();
+    if !(doubled > 0.0 && denominator > 0.0) {
+        return 0.0;
+    }
+    let sine = doubled / denominator;
+    let facing = if normal == DVec3::ZERO {
+        1.0
+    } else {
+        0.5 * (1.0 + cross.dot(normal) / doubled)
+    };
+    let q = sine * facing;
+    if q.is_finite() {
+        q
+    } else {
+        0.0
+    }
+}
+
+/// Triangulates the loop `l` (local vertices, as the surface traverses it: fill triangles
+/// traverse its edges the other way) with the largest smallest [`quality`], new edges not
+/// already edges of `m`; ear clipping for loops longer than [`MAX_DP_LOOP`]. `None` when the best
+/// has a triangle below [`MIN_FILL_QUALITY`].
+fn triangulate(m: &EditMesh, l: &[u32]) -> Option<Vec<[u32; 3]>> {
+    let n = l.len();
+    if n < 3 {
+        return None;
+    }
+    // The fill polygon: the loop reversed, in f64 about its centroid.
     let poly: Vec<u32> = l.iter().rev().copied().collect();
-    let p: Vec<DVec3> = poly.iter().map(|&v| m.pos[v as usize].as_dvec3()).collect();
+    let raw: Vec<DVec3> = poly.iter().map(|&v| m.pos[v as usize].as_dvec3()).collect();
+    let centre = raw.iter().sum::<DVec3>() / n as f64;
+    let p: Vec<DVec3> = raw.iter().map(|&x| x - centre).collect();
     let mut normal = DVec3::ZERO;
     for i in 0..n {
         let (a, b) = (p[i], p[(i + 1) % n]);
@@ -153,6 +371,58 @@ fn ear_clip(m: &EditMesh, l: &[u32]) -> Option<Vec<[u32; 3]>> {
         );
     }
     let normal = normal.normalize_or_zero();
+    if n > MAX_DP_LOOP {
+        return ear_clip(m, &poly, &p, normal);
+    }
+    // best[i·n + j], j > i: the largest smallest quality of the sub-polygon i..=j closed by the
+    // edge ij (−1 where ij may not be an edge); split[i·n + j]: its apex.
+    let mut best = vec![f64::INFINITY; n * n];
+    let mut split = vec![0u32; n * n];
+    for len in 2..n {
+        for i in 0..n - len {
+            let j = i + len;
+            let at = i * n + j;
+            if len < n - 1 && m.adjacent(poly[i], poly[j]) {
+                best[at] = -1.0;
+                continue;
+            }
+            let (mut b, mut apex) = (-1.0f64, i + 1);
+            for k in i + 1..j {
+                let sub = best[i * n + k].min(best[k * n + j]);
+                if sub <= b {
+                    continue;
+                }
+                let q = quality(p[i], p[k], p[j], normal).min(sub);
+                if q > b {
+                    (b, apex) = (q, k);
+                }
+            }
+            best[at] = b;
+            split[at] = apex as u32;
+        }
+    }
+    if best[n - 1].is_nan() || best[n - 1] < MIN_FILL_QUALITY {
+        return None;
+    }
+    let mut out = Vec::with_capacity(n - 2);
+    let mut stack = vec![(0usize, n - 1)];
+    while let Some((i, j)) = stack.pop() {
+        if j - i < 2 {
+            continue;
+        }
+        let k = split[i * n + j] as usize;
+        out.push([poly[i], poly[k], poly[j]]);
+        stack.push((i, k));
+        stack.push((k, j));
+    }
+    Some(out)
+}
+
+/// Ear clipping of the fill polygon `poly` (positions `p` about its centre, Newell `normal`):
+/// always the ear with the smallest interior angle whose new edge is not already an edge and
+/// whose triangle's [`quality`] is at least [`MIN_FILL_QUALITY`]. `None` when no ear is left.
+fn ear_clip(m: &EditMesh, poly: &[u32], p: &[DVec3], normal: DVec3) -> Option<Vec<[u32; 3]>> {
+    let n = poly.len();
     let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
     let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
     let mut alive = vec![true; n];
@@ -183,8 +453,7 @@ fn ear_clip(m: &EditMesh, l: &[u32]) -> Option<Vec<[u32; 3]>> {
             if m.adjacent(a, c) || diagonals.contains(&key) {
                 continue;
             }
-            let (pa, pb, pc) = (p[prev[i]], p[i], p[next[i]]);
-            if (pb - pa).cross(pc - pa).length_squared() <= 1e-24 * (pc - pa).length_squared() {
+            if quality(p[prev[i]], p[i], p[next[i]], normal) < MIN_FILL_QUALITY {
                 continue;
             }
             chosen = Some((i, key));
@@ -202,6 +471,9 @@ fn ear_clip(m: &EditMesh, l: &[u32]) -> Option<Vec<[u32; 3]>> {
         remaining -= 1;
     }
     let i = (0..n).find(|&i| alive[i])?;
+    if quality(p[prev[i]], p[i], p[next[i]], normal) < MIN_FILL_QUALITY {
+        return None;
+    }
     out.push([poly[prev[i]], poly[i], poly[next[i]]]);
     Some(out)
 }
@@ -222,10 +494,13 @@ fn fill_edge(m: &EditMesh, a: u32, b: u32, first_fill: usize) -> Option<(u32, u3
 }
 
 /// Splits fill edges longer than `1.5·tau` (`tau`: the hole's mean loop edge), with Delaunay flips after
-/// each sweep, until none is left.
-fn refine(m: &mut EditMesh, first_fill: usize, tau: f32) {
+/// each sweep, until none is left or the mesh has `cap` triangles (a sweep is not started past it).
+fn refine(m: &mut EditMesh, first_fill: usize, tau: f32, cap: usize) {
     for _round in 0..200 {
         let mut splits = 0;
+        if m.tris.len() >= cap {
+            break;
+        }
         // One sweep over the triangles the round starts with, then flips: splitting the new
         // edges at once too would cluster vertices around the ear clipping's fan apexes.
         let end = m.tris.len();
@@ -301,15 +576,16 @@ fn delaunay_flips(m: &mut EditMesh, first_fill: usize) {
     }
 }
 
-/// Whether every fill triangle is clearly non-degenerate (height above 1e-4 of its longest edge).
+/// Whether every fill triangle is clearly non-degenerate (height above 1e-4 of its longest edge,
+/// in `f64` from the stored positions).
 fn sound(m: &EditMesh, first_fill: usize) -> bool {
     (first_fill..m.tris.len()).all(|t| {
-        let [a, b, c] = m.tris[t].map(|v| m.pos[v as usize]);
+        let [a, b, c] = m.tris[t].map(|v| m.pos[v as usize].as_dvec3());
         let longest = (b - a)
             .length_squared()
             .max((c - b).length_squared())
             .max((a - c).length_squared());
-        tri_cross(a, b, c).length() > 1e-4 * longest
+        (b - a).cross(c - a).length() > 1e-4 * longest
     })
 }
 
@@ -442,4 +718,103 @@ fn fair(m: &mut EditMesh, first_new: usize, first_fill: usize) {
         lambda *= 0.5;
     }
     m.pos[first_new..].copy_from_slice(&old);
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::*;
+
+    /// A triangular hole 77 cm from the origin whose top side `A → B` (0.5 cm) is cut into
+    /// `k` pieces by vertices `eps` off the line (0: exactly collinear in `f32`), its apex 1.5
+    /// cm below (an 18.9° angle, the smallest of the loop), in a ring of quads around it.
+    fn collinear_hole(k: usize, eps: f32) -> TriMesh {
+        let (x0, apex) = (77.0f32, Vec3::new(77.25, -1.5, 0.0));
+        let mut inner: Vec<Vec3> = (0..=k)
+            .map(|i| {
+                let y = if i == 0 || i == k { 0.0 } else { eps };
+                Vec3::new(x0 + 0.5 * i as f32 / k as f32, y, 0.0)
+            })
+            .collect();
+        inner.push(apex);
+        let centre = inner.iter().sum::<Vec3>() / inner.len() as f32;
+        let outer: Vec<Vec3> = inner
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| {
+                if i <= k {
+                    Vec3::new(x0 - 0.25 + 1.0 * i as f32 / k as f32, 0.5, 0.0)
+                } else {
+                    centre + (p - centre) * 2.0
+                }
+            })
+            .collect();
+        let n = inner.len() as u32;
+        let mut positions = inner;
+        positions.extend(outer);
+        let mut triangles = Vec::new();
+        for i in 0..n {
+            let j = (i + 1) % n;
+            for tri in [[i, j, n + j], [i, n + j, n + i]] {
+                let [a, b, c] = tri.map(|v| positions[v as usize]);
+                let ccw = (b - a).cross(c - a).z > 0.0;
+                triangles.push(if ccw { tri } else { [tri[0], tri[2], tri[1]] });
+            }
+        }
+        TriMesh::new(positions, triangles).unwrap()
+    }
+
+    /// The smallest `2·area / longest²` of the triangles from `first` on, in `f64`: 0 for a
+    /// line, `√3/2` for an equilateral triangle.
+    fn thinnest(mesh: &TriMesh, first: usize) -> f64 {
+        (first..mesh.triangle_count())
+            .map(|t| {
+                let [a, b, c] = mesh.corners(t).map(|p| p.as_dvec3());
+                let longest = (b - a)
+                    .length_squared()
+                    .max((c - b).length_squared())
+                    .max((a - c).length_squared());
+                (b - a).cross(c - a).length() / longest
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Ear clipping by smallest angle takes the apex first and is left with `A, M, B`: a
+    /// zero-area triangle (an invalid result) when `M` is on the line, a sliver when it is a
+    /// hair off it. The fill never makes either, far from the origin or not.
+    #[test]
+    fn a_hole_with_collinear_loop_vertices_far_from_the_origin_fills_without_slivers() {
+        for k in [2, 3, 4, 8] {
+            for eps in [0.0f32, 1e-9, -1e-9, 2e-6] {
+                let mesh = collinear_hole(k, eps);
+                let out =
+                    fill_holes(&mesh, 2.0).unwrap_or_else(|e| panic!("k = {k}, eps = {eps}: {e}"));
+                assert_eq!((out.filled.len(), out.open.len()), (1, 1), "k = {k}");
+                assert_eq!(out.mesh.topology().boundary_loops().len(), 1);
+                let floor = thinnest(&out.mesh, out.first_fill_triangle);
+                assert!(
+                    floor >= 5e-4,
+                    "k = {k}, eps = {eps}: a fill triangle of height {floor:e} × its longest edge"
+                );
+            }
+        }
+    }
+
+    /// The quality is 0 for a line and a fold, and the sine of the smallest angle for a
+    /// triangle facing the loop's normal; the triangulation refuses a loop whose every
+    /// triangulation is degenerate (three collinear vertices and one more on the line).
+    #[test]
+    fn the_quality_floor_refuses_degenerate_triangulations() {
+        let z = DVec3::Z;
+        let (a, b) = (DVec3::new(77.0, 0.0, 0.0), DVec3::new(78.0, 0.0, 0.0));
+        let c = DVec3::new(77.5, 0.5 * 3f64.sqrt(), 0.0);
+        assert!((quality(a, b, c, z) - 0.5 * 3f64.sqrt()).abs() < 1e-9);
+        assert_eq!(quality(a, b, c, -z), 0.0);
+        assert_eq!(quality(a, b, DVec3::new(77.5, 0.0, 0.0), z), 0.0);
+        let line: Vec<Vec3> = (0..4)
+            .map(|i| Vec3::new(77.0 + i as f32, 0.0, 0.0))
+            .collect();
+        let m = EditMesh::new(&line, &[]);
+        assert_eq!(triangulate(&m, &[0, 1, 2, 3]), None);
+    }
 }

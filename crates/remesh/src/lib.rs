@@ -56,11 +56,19 @@
 //! noise to 0.0043 cm RMS.
 //!
 //! ## Hole filling
-//! [`fill_holes`] triangulates each loop up to a diameter by ear clipping (smallest interior angle
-//! first, against the loop's Newell normal), splits fill edges longer than 1.5 × the loop's mean
-//! edge with max–min-angle flips in between, and places the new vertices by harmonic (umbrella)
-//! fairing with the loop fixed. New vertices and triangles are appended; the input's numbering is
-//! kept.
+//! [`fill_holes`] triangulates each loop up to a diameter by the triangulation of the loop's own
+//! vertices with the largest smallest triangle quality (sine of the smallest angle, weighted by
+//! how far the triangle faces the loop's Newell normal; dynamic programming in `f64` about the
+//! loop's centroid; ear clipping with the same quality floor past [`MAX_DP_LOOP`] vertices), splits
+//! fill edges longer than 1.5 × the loop's mean edge (or 1/[`FILL_DIVISIONS`] of the hole's
+//! diameter, if longer) with max–min-angle flips in between, and places the new vertices by
+//! harmonic (umbrella) fairing with the loop fixed. No fill triangle is degenerate, whatever the
+//! scan's resolution and the coordinates' magnitude: straight runs of collinear loop vertices (a
+//! subdivided scan's) and a loop 77 cm from the origin in `f32` are filled with triangles whose
+//! height is at least 5e-4 of their longest edge, and a loop no triangulation fills so is left
+//! open. Each loop is filled on the triangles at its vertices only, so the cost is the holes'
+//! plus one copy of the surface. New vertices and triangles are appended; the input's numbering
+//! is kept.
 //!
 //! ```
 //! use tissue_remesh::{remesh, RemeshOptions};
@@ -96,6 +104,6 @@ mod remesh;
 pub mod scenes;
 
 pub use error::RemeshError;
-pub use holes::{fill_holes, Hole, HoleFill};
+pub use holes::{fill_holes, Hole, HoleFill, FILL_DIVISIONS, MAX_DP_LOOP};
 pub use quality::MeshQuality;
 pub use remesh::{remesh, RemeshOptions, RemeshStats, Remeshed, MAX_TRIANGLES};

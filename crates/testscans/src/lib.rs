@@ -6,8 +6,9 @@
 //!   noise-free surface it came from.
 //! - Generators: [`noisy_face_scan`] (mm: a photogrammetric face with 0.2 mm noise, 0.5 mm
 //!   triangles and holes), [`tapered_tube`] (cm: an uneven open tube, generated),
-//!   [`forearm_from_body`] (dm: the left arm cut from the body, refined) and [`closed_body`]
-//!   (dm: the watertight body as it is).
+//!   [`forearm_from_body`] (dm: the left arm cut from the body, refined), [`closed_body`]
+//!   (dm: the watertight body as it is) and [`fine_face_scan`] (the face subdivided to
+//!   millions of triangles, far from the origin).
 //! - Building blocks for variants: [`Rng`] (splitmix64, Box–Muller), [`median_edge`],
 //!   [`subdivide_midpoint`], [`loop_subdivide`], [`add_normal_noise`], [`punch_hole`],
 //!   [`remove_triangles`].
@@ -33,6 +34,7 @@
 
 mod body;
 mod face;
+mod fine;
 mod ops;
 mod rng;
 mod scan;
@@ -43,6 +45,7 @@ pub use face::{
     noisy_face_scan, FACE_BIG_HOLE_MM, FACE_CUT_Z_MM, FACE_HOLE_BORDER_MM, FACE_NOISE_SIGMA_MM,
     HEAD_FILE,
 };
+pub use fine::{fine_face_scan, FINE_FACE_HOLES};
 pub use ops::{
     add_normal_noise, loop_subdivide, median_edge, punch_hole, remove_triangles,
     subdivide_midpoint, Trimmed,
