@@ -346,7 +346,12 @@ fn the_solver_flag_reaches_the_report_and_is_refused_beside_a_job() {
     let job_file = dir.join("job.json");
     std::fs::write(&job_file, r#"{"request": {"solver": "explicit"}}"#).unwrap();
     assert_fails(
-        &["--job", job_file.to_str().unwrap(), "--solver", "quasi_static"],
+        &[
+            "--job",
+            job_file.to_str().unwrap(),
+            "--solver",
+            "quasi_static",
+        ],
         Exit::Usage,
         &["--job takes the whole job"],
     );
