@@ -20,7 +20,8 @@
 //! **The solve** is Newton's method without assembling the Hessian: each step solves
 //! `H dx = r` by conjugate gradients, `H` the model's Hessian at the current positions (every
 //! spring's `k d dᵀ + k·max(0, 1 − l₀/l)(I − d dᵀ)`, the anchors, the slab's shear across the
-//! normal, the hinges' Gauss–Newton `2k g gᵀ`, eq. (5)'s and the fill's rank-one terms, the
+//! normal, the hinges' Gauss–Newton `2k g gᵀ`, eq. (5)'s rank-one term, the fill's
+//! `K/V₀ ∇V ∇Vᵀ − p ∇²V` (its pressure's geometric term is what lets 100 cm³ converge), the
 //! contacts' `k n nᵀ` on their relative normal motion), preconditioned by the springs'
 //! Laplacian with the anchors, shear, hinges and eq. (5) on its diagonal, factored once per
 //! phase ([`tissue_mss::statics`], sparse Cholesky on faer: the local/global matrix of Liu et
@@ -33,9 +34,11 @@
 //!
 //! **Status**: where it converges it agrees with the explicit run (Table 2: gain within 0.8 %,
 //! volume difference within 1 %), but it does not yet converge reliably when the contacts
-//! carry the expander's full pressure (Table 2 at 100 and 150 cm³ stagnate near 10⁻² before
-//! they settle, and can end with layer-2 edges through the expander). It is therefore not the
-//! default: docs/validation.md has the figures.
+//! carry the expander's full pressure: Table 2 at 100 cm³ settles in a few hundred iterations
+//! with layer-2 edges through the expander by 0.04 cm, 150 cm³ stagnates near 10⁻². The slab's
+//! shear force, taken across layer 2's current normal, has a Jacobian this symmetric Newton
+//! step leaves out (the normal's dependence on the neighbours), of the springs' order. It is
+//! therefore not the default: docs/validation.md has the figures.
 //!
 //! **Stop**: on the residual, not a step count. The residual is the largest net force on a
 //! free particle divided by the force that would move that particle by one mean edge against
@@ -157,7 +160,7 @@ impl Contact {
 /// operator of a step's conjugate gradients): every spring's `k d dᵀ + k·max(0, 1 − l₀/l)
 /// (I − d dᵀ)` (positive semidefinite: a compressed spring's negative part dropped), the
 /// anchors' `k I`, the slab's shear `k (I − n nᵀ)`, the hinges' Gauss–Newton `2k g gᵀ`,
-/// eq. (5)'s and the fill's rank-one terms, and the contacts.
+/// eq. (5)'s rank-one term, the fill's `K/V₀ ∇V ∇Vᵀ − p ∇²V`, and the contacts.
 #[derive(Default)]
 struct Hessian {
     /// `(a, b, d, k, k_t)`.
@@ -173,6 +176,11 @@ struct Hessian {
     /// The fill: `(particle, ∇ᵢV)`, `K/V₀`.
     fill: Vec<(u32, DVec3)>,
     fill_k: f64,
+    /// The fill's surface (particle indices), its positions relative to its first vertex, and
+    /// its pressure: the geometric term `−p ∇²V` of the fill's Hessian.
+    fill_triangles: Vec<[u32; 3]>,
+    fill_positions: Vec<DVec3>,
+    fill_pressure: f64,
 }
 
 impl Hessian {
@@ -215,6 +223,16 @@ impl Hessian {
             let s: f64 = self.fill.iter().map(|(p, g)| g.dot(v[*p as usize])).sum();
             for &(p, g) in &self.fill {
                 out[p as usize] += g * (self.fill_k * s);
+            }
+            {
+                let scale = -self.fill_pressure / 6.0;
+                for t in &self.fill_triangles {
+                    let [a, b, c] = t.map(|p| self.fill_positions[p as usize]);
+                    let [va, vb, vc] = t.map(|p| v[p as usize]);
+                    out[t[0] as usize] += (vb.cross(c) + b.cross(vc)) * scale;
+                    out[t[1] as usize] += (vc.cross(a) + c.cross(va)) * scale;
+                    out[t[2] as usize] += (va.cross(b) + a.cross(vb)) * scale;
+                }
             }
         }
         for c in contacts {
@@ -819,6 +837,22 @@ impl ContactRun {
                     .extend(w.into_iter().map(|(p, w)| (p + t as u32, w)));
             }
             if let Some(pressure) = self.body.volume_pressures().first() {
+                h.fill_triangles.clear();
+                h.fill_triangles.extend(
+                    pressure
+                        .triangles()
+                        .iter()
+                        .map(|tri| tri.map(|v| v + t as u32)),
+                );
+                let origin = body
+                    .positions()
+                    .first()
+                    .map_or(DVec3::ZERO, |p| p.as_dvec3());
+                h.fill_positions.clear();
+                h.fill_positions.extend((0..t).map(|_| DVec3::ZERO));
+                h.fill_positions
+                    .extend(body.positions().iter().map(|p| p.as_dvec3() - origin));
+                h.fill_pressure = pressure.pressure(body.positions());
                 s.grad.iter_mut().for_each(|g| *g = Vec3A::ZERO);
                 pressure.add_gradient(body.positions(), &mut s.grad);
                 h.fill_k = pressure.bulk_modulus() / pressure.rest_volume();

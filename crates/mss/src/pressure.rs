@@ -93,6 +93,16 @@ impl VolumePressure {
         accumulate_gradient(&self.triangles, positions, 0, 1.0, out);
     }
 
+    /// The fill's surface triangles (particle indices).
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// The pressure at `positions`, `K·(V₀ − V)/V₀` (g/(cm·s²)): positive when squeezed.
+    pub fn pressure(&self, positions: &[Vec3A]) -> f64 {
+        self.bulk_modulus * (self.rest - self.volume(positions)) / self.rest
+    }
+
     /// The enclosed volume at `positions` (cm³).
     pub fn volume(&self, positions: &[Vec3A]) -> f64 {
         let origin = self
