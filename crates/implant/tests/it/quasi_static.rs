@@ -105,3 +105,37 @@ fn table_2_at_50_cm3_quasi_static_agrees_with_explicit() {
         statics.area_gain
     );
 }
+
+/// A parameter acts physically through the quasi-static solve as through the explicit run:
+/// twice the skin's Young's modulus squeezes the 50 cm³ expander more (its pressure holds a
+/// stiffer skin) and stretches the skin less, by the explicit run's ratios (compression × 1.34,
+/// gain − 3.5 %) within a tenth of the change.
+#[test]
+fn twice_the_skin_stiffness_acts_as_in_the_explicit_run() {
+    let selection = region();
+    let outcome = |solver: Solver, factor: f64| {
+        let mut params = InsertionParams {
+            solver,
+            ..InsertionParams::default()
+        };
+        params.layers.young *= factor;
+        run(&selection, 50.0, &params)
+    };
+    let change = |solver: Solver| {
+        let (soft, stiff) = (outcome(solver, 1.0), outcome(solver, 2.0));
+        assert_eq!(stiff.stop_reason, tissue_mss::StopReason::Settled);
+        (
+            stiff.implant_compression / soft.implant_compression,
+            stiff.area_gain / soft.area_gain,
+        )
+    };
+    let (explicit_squeeze, explicit_gain) = change(Solver::Explicit);
+    let (static_squeeze, static_gain) = change(Solver::QuasiStatic);
+    eprintln!(
+        "E × 2: compression × {static_squeeze:.3} (explicit × {explicit_squeeze:.3}), gain × \
+         {static_gain:.4} (explicit × {explicit_gain:.4})"
+    );
+    assert!(static_squeeze > 1.2 && static_gain < 0.99);
+    assert!((static_squeeze - explicit_squeeze).abs() <= 0.1 * (explicit_squeeze - 1.0));
+    assert!((static_gain - explicit_gain).abs() <= 0.1 * (1.0 - explicit_gain));
+}
