@@ -64,6 +64,8 @@ async function main() {
     check(result.boundary_unchanged === true, 'the region boundary stayed in place (boundary_unchanged)');
     const shown = await page.textContent('#report-figures');
     check(shown.includes(gain.toFixed(2)), 'the page shows the gain', shown);
+    check(result.inputs?.solver === 'explicit' && /Solver\s*explicit/.test(shown),
+      'the run used the default solver, explicit, and the page says so', JSON.stringify(result.inputs?.solver));
     await page.waitForTimeout(300);
     await shot(page, '3-result.png');
 
@@ -109,6 +111,31 @@ async function main() {
       `Cancel click to "cancelled" in the page: median ${sortedMs[1]?.toFixed(1)} ms of ${cancelMs.map((m) => m.toFixed(1)).join(', ')} (limit 100 ms)`, `${cancelMs}`);
     const status = await page.textContent('#job-status');
     check(/cancelled after \d/i.test(status), `the page says so: "${status}"`);
+
+    // d1. the quasi-static solver, chosen in Advanced (issue 31), at 50 cm³, where it converges
+    await page.click('#tab-2');
+    await page.fill('#volume', '50');
+    if (!(await page.isVisible('#solver'))) await page.click('details.advanced summary');
+    await page.selectOption('#solver', 'quasi_static');
+    await page.click('#tab-3');
+    await run.click();
+    await page.waitForFunction(() => {
+      const s = window.tissueStudio.planner.job;
+      return s.state !== 'running' && s.state !== 'idle';
+    }, null, { timeout: RUN_TIMEOUT_MS, polling: 200 });
+    const quasi = await planner(page, () => ({ job: window.tissueStudio.planner.job, result: window.tissueStudio.planner.result }));
+    const quasiShown = await page.textContent('#report-figures');
+    check(quasi.job.state === 'finished' && quasi.result?.inputs?.solver === 'quasi_static'
+      && quasi.result.iterations > 0 && quasi.result.residual_n > 0
+      && quasi.result.area_gain_cm2 >= 8.6 && quasi.result.area_gain_cm2 <= 14.4
+      && /quasi-static: \d+ iterations, residual/.test(quasiShown),
+      `a quasi-static run at 50 cm³: gain ${quasi.result?.area_gain_cm2?.toFixed(3)} cm² (Table 2's band 8.6 to 14.4), ${quasi.result?.iterations} iterations, residual ${quasi.result?.residual_n} N`,
+      `${quasi.job.state} ${JSON.stringify(quasi.result?.inputs?.solver)} ${quasiShown}`);
+    await shot(page, '3b-quasi-static.png');
+    await page.click('#tab-2');
+    await page.fill('#volume', '100');
+    await page.selectOption('#solver', 'explicit');
+    await page.click('#tab-3');
 
     // d2. an expansion over weeks (issue 21): the weekly chart and the flap's band
     await planner(page, () => window.tissueStudio.planner.startExpansion(2, { volume_cm3: 40, band_samples: 8 }));

@@ -92,6 +92,9 @@ export function renderReport(r, job) {
     ['Max displacement', r.max_displacement_cm != null ? `${fmt(r.max_displacement_cm, 2)} cm` : null],
     ['Steps', r.max_steps ? `${fmtInt(r.steps)} of at most ${fmtInt(r.max_steps)}` : fmtInt(r.steps)],
     ['Stop reason', STOP[r.stop_reason] || String(r.stop_reason ?? '—')],
+    ['Solver', r.inputs?.solver === 'quasi_static'
+      ? `quasi-static: ${fmtInt(r.iterations)} iterations, residual ${r.residual_n != null ? `${r.residual_n.toExponential(2)} N` : '—'}`
+      : (r.inputs?.solver ? 'explicit' : null)],
     ['Wall time', `${fmt(r.wall_time_s, 2)} s`],
     ['Region edge kept in place', r.boundary_unchanged != null ? (r.boundary_unchanged ? 'yes' : 'no') : null],
     ['Region', r.region_vertices != null ? `${fmtInt(r.region_vertices)} vertices, radius ${fmt(r.region_radius_cm, 2)} cm` : null],

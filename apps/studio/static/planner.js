@@ -66,6 +66,7 @@ const REQUEST_FIELDS = [...Object.keys(REQUEST_INPUTS), 'length_cm', 'width_cm']
 const OTHER_INPUTS = {
   rotation_deg: 'rotation', tangent: 'rotation', volumes_cm3: 'sweep-volumes',
   target_gain_cm2: 'target-gain', bracket_cm3: 'bracket-lo', expand_weeks: 'expand-weeks',
+  solver: 'solver',
 };
 
 /** The id of the input that sets request field `field`, or null. */
@@ -102,6 +103,7 @@ function buildRequest(extra = {}) {
     if (x !== undefined) request[field] = x;
   }
   request.rotation_deg = Number($('rotation').value);
+  request.solver = $('solver').value;
   const p = state.placement;
   if (p) {
     const k = state.patient.cm_per_unit || 1;

@@ -680,7 +680,9 @@ impl Insertion {
         let max_steps = self.run.max_steps();
         let window = self.run.stop_window().max(1) as u64;
         if self.solver == Solver::QuasiStatic {
-            self.solve_static(self.statics.max_iterations, &mut progress)?;
+            // The run's step limit bounds the solver's iterations too (a caller's bound on
+            // the work, e.g. the studio's).
+            self.solve_static(max_steps, &mut progress)?;
         }
         while self.solver == Solver::Explicit
             && !self.run.settled()
