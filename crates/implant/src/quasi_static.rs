@@ -125,8 +125,6 @@ pub struct StaticReport {
     pub residual_n: f64,
     /// Whether the final tolerance was met.
     pub converged: bool,
-    /// Factorisations of the matrix (one per change of the contact set).
-    pub factorisations: u32,
 }
 
 /// One contact's stiffness: the relative normal displacement `δ = n·Σ cᵢ xᵢ` of its (up to
@@ -181,6 +179,8 @@ struct Hessian {
     fill_triangles: Vec<[u32; 3]>,
     fill_positions: Vec<DVec3>,
     fill_pressure: f64,
+    /// Layer 2's vertex normals (scratch).
+    inner_normals: Vec<DVec3>,
 }
 
 impl Hessian {
@@ -256,6 +256,7 @@ struct Scratch {
     g: Vec<f64>,
     diagonal: Vec<f64>,
     contacts: Vec<Contact>,
+    ws: BvhWorkspace,
     hessian: Hessian,
     free: Vec<bool>,
     /// The contacts' stiffness on the preconditioner's diagonal.
@@ -277,7 +278,6 @@ struct Surfaces {
     dome_bvh: Bvh,
     inner: Vec<[u32; 3]>,
     inner_bvh: Bvh,
-    ws: BvhWorkspace,
     /// Area-weighted vertex normals of the body (per body particle) and of layer 2 (per
     /// region vertex), at the current positions.
     dome_normals: Vec<Vec3A>,
@@ -315,6 +315,31 @@ fn penalty(k: f64, d0: f32, gap: f32) -> (f64, f64) {
     let (d0, gap) = (f64::from(d0), f64::from(gap));
     let depth = (d0 - gap).max(0.0);
     (k * depth * depth / d0, 2.0 * k * depth / d0)
+}
+
+impl Surfaces {
+    /// The dome point closest to `x` within `reach`: its triangle, barycentric weights, the
+    /// dome's normal there (interpolated from its vertex normals: continuous across edges, so a
+    /// particle sliding over the dome sees no jump in its contact's direction) and `x`'s gap
+    /// along it. Needs `dome_bvh` refitted and `dome_normals` computed at `body`.
+    fn dome_contact(
+        &self,
+        dome: &Triangles<'_>,
+        body: &[Vec3A],
+        x: Vec3A,
+        reach: f32,
+        ws: &mut BvhWorkspace,
+    ) -> Option<([u32; 3], [f32; 3], Vec3A, f32)> {
+        let hit = self.dome_bvh.closest_point(dome, x, reach, ws)?;
+        let tri = self.dome[hit.primitive as usize];
+        let [a, b, c] = tri.map(|v| body[v as usize]);
+        let (q, bary) = closest_point_on_triangle(x, a, b, c);
+        let normal = (0..3)
+            .map(|i| self.dome_normals[tri[i] as usize] * bary[i])
+            .sum::<Vec3A>()
+            .normalize_or_zero();
+        Some((tri, bary, normal, (x - q).dot(normal)))
+    }
 }
 
 fn search(source: tissue_bvh::BvhError) -> ImplantError {
@@ -384,14 +409,12 @@ impl ContactRun {
     }
 
     fn surfaces(&self) -> Result<Surfaces, ImplantError> {
-        let body_inv = self.body.particles().inverse_masses();
         let dome: Vec<[u32; 3]> = self
             .body_triangles
             .iter()
             .copied()
             .filter(|t| t.iter().any(|&v| self.dome_vertex[v as usize]))
             .collect();
-        let _ = body_inv;
         let inner: Vec<[u32; 3]> = self
             .layers
             .rest(Layer::Inner)
@@ -411,7 +434,6 @@ impl ContactRun {
             dome_bvh,
             inner,
             inner_bvh,
-            ws: BvhWorkspace::default(),
             dome_normals: vec![Vec3A::ZERO; body_p.len()],
             inner_normals: vec![Vec3A::ZERO; self.layers.rest(Layer::Inner).vertex_count()],
         })
@@ -477,22 +499,11 @@ impl ContactRun {
                 continue;
             }
             let x = tissue_p[p as usize];
-            let Some(hit) = surfaces
-                .dome_bvh
-                .closest_point(&dome, x, reach, &mut surfaces.ws)
+            let Some((tri, bary, normal, gap)) =
+                surfaces.dome_contact(&dome, body_p, x, reach, &mut s.ws)
             else {
                 continue;
             };
-            let tri = surfaces.dome[hit.primitive as usize];
-            let [a, b, c] = tri.map(|v| body_p[v as usize]);
-            let (q, bary) = closest_point_on_triangle(x, a, b, c);
-            // The dome's normal interpolated from its vertex normals: continuous across edges,
-            // so a particle sliding over the dome sees no jump in its contact's direction.
-            let face = (0..3)
-                .map(|i| surfaces.dome_normals[tri[i] as usize] * bary[i])
-                .sum::<Vec3A>()
-                .normalize_or_zero();
-            let (normal, gap) = (face, (x - q).dot(face));
             if gap >= d0 {
                 continue;
             }
@@ -521,10 +532,9 @@ impl ContactRun {
                 if body_w[v] == 0.0 {
                     continue;
                 }
-                let Some(hit) =
-                    surfaces
-                        .inner_bvh
-                        .closest_point(&inner, x, reach, &mut surfaces.ws)
+                let Some(hit) = surfaces
+                    .inner_bvh
+                    .closest_point(&inner, x, reach, &mut s.ws)
                 else {
                     continue;
                 };
@@ -582,6 +592,7 @@ impl ContactRun {
             .map_err(search)?;
         vertex_normals(&surfaces.dome, body_p, 1, &mut surfaces.dome_normals);
         let dome = Triangles::new(body_p, &surfaces.dome).map_err(search)?;
+        let mut ws = BvhWorkspace::default();
         let n = self.layers.rest(Layer::Inner).vertex_count() as u32;
         let tissue = self.layers.system_mut().particles_mut();
         let (position, _, inverse_mass) = tissue.state_mut();
@@ -590,21 +601,11 @@ impl ContactRun {
             if inverse_mass[p] == 0.0 {
                 continue;
             }
-            let x = position[p];
-            let Some(hit) = surfaces
-                .dome_bvh
-                .closest_point(&dome, x, reach, &mut surfaces.ws)
+            let Some((_, _, normal, gap)) =
+                surfaces.dome_contact(&dome, body_p, position[p], reach, &mut ws)
             else {
                 continue;
             };
-            let tri = surfaces.dome[hit.primitive as usize];
-            let [a, b, c] = tri.map(|v| body_p[v as usize]);
-            let (q, bary) = closest_point_on_triangle(x, a, b, c);
-            let normal = (0..3)
-                .map(|i| surfaces.dome_normals[tri[i] as usize] * bary[i])
-                .sum::<Vec3A>()
-                .normalize_or_zero();
-            let gap = (x - q).dot(normal);
             if gap < d0 {
                 let shift = normal * (d0 - gap);
                 position[p] += shift;
@@ -758,15 +759,12 @@ impl ContactRun {
                 bp[p as usize - t].as_dvec3()
             }
         };
-        for (f, (i, &w)) in s.free.iter_mut().zip(
-            tissue
-                .particles()
-                .inverse_masses()
-                .iter()
-                .enumerate()
-                .chain(self.body.particles().inverse_masses().iter().enumerate()),
-        ) {
-            let _ = i;
+        let weights = tissue
+            .particles()
+            .inverse_masses()
+            .iter()
+            .chain(self.body.particles().inverse_masses());
+        for (f, &w) in s.free.iter_mut().zip(weights) {
             *f = w > 0.0;
         }
         if !body_free {
@@ -800,7 +798,9 @@ impl ContactRun {
         }
         h.shear.clear();
         let inner = self.layers.rest(Layer::Inner);
-        let mut normals = vec![DVec3::ZERO; inner.vertex_count()];
+        let normals = &mut h.inner_normals;
+        normals.clear();
+        normals.resize(inner.vertex_count(), DVec3::ZERO);
         for tri in inner.triangles() {
             let [a, b, c] = tri.map(|r| position(TissueLayers::particle(Layer::Inner, r)));
             let n = (b - a).cross(c - a);
@@ -808,7 +808,13 @@ impl ContactRun {
                 normals[r as usize] += n;
             }
         }
-        for (r, (&k, n)) in self.layers.shear.iter().zip(&normals).enumerate() {
+        for (r, (&k, n)) in self
+            .layers
+            .shear
+            .iter()
+            .zip(h.inner_normals.iter())
+            .enumerate()
+        {
             let outer = TissueLayers::particle(Layer::Outer, r as u32);
             h.shear
                 .push((outer, outer + 1, n.normalize_or_zero(), f64::from(k)));
@@ -828,13 +834,13 @@ impl ContactRun {
         h.fill.clear();
         if body_free {
             let body = self.body.particles();
-            for v in self.body.volume_preservations() {
-                let mut w = Vec::new();
-                v.weighted_directions(body.positions(), body.masses(), &mut w);
+            if let Some(v) = self.body.volume_preservations().first() {
+                v.weighted_directions(body.positions(), body.masses(), &mut h.radial);
+                for (p, _) in h.radial.iter_mut() {
+                    *p += t as u32;
+                }
                 let (kv, c) = v.constants();
                 h.radial_k = (kv / 3.0, c * kv);
-                h.radial
-                    .extend(w.into_iter().map(|(p, w)| (p + t as u32, w)));
             }
             if let Some(pressure) = self.body.volume_pressures().first() {
                 h.fill_triangles.clear();
@@ -965,7 +971,6 @@ impl ContactRun {
         let mut surfaces = self.surfaces()?;
         let fill = self.fill.take();
         let mut iterations = 0u64;
-        let mut factorisations = 0u32;
         let new_scratch = |diagonal: Vec<f64>| Scratch {
             tissue: t,
             r: vec![DVec3::ZERO; t + m],
@@ -975,6 +980,7 @@ impl ContactRun {
             g: vec![0.0; 3 * (t + m)],
             diagonal,
             contacts: Vec::new(),
+            ws: BvhWorkspace::default(),
             hessian: Hessian::default(),
             free: vec![false; t + m],
             extra: Vec::new(),
@@ -987,7 +993,6 @@ impl ContactRun {
                 pre: builder.build().map_err(ImplantError::Model)?,
                 body_free: false,
             };
-            factorisations += 1;
             let mut s = new_scratch(diagonal);
             let start: Vec<Vec3A> = fill
                 .particles
@@ -1041,7 +1046,6 @@ impl ContactRun {
                 pre: builder.build().map_err(ImplantError::Model)?,
                 body_free: true,
             };
-            factorisations += 1;
             let mut s = new_scratch(diagonal);
             last = self.solve_load(
                 &mut phase,
@@ -1060,7 +1064,6 @@ impl ContactRun {
             residual: last.1,
             residual_n: last.2 * 1e-5,
             converged: last.0,
-            factorisations,
         };
         tracing::debug!(?report, "quasi-static solve");
         Ok(report)

@@ -5,24 +5,11 @@ use std::ops::ControlFlow;
 
 use glam::Vec3;
 use tissue_implant::{
-    default_radius, place_implant, select_region_with, ImplantShape, ImplantSpec, Insertion,
-    InsertionOutcome, InsertionParams, RegionOptions, RegionRule, RegionSelection, Solver,
-    TissueLayers,
+    place_implant, ImplantShape, ImplantSpec, Insertion, InsertionOutcome, InsertionParams,
+    RegionSelection, Solver, TissueLayers,
 };
 
-fn region() -> RegionSelection {
-    let patient = tissue_mesh::grid(65, 20.0).unwrap();
-    select_region_with(
-        &patient,
-        Vec3::ZERO,
-        default_radius(3.5).unwrap(),
-        &RegionOptions {
-            rule: RegionRule::TouchesVertex,
-            ..RegionOptions::default()
-        },
-    )
-    .unwrap()
-}
+use crate::table2::region;
 
 fn run(selection: &RegionSelection, volume: f64, params: &InsertionParams) -> InsertionOutcome {
     let layers = TissueLayers::new(selection.mesh(), &params.layers).unwrap();

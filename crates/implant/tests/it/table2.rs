@@ -16,7 +16,8 @@ use tissue_implant::{
 };
 use tissue_mss::StopReason;
 
-fn region() -> RegionSelection {
+/// Table 2's region: the thesis's rule on the 20 cm plane of 65² vertices, radius 1.5 × 3.5 cm.
+pub(crate) fn region() -> RegionSelection {
     let patient = tissue_mesh::grid(65, 20.0).unwrap();
     select_region_with(
         &patient,
