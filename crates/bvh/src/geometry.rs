@@ -1,88 +1,110 @@
 //! Exact-as-`f32`-allows primitive tests used by the triangle queries: closest point on a triangle,
 //! ray against a triangle.
 
-use glam::Vec3A;
+use glam::{DVec3, Vec3A};
 
-/// The point of triangle `abc` closest to `p`, and its barycentric coordinates `[u, v, w]`
-/// (`point = u·a + v·b + w·c`, each in `[0, 1]`, summing to 1).
-///
-/// Ericson's Voronoi-region walk (*Real-Time Collision Detection*, 5.1.5): vertex regions, then edge
-/// regions, then the face. A triangle squashed to a segment or a point (possible in a deformed
-/// mesh) falls back to the closest of its three sides, so the result is always finite for finite
-/// input.
-pub fn closest_point_on_triangle(p: Vec3A, a: Vec3A, b: Vec3A, c: Vec3A) -> (Vec3A, [f32; 3]) {
-    let ab = b - a;
-    let ac = c - a;
-    let ap = p - a;
-    let d1 = ab.dot(ap);
-    let d2 = ac.dot(ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return (a, [1.0, 0.0, 0.0]);
-    }
-    let bp = p - b;
-    let d3 = ab.dot(bp);
-    let d4 = ac.dot(bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return (b, [0.0, 1.0, 0.0]);
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return (a + ab * v, [1.0 - v, v, 0.0]);
-    }
-    let cp = p - c;
-    let d5 = ab.dot(cp);
-    let d6 = ac.dot(cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return (c, [0.0, 0.0, 1.0]);
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return (a + ac * w, [1.0 - w, 0.0, w]);
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (b + (c - b) * w, [0.0, 1.0 - w, w]);
-    }
-    let sum = va + vb + vc;
-    if !(sum > 0.0 && sum.is_finite()) {
-        return closest_on_sides(p, a, b, c);
-    }
-    let v = vb / sum;
-    let w = vc / sum;
-    (a + ab * v + ac * w, [1.0 - v - w, v, w])
-}
-
-/// Closest point over the three sides of a (degenerate) triangle.
-fn closest_on_sides(p: Vec3A, a: Vec3A, b: Vec3A, c: Vec3A) -> (Vec3A, [f32; 3]) {
-    let on = |x: Vec3A, y: Vec3A| {
-        let d = y - x;
-        let len2 = d.length_squared();
-        let t = if len2 > 0.0 {
-            ((p - x).dot(d) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        (x + d * t, t)
-    };
-    let (pab, tab) = on(a, b);
-    let (pbc, tbc) = on(b, c);
-    let (pca, tca) = on(c, a);
-    let candidates = [
-        (pab, [1.0 - tab, tab, 0.0]),
-        (pbc, [0.0, 1.0 - tbc, tbc]),
-        (pca, [tca, 0.0, 1.0 - tca]),
-    ];
-    let mut best = candidates[0];
-    for cand in &candidates[1..] {
-        if (cand.0 - p).length_squared() < (best.0 - p).length_squared() {
-            best = *cand;
+/// Defines a closest-point-on-triangle function and its degenerate fallback for one
+/// precision (the `f32` and `f64` versions share one body).
+macro_rules! closest_point_on_triangle {
+    ($(#[$doc:meta])* $name:ident, $sides:ident, $v:ty, $s:ty) => {
+        $(#[$doc])*
+        pub fn $name(p: $v, a: $v, b: $v, c: $v) -> ($v, [$s; 3]) {
+            let ab = b - a;
+            let ac = c - a;
+            let ap = p - a;
+            let d1 = ab.dot(ap);
+            let d2 = ac.dot(ap);
+            if d1 <= 0.0 && d2 <= 0.0 {
+                return (a, [1.0, 0.0, 0.0]);
+            }
+            let bp = p - b;
+            let d3 = ab.dot(bp);
+            let d4 = ac.dot(bp);
+            if d3 >= 0.0 && d4 <= d3 {
+                return (b, [0.0, 1.0, 0.0]);
+            }
+            let vc = d1 * d4 - d3 * d2;
+            if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+                let v = d1 / (d1 - d3);
+                return (a + ab * v, [1.0 - v, v, 0.0]);
+            }
+            let cp = p - c;
+            let d5 = ab.dot(cp);
+            let d6 = ac.dot(cp);
+            if d6 >= 0.0 && d5 <= d6 {
+                return (c, [0.0, 0.0, 1.0]);
+            }
+            let vb = d5 * d2 - d1 * d6;
+            if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+                let w = d2 / (d2 - d6);
+                return (a + ac * w, [1.0 - w, 0.0, w]);
+            }
+            let va = d3 * d6 - d5 * d4;
+            if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+                let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+                return (b + (c - b) * w, [0.0, 1.0 - w, w]);
+            }
+            let sum = va + vb + vc;
+            if !(sum > 0.0 && sum.is_finite()) {
+                return $sides(p, a, b, c);
+            }
+            let v = vb / sum;
+            let w = vc / sum;
+            (a + ab * v + ac * w, [1.0 - v - w, v, w])
         }
-    }
-    best
+
+                /// Closest point over the three sides of a (degenerate) triangle.
+        fn $sides(p: $v, a: $v, b: $v, c: $v) -> ($v, [$s; 3]) {
+            let on = |x: $v, y: $v| {
+                let d = y - x;
+                let len2 = d.length_squared();
+                let t = if len2 > 0.0 {
+                    ((p - x).dot(d) / len2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                (x + d * t, t)
+            };
+            let (pab, tab) = on(a, b);
+            let (pbc, tbc) = on(b, c);
+            let (pca, tca) = on(c, a);
+            let candidates = [
+                (pab, [1.0 - tab, tab, 0.0]),
+                (pbc, [0.0, 1.0 - tbc, tbc]),
+                (pca, [tca, 0.0, 1.0 - tca]),
+            ];
+            let mut best = candidates[0];
+            for cand in &candidates[1..] {
+                if (cand.0 - p).length_squared() < (best.0 - p).length_squared() {
+                    best = *cand;
+                }
+            }
+            best
+        }
+    };
 }
+
+closest_point_on_triangle!(
+    /// The point of triangle `abc` closest to `p`, and its barycentric coordinates `[u, v, w]`
+    /// (`point = u·a + v·b + w·c`, each in `[0, 1]`, summing to 1).
+    ///
+    /// Ericson's Voronoi-region walk (*Real-Time Collision Detection*, 5.1.5): vertex regions, then edge
+    /// regions, then the face. A triangle squashed to a segment or a point (possible in a deformed
+    /// mesh) falls back to the closest of its three sides, so the result is always finite for finite
+    /// input.
+    closest_point_on_triangle,
+    closest_on_sides,
+    Vec3A,
+    f32
+);
+
+closest_point_on_triangle!(
+    /// [`closest_point_on_triangle`] in `f64`: for solvers that differentiate it.
+    closest_point_on_triangle_f64,
+    closest_on_sides_f64,
+    DVec3,
+    f64
+);
 
 /// Where the ray `origin + t·dir` meets triangle `abc` (either side), if at some `t ∈ [0, t_max]`:
 /// `(t, [u, v, w])` with the hit point `u·a + v·b + w·c`.

@@ -68,6 +68,6 @@ pub use bvh_build::{BuildWorkspace, MAX_PRIMITIVES};
 pub use bvh_refit::RefitReport;
 pub use bvh_traverse::{PointHit, RayHit};
 pub use error::BvhError;
-pub use geometry::{closest_point_on_triangle, ray_triangle};
+pub use geometry::{closest_point_on_triangle, closest_point_on_triangle_f64, ray_triangle};
 pub use primitives::{ClosestPoint, Primitives, Ray, RayIntersect, Triangles};
 pub use workspace::BvhWorkspace;

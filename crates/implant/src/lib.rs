@@ -68,6 +68,7 @@ mod expansion;
 mod geodesic;
 mod growth;
 mod insertion;
+mod krylov;
 mod layers;
 mod outcome;
 mod plane_press;

@@ -7,9 +7,11 @@
 //! volume to `p/K`), the fixed boundary and base. Only the contacts change form: the explicit
 //! run stops approaching particles with impulses; here they are forces of a penalty that acts
 //! within the contact distance `d₀`, both ways round:
-//! - a layer-2 particle closer than `d₀` to the expander's dome (signed along the dome's
-//!   normal interpolated from its vertex normals) is pushed out, the dome triangle's corners
-//!   pushed back by the same force split by barycentric weights;
+//! - layer 2 against the expander's dome: its particles, and points at ¼, ½ and ¾ of its
+//!   edges near the dome (an edge between two particles outside the dome can still cross its
+//!   bulge, as Table 2's 150 cm³ showed), each closer than `d₀` to the dome (signed along the
+//!   dome's normal interpolated from its vertex normals) pushed out, the dome triangle's
+//!   corners pushed back by the same force split by barycentric weights;
 //! - an expander particle closer than `d₀` below layer 2 likewise;
 //! - layer 1 closer than the thickness guard to layer 2 along layer 2's normal likewise
 //!   (the explicit run's [`TissueLayers::hold_thickness`]).
@@ -17,39 +19,46 @@
 //! `k_c` is [`StaticParams::contact_stiffness`] times the particle's own stiffness (the
 //! Laplacian's diagonal); the penalty `k_c·(d₀ − s)²/d₀` starts smoothly at `d₀`.
 //!
-//! **The solve** is Newton's method without assembling the Hessian: each step solves
-//! `H dx = r` by conjugate gradients, `H` the model's Hessian at the current positions (every
-//! spring's `k d dᵀ + k·max(0, 1 − l₀/l)(I − d dᵀ)`, the anchors, the slab's shear across the
-//! normal, the hinges' Gauss–Newton `2k g gᵀ`, eq. (5)'s rank-one term, the fill's
-//! `K/V₀ ∇V ∇Vᵀ − p ∇²V` (its pressure's geometric term is what lets 100 cm³ converge), the
-//! contacts' `k n nᵀ` on their relative normal motion), preconditioned by the springs'
-//! Laplacian with the anchors, shear, hinges and eq. (5) on its diagonal, factored once per
-//! phase ([`tissue_mss::statics`], sparse Cholesky on faer: the local/global matrix of Liu et
-//! al. 2013). A step whose residual norm grew is halved (down to 1/16) from the last accepted
-//! point.
+//! **The solve** is Newton's method without assembling the Jacobian: each step solves
+//! `J dx = r` by restarted GMRES (`crate::krylov`: the Jacobian is not symmetric), `J` the
+//! model's at the current positions: every spring's `k d dᵀ + k (1 − l₀/l)(I − d dᵀ)` (a
+//! compressed spring's negative transverse stiffness kept: dropping it stalled 100 cm³), the
+//! anchors, the slab's shear across layer 2's normal with the normal's turn under layer 2's
+//! motion (`k (dn (n·s) + n (dn·s))`, not symmetric), the hinges' Gauss–Newton `2k g gᵀ`,
+//! eq. (5)'s rank-one term, the fill's `K/V₀ ∇V ∇Vᵀ − p ∇²V`, and each contact's exact local
+//! Jacobian (central differences of its force in `f64`: the force turns with the dome's
+//! normal as a particle slides over it, a stiffness `f/R` the normal term alone leaves out).
+//! It is preconditioned by the springs' Laplacian with the anchors, shear, hinges and eq. (5)
+//! on its diagonal, factored once per phase ([`tissue_mss::statics`], sparse Cholesky on faer:
+//! the local/global matrix of Liu et al. 2013), the contacts' stiffness added to its diagonal
+//! (refactored each step), the fill's rank-one term by Sherman–Morrison. A step whose residual
+//! norm grew is halved (down to 1/16) from the last accepted point.
 //!
 //! **Load steps**: the expander fills from flat in [`StaticParams::load_steps`] steps with its
 //! dome held where the fill has got to, each solved to [`StaticParams::load_tolerance`]; then it
 //! is released to its own forces and everything is solved to [`StaticParams::tolerance`].
 //!
-//! **Status**: where it converges it agrees with the explicit run (Table 2: gain within 0.8 %,
-//! volume difference within 1 %), but it does not yet converge reliably when the contacts
-//! carry the expander's full pressure: Table 2 at 100 cm³ settles in a few hundred iterations
-//! with layer-2 edges through the expander by 0.04 cm, 150 cm³ stagnates near 10⁻². The slab's
-//! shear force, taken across layer 2's current normal, has a Jacobian this symmetric Newton
-//! step leaves out (the normal's dependence on the neighbours), of the springs' order. It is
-//! therefore not the default: docs/validation.md has the figures.
+//! **Status**: where it converges it agrees with the explicit run (Table 2: gain within 0.3 %,
+//! volume difference within 0.5 %, nothing through the expander), but the penalty contacts
+//! make the residual non-smooth where they switch, and the iterations grow with the contact
+//! count: Table 2 at 100 cm³ settles in about 240 iterations, 150 cm³ does not settle within
+//! 3 000, and on the 129² plane 100 cm³ takes 930. It is therefore not the default:
+//! docs/validation.md has the figures.
 //!
 //! **Stop**: on the residual, not a step count. The residual is the largest net force on a
 //! free particle divided by the force that would move that particle by one mean edge against
 //! its own stiffness (`P`'s diagonal × the mean layer-2 edge): a dimensionless step, so one
 //! tolerance serves every mesh. It is reported with the force itself (N).
 
-use glam::{DVec3, Vec3A};
-use tissue_bvh::{closest_point_on_triangle, BuildOptions, Bvh, BvhWorkspace, Triangles};
+use glam::{DMat3, DVec3, Vec3A};
+use tissue_bvh::{
+    closest_point_on_triangle, closest_point_on_triangle_f64, BuildOptions, Bvh, BvhWorkspace,
+    Triangles,
+};
 use tissue_mss::{Preconditioner, StiffnessBuilder};
 
 use crate::contact_run::{ContactRun, StepSummary};
+use crate::krylov::Gmres;
 use crate::{ImplantError, Layer, Param, TissueLayers};
 
 /// How the quasi-static solver converges and stops.
@@ -72,7 +81,7 @@ impl Default for StaticParams {
     /// A final tolerance of 10⁻⁴ (the net force on any particle would move it by a ten
     /// thousandth of an edge against its own stiffness), 10⁻² on the way, 6 load steps, at
     /// most 3 000 iterations, contacts twice as stiff as the particle (on Table 2 at 50 cm³:
-    /// 54 iterations; stiffer contacts hold the larger volumes' layer 2 off the expander
+    /// 43 iterations; stiffer contacts hold the larger volumes' layer 2 off the expander
     /// better but converge worse: see the module's status).
     fn default() -> Self {
         StaticParams {
@@ -154,6 +163,143 @@ impl Contact {
     }
 }
 
+/// A penalty contact between a point and a triangle, with its exact local Jacobian: the
+/// point `x = u₀ y₀ + u₁ y₁` (a particle, `u = (1, 0)`, or a layer-2 edge's midpoint) meets
+/// the force `±f(s)·n`, spread on its particles by `u`, the triangle's corners `∓f(s)·n·wᵢ`,
+/// `n` the triangle's normal interpolated from its (held) vertex normals at the closest point
+/// `q`, `s = ±(x − q)·n` the gap, `f` the [`penalty`]. The contacts carry the expander's
+/// pressure, so their force turns with `n` as the point slides over the curved dome: a
+/// stiffness of the order `f/R` that `k n nᵀ` leaves out. `m = −∂F/∂y` (the point's two
+/// particles, then the corners; 3×3 blocks) is taken by central differences in `f64` of that
+/// force.
+#[derive(Clone, Copy)]
+struct ContactBlock {
+    /// The point's two particles, then the triangle's.
+    particles: [u32; 5],
+    /// Whether each entry is free and carries weight (rows and columns of the others are left
+    /// out).
+    live: [bool; 5],
+    m: [[DMat3; 5]; 5],
+    /// The penalty's normal stiffness and the entries' weights (for the preconditioner).
+    k: f64,
+    c: [f64; 5],
+}
+
+/// A point–triangle contact's geometry: `y = [y₀, y₁, a, b, c]`, the point `u₀ y₀ + u₁ y₁`,
+/// the triangle's held vertex normals, and the side: `+1` for a point held above the
+/// triangle (along `n`), `−1` below.
+#[derive(Clone, Copy)]
+struct PointTriangle {
+    y: [DVec3; 5],
+    u: [f64; 2],
+    normals: [DVec3; 3],
+    side: f64,
+}
+
+impl PointTriangle {
+    /// The forces on the five entries ([`ContactBlock`]).
+    fn forces(&self, y: &[DVec3; 5], k: f64, d0: f64) -> [DVec3; 5] {
+        let x = y[0] * self.u[0] + y[1] * self.u[1];
+        let (q, w) = closest_point_on_triangle_f64(x, y[2], y[3], y[4]);
+        let n = (self.normals[0] * w[0] + self.normals[1] * w[1] + self.normals[2] * w[2])
+            .normalize_or_zero();
+        let gap = self.side * (x - q).dot(n);
+        let depth = (d0 - gap).max(0.0);
+        let f = n * (self.side * k * depth * depth / d0);
+        [
+            f * self.u[0],
+            f * self.u[1],
+            -f * w[0],
+            -f * w[1],
+            -f * w[2],
+        ]
+    }
+}
+
+impl ContactBlock {
+    /// The block of `geometry` with the penalty `(k, d₀)`; `live` as in the struct,
+    /// `stiffness` the penalty's normal stiffness at the gap and `weights` the closest point's
+    /// barycentric weights (for the preconditioner).
+    fn new(
+        particles: [u32; 5],
+        live: [bool; 5],
+        geometry: &PointTriangle,
+        (k, d0): (f64, f64),
+        stiffness: f64,
+        weights: [f64; 3],
+    ) -> Self {
+        let h = 1e-4 * d0;
+        let mut m = [[DMat3::ZERO; 5]; 5];
+        for j in 0..5 {
+            if !live[j] {
+                continue;
+            }
+            for axis in 0..3 {
+                let (mut plus, mut minus) = (geometry.y, geometry.y);
+                plus[j][axis] += h;
+                minus[j][axis] -= h;
+                let fp = geometry.forces(&plus, k, d0);
+                let fm = geometry.forces(&minus, k, d0);
+                for i in 0..5 {
+                    *m[i][j].col_mut(axis) = (fm[i] - fp[i]) / (2.0 * h);
+                }
+            }
+        }
+        let u = geometry.u;
+        ContactBlock {
+            particles,
+            live,
+            m,
+            k: stiffness,
+            c: [u[0], u[1], -weights[0], -weights[1], -weights[2]],
+        }
+    }
+
+    /// `out += m v` on the live entries.
+    fn apply(&self, v: &[DVec3], out: &mut [DVec3]) {
+        for i in 0..5 {
+            if !self.live[i] {
+                continue;
+            }
+            let mut sum = DVec3::ZERO;
+            for j in 0..5 {
+                if self.live[j] {
+                    sum += self.m[i][j] * v[self.particles[j] as usize];
+                }
+            }
+            out[self.particles[i] as usize] += sum;
+        }
+    }
+}
+
+/// Adds a point–triangle contact's forces to the residual `s.r` (on its live entries) and
+/// its block to `s.blocks`.
+fn push_contact(
+    s: &mut Scratch,
+    particles: [u32; 5],
+    live: [bool; 5],
+    geometry: &PointTriangle,
+    (k, d0): (f64, f64),
+    gap: f32,
+    bary: [f32; 3],
+) {
+    let forces = geometry.forces(&geometry.y, k, d0);
+    for ((&q, &l), f) in particles.iter().zip(&live).zip(forces) {
+        if l {
+            s.r[q as usize] += f;
+        }
+    }
+    let (_, stiffness) = penalty(k, d0 as f32, gap);
+    s.blocks.push(ContactBlock::new(
+        particles,
+        live,
+        geometry,
+        (k, d0),
+        stiffness,
+        bary.map(f64::from),
+    ));
+}
+
 /// The model's Hessian at the current positions, applied without assembling it (the
 /// operator of a step's conjugate gradients): every spring's `k d dᵀ + k·max(0, 1 − l₀/l)
 /// (I − d dᵀ)` (positive semidefinite: a compressed spring's negative part dropped), the
@@ -179,12 +325,26 @@ struct Hessian {
     fill_triangles: Vec<[u32; 3]>,
     fill_positions: Vec<DVec3>,
     fill_pressure: f64,
-    /// Layer 2's vertex normals (scratch).
+    /// Layer 2's vertex normals, unnormalised (the shear's `n` is this normalised).
     inner_normals: Vec<DVec3>,
+    /// Layer 2's triangles (region vertices) and positions, and the slab vectors `x₁ − x₂`:
+    /// the shear force's dependence on layer 2's normal, `k (dn (n·s) + n (dn·s))`, whose
+    /// `dn` is the normal's change under a displacement of layer 2 (not symmetric).
+    inner_triangles: Vec<[u32; 3]>,
+    inner_positions: Vec<DVec3>,
+    slab: Vec<DVec3>,
 }
 
 impl Hessian {
-    fn apply(&self, contacts: &[Contact], free: &[bool], v: &[DVec3], out: &mut [DVec3]) {
+    /// `out = H v`; `dn` is scratch of one entry per region vertex.
+    fn apply(
+        &self,
+        contacts: &[Contact],
+        free: &[bool],
+        v: &[DVec3],
+        out: &mut [DVec3],
+        dn: &mut [DVec3],
+    ) {
         out.iter_mut().for_each(|o| *o = DVec3::ZERO);
         for &(a, b, d, k, kt) in &self.springs {
             let dv = v[b as usize] - v[a as usize];
@@ -201,6 +361,30 @@ impl Hessian {
             let f = (dv - n * n.dot(dv)) * k;
             out[o as usize] += f;
             out[i as usize] -= f;
+        }
+        if !self.inner_triangles.is_empty() {
+            // The normal's turn: dN = Σ (dvb − dva) × (c − a) + (b − a) × (dvc − dva) over
+            // the triangles around each vertex, dn = (I − n nᵀ) dN / |N|.
+            dn.iter_mut().for_each(|d| *d = DVec3::ZERO);
+            for tri in &self.inner_triangles {
+                let [a, b, c] = tri.map(|r| self.inner_positions[r as usize]);
+                let [va, vb, vc] = tri.map(|r| v[TissueLayers::particle(Layer::Inner, r) as usize]);
+                let d = (vb - va).cross(c - a) + (b - a).cross(vc - va);
+                for &r in tri {
+                    dn[r as usize] += d;
+                }
+            }
+            for (r, &(o, i, n, k)) in self.shear.iter().enumerate() {
+                let len = self.inner_normals[r].length();
+                if k == 0.0 || len <= 0.0 {
+                    continue;
+                }
+                let d = (dn[r] - n * n.dot(dn[r])) / len;
+                let s = self.slab[r];
+                let g = (d * n.dot(s) + n * d.dot(s)) * k;
+                out[o as usize] -= g;
+                out[i as usize] += g;
+            }
         }
         for (particles, grad, k) in &self.hinges {
             let s: f64 = particles
@@ -256,13 +440,19 @@ struct Scratch {
     g: Vec<f64>,
     diagonal: Vec<f64>,
     contacts: Vec<Contact>,
+    blocks: Vec<ContactBlock>,
+    /// Whether each layer-2 vertex found the dome within reach (its edges are sampled).
+    near: Vec<bool>,
     ws: BvhWorkspace,
     hessian: Hessian,
     free: Vec<bool>,
     /// The contacts' stiffness on the preconditioner's diagonal.
     extra: Vec<(u32, f64)>,
-    /// Conjugate-gradient vectors.
-    cg: [Vec<DVec3>; 5],
+    /// The linear solver's workspace, the fill's Sherman–Morrison vector, scratch.
+    gmres: Gmres,
+    w: Vec<DVec3>,
+    z: Vec<DVec3>,
+    dn: Vec<DVec3>,
 }
 
 /// One phase of the solve: which body particles are free, and the factored matrix for them.
@@ -282,6 +472,11 @@ struct Surfaces {
     /// region vertex), at the current positions.
     dome_normals: Vec<Vec3A>,
     inner_normals: Vec<Vec3A>,
+    /// The body's dome particles (free once the body is released), held below layer 2.
+    points: Vec<u32>,
+    /// Layer 2's vertex count and edges (region vertices).
+    near_len: usize,
+    inner_edges: Vec<[u32; 2]>,
 }
 
 /// `out[v]` = the area-weighted normal of `triangles` at vertex `v / stride` (unnormalised).
@@ -298,14 +493,20 @@ fn vertex_normals(triangles: &[[u32; 3]], positions: &[Vec3A], stride: u32, out:
     }
 }
 
+/// Where layer 2's edges near the dome are sampled (fractions from one end).
+const EDGE_SAMPLES: [f64; 3] = [0.25, 0.5, 0.75];
+
 /// The shortest step the line search tries, as a fraction of the Newton step.
 const MIN_STEP: f64 = 1.0 / 16.0;
 
-/// The conjugate-gradient iterations of one step, at most.
-const CG_ITERATIONS: u32 = 200;
+/// The Krylov iterations of one step's linear solve, at most.
+const KRYLOV_ITERATIONS: u32 = 60;
+
+/// The Krylov space of one GMRES cycle.
+const GMRES_RESTART: usize = 30;
 
 /// A step's linear solve stops when its residual has fallen by this factor.
-const CG_FORCING: f64 = 0.05;
+const FORCING: f64 = 0.05;
 
 /// The contact penalty's force and stiffness at `gap` (cm) for a contact of stiffness `k`
 /// acting within `d0`: `f = k·(d₀ − s)²/d₀`, smooth where it starts (its stiffness
@@ -429,7 +630,14 @@ impl ContactRun {
             .map_err(search)?;
         let inner_bvh = Bvh::build(&Triangles::new(tissue_p, &inner).map_err(search)?, &options)
             .map_err(search)?;
+        let points: Vec<u32> = (0..body_p.len() as u32)
+            .filter(|&v| self.dome_vertex[v as usize])
+            .collect();
+        let inner_mesh = self.layers.rest(Layer::Inner);
         Ok(Surfaces {
+            near_len: inner_mesh.vertex_count(),
+            inner_edges: inner_mesh.topology().edges().to_vec(),
+            points,
             dome,
             dome_bvh,
             inner,
@@ -471,6 +679,7 @@ impl ContactRun {
             };
         }
         s.contacts.clear();
+        s.blocks.clear();
         let d0 = self.contact_distance;
         let reach = d0 + self.static_reach;
         let tissue_p = tissue.positions();
@@ -491,47 +700,87 @@ impl ContactRun {
         let inner = Triangles::new(tissue_p, &surfaces.inner).map_err(search)?;
         let mut contacts = 0u32;
         let kc = params.contact_stiffness;
-        // Layer 2 against the dome.
-        let n = self.layers.rest(Layer::Inner).vertex_count() as u32;
-        for r in 0..n {
-            let p = TissueLayers::particle(Layer::Inner, r);
-            if tissue_w[p as usize] == 0.0 {
+        // Layer 2 against the dome: its particles, then the midpoints of its edges near the
+        // dome (an edge can cross the dome's bulge between two particles that lie outside).
+        let d0f = f64::from(d0);
+        let dome_normals = |tri: [u32; 3]| {
+            tri.map(|v| {
+                surfaces.dome_normals[v as usize]
+                    .as_dvec3()
+                    .normalize_or_zero()
+            })
+        };
+        let body_live = |v: u32| body_free && body_w[v as usize] > 0.0;
+        s.near.iter_mut().for_each(|n| *n = false);
+        let points = (0..surfaces.near_len as u32).map(|r| ([r, r], 1.0)).chain(
+            surfaces
+                .inner_edges
+                .iter()
+                .flat_map(|&e| EDGE_SAMPLES.map(|f| (e, f))),
+        );
+        for ([ra, rb], along) in points {
+            let edge = ra != rb;
+            if edge && !(s.near[ra as usize] || s.near[rb as usize]) {
                 continue;
             }
-            let x = tissue_p[p as usize];
-            let Some((tri, bary, normal, gap)) =
+            let (pa, pb) = (
+                TissueLayers::particle(Layer::Inner, ra),
+                TissueLayers::particle(Layer::Inner, rb),
+            );
+            let (la, lb) = (tissue_w[pa as usize] > 0.0, tissue_w[pb as usize] > 0.0);
+            if !(la || lb) {
+                continue;
+            }
+            let u = [along, 1.0 - along];
+            let x = tissue_p[pa as usize] * u[0] as f32 + tissue_p[pb as usize] * u[1] as f32;
+            let Some((tri, bary, _, gap)) =
                 surfaces.dome_contact(&dome, body_p, x, reach, &mut s.ws)
             else {
                 continue;
             };
+            if !edge {
+                s.near[ra as usize] = true;
+            }
             if gap >= d0 {
                 continue;
             }
-            let (f, k) = penalty(kc * s.diagonal[p as usize], d0, gap);
-            let normal = normal.as_dvec3();
-            let mut contact = Contact {
-                particles: [p, 0, 0, 0],
-                c: [1.0, 0.0, 0.0, 0.0],
-                normal,
-                k,
+            let geometry = PointTriangle {
+                y: [
+                    tissue_p[pa as usize].as_dvec3(),
+                    tissue_p[pb as usize].as_dvec3(),
+                    body_p[tri[0] as usize].as_dvec3(),
+                    body_p[tri[1] as usize].as_dvec3(),
+                    body_p[tri[2] as usize].as_dvec3(),
+                ],
+                u,
+                normals: dome_normals(tri),
+                side: 1.0,
             };
-            s.r[p as usize] += normal * f;
-            for (i, (&v, &w)) in tri.iter().zip(&bary).enumerate() {
-                if body_free && body_w[v as usize] > 0.0 {
-                    s.r[t + v as usize] -= normal * (f * f64::from(w));
-                    contact.particles[i + 1] = t as u32 + v;
-                    contact.c[i + 1] = -f64::from(w);
-                }
-            }
-            s.contacts.push(contact);
+            let k = kc * s.diagonal[pa as usize].max(s.diagonal[pb as usize]);
+            let particles = [
+                pa,
+                pb,
+                t as u32 + tri[0],
+                t as u32 + tri[1],
+                t as u32 + tri[2],
+            ];
+            let live = [
+                la,
+                lb && edge,
+                body_live(tri[0]),
+                body_live(tri[1]),
+                body_live(tri[2]),
+            ];
+            push_contact(s, particles, live, &geometry, (k, d0f), gap, bary);
             contacts += 1;
         }
-        // The dome's free particles against layer 2.
+        // The body's free particles against layer 2.
         if body_free {
-            for (v, &x) in body_p.iter().enumerate() {
-                if body_w[v] == 0.0 {
+            for &v in &surfaces.points {
+                if body_w[v as usize] == 0.0 {
                     continue;
                 }
+                let x = body_p[v as usize];
                 let Some(hit) = surfaces
                     .inner_bvh
                     .closest_point(&inner, x, reach, &mut s.ws)
@@ -546,27 +795,31 @@ impl ContactRun {
                     .sum::<Vec3A>()
                     .normalize_or_zero();
                 // The body lies below layer 2 (layer 2's normal points out of the body).
-                let (normal, gap) = (face, (q - x).dot(face));
+                let gap = (q - x).dot(face);
                 if gap >= d0 {
                     continue;
                 }
-                let (f, k) = penalty(kc * s.diagonal[t + v], d0, gap);
-                let normal = normal.as_dvec3();
-                let mut contact = Contact {
-                    particles: [0, 0, 0, (t + v) as u32],
-                    c: [0.0, 0.0, 0.0, -1.0],
-                    normal,
-                    k,
+                let geometry = PointTriangle {
+                    y: [
+                        x.as_dvec3(),
+                        x.as_dvec3(),
+                        a.as_dvec3(),
+                        b.as_dvec3(),
+                        c.as_dvec3(),
+                    ],
+                    u: [1.0, 0.0],
+                    normals: tri.map(|p| {
+                        surfaces.inner_normals[p as usize / 2]
+                            .as_dvec3()
+                            .normalize_or_zero()
+                    }),
+                    side: -1.0,
                 };
-                s.r[t + v] -= normal * f;
-                for (i, (&p, &w)) in tri.iter().zip(&bary).enumerate() {
-                    if tissue_w[p as usize] > 0.0 {
-                        s.r[p as usize] += normal * (f * f64::from(w));
-                        contact.particles[i] = p;
-                        contact.c[i] = f64::from(w);
-                    }
-                }
-                s.contacts.push(contact);
+                let k = kc * s.diagonal[t + v as usize];
+                let particles = [t as u32 + v, t as u32 + v, tri[0], tri[1], tri[2]];
+                let live = tri.map(|p| tissue_w[p as usize] > 0.0);
+                let live = [true, false, live[0], live[1], live[2]];
+                push_contact(s, particles, live, &geometry, (k, d0f), gap, bary);
                 contacts += 1;
             }
         }
@@ -789,7 +1042,7 @@ impl ContactRun {
                 h.springs.push((a, b, DVec3::ZERO, 0.0, k));
                 continue;
             }
-            let kt = (k * (1.0 - f64::from(rest) / l)).max(0.0);
+            let kt = k * (1.0 - f64::from(rest) / l);
             h.springs.push((a, b, d / l, k, kt));
         }
         if h.anchors.is_empty() {
@@ -818,6 +1071,17 @@ impl ContactRun {
             let outer = TissueLayers::particle(Layer::Outer, r as u32);
             h.shear
                 .push((outer, outer + 1, n.normalize_or_zero(), f64::from(k)));
+        }
+        if h.inner_triangles.is_empty() {
+            h.inner_triangles.extend_from_slice(inner.triangles());
+        }
+        h.inner_positions.clear();
+        h.slab.clear();
+        for r in 0..inner.vertex_count() as u32 {
+            let o = position(TissueLayers::particle(Layer::Outer, r));
+            let i = position(TissueLayers::particle(Layer::Inner, r));
+            h.inner_positions.push(i);
+            h.slab.push(o - i);
         }
         h.hinges.clear();
         for hinge in &self.layers.hinges {
@@ -887,12 +1151,19 @@ impl ContactRun {
                 }
             }
         }
+        for b in &s.blocks {
+            for ((&p, &ci), &live) in b.particles.iter().zip(&b.c).zip(&b.live) {
+                if live && ci != 0.0 {
+                    s.extra.push((p, b.k * ci * ci));
+                }
+            }
+        }
+
         phase.pre.refactor(&s.extra).map_err(ImplantError::Model)?;
-        let [res, z, p, ap, w] = &mut s.cg;
-        let (hessian, contacts, free) = (&s.hessian, &s.contacts, &s.free);
-        let dot = |a: &[DVec3], b: &[DVec3]| a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum::<f64>();
+        let (hessian, contacts, blocks, free) = (&s.hessian, &s.contacts, &s.blocks, &s.free);
         let fill: &[(u32, DVec3)] = &hessian.fill;
         let alpha = hessian.fill_k;
+        let (w, z) = (&mut s.w, &mut s.z);
         let mut wg = 0.0;
         if !fill.is_empty() {
             z.iter_mut().for_each(|v| *v = DVec3::ZERO);
@@ -904,7 +1175,9 @@ impl ContactRun {
             phase.pre.solve(z, w);
             wg = fill.iter().map(|&(p, g)| g.dot(w[p as usize])).sum();
         }
-        let precondition = |pre: &mut Preconditioner, r: &[DVec3], out: &mut [DVec3]| {
+        let w: &[DVec3] = w;
+        let pre = &mut phase.pre;
+        let precondition = |r: &[DVec3], out: &mut [DVec3]| {
             pre.solve(r, out);
             if !fill.is_empty() {
                 let gz: f64 = fill.iter().map(|&(p, g)| g.dot(out[p as usize])).sum();
@@ -914,40 +1187,22 @@ impl ContactRun {
                 }
             }
         };
-        s.dx.iter_mut().for_each(|d| *d = DVec3::ZERO);
-        res.copy_from_slice(&s.r);
-        let r0 = dot(res, res).sqrt();
-        precondition(&mut phase.pre, res, z);
-        p.copy_from_slice(z);
-        let mut rz = dot(res, z);
-        let mut iterations = 0;
-        while iterations < CG_ITERATIONS {
-            hessian.apply(contacts, free, p, ap);
-            let pap = dot(p, ap);
-            if pap.is_nan() || pap <= 0.0 {
-                break;
+        let dn = &mut s.dn;
+        let apply = |v: &[DVec3], out: &mut [DVec3]| {
+            hessian.apply(contacts, free, v, out, dn);
+            for b in blocks {
+                b.apply(v, out);
             }
-            let a = rz / pap;
-            for ((d, r), (pi, api)) in
-                s.dx.iter_mut()
-                    .zip(res.iter_mut())
-                    .zip(p.iter().zip(ap.iter()))
-            {
-                *d += *pi * a;
-                *r -= *api * a;
-            }
-            iterations += 1;
-            if dot(res, res).sqrt() <= CG_FORCING * r0 {
-                break;
-            }
-            precondition(&mut phase.pre, res, z);
-            let rz_new = dot(res, z);
-            let beta = rz_new / rz;
-            rz = rz_new;
-            for (pi, zi) in p.iter_mut().zip(z.iter()) {
-                *pi = *zi + *pi * beta;
-            }
-        }
+        };
+        let (iterations, relative) = s.gmres.solve(
+            apply,
+            precondition,
+            &s.r,
+            &mut s.dx,
+            FORCING,
+            KRYLOV_ITERATIONS,
+        );
+        tracing::trace!(iterations, relative, "newton step's linear solve");
         Ok(iterations)
     }
 
@@ -980,11 +1235,16 @@ impl ContactRun {
             g: vec![0.0; 3 * (t + m)],
             diagonal,
             contacts: Vec::new(),
+            blocks: Vec::new(),
+            near: vec![false; t / 2],
             ws: BvhWorkspace::default(),
             hessian: Hessian::default(),
             free: vec![false; t + m],
             extra: Vec::new(),
-            cg: std::array::from_fn(|_| vec![DVec3::ZERO; t + m]),
+            gmres: Gmres::new(t + m, GMRES_RESTART),
+            w: vec![DVec3::ZERO; t + m],
+            z: vec![DVec3::ZERO; t + m],
+            dn: vec![DVec3::ZERO; t / 2],
         };
         let mut last = (false, f64::INFINITY, f64::INFINITY);
         if let Some(fill) = fill {
