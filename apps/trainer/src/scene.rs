@@ -174,7 +174,15 @@ mod tests {
                 default.radius
             )
         );
-        assert_eq!(plan.waypoints, default.path(cli.size));
+        assert_eq!(
+            plan.waypoints,
+            default.path_over(cli.size, scene.body.positions(), plan.reach)
+        );
+        // A box is as wide one way as the other: crossed along x through its centre.
+        let quarter = 0.25 * cli.size;
+        for (w, x) in plan.waypoints.iter().zip([-quarter, quarter]) {
+            assert!((w[0] - x).abs() < 1e-4 && w[1].abs() < 1e-4, "{w:?}");
+        }
         assert_eq!(
             scene.body.tool(scene.script.tool()).map(|t| t.pose()).ok(),
             Some(PressAndDrag::parked(cli.size))

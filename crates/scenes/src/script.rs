@@ -13,7 +13,7 @@
 //! - [`PressAndDrag`]: a probe (a capsule tool already in the body) settles above the organ,
 //!   presses down to a depth below its top and drags along waypoints.
 
-use glam::{Quat, Vec3};
+use glam::{Quat, Vec3, Vec3A};
 use tissue_pbd::{AttachmentId, ContactParams, Pose, SoftBody, ToolShape};
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent};
 
@@ -301,7 +301,8 @@ pub struct PressPlan {
     /// its axis +y.
     pub radius: f32,
     /// The drag's path (x, z), two points or more; the press is over the first. Empty: across
-    /// the organ's top along x, from −¼ to +¼ of its extent ([`PressPlan::path`]).
+    /// the organ along its longest horizontal extent, from −¼ to +¼ of it
+    /// ([`PressPlan::path_over`]).
     pub waypoints: Vec<[f32; 2]>,
     /// Horizontal radius within which the organ's top is looked for (cm);
     /// [`PressAndDrag::on_tray`] widens it to the body's mean tet edge when that is longer.
@@ -331,14 +332,55 @@ impl PressPlan {
         self.settle + self.press + self.drag
     }
 
-    /// The drag's path on an organ of largest extent `extent` (cm): the waypoints given, or,
-    /// when there are none, across the top along x from −¼ to +¼ of the extent.
-    pub fn path(&self, extent: f32) -> Vec<[f32; 2]> {
-        if self.waypoints.is_empty() {
-            vec![[-0.25 * extent, 0.0], [0.25 * extent, 0.0]]
-        } else {
-            self.waypoints.clone()
+    /// The drag's path on an organ of largest extent `extent` (cm) whose nodes are at
+    /// `positions` (y up): the waypoints given, or, when there are none, across the organ
+    /// along its longest horizontal extent, through the horizontal centroid of its nodes, from
+    /// −¼ to +¼ of the extent. The longest extent is the principal axis of the nodes' (x, z)
+    /// spread; an organ as wide one way as the other (within 20 % in variance) is crossed
+    /// along x. Each end of the path that has no node within `reach` (cm, horizontally: a
+    /// curved organ whose centroid is off it) is moved to the nearest node, so the press
+    /// starts over the organ whatever its shape and orientation.
+    pub fn path_over(&self, extent: f32, positions: &[Vec3A], reach: f32) -> Vec<[f32; 2]> {
+        if !self.waypoints.is_empty() {
+            return self.waypoints.clone();
         }
+        let n = positions.len().max(1) as f64;
+        let (cx, cz) = positions.iter().fold((0.0, 0.0), |(x, z), p| {
+            (x + f64::from(p.x) / n, z + f64::from(p.z) / n)
+        });
+        let (mut sxx, mut szz, mut sxz) = (0.0f64, 0.0f64, 0.0f64);
+        for p in positions {
+            let (dx, dz) = (f64::from(p.x) - cx, f64::from(p.z) - cz);
+            sxx += dx * dx;
+            szz += dz * dz;
+            sxz += dx * dz;
+        }
+        // The principal axis of [[sxx, sxz], [sxz, szz]] and how anisotropic the spread is.
+        let mean = 0.5 * (sxx + szz);
+        let spread = (0.25 * (sxx - szz).powi(2) + sxz * sxz).sqrt();
+        let (large, small) = (mean + spread, mean - spread);
+        let axis = if large > 1.2 * small.max(0.0) && spread > 0.0 {
+            let angle = 0.5 * (2.0 * sxz).atan2(sxx - szz);
+            [angle.cos(), angle.sin()]
+        } else {
+            [1.0, 0.0]
+        };
+        let reach = f64::from(reach);
+        let over = |x: f64, z: f64| -> [f32; 2] {
+            let near = positions
+                .iter()
+                .map(|p| ((f64::from(p.x) - x).hypot(f64::from(p.z) - z), p))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            match near {
+                Some((d, p)) if d > reach => [p.x, p.z],
+                _ => [x as f32, z as f32],
+            }
+        };
+        let half = 0.25 * f64::from(extent);
+        vec![
+            over(cx - half * axis[0], cz - half * axis[1]),
+            over(cx + half * axis[0], cz + half * axis[1]),
+        ]
     }
 }
 
@@ -355,7 +397,7 @@ pub struct PressAndDrag {
 
 impl PressAndDrag {
     /// The run of tool `tool` (a capsule of [`PressPlan::radius`], already in the body) along
-    /// `plan`, whose waypoints must be given (see [`PressPlan::path`]).
+    /// `plan`, whose waypoints must be given (see [`PressPlan::path_over`]).
     ///
     /// # Errors
     /// [`SceneError::Tool`] when the plan has fewer than two waypoints, a negative or
@@ -390,7 +432,7 @@ impl PressAndDrag {
     /// The press-and-drag set-up on an organ of largest extent `extent` (cm) lying on its tray:
     /// adds the probe to `body` (a capsule of [`PressPlan::radius`] as long as the organ, with
     /// `contact`'s friction), parks it ([`PressAndDrag::parked`]) and plans its run: the path
-    /// of [`PressPlan::path`], the top looked for within the plan's reach or the body's mean tet
+    /// of [`PressPlan::path_over`], the top looked for within the plan's reach or the body's mean tet
     /// edge, whichever is longer. The probe's id is [`PressAndDrag::tool`].
     ///
     /// # Errors
@@ -426,9 +468,10 @@ impl PressAndDrag {
         let edges = body.distance_constraints();
         let mean_edge =
             edges.iter().map(|c| f64::from(c.rest_length)).sum::<f64>() / edges.len().max(1) as f64;
+        let reach = plan.reach.max(mean_edge as f32);
         let plan = PressPlan {
-            waypoints: plan.path(extent),
-            reach: plan.reach.max(mean_edge as f32),
+            waypoints: plan.path_over(extent, body.positions(), reach),
+            reach,
             ..plan
         };
         PressAndDrag::new(tool, plan)
@@ -528,6 +571,70 @@ fn along(points: &[[f32; 2]], s: f32) -> Option<[f32; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The default path crosses an organ along its longest horizontal extent, through its
+    /// centre: a slab long in z is crossed along z (the old default, along x, left its first
+    /// point 1.5 cm off a 1 cm wide organ), a square one along x, and given waypoints stay.
+    #[test]
+    fn the_default_path_follows_the_organs_longest_extent() {
+        let grid = |nx: i32, nz: i32, dx: f32, dz: f32| -> Vec<Vec3A> {
+            (0..=nx)
+                .flat_map(|i| {
+                    (0..=nz).map(move |k| {
+                        Vec3A::new(
+                            (i as f32 / nx as f32 - 0.5) * dx,
+                            0.0,
+                            (k as f32 / nz as f32 - 0.5) * dz,
+                        )
+                    })
+                })
+                .collect()
+        };
+        let plan = PressPlan::default();
+        let close = |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-4;
+        let thin = plan.path_over(6.0, &grid(4, 24, 1.0, 6.0), 0.3);
+        assert!(
+            close(thin[0], [0.0, -1.5]) && close(thin[1], [0.0, 1.5]),
+            "{thin:?}"
+        );
+        let square = plan.path_over(6.0, &grid(12, 12, 6.0, 6.0), 0.3);
+        assert!(
+            close(square[0], [-1.5, 0.0]) && close(square[1], [1.5, 0.0]),
+            "{square:?}"
+        );
+        let given = PressPlan {
+            waypoints: vec![[1.0, 2.0], [3.0, 4.0]],
+            ..PressPlan::default()
+        };
+        assert_eq!(
+            given.path_over(6.0, &grid(4, 24, 1.0, 6.0), 0.3),
+            given.waypoints
+        );
+    }
+
+    /// On a curved organ (a half ring, its centroid off the tissue) each end of the path is
+    /// over a node, so the press finds the organ's top.
+    #[test]
+    fn the_default_path_stays_over_a_curved_organ() {
+        let ring: Vec<Vec3A> = (0..=60)
+            .flat_map(|i| {
+                let a = std::f32::consts::PI * i as f32 / 60.0;
+                [2.8f32, 3.0, 3.2].map(|r| Vec3A::new(r * a.cos(), 1.0, r * a.sin()))
+            })
+            .collect();
+        let path = PressPlan::default().path_over(6.4, &ring, 0.3);
+        for w in &path {
+            let nearest = ring
+                .iter()
+                .map(|p| (p.x - w[0]).hypot(p.z - w[1]))
+                .fold(f32::INFINITY, f32::min);
+            assert!(nearest <= 0.3, "{w:?} is {nearest} cm from the organ");
+        }
+        assert!(
+            (path[1][0] - path[0][0]).abs() > 1.0,
+            "{path:?} crosses along x"
+        );
+    }
 
     #[test]
     fn along_a_polyline_is_by_length() {
