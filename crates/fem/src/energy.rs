@@ -130,6 +130,7 @@ impl StableNeoHookean {
 
 /// Eigen-decomposition of a symmetric `N × N` matrix by cyclic Jacobi rotations: on return the
 /// diagonal of `a` holds the eigenvalues and the columns of `v` the eigenvectors.
+#[allow(clippy::needless_range_loop)] // rotations index rows and columns p, q together
 fn jacobi_eigen<const N: usize>(a: &mut [[f64; N]; N], v: &mut [[f64; N]; N]) {
     for (i, row) in v.iter_mut().enumerate() {
         *row = [0.0; N];

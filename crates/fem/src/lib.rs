@@ -75,11 +75,13 @@
 //! let material = ElasticMaterial { young_kpa: 10.0, poisson: 0.3, density: 1.0 };
 //! let mut problem = StaticProblem::new(&mesh, material)?;
 //! problem.set_floor(Plane::floor(-0.5))?;
-//! // A frictionless floor does not hold the block sideways: hold one bottom edge's nodes in x
-//! // and y (rollers, free vertically).
-//! for node in problem.nodes_where(|p| p.z < -0.49 && p.y < -0.99) {
-//!     problem.fix_axes(node, [true, true, false])?;
-//! }
+//! // A frictionless floor does not hold the block sideways: hold the bottom centre in x and y
+//! // and a bottom node on the x axis in y (rollers, free vertically; by symmetry they carry
+//! // no force).
+//! let centre = problem.nodes_where(|p| p.z < -0.49 && p.x.abs() < 1e-6 && p.y.abs() < 1e-6);
+//! let on_x = problem.nodes_where(|p| p.z < -0.49 && p.x > 0.99 && p.y.abs() < 1e-6);
+//! problem.fix_axes(centre[0], [true, true, false])?;
+//! problem.fix_axes(on_x[0], [false, true, false])?;
 //! let solution = problem.solve()?;
 //! assert!(solution.report.converged);
 //! // The floor carries the weight, 4 cm³ · 1 g/cm³ · 981 cm/s².

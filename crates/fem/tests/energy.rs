@@ -1,6 +1,11 @@
 //! The stable neo-Hookean element against central finite differences, at rest and against
 //! Hooke's law at small strain.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::needless_range_loop
+)]
 
 use glam::{DMat3, DVec3};
 use tissue_fem::{project_psd, ElasticMaterial, FemError, StableNeoHookean, TetElement};

@@ -70,3 +70,21 @@ pub fn lattice_block(xs: &[f64], ys: &[f64], zs: &[f64], mirrored: bool) -> TetM
 pub fn uniform(a: f64, b: f64, n: usize) -> Vec<f64> {
     (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect()
 }
+
+/// Coordinates from 0 to at least `length`: steps of `h0` up to `fine` (rounded up to whole
+/// steps), then steps growing by `growth` each until `length` is reached (the last coordinate is
+/// set to `length` exactly when it overshoots by less than half a step, else kept).
+pub fn graded(h0: f64, fine: f64, growth: f64, length: f64) -> Vec<f64> {
+    let mut xs = vec![0.0];
+    let mut h = h0;
+    while *xs.last().unwrap() < fine - 1e-12 {
+        xs.push(xs.last().unwrap() + h0);
+    }
+    while *xs.last().unwrap() < length - 1e-12 {
+        h *= growth;
+        xs.push(xs.last().unwrap() + h);
+    }
+    let n = xs.len();
+    xs[n - 1] = length.max(xs[n - 2] + 0.5 * h);
+    xs
+}
