@@ -508,7 +508,12 @@ impl StaticProblem {
     /// A body must be held against rigid motion: clamped nodes, or a floor plus
     /// [`StaticProblem::fix_axes`] on a few nodes for the sideways motions a frictionless floor
     /// allows. When the tangent stiffness cannot be factored the solver adds
-    /// `10⁻⁸, 10⁻⁶, …, 10⁻²` times its largest diagonal entry before giving up.
+    /// `10⁻⁸, 10⁻⁶, …, 10⁻²` times its largest diagonal entry before giving up; when the line
+    /// search rejects a Newton step (a nearly singular tangent) the step is recomputed with
+    /// `10⁻⁶, 10⁻⁴, 10⁻², 1` times that entry on the diagonal (towards gradient descent).
+    /// The first Newton step starts from the rest shape; vertices touching an obstacle exactly
+    /// (gap 0) already get its stiffness in the tangent, so a body resting on the floor at
+    /// the start is supported from the first step.
     ///
     /// # Errors
     /// [`FemError::Factorisation`] when the tangent stiffness cannot be factored even so.

@@ -10,7 +10,8 @@
 //!
 //! Measured while choosing the block (ratio F/F_Hertz, ν = 0.3): size 10a 1.082, 20a 1.053,
 //! 40a 1.039 (a finite block is stiffer than the half-space); cells of a/3, a/4, a/6 at 20a:
-//! 1.053, 1.053, 1.058 (the discretisation is not what limits it).
+//! 1.053, 1.053, 1.058 (the discretisation is not what limits it). On this mesh the force at
+//! d/2, d, 2d gives the exponent 1.52 (Hertz: 3/2).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::print_stdout)]
 
 mod common;
@@ -77,6 +78,15 @@ fn a_shallow_spherical_indentation_meets_hertz_within_10_percent() {
     assert!(error.abs() < 0.10, "{error}");
     // The penalty is stiff: penetration well under 1 % of the depth.
     assert!(solution.report.max_penetration < 0.01 * d);
+    // Force grows as d^{3/2} (the contact area grows with the depth): half the depth on the
+    // same mesh.
+    let (half, _) = indent(material, r, d / 2.0, a);
+    let exponent = (force / half).ln() / 2.0f64.ln();
+    println!(
+        "hertz: F(d)/F(d/2) = {:.4}, exponent {exponent:.3} (Hertz 1.5)",
+        force / half
+    );
+    assert!((exponent - 1.5).abs() < 0.1, "{exponent}");
     // The bottom's reactions balance the indenter vertically (frictionless, no gravity; the
     // symmetry planes carry only sideways forces).
     let balance = solution.clamp_force.z + solution.indenter_force.z;
