@@ -575,7 +575,7 @@ impl StaticProblem {
         self.referenced[i] && !self.fixed[i][a]
     }
 
-    /// The obstacles at load fraction `t`: `(plane or sphere, kind)`.
+    /// The obstacles at load fraction `t`: `[floor, plate, indenter]`.
     fn obstacles(&self, t: f64) -> [Option<Obstacle>; 3] {
         [
             self.floor.map(|p| Obstacle::Plane(p.point, p.normal)),
