@@ -57,6 +57,9 @@ pub enum SceneError {
     /// A tool action that cannot be done (a grab off the surface, a cut path of one point, …).
     #[error("{0}")]
     Tool(String),
+    /// The finite-element reference refused its input or could not factor its matrix.
+    #[error("the finite-element reference: {0}")]
+    Reference(#[from] tissue_fem::FemError),
 }
 
 fn too_large(name: &str, tets: usize, estimated: bool, decimate_to: Option<usize>) -> String {
@@ -140,6 +143,13 @@ impl SceneError {
             SceneError::Pbd(e) => SceneErrorKind::of_pbd(e),
             SceneError::Surgery(_) => SceneErrorKind::Simulation,
             SceneError::Tool(_) => SceneErrorKind::Tool,
+            SceneError::Reference(e) => match e {
+                tissue_fem::FemError::Material { .. } | tissue_fem::FemError::Problem { .. } => {
+                    SceneErrorKind::Parameters
+                }
+                tissue_fem::FemError::DegenerateTet { .. } => SceneErrorKind::Mesh,
+                tissue_fem::FemError::Factorisation { .. } => SceneErrorKind::Simulation,
+            },
         }
     }
 

@@ -79,12 +79,14 @@
 mod error;
 mod event;
 mod organ;
+mod reference;
 pub mod script;
 mod session;
 
 pub use error::{SceneError, SceneErrorKind};
 pub use event::{TrainerEvent, TrainerEventKind};
 pub use organ::{Organ, Setting, ShippedOrgan, Tray, APPENDIX_BASE_X, MAX_TETS};
+pub use reference::{reference, ReferencePlan, ReferencePress, ReferenceSummary};
 pub use script::{AppendixPlan, AppendixProcedure, PressAndDrag, PressPlan, Script, ScriptStep};
 pub use session::{
     Session, SessionOptions, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS, SUTURE_SPACING_CM,
