@@ -25,6 +25,11 @@
 //!   `trainer`, the studio's demonstration and this crate's moving-body test run these;
 //!   [`PressPlan::default`] is the one press-and-drag timeline, and [`PressAndDrag::on_tray`]
 //!   the one set-up of its probe.
+//! - [`TissuePreset`]: Young's modulus, Poisson's ratio and density of liver, kidney, bowel,
+//!   fat and skin from the literature (`docs/materials.md`), [`ShippedOrgan::tissue`];
+//!   [`reference()`]: the finite-element reference (`tissue-fem`) of an organ's static states
+//!   as a session holds it — settled on its support, the probe pressed — for comparing a run
+//!   with the material it stands for.
 //! - [`Organ::body`]: an organ as a `tissue-pbd` body held as its [`Setting`] says (on a
 //!   [`Tray`], or the appendix's base pinned over the abdominal wall); [`Organ::scaled_to`].
 //!
@@ -82,6 +87,7 @@ mod organ;
 mod reference;
 pub mod script;
 mod session;
+mod tissue;
 
 pub use error::{SceneError, SceneErrorKind};
 pub use event::{TrainerEvent, TrainerEventKind};
@@ -91,3 +97,4 @@ pub use script::{AppendixPlan, AppendixProcedure, PressAndDrag, PressPlan, Scrip
 pub use session::{
     Session, SessionOptions, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS, SUTURE_SPACING_CM,
 };
+pub use tissue::TissuePreset;

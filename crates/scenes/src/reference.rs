@@ -161,7 +161,8 @@ fn top_near(solution: &StaticSolution, at: [f32; 2], reach: f64) -> Option<f64> 
         .reduce(f64::max)
 }
 
-/// Solves the organ's settled and pressed states ([module docs](self)).
+/// Solves the organ's settled and pressed states: under gravity on its support, then with the
+/// probe's tip pressed at each depth of `plan` (see [`ReferencePlan`]).
 ///
 /// # Errors
 /// [`SceneError::Reference`] for a material or setting the solver refuses (a Poisson ratio
