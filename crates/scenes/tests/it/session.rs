@@ -455,7 +455,8 @@ fn scene_errors_say_what_kind_of_failure_they_are() -> Result {
 }
 
 /// The press-and-drag set-up written once: on a tray it adds the probe parked three organ
-/// extents up, plans the default path across the organ, and the run is PressPlan::default's.
+/// extents up, plans the default path across the organ along its longest extent, and the run
+/// is PressPlan::default's.
 #[test]
 fn the_press_and_drag_set_up_parks_its_probe_and_plans_the_default_path() -> Result {
     use tissue_scenes::{PressAndDrag, Script, Tray};
@@ -473,8 +474,12 @@ fn the_press_and_drag_set_up_parks_its_probe_and_plans_the_default_path() -> Res
     assert_eq!(script.steps(), PressPlan::default().steps());
     assert_eq!(
         plan.waypoints,
-        vec![[-0.25 * extent, 0.0], [0.25 * extent, 0.0]]
+        PressPlan::default().path_over(extent, body.positions(), plan.reach)
     );
+    // The appendix is long in x: the path crosses it along x, half its extent long.
+    let [a, b] = [plan.waypoints[0], plan.waypoints[1]];
+    assert!((a[1] - b[1]).abs() < 1e-3, "{a:?} {b:?}");
+    assert!(((b[0] - a[0]) - 0.5 * extent).abs() < 1e-3, "{a:?} {b:?}");
     assert!(plan.reach >= PressPlan::default().reach);
     let parked = body.tool(script.tool())?.pose().translation;
     assert_eq!(parked, Vec3::new(0.0, 3.0 * extent, 0.0));
