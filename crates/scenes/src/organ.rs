@@ -2,7 +2,7 @@
 //! load; the appendix, generated) and uploads (a closed surface, tetrahedralised, or a tet mesh),
 //! placed on the tray: centred on x = z = 0 with its lowest node on y = 0 (y up).
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use tissue_mesh::{TetMesh, TriMesh};
 use tissue_pbd::{
     ColliderShape, ContactParams, Floor, Material, OrientedBox, SoftBody, StepSettings,
@@ -26,6 +26,9 @@ pub enum Setting {
     /// The appendix: its base (x below [`APPENDIX_BASE_X`]) pinned to the cecum, lying on the
     /// abdominal wall (a floor at y = 0).
     Appendix,
+    /// A beam along x clamped at x = 0 (its nodes there pinned), nothing under it
+    /// ([`Organ::cantilever`]): a check of the material against beam theory.
+    Cantilever,
 }
 
 /// Nodes of the appendix with x below this (cm) are pinned: its base.
@@ -245,8 +248,100 @@ impl Organ {
                     }
                 }
             }
+            Setting::Cantilever => {
+                for i in self.clamped_nodes() {
+                    body.pin(i)?;
+                }
+            }
         }
         Ok(body)
+    }
+}
+
+impl Organ {
+    /// A beam of square section `thickness` × `thickness` along x from 0 to `length` (cm), its
+    /// bottom at y = 0, `cells` cells through the thickness and as many per thickness along
+    /// it (`tissue_mesh::tet_box`, six tetrahedra a cell), clamped at x = 0
+    /// ([`Setting::Cantilever`]).
+    ///
+    /// # Errors
+    /// [`SceneError::Size`] for a length or thickness that is not a positive length, or a
+    /// beam thinner than a tenth of a millimetre; [`SceneError::TooLarge`] above [`MAX_TETS`].
+    pub fn cantilever(length: f32, thickness: f32, cells: u32) -> Result<Organ, SceneError> {
+        for size in [length, thickness] {
+            if !(size.is_finite() && size >= 0.01) {
+                return Err(SceneError::Size { size });
+            }
+        }
+        let name = format!("cantilever {length} × {thickness} × {thickness} cm");
+        let across = cells.max(1);
+        let along = ((f64::from(length) / f64::from(thickness)) * f64::from(across))
+            .ceil()
+            .max(1.0);
+        let tets = 6.0 * along * f64::from(across) * f64::from(across);
+        if tets > MAX_TETS as f64 {
+            return Err(SceneError::TooLarge {
+                name,
+                tets: tets as usize,
+                estimated: false,
+                decimate_to: None,
+            });
+        }
+        let mesh = tissue_mesh::tet_box(
+            along as u32,
+            across,
+            across,
+            Vec3::new(length, thickness, thickness),
+        )
+        .map_err(|e| SceneError::mesh(&name, e))?;
+        let shift = Vec3::new(0.5 * length, 0.5 * thickness, 0.0);
+        let positions = mesh.positions().iter().map(|&p| p + shift).collect();
+        let mesh = TetMesh::new(positions, mesh.tets().to_vec())
+            .map_err(|e| SceneError::mesh(&name, e))?;
+        Ok(Organ {
+            label: name,
+            mesh,
+            setting: Setting::Cantilever,
+            quality: None,
+        })
+    }
+
+    /// The nodes a [`Setting::Cantilever`] clamps: those at its smallest x (none for the
+    /// other settings).
+    pub fn clamped_nodes(&self) -> Vec<u32> {
+        if self.setting != Setting::Cantilever {
+            return Vec::new();
+        }
+        let lo = self
+            .mesh
+            .positions()
+            .iter()
+            .map(|p| p.x)
+            .fold(f32::INFINITY, f32::min);
+        let tolerance = 1e-4 * self.extent();
+        (0..self.mesh.positions().len() as u32)
+            .filter(|&i| self.mesh.positions()[i as usize].x <= lo + tolerance)
+            .collect()
+    }
+
+    /// How far a [`Setting::Cantilever`]'s free end has come down at `positions` (cm): the mean
+    /// drop of its nodes at the largest x from where they were loaded. `None` for the other
+    /// settings or a position count that is not the organ's.
+    pub fn tip_deflection(&self, positions: &[Vec3A]) -> Option<f64> {
+        let rest = self.mesh.positions();
+        if self.setting != Setting::Cantilever || positions.len() != rest.len() {
+            return None;
+        }
+        let hi = rest.iter().map(|p| p.x).fold(f32::NEG_INFINITY, f32::max);
+        let tolerance = 1e-4 * self.extent();
+        let (sum, n) = rest
+            .iter()
+            .zip(positions)
+            .filter(|(r, _)| r.x >= hi - tolerance)
+            .fold((0.0f64, 0usize), |(s, n), (r, p)| {
+                (s + f64::from(r.y - p.y), n + 1)
+            });
+        (n > 0).then(|| sum / n as f64)
     }
 }
 

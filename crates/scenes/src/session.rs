@@ -446,6 +446,11 @@ impl Session {
                 "demonstration: the appendix is grasped, incised, its tip cut off, the \
                  incision sutured",
             ),
+            Setting::Cantilever => {
+                return Err(SceneError::Tool(
+                    "a cantilever has no demonstration: it settles under its own weight".into(),
+                ))
+            }
             Setting::Tray => {
                 let (extent, plan) = (self.extent, PressPlan::default());
                 let script = match self.demo_probe {
