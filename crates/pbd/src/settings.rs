@@ -302,7 +302,7 @@ impl StepSettings {
 
     /// Substeps of [`StepSettings::material`] per 10 ms step: doubling them changes a settled
     /// column's compression by less than 3 % (docs/trainer.md, `tests/it/elastic.rs`).
-    pub const MATERIAL_SUBSTEPS: u32 = 16;
+    pub const MATERIAL_SUBSTEPS: u32 = 32;
 
     /// The relaxation time `τ` of [`StepSettings::material`] (s).
     pub const MATERIAL_RELAXATION_TIME: f32 = 0.1;

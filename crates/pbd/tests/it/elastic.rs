@@ -184,10 +184,73 @@ fn analytic(young_kpa: f32, density: f32) -> f64 {
     density as f64 * 981.0 * (L * L) as f64 / (2.0 * young_kpa as f64 * 1e4)
 }
 
+/// Settling steps of the column (1.5 s, fifteen relaxation times of the preset's damping).
+const SETTLE: u32 = 150;
+
 #[test]
-fn column_explore() {
-    for n in [4, 8, 16, 32, 64] {
-        let s = column_sag(20.0, 0.0, 1.0, n, 150);
-        eprintln!("  / analytic {:.4}", s / analytic(20.0, 1.0));
+fn a_column_under_its_own_weight_compresses_as_small_strain_elasticity_says() {
+    let n = StepSettings::MATERIAL_SUBSTEPS;
+    let (e, rho) = (20.0, 1.0);
+    let delta = analytic(e, rho);
+    let preset = column_sag(e, 0.0, rho, n, SETTLE);
+    let doubled = column_sag(e, 0.0, rho, 2 * n, SETTLE);
+    eprintln!(
+        "column: analytic {delta:.5} cm; {n} substeps {:.4}×, {} substeps {:.4}×",
+        preset / delta,
+        2 * n,
+        doubled / delta
+    );
+    // Measured: 1.037× at 32 substeps, 1.009× at 64 (one iteration per substep leaves XPBD a
+    // little soft, by O((h c/ℓ)²)).
+    assert!((preset / delta - 1.0).abs() < 0.05, "{}", preset / delta);
+    assert!((doubled / delta - 1.0).abs() < 0.02, "{}", doubled / delta);
+    // Doubling the substeps changes the settled compression by less than 3 %.
+    assert!((doubled / preset - 1.0).abs() < 0.03, "{}", doubled / preset);
+    // Twice as stiff: half the compression; twice as dense: twice.
+    let stiff = column_sag(2.0 * e, 0.0, rho, n, SETTLE);
+    let dense = column_sag(e, 0.0, 2.0 * rho, n, SETTLE);
+    eprintln!(
+        "column: 2E ratio {:.4}, 2ρ ratio {:.4}",
+        stiff / preset,
+        dense / preset
+    );
+    assert!((0.45..=0.55).contains(&(stiff / preset)), "{}", stiff / preset);
+    assert!((1.8..=2.2).contains(&(dense / preset)), "{}", dense / preset);
+}
+
+#[test]
+fn a_nearly_incompressible_block_keeps_its_volume_without_a_piece_constraint() {
+    // A 4 × 3 × 4 cm block (soft organ: 10 kPa, ν = 0.49, 1.05 g/cm³) dropped 1 mm onto a floor
+    // and settled for 1 s.
+    let (p, t) = tet_box(12, 9, 12, Vec3::new(4.0, 3.0, 4.0))
+        .unwrap()
+        .into_parts();
+    let mesh = tissue_mesh::TetMesh::new(p.iter().map(|p| *p + 1.6 * Vec3::Y).collect(), t).unwrap();
+    let material = Material::elastic(10.0, 0.49, 1.05).unwrap();
+    assert!(!material.hold_piece_volumes);
+    let mut body = SoftBody::new(&mesh, &material).unwrap();
+    body.set_floor(Some(tissue_pbd::Floor::y(0.0))).unwrap();
+    let y0 = body.positions().iter().map(|p| p.y).fold(f32::MIN, f32::max);
+    for _ in 0..100 {
+        body.step().unwrap();
     }
+    let total = body.volume() / body.rest_volume() - 1.0;
+    let x = body.positions();
+    let (mut weighted, mut rest_sum) = (0.0f64, 0.0f64);
+    for (tet, &v0) in body.tets().iter().zip(body.tet_rest_volumes()) {
+        let [a, b, c, d] = tet.map(|i| x[i as usize].as_dvec3());
+        let v = (b - a).cross(c - a).dot(d - a) / 6.0;
+        weighted += (v - v0 as f64).abs();
+        rest_sum += v0 as f64;
+    }
+    let per_tet = weighted / rest_sum;
+    let top = x.iter().map(|p| p.y).fold(f32::MIN, f32::max);
+    eprintln!(
+        "block ν 0.49: V/V₀ − 1 = {total:.5}, volume-weighted mean |ΔV/V₀| per tet {per_tet:.5}, top {y0:.3} → {top:.3} cm, KE {:.2e}",
+        body.kinetic_energy()
+    );
+    assert!(total.abs() < 0.01, "{total}");
+    assert!(per_tet <= 0.02, "{per_tet}");
+    // It settled on the floor and sags under its weight but stands.
+    assert!(top < y0 - 0.1 && top > y0 - 1.5, "{top}");
 }
