@@ -125,6 +125,12 @@ fn main() -> ExitCode {
     // A closed stdout (`| head`) ends the program by SIGPIPE, silently; see tissue-cli.
     tissue_cli::reset_sigpipe();
     let cli = Cli::parse();
+    if let Err(message) = cli.check() {
+        use clap::CommandFactory;
+        Cli::command()
+            .error(clap::error::ErrorKind::ArgumentConflict, message)
+            .exit();
+    }
     match main_inner(&cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(failure) => {
