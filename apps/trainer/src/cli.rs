@@ -26,8 +26,17 @@ Material::soft_tissue, which the studio uses too): each 10 ms step is 9 substeps
 linearised-PBD iteration, classic volume constraints and one volume constraint per connected \
 piece (--no-piece-volumes drops it), k = 1. `legacy` (the scheme before issue \
 19, for comparison): one 10 ms step of K = 10 iterations, distance stiffness --stiffness. \
---dt, --substeps, --iterations, --solver, --compliance and --volume override either scheme's \
-values (`--scheme legacy` is `--substeps 1 --iterations 10`). `material` (issue 32; StepSettings::material and Material::elastic): a physical material, stable neo-Hookean (Macklin & Müller 2021: per tet the constraint pair det F - gamma and sqrt(tr F^T F), with compliances 1/(lambda V0) and 1/(mu V0), solved together by XPBD) of Young's modulus --young-kpa (default 10 kPa), Poisson's ratio --poisson (0 to 0.495, default 0.45) and density --density (default 1.05 g/cm3), no distance or volume constraints; each 10 ms step is 32 XPBD substeps of one iteration; damping: every motion relative to the organ's rigid motion decays as exp(-t/tau), tau = --relaxation-time (default 0.1 s). Giving any of these four flags without --scheme selects `material`; with `--scheme realtime` or `legacy` they are refused. docs/trainer.md compares the schemes.
+--dt, --substeps, --iterations, --solver, --compliance and --volume override any scheme's \
+values (`--scheme legacy` is `--substeps 1 --iterations 10`). `material` (issue 32; \
+StepSettings::material and Material::elastic): a physical material, stable neo-Hookean (Macklin \
+& Müller 2021: per tet the constraint pair det F - gamma and sqrt(tr F^T F), with compliances \
+1/(lambda V0) and 1/(mu V0), solved together by XPBD) of Young's modulus --young-kpa (default \
+10 kPa), Poisson's ratio --poisson (0 to 0.495, default 0.45) and density --density (default \
+1.05 g/cm3), no distance or volume constraints; each 10 ms step is 32 XPBD substeps of one \
+iteration; damping: every motion relative to the organ's rigid motion decays as exp(-t/tau), \
+tau = --relaxation-time (default 0.1 s). Giving any of these four flags without --scheme \
+selects `material`; with `--scheme realtime` or `legacy` they are refused. docs/trainer.md \
+compares the schemes.
 
 UNITS: centimetres, grams, seconds. --size, --depth, --tool-radius, --cell, the waypoints in cm \
 (x and z of the tray plane, the organ centred at x = z = 0); --dt in s.";
@@ -168,22 +177,22 @@ pub struct Cli {
     /// rigid motion decays as exp(-t/tau) [default: 0.1].
     #[arg(long, value_name = "S")]
     pub relaxation_time: Option<f32>,
-    /// Time step per frame (s) [default: 0.01, both schemes].
+    /// Time step per frame (s) [default: 0.01, every scheme].
     #[arg(long, value_name = "S")]
     pub dt: Option<f32>,
-    /// Substeps per step [default: realtime 8, legacy 1].
+    /// Substeps per step [default: realtime 9, legacy 1, material 32].
     #[arg(long, value_name = "N")]
     pub substeps: Option<u32>,
-    /// Gauss–Seidel iterations K per substep [default: realtime 1, legacy 10].
+    /// Gauss–Seidel iterations K per substep [default: realtime 1, legacy 10, material 1].
     #[arg(long, value_name = "K")]
     pub iterations: Option<u32>,
-    /// Stiffness model [default: linearised PBD, both schemes].
+    /// Stiffness model [default: linearised PBD; XPBD, the only one it accepts, for material].
     #[arg(long, value_enum)]
     pub solver: Option<SolverArg>,
     /// XPBD compliance of the distance constraints (cm/dyn; with --solver xpbd) [default: 0].
     #[arg(long, value_name = "ALPHA")]
     pub compliance: Option<f32>,
-    /// Volume constraint [default: classic].
+    /// Volume constraint (realtime and legacy; the material scheme has none) [default: classic].
     #[arg(long, value_enum, default_value_t = Volume::Classic)]
     pub volume: Volume,
     /// PBD stiffness of the distance constraints, in [0, 1] (legacy scheme).
@@ -260,7 +269,8 @@ impl Cli {
     pub fn check(&self) -> Result<(), String> {
         if self.material_flags() && self.scheme() != Scheme::Material {
             return Err(format!(
-                "--young-kpa, --poisson, --density and --relaxation-time set the material scheme's                  organ; the {:?} scheme has no physical material: drop them or use --scheme material",
+                "--young-kpa, --poisson, --density and --relaxation-time set the material scheme's \
+                 organ; the {:?} scheme has no physical material: drop them or use --scheme material",
                 self.scheme()
             )
             .to_lowercase());
