@@ -388,11 +388,16 @@ mod tests {
         assert_eq!(cli.scheme(), Scheme::Material);
         assert!(cli.check().is_ok());
         let (material, settings) = cli.physics();
-        let e = material.elastic.unwrap_or_else(|| panic!("no elastic material"));
+        let e = material
+            .elastic
+            .unwrap_or_else(|| panic!("no elastic material"));
         assert_eq!((e.young_kpa, e.poisson), (20.0, 0.49));
         assert_eq!(material.density, tissue_pbd::Material::ORGAN_DENSITY);
         assert_eq!(settings.solver, tissue_pbd::Solver::Xpbd);
-        assert_eq!(settings.substeps, tissue_pbd::StepSettings::MATERIAL_SUBSTEPS);
+        assert_eq!(
+            settings.substeps,
+            tissue_pbd::StepSettings::MATERIAL_SUBSTEPS
+        );
         let cli = parse(&["trainer", "--scheme", "material"]);
         assert!(cli.physics().0.elastic.is_some());
         for scheme in ["realtime", "legacy"] {

@@ -191,7 +191,11 @@ pub(crate) fn set_neo_hookean_lane(
 }
 
 /// A neo-Hookean batch whose every lane is `c` on local nodes `s` (a new dynamic batch).
-pub(crate) fn neo_hookean_batch(s: [u32; 4], c: &NeoHookeanConstraint, param: [f32; 2]) -> NeoHookeanBatch {
+pub(crate) fn neo_hookean_batch(
+    s: [u32; 4],
+    c: &NeoHookeanConstraint,
+    param: [f32; 2],
+) -> NeoHookeanBatch {
     let mut b = NeoHookeanBatch {
         nodes: [[0; LANES]; 4],
         dm_inv: [F::ZERO; 9],
@@ -640,7 +644,9 @@ pub(crate) fn project_neo_hookean(
     let m = &b.dm_inv;
     // F's columns: f_c = Σ_r e_r B[r][c].
     let f: [P4; 3] = std::array::from_fn(|c| {
-        e[0].scale(m[c]).add(e[1].scale(m[3 + c])).add(e[2].scale(m[6 + c]))
+        e[0].scale(m[c])
+            .add(e[1].scale(m[3 + c]))
+            .add(e[2].scale(m[6 + c]))
     });
     let ic = f[0].dot(f[0]) + f[1].dot(f[1]) + f[2].dot(f[2]);
     let cd = ic.sqrt();

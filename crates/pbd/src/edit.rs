@@ -361,8 +361,8 @@ impl SoftBody {
                     }
                     if let Some(batch) = d.neo_hookean_batches.get_mut(b) {
                         let p = self.neo_hookean[t].params(s.substep_dt());
-                        for j in 0..2 {
-                            set_lane(&mut batch.param[j], l, if live { p[j] } else { off });
+                        for (param, v) in batch.param.iter_mut().zip(p) {
+                            set_lane(param, l, if live { v } else { off });
                         }
                     }
                     if let Some(batch) = d.centroid_batches.get_mut(b) {

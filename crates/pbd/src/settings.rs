@@ -37,7 +37,10 @@ impl Elastic {
     pub fn lame(&self) -> (f64, f64) {
         let e = self.young_kpa as f64 * 1e4;
         let nu = self.poisson as f64;
-        (e / (2.0 * (1.0 + nu)), e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)))
+        (
+            e / (2.0 * (1.0 + nu)),
+            e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+        )
     }
 
     /// The stable neo-Hookean energy's parameters `(μ, λ)` in dyn/cm² (`Ψ = μ/2 (I_C − 3) +
@@ -149,10 +152,7 @@ impl Material {
             density,
             volume: VolumeConstraintKind::None,
             hold_piece_volumes: false,
-            elastic: Some(Elastic {
-                young_kpa,
-                poisson,
-            }),
+            elastic: Some(Elastic { young_kpa, poisson }),
             ..Self::default()
         };
         m.validate()?;

@@ -230,13 +230,9 @@ fn project_set<const XPBD: bool>(
             project_batches::<_, 2, 1>(distance, ld, p, |b| &b.nodes, project_distance::<XPBD>);
             match volume {
                 VolumeConstraintKind::None => {}
-                VolumeConstraintKind::Classic => project_batches::<_, 4, 1>(
-                    tet,
-                    lv,
-                    p,
-                    |b| &b.nodes,
-                    project_tet_volume::<XPBD>,
-                ),
+                VolumeConstraintKind::Classic => {
+                    project_batches::<_, 4, 1>(tet, lv, p, |b| &b.nodes, project_tet_volume::<XPBD>)
+                }
                 VolumeConstraintKind::Centroid => project_batches::<_, 4, 4>(
                     centroid,
                     lv,

@@ -7,8 +7,7 @@
 use glam::{DVec3, Vec3, Vec3A};
 use tissue_mesh::tet_box;
 use tissue_pbd::{
-    Elastic, Material, NeoHookeanConstraint, PbdError, PbdParam, SoftBody, Solver,
-    StepSettings,
+    Elastic, Material, NeoHookeanConstraint, PbdError, PbdParam, SoftBody, Solver, StepSettings,
 };
 
 /// A fixed-seed generator in [−1, 1).
@@ -148,8 +147,11 @@ const L: f32 = 4.0;
 /// top's mean downward displacement (cm).
 fn column_sag(young_kpa: f32, poisson: f32, density: f32, substeps: u32, steps: u32) -> f64 {
     let mesh = tet_box(4, 16, 4, Vec3::new(2.0, L, 2.0)).unwrap();
-    let mut body = SoftBody::new(&mesh, &Material::elastic(young_kpa, poisson, density).unwrap())
-        .unwrap();
+    let mut body = SoftBody::new(
+        &mesh,
+        &Material::elastic(young_kpa, poisson, density).unwrap(),
+    )
+    .unwrap();
     body.set_settings(StepSettings {
         substeps,
         ..StepSettings::material()
@@ -157,8 +159,12 @@ fn column_sag(young_kpa: f32, poisson: f32, density: f32, substeps: u32, steps: 
     .unwrap();
     let y0: Vec<f32> = body.positions().iter().map(|p| p.y).collect();
     let (bottom, top): (Vec<u32>, Vec<u32>) = (
-        (0..y0.len() as u32).filter(|&i| y0[i as usize] < -L / 2.0 + 1e-4).collect(),
-        (0..y0.len() as u32).filter(|&i| y0[i as usize] > L / 2.0 - 1e-4).collect(),
+        (0..y0.len() as u32)
+            .filter(|&i| y0[i as usize] < -L / 2.0 + 1e-4)
+            .collect(),
+        (0..y0.len() as u32)
+            .filter(|&i| y0[i as usize] > L / 2.0 - 1e-4)
+            .collect(),
     );
     for &i in &bottom {
         body.pin(i).unwrap();
@@ -205,7 +211,11 @@ fn a_column_under_its_own_weight_compresses_as_small_strain_elasticity_says() {
     assert!((preset / delta - 1.0).abs() < 0.05, "{}", preset / delta);
     assert!((doubled / delta - 1.0).abs() < 0.02, "{}", doubled / delta);
     // Doubling the substeps changes the settled compression by less than 3 %.
-    assert!((doubled / preset - 1.0).abs() < 0.03, "{}", doubled / preset);
+    assert!(
+        (doubled / preset - 1.0).abs() < 0.03,
+        "{}",
+        doubled / preset
+    );
     // Twice as stiff: half the compression; twice as dense: twice.
     let stiff = column_sag(2.0 * e, 0.0, rho, n, SETTLE);
     let dense = column_sag(e, 0.0, 2.0 * rho, n, SETTLE);
@@ -214,8 +224,16 @@ fn a_column_under_its_own_weight_compresses_as_small_strain_elasticity_says() {
         stiff / preset,
         dense / preset
     );
-    assert!((0.45..=0.55).contains(&(stiff / preset)), "{}", stiff / preset);
-    assert!((1.8..=2.2).contains(&(dense / preset)), "{}", dense / preset);
+    assert!(
+        (0.45..=0.55).contains(&(stiff / preset)),
+        "{}",
+        stiff / preset
+    );
+    assert!(
+        (1.8..=2.2).contains(&(dense / preset)),
+        "{}",
+        dense / preset
+    );
 }
 
 #[test]
@@ -225,12 +243,17 @@ fn a_nearly_incompressible_block_keeps_its_volume_without_a_piece_constraint() {
     let (p, t) = tet_box(12, 9, 12, Vec3::new(4.0, 3.0, 4.0))
         .unwrap()
         .into_parts();
-    let mesh = tissue_mesh::TetMesh::new(p.iter().map(|p| *p + 1.6 * Vec3::Y).collect(), t).unwrap();
+    let mesh =
+        tissue_mesh::TetMesh::new(p.iter().map(|p| *p + 1.6 * Vec3::Y).collect(), t).unwrap();
     let material = Material::elastic(10.0, 0.49, 1.05).unwrap();
     assert!(!material.hold_piece_volumes);
     let mut body = SoftBody::new(&mesh, &material).unwrap();
     body.set_floor(Some(tissue_pbd::Floor::y(0.0))).unwrap();
-    let y0 = body.positions().iter().map(|p| p.y).fold(f32::MIN, f32::max);
+    let y0 = body
+        .positions()
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::MIN, f32::max);
     for _ in 0..100 {
         body.step().unwrap();
     }
@@ -253,4 +276,47 @@ fn a_nearly_incompressible_block_keeps_its_volume_without_a_piece_constraint() {
     assert!(per_tet <= 0.02, "{per_tet}");
     // It settled on the floor and sags under its weight but stands.
     assert!(top < y0 - 0.1 && top > y0 - 1.5, "{top}");
+}
+
+/// The column with every tet moved onto copies of its nodes (a cut's relabelling, through
+/// `duplicate_nodes` and `set_tet_nodes`; the old nodes left without tets, massless) sags as the
+/// column as built: the moved pairs keep their rest shapes and the copies their masses.
+#[test]
+fn tets_moved_onto_copies_keep_their_material() {
+    let mesh = tet_box(4, 16, 4, Vec3::new(2.0, L, 2.0)).unwrap();
+    let mut body = SoftBody::new(&mesh, &Material::elastic(20.0, 0.3, 1.0).unwrap()).unwrap();
+    let n = body.node_count() as u32;
+    let all: Vec<u32> = (0..n).collect();
+    let first = body.duplicate_nodes(&all).unwrap();
+    let tets = body.tets().to_vec();
+    for (t, tet) in tets.iter().enumerate() {
+        body.set_tet_nodes(t, tet.map(|i| first + i)).unwrap();
+    }
+    for i in 0..n {
+        body.set_node_mass(i, 0.0).unwrap();
+    }
+    assert!(body
+        .neo_hookean_constraints()
+        .iter()
+        .all(|c| c.nodes.iter().all(|&i| i >= first)));
+    let y0: Vec<f32> = body.positions().iter().map(|p| p.y).collect();
+    for i in first..first + n {
+        if y0[i as usize] < -L / 2.0 + 1e-4 {
+            body.pin(i).unwrap();
+        }
+    }
+    for _ in 0..SETTLE {
+        body.step().unwrap();
+    }
+    let top: Vec<u32> = (first..first + n)
+        .filter(|&i| y0[i as usize] > L / 2.0 - 1e-4)
+        .collect();
+    let sag = top
+        .iter()
+        .map(|&i| (y0[i as usize] - body.positions()[i as usize].y) as f64)
+        .sum::<f64>()
+        / top.len() as f64;
+    let built = column_sag(20.0, 0.3, 1.0, StepSettings::MATERIAL_SUBSTEPS, SETTLE);
+    eprintln!("relabelled column: sag {sag:.5} cm, as built {built:.5} cm");
+    assert!((sag / built - 1.0).abs() < 0.01, "{sag} vs {built}");
 }

@@ -57,7 +57,12 @@ fn five_steps(mut body: SoftBody, solver: Solver, parallel: bool, threads: usize
         .collect()
 }
 
-fn run(kind: Option<VolumeConstraintKind>, solver: Solver, parallel: bool, threads: usize) -> Vec<u32> {
+fn run(
+    kind: Option<VolumeConstraintKind>,
+    solver: Solver,
+    parallel: bool,
+    threads: usize,
+) -> Vec<u32> {
     let body = box_body(kind, -4.0);
     assert!(
         body.block_count() >= 15,
