@@ -643,11 +643,13 @@ pub(crate) fn project_neo_hookean(
     let e = [q[1].sub(q[0]), q[2].sub(q[0]), q[3].sub(q[0])];
     let m = &b.dm_inv;
     // F's columns: f_c = Σ_r e_r B[r][c].
-    let f: [P4; 3] = std::array::from_fn(|c| {
+    // (Spelled out: `array::from_fn` is not inlined here.)
+    let column = |c: usize| {
         e[0].scale(m[c])
             .add(e[1].scale(m[3 + c]))
             .add(e[2].scale(m[6 + c]))
-    });
+    };
+    let f = [column(0), column(1), column(2)];
     let ic = f[0].dot(f[0]) + f[1].dot(f[1]) + f[2].dot(f[2]);
     let cd = ic.sqrt();
     let cof = [f[1].cross(f[2]), f[2].cross(f[0]), f[0].cross(f[1])];

@@ -243,7 +243,14 @@ fn project_set<const XPBD: bool>(
             }
         }
         TetKind::NeoHookean => {
-            project_batches::<_, 4, 2>(neo_hookean, lv, p, |b| &b.nodes, project_neo_hookean)
+            // Through a closure, so that the kernel is inlined into the loop.
+            project_batches::<_, 4, 2>(
+                neo_hookean,
+                lv,
+                p,
+                |b| &b.nodes,
+                |q, w, b, l| project_neo_hookean(q, w, b, l),
+            )
         }
     }
 }
