@@ -320,3 +320,62 @@ fn tets_moved_onto_copies_keep_their_material() {
     eprintln!("relabelled column: sag {sag:.5} cm, as built {built:.5} cm");
     assert!((sag / built - 1.0).abs() < 0.01, "{sag} vs {built}");
 }
+
+/// A 4 × 2 × 4 cm block of `young_kpa` on a tray, settled, pressed 1.3 cm by a probe of radius
+/// 0.4 cm over 40 steps and held for 20: the upward force on the probe (N) and its contacts.
+fn probe_force(young_kpa: f32) -> (f32, usize) {
+    use tissue_pbd::{ContactParams, ContactSource, OrientedBox, Pose, ToolShape, VoxelCollider};
+    let (p, t) = tet_box(12, 6, 12, Vec3::new(4.0, 2.0, 4.0))
+        .unwrap()
+        .into_parts();
+    let block = tissue_mesh::TetMesh::new(p.iter().map(|p| *p + Vec3::Y).collect(), t).unwrap();
+    let material = Material::elastic(young_kpa, 0.45, 1.05).unwrap();
+    let mut body = SoftBody::new(&block, &material).unwrap();
+    let tray =
+        VoxelCollider::from_box(OrientedBox::tray(0.0, 0.0, 0.0, 20.0, 20.0, 2.0), 0.5).unwrap();
+    body.add_collider(tray, ContactParams::default()).unwrap();
+    for _ in 0..50 {
+        body.step().unwrap();
+    }
+    let top = body
+        .positions()
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::MIN, f32::max);
+    let probe = ToolShape::Capsule {
+        a: Vec3::ZERO,
+        b: Vec3::new(0.0, 5.0, 0.0),
+        radius: 0.4,
+    };
+    let at = |y: f32| Pose::from_translation(Vec3::new(0.0, y, 0.0));
+    let id = body
+        .add_tool(probe, at(top + 0.5), ContactParams::default())
+        .unwrap();
+    for i in 1..=60 {
+        // From 0.5 cm above the top to 1.3 cm below it.
+        let y = top + 0.5 - (1.8 * i as f32 / 40.0).min(1.8);
+        body.set_tool_pose(id, at(y)).unwrap();
+        body.step().unwrap();
+    }
+    let contacts = body
+        .contacts()
+        .iter()
+        .filter(|c| c.source == ContactSource::Tool(id))
+        .count();
+    (
+        body.tool_force(id).unwrap().y / tissue_pbd::DYN_PER_NEWTON,
+        contacts,
+    )
+}
+
+#[test]
+fn a_probe_feels_the_material() {
+    // The tool's reaction on the elastic block: measured 1.70 N at 1.3 cm (10 kPa), 1.81 × that
+    // at 20 kPa (nearly linear in E; one iteration per substep softens the stiffer a little).
+    let (soft, n) = probe_force(10.0);
+    let (stiff, _) = probe_force(20.0);
+    eprintln!("probe: {soft:.4} N at 10 kPa ({n} contacts), {stiff:.4} N at 20 kPa");
+    assert!(n > 0);
+    assert!((0.5..2.0).contains(&soft), "{soft}");
+    assert!((1.7..2.3).contains(&(stiff / soft)), "{}", stiff / soft);
+}
