@@ -102,7 +102,7 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
     );
     println!(
         "  run           {total} steps, {}",
-        crate::describe_settings(body.settings(), body.volume_kind())
+        crate::describe_settings(&body)
     );
     println!(
         "  volume drift  {:+.3} % at the end (V/V0 = {:.4}, V0 as built), largest |drift| {:.3} %",

@@ -243,7 +243,9 @@ fn project_set<const XPBD: bool>(
             }
         }
         TetKind::NeoHookean => {
-            // Through a closure, so that the kernel is inlined into the loop.
+            // Through a closure, so that the kernel is inlined into the loop (passed as the
+            // function itself it went through a call shim that was not inlined).
+            #[allow(clippy::redundant_closure)]
             project_batches::<_, 4, 2>(
                 neo_hookean,
                 lv,
