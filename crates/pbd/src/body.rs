@@ -206,7 +206,9 @@ impl SoftBody {
 
     /// A body on raw positions (cm) and positively oriented tets: masses from eq. (1) (a quarter
     /// of each tet's mass `density × volume` to each of its nodes), one distance constraint per
-    /// unique tet edge, the volume constraints of `material.volume`.
+    /// unique tet edge, the volume constraints of `material.volume` or, with
+    /// [`Material::elastic`], one stable neo-Hookean pair per tet instead (the initial settings
+    /// are then [`StepSettings::material`], else [`StepSettings::default`]).
     ///
     /// # Errors
     /// [`PbdError::InvalidParameter`] for a bad material, [`PbdError::NonFinite`] for a bad
@@ -523,7 +525,8 @@ impl SoftBody {
     ///
     /// # Errors
     /// [`PbdError::InvalidParameter`] for `dt ≤ 0`, `iterations == 0`, damping outside `[0, 1]`
-    /// or non-finite gravity.
+    /// or non-finite gravity, and for a solver other than [`Solver::Xpbd`] on an elastic body
+    /// ([`PbdParam::Solver`]).
     pub fn set_settings(&mut self, settings: StepSettings) -> Result<(), PbdError> {
         settings.validate()?;
         if self.elastic.is_some() && settings.solver != Solver::Xpbd {

@@ -410,7 +410,8 @@ impl SoftBody {
     pub fn distance_slot(&self, c: usize) -> Option<ConstraintSlot> {
         self.edits.distance_slot.get(c).copied()
     }
-    /// Where tet `t`'s volume constraints are projected (`None` past the end).
+    /// Where tet `t`'s volume constraints (or neo-Hookean pair) are projected (`None` past the
+    /// end).
     pub fn tet_slot(&self, t: usize) -> Option<ConstraintSlot> {
         self.edits.tet_slot.get(t).copied()
     }
@@ -1005,8 +1006,9 @@ impl SoftBody {
         self.push_dyn_tet(t as u32);
     }
 
-    /// Gives tet `t` new nodes **and** a new rest shape: its rest volume (classic) or rest
-    /// heights (centroid) are computed from `rest`, the rest positions of `nodes` (cm, `f64`),
+    /// Gives tet `t` new nodes **and** a new rest shape: its rest volume (classic), rest
+    /// heights (centroid) or neo-Hookean pair (`D_m⁻¹`, `V₀`, compliances) are computed from
+    /// `rest`, the rest positions of `nodes` (cm, `f64`),
     /// which must be positively oriented. The way a cut reuses a tet it splits for one of the
     /// pieces, or rebuilds a tet whose node was snapped onto the cut. The tet keeps its lane if
     /// it can (see the module docs), else it is projected in a dynamic set from now on.
@@ -1030,7 +1032,8 @@ impl SoftBody {
     }
 
     /// Appends a tet on `nodes` with the rest shape `rest` (as [`SoftBody::reshape_tet`]) and
-    /// the volume stiffness and compliance of tet `like`; it is projected in a dynamic set (that
+    /// the volume stiffness and compliance of tet `like` (an elastic body: its material's pair
+    /// for this rest shape); it is projected in a dynamic set (that
     /// of the deepest block holding its nodes, or the serial set).
     /// Returns its index (the next one of [`SoftBody::tets`]). Masses are not changed: set them
     /// with [`SoftBody::set_node_mass`].

@@ -264,7 +264,8 @@ impl SoftBody {
     /// 1. `v += h·g` for free nodes (`w·f_ext` with `f_ext = m g`);
     /// 2. `p = x + h·v`; attached nodes take their targets; contacts with colliders and tools are
     ///    generated for the predictions (see [`crate::Contact`]);
-    /// 3. `K` times: distance and volume constraints block by block, then the floor (Gauss–Seidel
+    /// 3. `K` times: distance and volume constraints (an elastic body: its neo-Hookean pairs)
+    ///    block by block, then the floor (Gauss–Seidel
     ///    in the order of the crate docs, in solver node order), then the contacts with friction;
     ///    XPBD multipliers start at 0 each step;
     /// 4. `v = (1 − c)(p − x)/h` (`c` the linear damping per substep, default 0), `x = p` (the old `x` becomes [`SoftBody::previous_positions`]);
