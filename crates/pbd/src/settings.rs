@@ -20,8 +20,7 @@ pub enum VolumeConstraintKind {
 /// constants. Units: kPa (1 kPa = 10⁴ dyn/cm²).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Elastic {
-    /// Young's modulus `E > 0` (kPa). Soft organs are about 1–100 kPa (liver ≈ 5–10, kidney
-    /// ≈ 10–30 in indentation).
+    /// Young's modulus `E > 0` (kPa). Soft organs are of the order of 1–100 kPa.
     pub young_kpa: f32,
     /// Poisson's ratio `ν ∈ [0, 0.495]`: 0 has no lateral coupling, near 0.5 is nearly
     /// incompressible (tissue: 0.45–0.49). 0.5 itself is refused (`λ` would be infinite).

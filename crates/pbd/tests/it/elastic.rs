@@ -379,3 +379,28 @@ fn a_probe_feels_the_material() {
     assert!((0.5..2.0).contains(&soft), "{soft}");
     assert!((1.7..2.3).contains(&(stiff / soft)), "{}", stiff / soft);
 }
+
+#[test]
+fn the_damping_is_a_relaxation_time() {
+    for dt in [0.005f32, 0.01, 0.02] {
+        let s = StepSettings {
+            dt,
+            ..StepSettings::material()
+        }
+        .with_relaxation_time(0.1);
+        // Per step exp(−Δt/τ) of the relative velocity is left: e^{−1} after τ whatever Δt.
+        let left = (1.0 - s.damping as f64).powf(0.1 / dt as f64);
+        assert!((left - (-1.0f64).exp()).abs() < 1e-5, "{dt}: {left}");
+        assert!((s.relaxation_time() - 0.1).abs() < 1e-5);
+    }
+    assert!(
+        (StepSettings::material().relaxation_time() - StepSettings::MATERIAL_RELAXATION_TIME).abs()
+            < 1e-5
+    );
+    assert_eq!(
+        StepSettings::material()
+            .with_relaxation_time(f32::INFINITY)
+            .damping,
+        0.0
+    );
+}
