@@ -31,7 +31,7 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
     let organ = Organ::shipped(ShippedOrgan::Appendix)
         .map_err(|e| Failure::new(Exit::Meshing, format!("the appendix: {e}")))?;
     let (material, mut settings) = cli.physics();
-    if cli.scheme == Scheme::Legacy {
+    if cli.scheme() == Scheme::Legacy {
         // The scenario's own damping before the real-time preset (the library's default step).
         settings.damping = StepSettings::default().damping;
     }
@@ -102,7 +102,7 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
     );
     println!(
         "  run           {total} steps, {}",
-        crate::describe_settings(body.settings(), body.volume_kind())
+        crate::describe_settings(&body)
     );
     println!(
         "  volume drift  {:+.3} % at the end (V/V0 = {:.4}, V0 as built), largest |drift| {:.3} %",

@@ -26,8 +26,17 @@ Material::soft_tissue, which the studio uses too): each 10 ms step is 9 substeps
 linearised-PBD iteration, classic volume constraints and one volume constraint per connected \
 piece (--no-piece-volumes drops it), k = 1. `legacy` (the scheme before issue \
 19, for comparison): one 10 ms step of K = 10 iterations, distance stiffness --stiffness. \
---dt, --substeps, --iterations, --solver, --compliance and --volume override either scheme's \
-values (`--scheme legacy` is `--substeps 1 --iterations 10`). docs/trainer.md compares them.
+--dt, --substeps, --iterations, --solver, --compliance and --volume override any scheme's \
+values (`--scheme legacy` is `--substeps 1 --iterations 10`). `material` (issue 32; \
+StepSettings::material and Material::elastic): a physical material, stable neo-Hookean (Macklin \
+& Müller 2021: per tet the constraint pair det F - gamma and sqrt(tr F^T F), with compliances \
+1/(lambda V0) and 1/(mu V0), solved together by XPBD) of Young's modulus --young-kpa (default \
+10 kPa), Poisson's ratio --poisson (0 to 0.495, default 0.45) and density --density (default \
+1.05 g/cm3), no distance or volume constraints; each 10 ms step is 32 XPBD substeps of one \
+iteration; damping: every motion relative to the organ's rigid motion decays as exp(-t/tau), \
+tau = --relaxation-time (default 0.1 s). Giving any of these four flags without --scheme \
+selects `material`; with `--scheme realtime` or `legacy` they are refused. docs/trainer.md \
+compares the schemes.
 
 UNITS: centimetres, grams, seconds. --size, --depth, --tool-radius, --cell, the waypoints in cm \
 (x and z of the tray plane, the organ centred at x = z = 0); --dt in s.";
@@ -85,6 +94,9 @@ pub enum Scheme {
     Realtime,
     /// The scheme before the real-time preset: one 10 ms step of K = 10 linearised-PBD iterations.
     Legacy,
+    /// tissue-pbd's material scheme: a stable neo-Hookean organ (--young-kpa, --poisson,
+    /// --density) in 32 XPBD substeps of one iteration per 10 ms step.
+    Material,
 }
 
 /// The stiffness model (tissue_pbd::Solver).
@@ -146,26 +158,41 @@ pub struct Cli {
     /// Largest extent of the organ after scaling (cm).
     #[arg(long, value_name = "CM", default_value_t = 10.0)]
     pub size: f32,
-    /// Time-stepping scheme: `realtime` (library preset, 9 substeps of 1 iteration) or
-    /// `legacy` (one step of K = 10 PBD iterations, as before the real-time preset).
-    #[arg(long, value_enum, default_value_t = Scheme::Realtime)]
-    pub scheme: Scheme,
-    /// Time step per frame (s) [default: 0.01, both schemes].
+    /// Time-stepping scheme: `realtime` (library preset, 9 substeps of 1 iteration), `legacy`
+    /// (one step of K = 10 PBD iterations, as before the real-time preset) or `material` (a
+    /// stable neo-Hookean organ in SI-consistent units, 32 XPBD substeps) [default: realtime,
+    /// or material when a material flag is given].
+    #[arg(long, value_enum)]
+    pub scheme: Option<Scheme>,
+    /// Young's modulus of the organ (kPa; material scheme) [default: 10].
+    #[arg(long, value_name = "E")]
+    pub young_kpa: Option<f32>,
+    /// Poisson's ratio of the organ, 0 to 0.495 (material scheme) [default: 0.45].
+    #[arg(long, value_name = "NU")]
+    pub poisson: Option<f32>,
+    /// Density of the organ (g/cm³; material scheme) [default: 1.05].
+    #[arg(long, value_name = "RHO")]
+    pub density: Option<f32>,
+    /// Relaxation time of the damping (s; material scheme): motion relative to the organ's
+    /// rigid motion decays as exp(-t/tau) [default: 0.1].
+    #[arg(long, value_name = "S")]
+    pub relaxation_time: Option<f32>,
+    /// Time step per frame (s) [default: 0.01, every scheme].
     #[arg(long, value_name = "S")]
     pub dt: Option<f32>,
-    /// Substeps per step [default: realtime 8, legacy 1].
+    /// Substeps per step [default: realtime 9, legacy 1, material 32].
     #[arg(long, value_name = "N")]
     pub substeps: Option<u32>,
-    /// Gauss–Seidel iterations K per substep [default: realtime 1, legacy 10].
+    /// Gauss–Seidel iterations K per substep [default: realtime 1, legacy 10, material 1].
     #[arg(long, value_name = "K")]
     pub iterations: Option<u32>,
-    /// Stiffness model [default: linearised PBD, both schemes].
+    /// Stiffness model [default: linearised PBD; XPBD, the only one it accepts, for material].
     #[arg(long, value_enum)]
     pub solver: Option<SolverArg>,
     /// XPBD compliance of the distance constraints (cm/dyn; with --solver xpbd) [default: 0].
     #[arg(long, value_name = "ALPHA")]
     pub compliance: Option<f32>,
-    /// Volume constraint [default: classic].
+    /// Volume constraint (realtime and legacy; the material scheme has none) [default: classic].
     #[arg(long, value_enum, default_value_t = Volume::Classic)]
     pub volume: Volume,
     /// PBD stiffness of the distance constraints, in [0, 1] (legacy scheme).
@@ -219,12 +246,57 @@ pub struct Cli {
 }
 
 impl Cli {
+    /// Whether a material flag (--young-kpa, --poisson, --density, --relaxation-time) is given.
+    fn material_flags(&self) -> bool {
+        self.young_kpa.is_some()
+            || self.poisson.is_some()
+            || self.density.is_some()
+            || self.relaxation_time.is_some()
+    }
+
+    /// The scheme of the run: `--scheme` as given; without it `material` when a material flag
+    /// is given, else `realtime`.
+    pub fn scheme(&self) -> Scheme {
+        match self.scheme {
+            Some(s) => s,
+            None if self.material_flags() => Scheme::Material,
+            None => Scheme::Realtime,
+        }
+    }
+
+    /// Refuses the material flags with the realtime or legacy scheme (they have no physical
+    /// material): the message says which flag and what to do.
+    pub fn check(&self) -> Result<(), String> {
+        if self.material_flags() && self.scheme() != Scheme::Material {
+            return Err(format!(
+                "--young-kpa, --poisson, --density and --relaxation-time set the material scheme's \
+                 organ; the {:?} scheme has no physical material: drop them or use --scheme material",
+                self.scheme()
+            )
+            .to_lowercase());
+        }
+        Ok(())
+    }
+
     /// The material and step settings of the run: the scheme's library preset with the
     /// overrides given.
     pub fn physics(&self) -> (tissue_pbd::Material, tissue_pbd::StepSettings) {
-        use tissue_pbd::{Material, StepSettings, VolumeConstraintKind};
-        let (mut material, mut settings) = match self.scheme {
+        use tissue_pbd::{Elastic, Material, StepSettings, VolumeConstraintKind};
+        let scheme = self.scheme();
+        let (mut material, mut settings) = match scheme {
             Scheme::Realtime => (Material::soft_tissue(), StepSettings::realtime()),
+            Scheme::Material => (
+                // Validated when the body is built (tissue-pbd's error names the parameter).
+                Material {
+                    density: self.density.unwrap_or(Material::ORGAN_DENSITY),
+                    elastic: Some(Elastic {
+                        young_kpa: self.young_kpa.unwrap_or(Material::ORGAN_YOUNG_KPA),
+                        poisson: self.poisson.unwrap_or(Material::ORGAN_POISSON),
+                    }),
+                    ..Material::soft_organ()
+                },
+                StepSettings::material(),
+            ),
             Scheme::Legacy => (
                 Material {
                     distance_stiffness: self.stiffness,
@@ -234,6 +306,7 @@ impl Cli {
                 StepSettings::legacy(),
             ),
         };
+        // (Ignored by the material scheme's elastic organ.)
         material.volume = match self.volume {
             Volume::Classic => VolumeConstraintKind::Classic,
             Volume::Centroid => VolumeConstraintKind::Centroid,
@@ -259,6 +332,13 @@ impl Cli {
             settings.iterations = k;
         }
         settings.parallel = self.parallel;
+        if scheme == Scheme::Material {
+            // After --dt: the damping per step follows the step.
+            settings = settings.with_relaxation_time(
+                self.relaxation_time
+                    .unwrap_or(StepSettings::MATERIAL_RELAXATION_TIME),
+            );
+        }
         if self.no_piece_volumes {
             material.hold_piece_volumes = false;
         }
@@ -298,5 +378,36 @@ mod tests {
         );
         assert_eq!((cli.depth, cli.tool_radius), (plan.depth, plan.radius));
         assert!(cli.waypoints.is_empty() && plan.waypoints.is_empty());
+    }
+
+    #[test]
+    fn material_flags_imply_the_material_scheme_and_are_refused_with_the_others() {
+        let parse = |args: &[&str]| Cli::try_parse_from(args).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(parse(&["trainer"]).scheme(), Scheme::Realtime);
+        let cli = parse(&["trainer", "--young-kpa", "20", "--poisson", "0.49"]);
+        assert_eq!(cli.scheme(), Scheme::Material);
+        assert!(cli.check().is_ok());
+        let (material, settings) = cli.physics();
+        let e = material
+            .elastic
+            .unwrap_or_else(|| panic!("no elastic material"));
+        assert_eq!((e.young_kpa, e.poisson), (20.0, 0.49));
+        assert_eq!(material.density, tissue_pbd::Material::ORGAN_DENSITY);
+        assert_eq!(settings.solver, tissue_pbd::Solver::Xpbd);
+        assert_eq!(
+            settings.substeps,
+            tissue_pbd::StepSettings::MATERIAL_SUBSTEPS
+        );
+        let cli = parse(&["trainer", "--scheme", "material"]);
+        assert!(cli.physics().0.elastic.is_some());
+        for scheme in ["realtime", "legacy"] {
+            let cli = parse(&["trainer", "--scheme", scheme, "--density", "1.1"]);
+            let err = cli.check().unwrap_err();
+            assert!(err.contains("--scheme material"), "{err}");
+        }
+        // The old schemes are as they were.
+        let (m, s) = parse(&["trainer"]).physics();
+        assert!(m.elastic.is_none());
+        assert_eq!(s, tissue_pbd::StepSettings::realtime());
     }
 }

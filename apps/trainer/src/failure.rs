@@ -32,8 +32,11 @@ pub fn flag_of(param: PbdParam) -> Option<&'static str> {
         P::DistanceCompliance => Some("--compliance"),
         P::CellSize => Some("--cell"),
         P::StaticFriction | P::KineticFriction => Some("--friction"),
-        P::Density
-        | P::VolumeStiffness
+        P::Density => Some("--density"),
+        P::YoungModulus => Some("--young-kpa"),
+        P::PoissonRatio => Some("--poisson"),
+        P::Solver => Some("--solver"),
+        P::VolumeStiffness
         | P::VolumeCompliance
         | P::GravityX
         | P::GravityY

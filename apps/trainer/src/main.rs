@@ -24,18 +24,25 @@ fn ms(s: f64) -> String {
 
 /// The scheme of a run, for the summaries: `dt = 0.01 s, 9 substeps × K = 1, Xpbd, Classic
 /// volume`.
-fn describe_settings(
-    s: &tissue_pbd::StepSettings,
-    volume: tissue_pbd::VolumeConstraintKind,
-) -> String {
+fn describe_settings(body: &tissue_pbd::SoftBody) -> String {
+    let s = body.settings();
+    let material = match body.elastic() {
+        Some(e) => format!(
+            "neo-Hookean E = {} kPa, ν = {}, ρ = {} g/cm³, τ = {:.3} s",
+            e.young_kpa,
+            e.poisson,
+            body.density(),
+            s.relaxation_time()
+        ),
+        None => format!("{:?} volume", body.volume_kind()),
+    };
     format!(
-        "dt = {} s, {} substep{} × K = {}, {:?}, {:?} volume{}",
+        "dt = {} s, {} substep{} × K = {}, {:?}, {material}{}",
         s.dt,
         s.substeps,
         if s.substeps == 1 { "" } else { "s" },
         s.iterations,
         s.solver,
-        volume,
         if s.parallel { ", colour-parallel" } else { "" }
     )
 }
@@ -63,7 +70,7 @@ fn main_inner(cli: &Cli) -> Result<(), Failure> {
         cli.settle_steps,
         cli.press_steps,
         cli.drag_steps,
-        describe_settings(scene.body.settings(), scene.body.volume_kind())
+        describe_settings(&scene.body)
     );
     println!(
         "  step time     median {}, p99 {}, max {} (all {} steps)",
@@ -125,6 +132,12 @@ fn main() -> ExitCode {
     // A closed stdout (`| head`) ends the program by SIGPIPE, silently; see tissue-cli.
     tissue_cli::reset_sigpipe();
     let cli = Cli::parse();
+    if let Err(message) = cli.check() {
+        use clap::CommandFactory;
+        Cli::command()
+            .error(clap::error::ErrorKind::ArgumentConflict, message)
+            .exit();
+    }
     match main_inner(&cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(failure) => {

@@ -4,11 +4,14 @@ use glam::{DVec3, Vec3, Vec3A, Vec4};
 use tissue_mesh::{TetMesh, ZERO_VOLUME_TOLERANCE};
 
 use crate::colour::{colour_order, greedy_colours};
-use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
+use crate::constraint::{
+    set_neo_hookean_lane, CentroidBatch, DistanceBatch, NeoHookeanBatch, TetBatch, F, LANES,
+};
 use crate::partition::{bisection_order, spare_tree, Tree};
 use crate::{
-    AttachmentId, CentroidVolumeConstraint, DistanceConstraint, Floor, Material, PbdError,
-    PbdParam, StepSettings, TetVolumeConstraint, VolumeConstraintKind,
+    AttachmentId, CentroidVolumeConstraint, DistanceConstraint, Elastic, Floor, Material,
+    NeoHookeanConstraint, PbdError, PbdParam, Solver, StepSettings, TetVolumeConstraint,
+    VolumeConstraintKind,
 };
 
 /// A tetrahedral soft body simulated by position-based dynamics.
@@ -72,8 +75,14 @@ pub struct SoftBody {
     pub(crate) centroid_batches: Vec<CentroidBatch>,
     /// The tet (index into `tets`) of each lane of each volume batch.
     pub(crate) tet_lanes: Vec<[u32; LANES]>,
-    /// One multiplier per lane and volume constraint (1 or 4 per tet).
+    /// One multiplier per lane and volume constraint (1 or 4 per tet; 2 for the neo-Hookean
+    /// pair).
     pub(crate) volume_lambda: Vec<F>,
+    /// The hyperelastic material ([`Material::elastic`]), its energy's `(μ, λ)` (dyn/cm²), and
+    /// its constraint pairs (one per tet, in tet order) and their batches (by `tet_lanes`).
+    pub(crate) elastic: Option<(Elastic, f64, f64)>,
+    pub(crate) neo_hookean: Vec<NeoHookeanConstraint>,
+    pub(crate) neo_hookean_batches: Vec<NeoHookeanBatch>,
 
     pub(crate) floor: Option<Floor>,
     pub(crate) attachments: crate::attachment::Attachments,
@@ -197,7 +206,9 @@ impl SoftBody {
 
     /// A body on raw positions (cm) and positively oriented tets: masses from eq. (1) (a quarter
     /// of each tet's mass `density × volume` to each of its nodes), one distance constraint per
-    /// unique tet edge, the volume constraints of `material.volume`.
+    /// unique tet edge, the volume constraints of `material.volume` or, with
+    /// [`Material::elastic`], one stable neo-Hookean pair per tet instead (the initial settings
+    /// are then [`StepSettings::material`], else [`StepSettings::default`]).
     ///
     /// # Errors
     /// [`PbdError::InvalidParameter`] for a bad material, [`PbdError::NonFinite`] for a bad
@@ -364,7 +375,46 @@ impl SoftBody {
         let (mut tet_volume, mut centroid) = (Vec::new(), Vec::new());
         let (mut tet_batches, mut centroid_batches) = (Vec::new(), Vec::new());
         let mut volume_lambda = Vec::new();
-        match material.volume {
+        let elastic = material.elastic.map(|e| {
+            let (mu, lambda) = e.energy_parameters();
+            (e, mu, lambda)
+        });
+        let volume_kind = if elastic.is_some() {
+            VolumeConstraintKind::None
+        } else {
+            material.volume
+        };
+        let (mut neo_hookean, mut neo_hookean_batches) = (Vec::new(), Vec::new());
+        if let Some((_, mu, lambda)) = elastic {
+            for (k, t) in tets.iter().enumerate() {
+                let rest = t.map(|i| positions[i as usize].as_dvec3());
+                let Some(c) = NeoHookeanConstraint::new(*t, rest, mu, lambda) else {
+                    return Err(PbdError::DegenerateTet {
+                        tet: k,
+                        volume: sixfold_volume(t.map(|i| positions[i as usize])) / 6.0,
+                    });
+                };
+                neo_hookean.push(c);
+            }
+            neo_hookean_batches = tet_nodes
+                .iter()
+                .zip(&tl.lanes)
+                .map(|(&nodes, lanes)| {
+                    let mut b = crate::constraint::neo_hookean_batch(
+                        [0; 4],
+                        &neo_hookean[lanes[0] as usize],
+                        [0.0; 2],
+                    );
+                    for (l, &r) in lanes.iter().enumerate() {
+                        let s = [0, 1, 2, 3].map(|k| nodes[k][l]);
+                        set_neo_hookean_lane(&mut b, l, s, &neo_hookean[r as usize], [0.0; 2]);
+                    }
+                    b
+                })
+                .collect();
+            volume_lambda = vec![F::ZERO; 2 * tl.lanes.len()];
+        }
+        match volume_kind {
             VolumeConstraintKind::None => {}
             VolumeConstraintKind::Classic => {
                 tet_volume = tets
@@ -440,13 +490,16 @@ impl SoftBody {
             distance_lanes: dl.lanes,
             distance,
             tets,
-            volume_kind: material.volume,
+            volume_kind,
             tet_volume,
             tet_batches,
             centroid,
             centroid_batches,
             tet_lanes: tl.lanes,
             volume_lambda,
+            elastic,
+            neo_hookean,
+            neo_hookean_batches,
             floor: None,
             attachments: Default::default(),
             collision: Default::default(),
@@ -460,7 +513,11 @@ impl SoftBody {
             ),
         };
         body.edits = crate::edit::Edits::new(&body, material.density, tree, post);
-        body.set_settings(StepSettings::default())?;
+        body.set_settings(if body.elastic.is_some() {
+            StepSettings::material()
+        } else {
+            StepSettings::default()
+        })?;
         Ok(body)
     }
 
@@ -468,9 +525,17 @@ impl SoftBody {
     ///
     /// # Errors
     /// [`PbdError::InvalidParameter`] for `dt ≤ 0`, `iterations == 0`, damping outside `[0, 1]`
-    /// or non-finite gravity.
+    /// or non-finite gravity, and for a solver other than [`Solver::Xpbd`] on an elastic body
+    /// ([`PbdParam::Solver`]).
     pub fn set_settings(&mut self, settings: StepSettings) -> Result<(), PbdError> {
         settings.validate()?;
+        if self.elastic.is_some() && settings.solver != Solver::Xpbd {
+            return Err(PbdError::InvalidParameter {
+                param: PbdParam::Solver,
+                value: settings.solver as u8 as f64,
+                expected: "Solver::Xpbd for an elastic material (its constraints have compliances, not stiffnesses): use StepSettings::material() or set solver: Solver::Xpbd",
+            });
+        }
         self.settings = settings;
         let s = &self.settings;
         for (b, lanes) in self.distance_batches.iter_mut().zip(&self.distance_lanes) {
@@ -492,6 +557,11 @@ impl SoftBody {
                     s.param(c.stiffness, c.compliance)
                 }))
             });
+        }
+        let h = s.substep_dt();
+        for (b, lanes) in self.neo_hookean_batches.iter_mut().zip(&self.tet_lanes) {
+            let p = lanes.map(|r| self.neo_hookean[r as usize].params(h));
+            b.param = [0, 1].map(|j| F::from_lanes(p.map(|x| x[j])));
         }
         self.refresh_edit_params();
         // Projected in the K iterations of the last substep only (pieces.rs).
@@ -547,7 +617,17 @@ impl SoftBody {
     pub fn centroid_volume_constraints(&self) -> &[CentroidVolumeConstraint] {
         &self.centroid
     }
-    /// The volume constraint kind.
+    /// The stable neo-Hookean constraint pairs, one per tet in tet order (empty unless the
+    /// material is [`Material::elastic`]).
+    pub fn neo_hookean_constraints(&self) -> &[NeoHookeanConstraint] {
+        &self.neo_hookean
+    }
+    /// The hyperelastic material the body was built with ([`Material::elastic`]).
+    pub fn elastic(&self) -> Option<Elastic> {
+        self.elastic.map(|e| e.0)
+    }
+    /// The volume constraint kind ([`VolumeConstraintKind::None`] for an elastic material:
+    /// its neo-Hookean pairs hold the volume).
     pub fn volume_kind(&self) -> VolumeConstraintKind {
         self.volume_kind
     }

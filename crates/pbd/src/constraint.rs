@@ -9,7 +9,7 @@
 //! it is the PBD projection with `k = 1`. Both conserve linear and angular momentum (the
 //! gradients of a translation- and rotation-invariant `C` sum to zero and have zero torque).
 
-use glam::{BVec4A, Mat4, Vec3A, Vec4};
+use glam::{BVec4A, Mat3, Mat4, Vec3A, Vec4};
 
 /// Whether a constraint holds as `C = 0` or as `C ≥ 0` (projected only when `C < 0`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,6 +62,150 @@ pub struct CentroidVolumeConstraint {
     pub stiffness: f32,
     /// XPBD compliance `α ≥ 0` (cm/dyn).
     pub compliance: f32,
+}
+
+/// The stable neo-Hookean constraint pair of one tet (Macklin & Müller 2021, "A constraint-based
+/// formulation of stable neo-Hookean materials"), for [`crate::Material::elastic`]: with the
+/// deformation gradient `F = D_s D_m⁻¹` (`D_s = [x₁−x₀, x₂−x₀, x₃−x₀]`, `D_m` the same of the rest
+/// positions), the hydrostatic constraint `C_H = det F − γ` (compliance `α_H = 1/(λ V₀)`) and the
+/// deviatoric constraint `C_D = √(tr FᵀF)` (compliance `α_D = 1/(μ V₀)`). Their XPBD energy
+/// `C_H²/(2α_H) + C_D²/(2α_D) = V₀ [λ/2 (J − γ)² + μ/2 I_C]` is `V₀ Ψ` of the stable
+/// neo-Hookean density `Ψ = μ/2 (I_C − 3) + λ/2 (J − γ)²` up to a constant; with `γ = 1 + μ/λ`
+/// its gradient vanishes at `F = I` (the rest state is stress-free, though neither constraint is
+/// zero there: `C_H = −μ/λ`, `C_D = √3`). Here `λ` is the energy's parameter, `λ_Lamé + μ`, so
+/// that small strains follow linear elasticity with the Lamé `λ_Lamé`, `μ` (see
+/// [`crate::Elastic::lame`]). Cardinality 4, two equalities, solved together per tet (a 2×2 XPBD
+/// system).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NeoHookeanConstraint {
+    /// The tet's nodes, positively oriented.
+    pub nodes: [u32; 4],
+    /// Rest volume `V₀` (cm³).
+    pub rest_volume: f32,
+    /// `D_m⁻¹`, the inverse of the rest edge matrix (1/cm).
+    pub inverse_rest_edges: Mat3,
+    /// `γ = 1 + μ/λ`.
+    pub gamma: f32,
+    /// `α_H = 1/(λ V₀)` (1/erg).
+    pub hydrostatic_compliance: f32,
+    /// `α_D = 1/(μ V₀)` (1/erg).
+    pub deviatoric_compliance: f32,
+}
+
+impl NeoHookeanConstraint {
+    /// Number of nodes.
+    pub const CARDINALITY: usize = 4;
+    /// Equalities.
+    pub const KIND: ConstraintKind = ConstraintKind::Equality;
+
+    /// `F = D_s D_m⁻¹` at `positions`.
+    pub fn deformation_gradient(&self, positions: &[Vec3A]) -> Mat3 {
+        let [a, b, c, d] = self.nodes.map(|i| glam::Vec3::from(positions[i as usize]));
+        Mat3::from_cols(b - a, c - a, d - a) * self.inverse_rest_edges
+    }
+
+    /// `[C_H, C_D]` at `positions`.
+    pub fn values(&self, positions: &[Vec3A]) -> [f32; 2] {
+        let f = self.deformation_gradient(positions);
+        let ic = f.x_axis.length_squared() + f.y_axis.length_squared() + f.z_axis.length_squared();
+        [f.determinant() - self.gamma, ic.sqrt()]
+    }
+
+    /// `[∇C_H, ∇C_D]` at `positions`, each the gradients with respect to the four nodes:
+    /// `∂C/∂x_i = (∂C/∂F) D_m⁻ᵀ` column `i − 1` (`i = 1, 2, 3`), `∂C/∂x₀ = −Σ` of those, with
+    /// `∂C_H/∂F = cof F = [f₁×f₂, f₂×f₀, f₀×f₁]` and `∂C_D/∂F = F / C_D` (`f_j` the columns of
+    /// `F`).
+    pub fn gradients(&self, positions: &[Vec3A]) -> [[Vec3A; 4]; 2] {
+        let f = self.deformation_gradient(positions);
+        let ic = f.x_axis.length_squared() + f.y_axis.length_squared() + f.z_axis.length_squared();
+        let cof = Mat3::from_cols(
+            f.y_axis.cross(f.z_axis),
+            f.z_axis.cross(f.x_axis),
+            f.x_axis.cross(f.y_axis),
+        );
+        let bt = self.inverse_rest_edges.transpose();
+        [cof * bt, f * bt * (1.0 / ic.sqrt())].map(|g| {
+            let (g1, g2, g3) = (g.x_axis, g.y_axis, g.z_axis);
+            [-(g1 + g2 + g3), g1, g2, g3].map(Vec3A::from)
+        })
+    }
+}
+
+impl NeoHookeanConstraint {
+    /// The pair of tet `nodes` with rest positions `rest` (cm, positively oriented) for the
+    /// energy parameters `(μ, λ)` (dyn/cm², [`crate::Elastic::energy_parameters`]); `None` when
+    /// the rest shape is flat, inverted or not finite.
+    pub fn new(nodes: [u32; 4], rest: [glam::DVec3; 4], mu: f64, lambda: f64) -> Option<Self> {
+        let [a, b, c, d] = rest;
+        let dm = glam::DMat3::from_cols(b - a, c - a, d - a);
+        let det = dm.determinant();
+        let volume = det / 6.0;
+        if !(volume.is_finite() && volume > 0.0 && (volume as f32) > 0.0) {
+            return None;
+        }
+        let inv = dm.inverse();
+        if !inv.is_finite() {
+            return None;
+        }
+        Some(Self {
+            nodes,
+            rest_volume: volume as f32,
+            inverse_rest_edges: inv.as_mat3(),
+            gamma: (1.0 + mu / lambda) as f32,
+            hydrostatic_compliance: (1.0 / (lambda * volume)) as f32,
+            deviatoric_compliance: (1.0 / (mu * volume)) as f32,
+        })
+    }
+
+    /// The kernels' parameters `[α̃_H, α̃_D] = α/h²` for substeps of `h` (s).
+    pub(crate) fn params(&self, h: f32) -> [f32; 2] {
+        let h2 = (h as f64) * (h as f64);
+        [
+            (self.hydrostatic_compliance as f64 / h2) as f32,
+            (self.deviatoric_compliance as f64 / h2) as f32,
+        ]
+    }
+}
+
+/// Writes lane `l` of a neo-Hookean batch: the local node indices `s`, the record's rest data
+/// and the parameters `param` (`[α̃_H, α̃_D]`).
+pub(crate) fn set_neo_hookean_lane(
+    b: &mut NeoHookeanBatch,
+    l: usize,
+    s: [u32; 4],
+    c: &NeoHookeanConstraint,
+    param: [f32; 2],
+) {
+    let set = |f: &mut F, v: f32| f.0[l / 4][l % 4] = v;
+    for (ids, &n) in b.nodes.iter_mut().zip(&s) {
+        ids[l] = n;
+    }
+    for r in 0..3 {
+        for col in 0..3 {
+            set(&mut b.dm_inv[3 * r + col], c.inverse_rest_edges.col(col)[r]);
+        }
+    }
+    set(&mut b.gamma, c.gamma);
+    set(&mut b.param[0], param[0]);
+    set(&mut b.param[1], param[1]);
+}
+
+/// A neo-Hookean batch whose every lane is `c` on local nodes `s` (a new dynamic batch).
+pub(crate) fn neo_hookean_batch(
+    s: [u32; 4],
+    c: &NeoHookeanConstraint,
+    param: [f32; 2],
+) -> NeoHookeanBatch {
+    let mut b = NeoHookeanBatch {
+        nodes: [[0; LANES]; 4],
+        dm_inv: [F::ZERO; 9],
+        gamma: F::ZERO,
+        param: [F::ZERO; 2],
+    };
+    for l in 0..LANES {
+        set_neo_hookean_lane(&mut b, l, s, c, param);
+    }
+    b
 }
 
 impl DistanceConstraint {
@@ -263,6 +407,17 @@ pub(crate) struct CentroidBatch {
     pub nodes: [[u32; LANES]; 4],
     pub rest: [F; 4],
     pub param: [F; 4],
+}
+
+/// Stable neo-Hookean constraint pairs of [`LANES`] tets: `D_m⁻¹` row-major (`dm_inv[3r + c]`),
+/// `γ`, and the parameters `α̃_H`, `α̃_D` (`α/h²`).
+#[derive(Debug, Clone, Copy)]
+#[repr(C)]
+pub(crate) struct NeoHookeanBatch {
+    pub nodes: [[u32; LANES]; 4],
+    pub dm_inv: [F; 9],
+    pub gamma: F,
+    pub param: [F; 2],
 }
 
 const _: () = assert!(std::mem::size_of::<DistanceBatch>() == 16 * LANES);
@@ -468,6 +623,80 @@ fn centroid_apex<
     q[A] = q[A].sub(face.scale(w[A]));
     q[B] = q[B].sub(face.scale(w[B]));
     q[C] = q[C].sub(face.scale(w[C]));
+}
+
+/// Projects a batch of stable neo-Hookean constraint pairs (see [`NeoHookeanConstraint`]) on
+/// their gathered nodes: both constraints of a tet at once, by the linearised XPBD system
+/// `(∇C M⁻¹ ∇Cᵀ + α̃) Δλ = −C − α̃ λ` of the pair (2×2, solved exactly), then
+/// `Δx_i = w_i (∇_i C_H Δλ_H + ∇_i C_D Δλ_D)`. At rest (`F = I`) `∇C_D = ∇C_H/√3` and the
+/// solution moves nothing: the coupled solve keeps the rest state still where projecting the two
+/// one after the other would not (each alone is far from zero there). Lanes with `C_D` below
+/// [`MIN_LENGTH`] (a collapsed, switched-off tet) are skipped. Multipliers `lambda[0]` (`C_H`),
+/// `lambda[1]` (`C_D`). Always XPBD.
+#[inline(always)]
+pub(crate) fn project_neo_hookean(
+    q: &mut [P4; 4],
+    w: &[F; 4],
+    b: &NeoHookeanBatch,
+    lambda: &mut [F],
+) {
+    let e = [q[1].sub(q[0]), q[2].sub(q[0]), q[3].sub(q[0])];
+    let m = &b.dm_inv;
+    // F's columns: f_c = Σ_r e_r B[r][c].
+    // (Spelled out: `array::from_fn` is not inlined here.)
+    let column = |c: usize| {
+        e[0].scale(m[c])
+            .add(e[1].scale(m[3 + c]))
+            .add(e[2].scale(m[6 + c]))
+    };
+    let f = [column(0), column(1), column(2)];
+    let ic = f[0].dot(f[0]) + f[1].dot(f[1]) + f[2].dot(f[2]);
+    let cd = ic.sqrt();
+    let cof = [f[1].cross(f[2]), f[2].cross(f[0]), f[0].cross(f[1])];
+    let ch = f[0].dot(cof[0]) - b.gamma;
+    let valid = cd.cmpge(F::splat(MIN_LENGTH));
+    let inv_cd = F::select(valid, F::splat(1.0) / cd, F::ZERO);
+    // Gradients at nodes 1..3: g_r = Σ_c P_c B[r][c]; node 0 the negative sum.
+    let grad = |p: &[P4; 3], r: usize| {
+        p[0].scale(m[3 * r])
+            .add(p[1].scale(m[3 * r + 1]))
+            .add(p[2].scale(m[3 * r + 2]))
+    };
+    let gh = [grad(&cof, 0), grad(&cof, 1), grad(&cof, 2)];
+    let gd = [
+        grad(&f, 0).scale(inv_cd),
+        grad(&f, 1).scale(inv_cd),
+        grad(&f, 2).scale(inv_cd),
+    ];
+    let gh0 = gh[0].add(gh[1]).add(gh[2]);
+    let gd0 = gd[0].add(gd[1]).add(gd[2]);
+    let (mut hh, mut dd, mut hd) = (
+        w[0] * gh0.dot(gh0),
+        w[0] * gd0.dot(gd0),
+        w[0] * gh0.dot(gd0),
+    );
+    for k in 0..3 {
+        hh = hh + w[k + 1] * gh[k].dot(gh[k]);
+        dd = dd + w[k + 1] * gd[k].dot(gd[k]);
+        hd = hd + w[k + 1] * gh[k].dot(gd[k]);
+    }
+    let [ah, ad] = b.param;
+    let rh = -ch - ah * lambda[0];
+    let rd = -cd - ad * lambda[1];
+    // det = (hh + α̃_H)(dd + α̃_D) − hd², its Gram part hh·dd − hd² ≥ 0 kept so in rounding.
+    let gram = hh * dd - hd * hd;
+    let gram = F::select(gram.cmpgt(F::ZERO), gram, F::ZERO);
+    let det = gram + ah * dd + ad * hh + ah * ad;
+    let valid = valid & det.cmpgt(F::splat(f32::MIN_POSITIVE));
+    let inv = F::select(valid, F::splat(1.0) / det, F::ZERO);
+    let dlh = F::select(valid, ((dd + ad) * rh - hd * rd) * inv, F::ZERO);
+    let dld = F::select(valid, ((hh + ah) * rd - hd * rh) * inv, F::ZERO);
+    lambda[0] = lambda[0] + dlh;
+    lambda[1] = lambda[1] + dld;
+    q[0] = q[0].sub(gh0.scale(w[0] * dlh).add(gd0.scale(w[0] * dld)));
+    for k in 0..3 {
+        q[k + 1] = q[k + 1].add(gh[k].scale(w[k + 1] * dlh).add(gd[k].scale(w[k + 1] * dld)));
+    }
 }
 
 #[cfg(test)]

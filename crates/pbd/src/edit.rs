@@ -49,11 +49,14 @@
 use glam::{DVec3, Vec3, Vec3A, Vec4};
 
 use crate::body::{Block, SoftBody};
-use crate::constraint::{CentroidBatch, DistanceBatch, TetBatch, F, LANES};
+use crate::constraint::{
+    neo_hookean_batch, set_neo_hookean_lane, CentroidBatch, DistanceBatch, NeoHookeanBatch,
+    TetBatch, F, LANES,
+};
 use crate::partition::Tree;
 use crate::{
-    CentroidVolumeConstraint, DistanceConstraint, PbdError, PbdParam, Solver, TetVolumeConstraint,
-    VolumeConstraintKind,
+    CentroidVolumeConstraint, DistanceConstraint, NeoHookeanConstraint, PbdError, PbdParam, Solver,
+    TetVolumeConstraint, VolumeConstraintKind,
 };
 
 /// Where a distance constraint or tet is projected.
@@ -103,6 +106,7 @@ pub(crate) struct DynSet {
     pub tet_fill: Vec<u8>,
     pub tet_batches: Vec<TetBatch>,
     pub centroid_batches: Vec<CentroidBatch>,
+    pub neo_hookean_batches: Vec<NeoHookeanBatch>,
 }
 
 /// The edit state of a body.
@@ -304,6 +308,11 @@ impl SoftBody {
                             set_lane(p, l, off);
                         }
                     }
+                    if let Some(b) = self.neo_hookean_batches.get_mut(k) {
+                        for p in &mut b.param {
+                            set_lane(p, l, off);
+                        }
+                    }
                 }
             }
         }
@@ -350,6 +359,12 @@ impl SoftBody {
                             },
                         );
                     }
+                    if let Some(batch) = d.neo_hookean_batches.get_mut(b) {
+                        let p = self.neo_hookean[t].params(s.substep_dt());
+                        for (param, v) in batch.param.iter_mut().zip(p) {
+                            set_lane(param, l, if live { v } else { off });
+                        }
+                    }
                     if let Some(batch) = d.centroid_batches.get_mut(b) {
                         for j in 0..4 {
                             let c = &self.centroid[4 * t + j];
@@ -395,7 +410,8 @@ impl SoftBody {
     pub fn distance_slot(&self, c: usize) -> Option<ConstraintSlot> {
         self.edits.distance_slot.get(c).copied()
     }
-    /// Where tet `t`'s volume constraints are projected (`None` past the end).
+    /// Where tet `t`'s volume constraints (or neo-Hookean pair) are projected (`None` past the
+    /// end).
     pub fn tet_slot(&self, t: usize) -> Option<ConstraintSlot> {
         self.edits.tet_slot.get(t).copied()
     }
@@ -571,6 +587,7 @@ impl SoftBody {
             switch_off_tet_lane(
                 self.tet_batches.get_mut(batch),
                 self.centroid_batches.get_mut(batch),
+                self.neo_hookean_batches.get_mut(batch),
                 l,
                 off,
             );
@@ -694,11 +711,11 @@ impl SoftBody {
                 [0, 1, 2, 3].map(|j| self.settings.param(c[j].stiffness, c[j].compliance)),
             )
         });
-        let per_tet = match self.volume_kind {
-            VolumeConstraintKind::None => 0,
-            VolumeConstraintKind::Classic => 1,
-            VolumeConstraintKind::Centroid => 4,
-        };
+        let neo_hookean = self
+            .neo_hookean
+            .get(t as usize)
+            .map(|c| (*c, c.params(self.settings.substep_dt())));
+        let per_tet = self.tet_kind().per_tet();
         let e = &mut self.edits;
         let d = &mut e.sets[set];
         let count = d.tet_lanes.len();
@@ -712,7 +729,8 @@ impl SoftBody {
                 .tet_batches
                 .get(b)
                 .map(|x| x.nodes)
-                .or_else(|| d.centroid_batches.get(b).map(|x| x.nodes));
+                .or_else(|| d.centroid_batches.get(b).map(|x| x.nodes))
+                .or_else(|| d.neo_hookean_batches.get(b).map(|x| x.nodes));
             let clash = ids.is_some_and(|ids| ids.iter().any(|l| l.iter().any(|n| s.contains(n))));
             if clash {
                 continue;
@@ -730,6 +748,9 @@ impl SoftBody {
                     set_lane(&mut x.rest[k], lane, rest[k]);
                     set_lane(&mut x.param[k], lane, param[k]);
                 }
+            }
+            if let (Some(x), Some((c, param))) = (d.neo_hookean_batches.get_mut(b), &neo_hookean) {
+                set_neo_hookean_lane(x, lane, s, c, *param);
             }
             d.tet_fill[b] += 1;
             d.tet_lanes[b][lane] = t;
@@ -752,6 +773,9 @@ impl SoftBody {
                     rest: rest.map(F::splat),
                     param: param.map(F::splat),
                 });
+            }
+            if let Some((c, param)) = &neo_hookean {
+                d.neo_hookean_batches.push(neo_hookean_batch(s, c, *param));
             }
             d.tet_lanes.push([t; LANES]);
             d.tet_fill.push(1);
@@ -781,6 +805,7 @@ impl SoftBody {
             switch_off_tet_lane(
                 d.tet_batches.get_mut(b),
                 d.centroid_batches.get_mut(b),
+                d.neo_hookean_batches.get_mut(b),
                 l,
                 off,
             );
@@ -926,7 +951,7 @@ impl SoftBody {
     pub fn set_tet_nodes(&mut self, t: usize, nodes: [u32; 4]) -> Result<(), PbdError> {
         let slot = self.live_tet(t)?;
         self.check_nodes("tet", t, &nodes)?;
-        self.rewrite_tet(t, slot, nodes, None);
+        self.rewrite_tet(t, slot, nodes, None, None);
         Ok(())
     }
 
@@ -938,8 +963,15 @@ impl SoftBody {
         slot: ConstraintSlot,
         nodes: [u32; 4],
         rest: Option<(f32, [f32; 4])>,
+        neo_hookean: Option<NeoHookeanConstraint>,
     ) {
         self.tets[t] = nodes;
+        if let Some(c) = self.neo_hookean.get_mut(t) {
+            c.nodes = nodes;
+            if let Some(new) = neo_hookean {
+                *c = new;
+            }
+        }
         self.pieces.stale = true;
         if let Some((volume, _)) = rest {
             self.edits.tet_rest[t] = volume;
@@ -974,8 +1006,9 @@ impl SoftBody {
         self.push_dyn_tet(t as u32);
     }
 
-    /// Gives tet `t` new nodes **and** a new rest shape: its rest volume (classic) or rest
-    /// heights (centroid) are computed from `rest`, the rest positions of `nodes` (cm, `f64`),
+    /// Gives tet `t` new nodes **and** a new rest shape: its rest volume (classic), rest
+    /// heights (centroid) or neo-Hookean pair (`D_m⁻¹`, `V₀`, compliances) are computed from
+    /// `rest`, the rest positions of `nodes` (cm, `f64`),
     /// which must be positively oriented. The way a cut reuses a tet it splits for one of the
     /// pieces, or rebuilds a tet whose node was snapped onto the cut. The tet keeps its lane if
     /// it can (see the module docs), else it is projected in a dynamic set from now on.
@@ -993,12 +1026,14 @@ impl SoftBody {
         let slot = self.live_tet(t)?;
         self.check_nodes("tet", t, &nodes)?;
         let shape = rest_shape(&rest)?;
-        self.rewrite_tet(t, slot, nodes, Some(shape));
+        let neo_hookean = self.neo_hookean_for(nodes, rest)?;
+        self.rewrite_tet(t, slot, nodes, Some(shape), neo_hookean);
         Ok(())
     }
 
     /// Appends a tet on `nodes` with the rest shape `rest` (as [`SoftBody::reshape_tet`]) and
-    /// the volume stiffness and compliance of tet `like`; it is projected in a dynamic set (that
+    /// the volume stiffness and compliance of tet `like` (an elastic body: its material's pair
+    /// for this rest shape); it is projected in a dynamic set (that
     /// of the deepest block holding its nodes, or the serial set).
     /// Returns its index (the next one of [`SoftBody::tets`]). Masses are not changed: set them
     /// with [`SoftBody::set_node_mass`].
@@ -1030,6 +1065,9 @@ impl SoftBody {
         }
         self.check_nodes("tet", t, &nodes)?;
         let (volume, heights) = rest_shape(&rest)?;
+        if let Some(c) = self.neo_hookean_for(nodes, rest)? {
+            self.neo_hookean.push(c);
+        }
         self.tets.push(nodes);
         self.pieces.stale = true;
         self.edits.tet_rest.push(volume);
@@ -1212,7 +1250,8 @@ impl SoftBody {
             .tet_batches
             .get(batch)
             .map(|x| x.nodes)
-            .or_else(|| self.centroid_batches.get(batch).map(|x| x.nodes));
+            .or_else(|| self.centroid_batches.get(batch).map(|x| x.nodes))
+            .or_else(|| self.neo_hookean_batches.get(batch).map(|x| x.nodes));
         if let Some(ids) = ids {
             let clash = (0..LANES)
                 .filter(|&l| lanes[l] != t as u32)
@@ -1228,6 +1267,12 @@ impl SoftBody {
                 }
                 set_lane(&mut x.rest, l, c.rest_volume);
                 set_lane(&mut x.param, l, settings.param(c.stiffness, c.compliance));
+            }
+            if let (Some(x), Some(c)) = (
+                self.neo_hookean_batches.get_mut(batch),
+                self.neo_hookean.get(t),
+            ) {
+                set_neo_hookean_lane(x, l, s, c, c.params(settings.substep_dt()));
             }
             if let Some(x) = self.centroid_batches.get_mut(batch) {
                 for (k, &n) in s.iter().enumerate() {
@@ -1297,13 +1342,18 @@ impl SoftBody {
                 [0, 1, 2, 3].map(|j| self.settings.param(c[j].stiffness, c[j].compliance)),
             )
         });
+        let neo_hookean = self
+            .neo_hookean
+            .get(t)
+            .map(|c| (*c, c.params(self.settings.substep_dt())));
         let e = &mut self.edits.sets[set];
         let fill = e.tet_fill[b] as usize;
         let ids = e
             .tet_batches
             .get(b)
             .map(|x| x.nodes)
-            .or_else(|| e.centroid_batches.get(b).map(|x| x.nodes));
+            .or_else(|| e.centroid_batches.get(b).map(|x| x.nodes))
+            .or_else(|| e.neo_hookean_batches.get(b).map(|x| x.nodes));
         if let Some(ids) = ids {
             let clash = (0..fill)
                 .filter(|&lane| lane != l)
@@ -1321,15 +1371,42 @@ impl SoftBody {
                 set_lane(&mut x.rest, lane, rest);
                 set_lane(&mut x.param, lane, param);
             }
-            if let (Some(x), Some((rest, param))) = (e.centroid_batches.get_mut(b), centroid) {
+            if let (Some(x), Some(centroid)) = (e.centroid_batches.get_mut(b), centroid) {
+                let (rest, param) = centroid;
                 for k in 0..4 {
                     x.nodes[k][lane] = s[k];
                     set_lane(&mut x.rest[k], lane, rest[k]);
                     set_lane(&mut x.param[k], lane, param[k]);
                 }
             }
+            if let (Some(x), Some((c, param))) = (e.neo_hookean_batches.get_mut(b), &neo_hookean) {
+                set_neo_hookean_lane(x, lane, s, c, *param);
+            }
         }
         true
+    }
+
+    /// The neo-Hookean pair of a tet on `nodes` with rest positions `rest`, for an elastic body
+    /// (`None` otherwise).
+    fn neo_hookean_for(
+        &self,
+        nodes: [u32; 4],
+        rest: [DVec3; 4],
+    ) -> Result<Option<NeoHookeanConstraint>, PbdError> {
+        let Some((_, mu, lambda)) = self.elastic else {
+            return Ok(None);
+        };
+        match NeoHookeanConstraint::new(nodes, rest, mu, lambda) {
+            Some(c) => Ok(Some(c)),
+            None => Err(PbdError::InvalidParameter {
+                param: PbdParam::RestVolume,
+                value: (rest[1] - rest[0])
+                    .cross(rest[2] - rest[0])
+                    .dot(rest[3] - rest[0])
+                    / 6.0,
+                expected: "finite and > 0: rest positions positively oriented, not flat",
+            }),
+        }
     }
 
     /// Takes tet `t` out of its current slot (its lane switched off).
@@ -1426,9 +1503,18 @@ fn check_distance_values(c: &DistanceConstraint) -> Result<(), PbdError> {
 fn switch_off_tet_lane(
     tet: Option<&mut TetBatch>,
     centroid: Option<&mut CentroidBatch>,
+    neo_hookean: Option<&mut NeoHookeanBatch>,
     l: usize,
     off: f32,
 ) {
+    if let Some(b) = neo_hookean {
+        for k in 1..4 {
+            b.nodes[k][l] = b.nodes[0][l];
+        }
+        for p in &mut b.param {
+            set_lane(p, l, off);
+        }
+    }
     if let Some(b) = tet {
         for k in 1..4 {
             b.nodes[k][l] = b.nodes[0][l];

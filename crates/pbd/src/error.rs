@@ -195,11 +195,17 @@ pub enum PbdParam {
     Stiffness,
     /// A distance constraint's compliance (cm/dyn).
     Compliance,
+    /// [`crate::Elastic::young_kpa`] (kPa).
+    YoungModulus,
+    /// [`crate::Elastic::poisson`].
+    PoissonRatio,
+    /// [`crate::StepSettings::solver`] (0 = PBD, 1 = linearised PBD, 2 = XPBD).
+    Solver,
 }
 
 impl PbdParam {
     /// Every parameter, in declaration order.
-    pub const ALL: [PbdParam; 32] = [
+    pub const ALL: [PbdParam; 35] = [
         PbdParam::Density,
         PbdParam::DistanceStiffness,
         PbdParam::VolumeStiffness,
@@ -232,6 +238,9 @@ impl PbdParam {
         PbdParam::RestLength,
         PbdParam::Stiffness,
         PbdParam::Compliance,
+        PbdParam::YoungModulus,
+        PbdParam::PoissonRatio,
+        PbdParam::Solver,
     ];
 
     /// The parameter's name as the messages give it: the field's name (`distance_stiffness`,
@@ -270,6 +279,9 @@ impl PbdParam {
             PbdParam::RestLength => "rest_length",
             PbdParam::Stiffness => "stiffness",
             PbdParam::Compliance => "compliance",
+            PbdParam::YoungModulus => "elastic.young_kpa",
+            PbdParam::PoissonRatio => "elastic.poisson",
+            PbdParam::Solver => "solver",
         }
     }
 }

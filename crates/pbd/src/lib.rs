@@ -9,6 +9,10 @@
 //!   per connected piece (its tets' total volume, projected on its boundary nodes after the
 //!   contacts, the nodes in contact held: Müller et al. 2007 §4.4; a cut that separates a piece
 //!   gives it its own). Pins, kinematic attachments, a static [`Floor`].
+//! - Or a physical material, [`Material::elastic`] ([`Elastic`]: Young's modulus in kPa,
+//!   Poisson's ratio, with the density): one stable neo-Hookean constraint pair per tet
+//!   ([`NeoHookeanConstraint`], see "Elastic material" below) in place of the distance and
+//!   volume constraints, with the preset [`StepSettings::material`].
 //! - [`StepSettings`] / [`Solver`]: `Δt`, `K` Gauss–Seidel iterations, PBD with raw or linearised
 //!   stiffness (`k' = 1 − (1 − k)^{1/K}`), or XPBD (compliance `α`, `α̃ = α/Δt²`), gravity,
 //!   rigid-mode damping, serial or parallel projection (same result).
@@ -42,7 +46,44 @@
 //!
 //! ## Units
 //! Centimetres, grams, seconds (as `tissue-mss`): gravity −981 cm/s², density g/cm³, XPBD
-//! compliance in `[C]²/erg` (cm/dyn for distances).
+//! compliance in `[C]²/erg` (cm/dyn for distances, 1/erg for the dimensionless neo-Hookean
+//! constraints), force in dyn (g·cm/s²), stress and moduli in dyn/cm² (1 kPa = 10⁴ dyn/cm²;
+//! [`Elastic::young_kpa`] is in kPa).
+//!
+//! ## Elastic material (issue 32)
+//! With [`Material::elastic`] = `Some(Elastic { young_kpa: E, poisson: ν })` (validated:
+//! `E > 0` finite, `0 ≤ ν ≤ 0.495`) and the density `ρ`, every tet carries the stable
+//! neo-Hookean energy (Smith et al. 2018) as the constraint pair of Macklin & Müller 2021
+//! ([`NeoHookeanConstraint`]):
+//! - Lamé parameters `μ = E/(2(1+ν))`, `λ_L = Eν/((1+ν)(1−2ν))` (dyn/cm²), and the energy's
+//!   `λ = λ_L + μ` (the energy below linearises to `μ(H+Hᵀ) + (λ − μ) tr H · I` at `F = I + H`,
+//!   so this makes small strains linear elasticity with `E`, `ν`; it also makes `ν = 0` usable);
+//! - `Ψ(F) = μ/2 (I_C − 3) + λ/2 (J − γ)²`, `γ = 1 + μ/λ`, `F = D_s D_m⁻¹` (`D_s`, `D_m` the
+//!   edge matrices `[x₁−x₀, x₂−x₀, x₃−x₀]` now and at rest), `I_C = tr FᵀF`, `J = det F`;
+//! - hydrostatic `C_H = det F − γ`, `α_H = 1/(λ V₀)`; deviatoric `C_D = √I_C`,
+//!   `α_D = 1/(μ V₀)`: the XPBD energy `C_H²/(2α_H) + C_D²/(2α_D)` is `V₀ Ψ` plus a constant.
+//!   `√I_C` (not `√(I_C − 3)`) keeps the gradient finite at rest;
+//! - gradients `∂C/∂x_i = (∂C/∂F) D_m⁻ᵀ` column `i−1`, `∂C/∂x₀ = −Σ`, with
+//!   `∂C_H/∂F = cof F` and `∂C_D/∂F = F/C_D`;
+//! - solved per tet as **one coupled 2×2 XPBD system** (Macklin & Müller §4):
+//!   `Σ_j (∇C_i M⁻¹ ∇C_jᵀ + α̃_i δ_ij) Δλ_j = −C_i − α̃_i λ_i` with `α̃ = α/h²` for substeps of
+//!   `h`, multipliers accumulated over the iterations of a substep and reset every substep,
+//!   `Δx_k = w_k Σ_i ∇_k C_i Δλ_i`. At rest `∇C_D = ∇C_H/√3` and the coupled solution moves
+//!   nothing, although `C_H = −μ/λ` and `C_D = √3` there: the rest state is stress-free and
+//!   stays still (projected one after the other, the two would pull it apart each substep);
+//! - always XPBD: an elastic body refuses another [`Solver`]. Its distance constraints are
+//!   still built and kept by edits (cutting uses the edges) but not projected; links (sutures),
+//!   the floor, contacts and the per-piece constraint (off in [`Material::elastic`]) are as
+//!   ever. The pairs are laid out, coloured, batched and edited exactly as the tets' volume
+//!   constraints (the tet batches, `tet_lanes`, dynamic sets), two multipliers per tet.
+//! - Convergence: one Gauss–Seidel sweep per substep leaves a body softer than the material by
+//!   about `(h ω)²` (`ω ~ c/ℓ`, the wave speed over the tet size); [`StepSettings::material`]'s
+//!   32 substeps of 10 ms/32 bring a settled column to 3.7 % of `ρ g L²/(2E)` and change by
+//!   2.7 % when doubled (`tests/it/elastic.rs`; docs/trainer.md has the bunny).
+//! - Damping ([`StepSettings::with_relaxation_time`]): the rigid-mode damping expressed as a
+//!   relaxation time `τ`, `k_damp = 1 − exp(−Δt/τ)`: every motion relative to the body's rigid
+//!   motion decays as `exp(−t/τ)` (a mass-proportional damping force `−ρ(v − v_rigid)/τ` per
+//!   volume, momentum conserved); `τ` = 0.1 s in the preset.
 //!
 //! ## Step (SPEC Part B, Müller et al.)
 //! `v += Δt·w·f_ext`; `p = x + Δt·v`; generate contacts; `K` × project (distance, volume, floor,
@@ -163,13 +204,14 @@ mod voxel;
 pub use attachment::AttachmentId;
 pub use body::{BodyId, SoftBody};
 pub use constraint::{
-    CentroidVolumeConstraint, ConstraintKind, DistanceConstraint, Floor, TetVolumeConstraint,
+    CentroidVolumeConstraint, ConstraintKind, DistanceConstraint, Floor, NeoHookeanConstraint,
+    TetVolumeConstraint,
 };
 pub use contact::{Contact, ContactParams, ContactSource};
 pub use edit::ConstraintSlot;
 pub use error::{PbdError, PbdParam};
 pub use force::DYN_PER_NEWTON;
 pub use haptic::{ContactForceModel, ModelContact, StiffnessEstimator};
-pub use settings::{Material, Solver, StepSettings, VolumeConstraintKind};
+pub use settings::{Elastic, Material, Solver, StepSettings, VolumeConstraintKind};
 pub use tool::{Pose, Tool, ToolShape};
 pub use voxel::{ColliderShape, OrientedBox, VoxelCollider, MAX_COLLIDER_CORNERS};

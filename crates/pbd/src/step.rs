@@ -4,8 +4,8 @@
 
 use crate::body::{Block, SPARE};
 use crate::constraint::{
-    gather, project_centroid, project_distance, project_tet_volume, scatter, CentroidBatch,
-    DistanceBatch, TetBatch, F, LANES, P4,
+    gather, project_centroid, project_distance, project_neo_hookean, project_tet_volume, scatter,
+    CentroidBatch, DistanceBatch, NeoHookeanBatch, TetBatch, F, LANES, P4,
 };
 use crate::edit::DynSet;
 use crate::{PbdError, SoftBody, Solver, VolumeConstraintKind};
@@ -42,10 +42,32 @@ struct Sweep<'a> {
     distance: &'a [DistanceBatch],
     tet: &'a [TetBatch],
     centroid: &'a [CentroidBatch],
+    neo_hookean: &'a [NeoHookeanBatch],
     /// The blocks' dynamic batches (`edit.rs`), by heap index.
     dynamic: &'a [DynSet],
-    kind: VolumeConstraintKind,
+    kind: TetKind,
     parallel: bool,
+}
+
+/// What the body projects per tet and edge: the volume constraints of a
+/// [`VolumeConstraintKind`] with the distance constraints, or (an elastic material) the
+/// neo-Hookean pairs alone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum TetKind {
+    Volume(VolumeConstraintKind),
+    NeoHookean,
+}
+
+impl TetKind {
+    /// Multipliers per tet.
+    pub(crate) fn per_tet(self) -> usize {
+        match self {
+            TetKind::Volume(VolumeConstraintKind::None) => 0,
+            TetKind::Volume(VolumeConstraintKind::Classic) => 1,
+            TetKind::Volume(VolumeConstraintKind::Centroid) => 4,
+            TetKind::NeoHookean => 2,
+        }
+    }
 }
 
 /// The multipliers of a subtree's batches: tree distances, tree volumes, dynamic distances,
@@ -90,11 +112,7 @@ impl<'a> Lambdas<'a> {
 
 impl Sweep<'_> {
     fn per_tet(&self) -> usize {
-        match self.kind {
-            VolumeConstraintKind::None => 0,
-            VolumeConstraintKind::Classic => 1,
-            VolumeConstraintKind::Centroid => 4,
-        }
+        self.kind.per_tet()
     }
 
     /// Projects the constraints of block `h`'s subtree: both children (at the same time in
@@ -159,6 +177,7 @@ impl Sweep<'_> {
             &self.distance[ds..de],
             self.tet.get(ts..te).unwrap_or_default(),
             self.centroid.get(ts..te).unwrap_or_default(),
+            self.neo_hookean.get(ts..te).unwrap_or_default(),
             lam.d,
             lam.v,
             p,
@@ -171,6 +190,7 @@ impl Sweep<'_> {
                 &[],
                 &dynamic.tet_batches,
                 &dynamic.centroid_batches,
+                &dynamic.neo_hookean_batches,
                 &mut [],
                 lam.dv,
                 p,
@@ -178,6 +198,7 @@ impl Sweep<'_> {
             project_set::<XPBD>(
                 self.kind,
                 &dynamic.distance_batches,
+                &[],
                 &[],
                 &[],
                 lam.dd,
@@ -189,26 +210,49 @@ impl Sweep<'_> {
 }
 
 /// Projects distance batches, then the volume batches of `kind`, on `p` with their multipliers
-/// `ld`, `lv`. Not inlined: one copy for the tree's and the dynamic batches keeps the plain
+/// `ld`, `lv`; for [`TetKind::NeoHookean`] the neo-Hookean pairs alone (the distances are not
+/// projected). Not inlined: one copy for the tree's and the dynamic batches keeps the plain
 /// step's code small and fast.
+#[allow(clippy::too_many_arguments)]
 #[inline(never)]
 fn project_set<const XPBD: bool>(
-    kind: VolumeConstraintKind,
+    kind: TetKind,
     distance: &[DistanceBatch],
     tet: &[TetBatch],
     centroid: &[CentroidBatch],
+    neo_hookean: &[NeoHookeanBatch],
     ld: &mut [F],
     lv: &mut [F],
     p: &mut [Vec4],
 ) {
-    project_batches::<_, 2, 1>(distance, ld, p, |b| &b.nodes, project_distance::<XPBD>);
     match kind {
-        VolumeConstraintKind::None => {}
-        VolumeConstraintKind::Classic => {
-            project_batches::<_, 4, 1>(tet, lv, p, |b| &b.nodes, project_tet_volume::<XPBD>)
+        TetKind::Volume(volume) => {
+            project_batches::<_, 2, 1>(distance, ld, p, |b| &b.nodes, project_distance::<XPBD>);
+            match volume {
+                VolumeConstraintKind::None => {}
+                VolumeConstraintKind::Classic => {
+                    project_batches::<_, 4, 1>(tet, lv, p, |b| &b.nodes, project_tet_volume::<XPBD>)
+                }
+                VolumeConstraintKind::Centroid => project_batches::<_, 4, 4>(
+                    centroid,
+                    lv,
+                    p,
+                    |b| &b.nodes,
+                    project_centroid::<XPBD>,
+                ),
+            }
         }
-        VolumeConstraintKind::Centroid => {
-            project_batches::<_, 4, 4>(centroid, lv, p, |b| &b.nodes, project_centroid::<XPBD>)
+        TetKind::NeoHookean => {
+            // Through a closure, so that the kernel is inlined into the loop (passed as the
+            // function itself it went through a call shim that was not inlined).
+            #[allow(clippy::redundant_closure)]
+            project_batches::<_, 4, 2>(
+                neo_hookean,
+                lv,
+                p,
+                |b| &b.nodes,
+                |q, w, b, l| project_neo_hookean(q, w, b, l),
+            )
         }
     }
 }
@@ -220,7 +264,8 @@ impl SoftBody {
     /// 1. `v += h·g` for free nodes (`w·f_ext` with `f_ext = m g`);
     /// 2. `p = x + h·v`; attached nodes take their targets; contacts with colliders and tools are
     ///    generated for the predictions (see [`crate::Contact`]);
-    /// 3. `K` times: distance and volume constraints block by block, then the floor (Gauss–Seidel
+    /// 3. `K` times: distance and volume constraints (an elastic body: its neo-Hookean pairs)
+    ///    block by block, then the floor (Gauss–Seidel
     ///    in the order of the crate docs, in solver node order), then the contacts with friction;
     ///    XPBD multipliers start at 0 each step;
     /// 4. `v = (1 − c)(p − x)/h` (`c` the linear damping per substep, default 0), `x = p` (the old `x` becomes [`SoftBody::previous_positions`]);
@@ -360,14 +405,11 @@ impl SoftBody {
     /// serial dynamic set and the links of `edit.rs`), then the floor. `p` and `w` are in solver
     /// order.
     fn project_once<const XPBD: bool>(&mut self) {
+        let kind = self.tet_kind();
         let (p, w) = (&mut self.q, &self.qw);
         let e = &mut self.edits;
         let root = self.blocks[0];
-        let per_tet = match self.volume_kind {
-            VolumeConstraintKind::None => 0,
-            VolumeConstraintKind::Classic => 1,
-            VolumeConstraintKind::Centroid => 4,
-        };
+        let per_tet = kind.per_tet();
         // The blocks' dynamic multipliers come first, the serial set's after them.
         let (dd, serial_dd) = e
             .dyn_distance_lambda
@@ -381,8 +423,9 @@ impl SoftBody {
             distance: &self.distance_batches,
             tet: &self.tet_batches,
             centroid: &self.centroid_batches,
+            neo_hookean: &self.neo_hookean_batches,
             dynamic: &e.sets,
-            kind: self.volume_kind,
+            kind,
             parallel: self.settings.parallel,
         }
         .block::<XPBD>(
@@ -398,16 +441,23 @@ impl SoftBody {
         // The serial dynamic set (edited and added constraints on nodes past the tree's slots),
         // in edit order, on all nodes: volumes, then distances, then links (sutures).
         let serial = &e.sets[self.blocks.len()];
-        match self.volume_kind {
-            VolumeConstraintKind::None => {}
-            VolumeConstraintKind::Classic => project_batches::<_, 4, 1>(
+        match kind {
+            TetKind::Volume(VolumeConstraintKind::None) => {}
+            TetKind::NeoHookean => project_batches::<_, 4, 2>(
+                &serial.neo_hookean_batches,
+                serial_dv,
+                p,
+                |b| &b.nodes,
+                project_neo_hookean,
+            ),
+            TetKind::Volume(VolumeConstraintKind::Classic) => project_batches::<_, 4, 1>(
                 &serial.tet_batches,
                 serial_dv,
                 p,
                 |b| &b.nodes,
                 project_tet_volume::<XPBD>,
             ),
-            VolumeConstraintKind::Centroid => project_batches::<_, 4, 4>(
+            TetKind::Volume(VolumeConstraintKind::Centroid) => project_batches::<_, 4, 4>(
                 &serial.centroid_batches,
                 serial_dv,
                 p,
@@ -415,7 +465,7 @@ impl SoftBody {
                 project_centroid::<XPBD>,
             ),
         }
-        if !serial.distance_batches.is_empty() {
+        if !serial.distance_batches.is_empty() && kind != TetKind::NeoHookean {
             project_batches::<_, 2, 1>(
                 &serial.distance_batches,
                 serial_dd,
@@ -448,6 +498,15 @@ impl SoftBody {
                 }
             }
             self.collision.floor_pending += pushed;
+        }
+    }
+
+    /// What the body projects per tet and edge.
+    pub(crate) fn tet_kind(&self) -> TetKind {
+        if self.elastic.is_some() {
+            TetKind::NeoHookean
+        } else {
+            TetKind::Volume(self.volume_kind)
         }
     }
 

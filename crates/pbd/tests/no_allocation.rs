@@ -38,18 +38,27 @@ fn steps_allocate_nothing_after_the_first() {
         .num_threads(2)
         .build()
         .unwrap();
+    // `None`: the elastic material (neo-Hookean pairs, XPBD only).
     for kind in [
-        VolumeConstraintKind::Centroid,
-        VolumeConstraintKind::Classic,
-        VolumeConstraintKind::None,
+        Some(VolumeConstraintKind::Centroid),
+        Some(VolumeConstraintKind::Classic),
+        Some(VolumeConstraintKind::None),
+        None,
     ] {
         for solver in [Solver::Pbd, Solver::PbdLinearised, Solver::Xpbd] {
+            if kind.is_none() && solver != Solver::Xpbd {
+                continue;
+            }
             for parallel in [false, true] {
                 let material = Material {
                     distance_compliance: 1e-5,
                     volume_compliance: 1e-5,
-                    volume: kind,
+                    volume: kind.unwrap_or(VolumeConstraintKind::None),
                     hold_piece_volumes: true,
+                    elastic: kind.is_none().then_some(tissue_pbd::Elastic {
+                        young_kpa: 5.0,
+                        poisson: 0.45,
+                    }),
                     ..Material::default()
                 };
                 let mut body = SoftBody::new(&mesh, &material).unwrap();

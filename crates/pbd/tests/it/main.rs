@@ -7,6 +7,7 @@ mod common;
 
 mod collision;
 mod edit;
+mod elastic;
 mod errors;
 mod force;
 mod parallel;

@@ -9,16 +9,20 @@ use tissue_pbd::{
 };
 
 /// The 20³-cell test box (colours of a few thousand constraints, so the parallel path really
-/// forks), on a floor `floor` below, node 0 pinned.
-fn box_body(kind: VolumeConstraintKind, floor: f32) -> SoftBody {
+/// forks), on a floor `floor` below, node 0 pinned; `None`: the elastic material (neo-Hookean
+/// pairs) instead of volume constraints of a kind.
+fn box_body(kind: Option<VolumeConstraintKind>, floor: f32) -> SoftBody {
     let mesh = tet_box(20, 20, 20, Vec3::splat(10.0)).unwrap();
-    let material = Material {
-        distance_stiffness: 0.7,
-        volume_stiffness: 0.9,
-        distance_compliance: 1e-4,
-        volume_compliance: 1e-4,
-        volume: kind,
-        ..Material::default()
+    let material = match kind {
+        Some(kind) => Material {
+            distance_stiffness: 0.7,
+            volume_stiffness: 0.9,
+            distance_compliance: 1e-4,
+            volume_compliance: 1e-4,
+            volume: kind,
+            ..Material::default()
+        },
+        None => Material::elastic(2.0, 0.45, 1.0).unwrap(),
     };
     let mut body = SoftBody::new(&mesh, &material).unwrap();
     body.set_floor(Some(Floor::y(floor))).unwrap();
@@ -53,7 +57,12 @@ fn five_steps(mut body: SoftBody, solver: Solver, parallel: bool, threads: usize
         .collect()
 }
 
-fn run(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: usize) -> Vec<u32> {
+fn run(
+    kind: Option<VolumeConstraintKind>,
+    solver: Solver,
+    parallel: bool,
+    threads: usize,
+) -> Vec<u32> {
     let body = box_body(kind, -4.0);
     assert!(
         body.block_count() >= 15,
@@ -65,8 +74,9 @@ fn run(kind: VolumeConstraintKind, solver: Solver, parallel: bool, threads: usiz
 #[test]
 fn parallel_is_bit_identical_for_any_thread_count_and_to_serial() {
     for (kind, solver) in [
-        (VolumeConstraintKind::Centroid, Solver::PbdLinearised),
-        (VolumeConstraintKind::Classic, Solver::Xpbd),
+        (Some(VolumeConstraintKind::Centroid), Solver::PbdLinearised),
+        (Some(VolumeConstraintKind::Classic), Solver::Xpbd),
+        (None, Solver::Xpbd),
     ] {
         let serial = run(kind, solver, false, 1);
         for threads in [1, 2, 3] {
@@ -85,7 +95,7 @@ fn parallel_is_bit_identical_for_any_thread_count_and_to_serial() {
 /// (the leaves' spare slots used up before the cut) most of both are in the serial set after
 /// the tree. Parallel stays bit-identical either way.
 fn run_cut(
-    kind: VolumeConstraintKind,
+    kind: Option<VolumeConstraintKind>,
     solver: Solver,
     parallel: bool,
     threads: usize,
@@ -245,8 +255,9 @@ fn run_cut(
 #[test]
 fn a_cut_body_is_bit_identical_in_parallel_and_serial() {
     for (kind, solver) in [
-        (VolumeConstraintKind::Centroid, Solver::PbdLinearised),
-        (VolumeConstraintKind::Classic, Solver::Xpbd),
+        (Some(VolumeConstraintKind::Centroid), Solver::PbdLinearised),
+        (Some(VolumeConstraintKind::Classic), Solver::Xpbd),
+        (None, Solver::Xpbd),
     ] {
         for full in [false, true] {
             let serial = run_cut(kind, solver, false, 1, full);
