@@ -124,6 +124,9 @@ pub enum FrameFormat {
 pub enum Scenario {
     /// Deform, incise, cut a piece off, suture the wound.
     Appendix,
+    /// A beam of --length along x and square section --thickness, clamped at x = 0, no tray,
+    /// settling under gravity for --settle-steps; prints its tip deflection.
+    Cantilever,
 }
 
 /// `trainer` arguments.
@@ -243,15 +246,43 @@ pub struct Cli {
     /// Material::hold_piece_volumes), keeping the tets' own: for comparison.
     #[arg(long)]
     pub no_piece_volumes: bool,
+    /// Instead of stepping, solve the run's static states with the finite-element reference
+    /// (tissue-fem, the same stable neo-Hookean material, organ, support and probe depth) and
+    /// print the same summary lines: the heights as loaded and settled, the probe's force at
+    /// --depth (a cantilever: its tip deflection). Implies the material scheme.
+    #[arg(long)]
+    pub reference: bool,
+    /// The cantilever's length along x (cm; --scenario cantilever).
+    #[arg(long, value_name = "CM", default_value_t = 10.0)]
+    pub length: f32,
+    /// The cantilever's square section's side (cm; --scenario cantilever).
+    #[arg(long, value_name = "CM", default_value_t = 1.0)]
+    pub thickness: f32,
+    /// The cantilever's cells through its thickness, as many per thickness along it, six tets
+    /// a cell (--scenario cantilever).
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=16))]
+    pub cells: u32,
 }
 
 impl Cli {
-    /// Whether a material flag (--young-kpa, --poisson, --density, --relaxation-time) is given.
+    /// Whether a material flag (--young-kpa, --poisson, --density, --relaxation-time) or
+    /// --reference is given.
     fn material_flags(&self) -> bool {
         self.young_kpa.is_some()
             || self.poisson.is_some()
             || self.density.is_some()
             || self.relaxation_time.is_some()
+            || self.reference
+    }
+
+    /// The material scheme's organ as the finite-element reference takes it (E, ν, ρ).
+    pub fn elastic_material(&self) -> tissue_fem::ElasticMaterial {
+        use tissue_pbd::Material;
+        tissue_fem::ElasticMaterial {
+            young_kpa: f64::from(self.young_kpa.unwrap_or(Material::ORGAN_YOUNG_KPA)),
+            poisson: f64::from(self.poisson.unwrap_or(Material::ORGAN_POISSON)),
+            density: f64::from(self.density.unwrap_or(Material::ORGAN_DENSITY)),
+        }
     }
 
     /// The scheme of the run: `--scheme` as given; without it `material` when a material flag
@@ -269,8 +300,9 @@ impl Cli {
     pub fn check(&self) -> Result<(), String> {
         if self.material_flags() && self.scheme() != Scheme::Material {
             return Err(format!(
-                "--young-kpa, --poisson, --density and --relaxation-time set the material scheme's \
-                 organ; the {:?} scheme has no physical material: drop them or use --scheme material",
+                "--young-kpa, --poisson, --density, --relaxation-time and --reference need the \
+                 material scheme's organ; the {:?} scheme has no physical material: drop them or \
+                 use --scheme material",
                 self.scheme()
             )
             .to_lowercase());
@@ -378,6 +410,29 @@ mod tests {
         );
         assert_eq!((cli.depth, cli.tool_radius), (plan.depth, plan.radius));
         assert!(cli.waypoints.is_empty() && plan.waypoints.is_empty());
+    }
+
+    /// --reference solves the material scheme's organ: it implies the scheme, is refused with
+    /// the others, and takes the material flags (the reference's E, ν, ρ are the run's).
+    #[test]
+    fn the_reference_is_the_material_schemes() {
+        let parse = |args: &[&str]| Cli::try_parse_from(args).unwrap_or_else(|e| panic!("{e}"));
+        let cli = parse(&["trainer", "--reference", "--young-kpa", "20"]);
+        assert_eq!(cli.scheme(), Scheme::Material);
+        assert!(cli.check().is_ok());
+        let m = cli.elastic_material();
+        assert_eq!(
+            (m.young_kpa, m.poisson as f32, m.density as f32),
+            (
+                20.0,
+                tissue_pbd::Material::ORGAN_POISSON,
+                tissue_pbd::Material::ORGAN_DENSITY
+            )
+        );
+        let refused = parse(&["trainer", "--reference", "--scheme", "legacy"]);
+        assert!(refused.check().unwrap_err().contains("--reference"));
+        let beam = parse(&["trainer", "--scenario", "cantilever", "--length", "4"]);
+        assert_eq!((beam.length, beam.thickness, beam.cells), (4.0, 1.0, 4));
     }
 
     #[test]

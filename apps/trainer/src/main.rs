@@ -6,8 +6,10 @@
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod appendix;
+mod cantilever;
 mod cli;
 mod failure;
+mod reference;
 mod run;
 mod scene;
 
@@ -48,11 +50,39 @@ fn describe_settings(body: &tissue_pbd::SoftBody) -> String {
 }
 
 fn main_inner(cli: &Cli) -> Result<(), Failure> {
-    if cli.scenario == Some(cli::Scenario::Appendix) {
-        return appendix::run(cli);
+    match cli.scenario {
+        Some(cli::Scenario::Appendix) if cli.reference => {
+            return Err(Failure::new(
+                failure::Exit::Parameters,
+                "--reference solves a press on the tray or the cantilever, not the appendix's \
+                 surgery: drop one of them",
+            ))
+        }
+        Some(cli::Scenario::Appendix) => return appendix::run(cli),
+        Some(cli::Scenario::Cantilever) => return cantilever::run(cli),
+        None => {}
     }
     let mut scene = scene::build(cli)?;
-    let (nodes, tets) = (scene.mesh.vertex_count(), scene.mesh.tet_count());
+    if cli.reference {
+        let at = scene
+            .script
+            .plan()
+            .waypoints
+            .first()
+            .copied()
+            .unwrap_or([0.0, 0.0]);
+        reference::print(
+            &scene.organ,
+            cli.elastic_material(),
+            (at, cli.tool_radius, cli.depth),
+            cli.size,
+        )?;
+        return Ok(());
+    }
+    let (nodes, tets) = (
+        scene.organ.mesh.vertex_count(),
+        scene.organ.mesh.tet_count(),
+    );
     println!("trainer: {}", scene.source);
     println!(
         "  organ         {nodes} nodes, {tets} tets, {:.1} cm, {:.0} g, V0 = {:.1} cm³",

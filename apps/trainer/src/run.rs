@@ -171,8 +171,8 @@ impl Frames {
     fn new(cli: &Cli, scene: &Scene, dir: &Path) -> Result<Self, Failure> {
         std::fs::create_dir_all(dir)
             .map_err(|e| Failure::output(&format!("frames folder {}", dir.display()), e))?;
-        let faces = scene.mesh.boundary_faces();
-        let mut local = vec![u32::MAX; scene.mesh.vertex_count()];
+        let faces = scene.organ.mesh.boundary_faces();
+        let mut local = vec![u32::MAX; scene.organ.mesh.vertex_count()];
         let mut nodes = Vec::new();
         let triangles: Vec<[u32; 3]> = faces
             .iter()
@@ -188,7 +188,7 @@ impl Frames {
             .collect();
         let rest: Vec<Vec3> = nodes
             .iter()
-            .map(|&n| scene.mesh.positions()[n as usize])
+            .map(|&n| scene.organ.mesh.positions()[n as usize])
             .collect();
         let surface = TriMesh::new(rest.clone(), triangles).map_err(|e| {
             Failure::new(

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use glam::Vec3;
-use tissue_mesh::{tet_box, TetMesh};
+use tissue_mesh::tet_box;
 use tissue_pbd::{ContactParams, SoftBody, ToolShape};
 use tissue_scenes::{Organ, PressAndDrag, PressPlan, ShippedOrgan, Tray};
 
@@ -52,7 +52,7 @@ pub struct Scene {
     /// Where the organ came from.
     pub source: Source,
     /// The organ as placed (cm), resting on the tray's plane y = 0.
-    pub mesh: TetMesh,
+    pub organ: Organ,
     /// The body with the tray and the probe.
     pub body: SoftBody,
     /// The probe's shape (tip at the local origin, axis +y).
@@ -142,7 +142,7 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
         .to_owned();
     Ok(Scene {
         source,
-        mesh: organ.mesh,
+        organ,
         body,
         probe,
         script,

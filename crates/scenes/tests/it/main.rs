@@ -1,5 +1,6 @@
 //! The integration tests of `tissue-scenes` in one binary, a module per area (each module's own
 //! doc says what it covers).
 
+mod material;
 mod moving_body;
 mod session;
