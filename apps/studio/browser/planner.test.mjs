@@ -137,7 +137,10 @@ async function main() {
     await page.selectOption('#solver', 'explicit');
     await page.click('#tab-3');
 
-    // d2. an expansion over weeks (issue 21): the weekly chart and the flap's band
+    // d2. an expansion over weeks (issue 21): the weekly chart and the flap's band. The volume
+    // just changed, so the placement is checked again: start once the page can run (a start
+    // while the check is pending is ignored, as a click on the disabled button would be).
+    await page.waitForFunction(() => !document.getElementById('expansion-start').disabled, null, { timeout: 60000, polling: 100 });
     await planner(page, () => window.tissueStudio.planner.startExpansion(2, { volume_cm3: 40, band_samples: 8 }));
     await page.waitForFunction(() => {
       const s = window.tissueStudio.planner.job;
