@@ -13,16 +13,13 @@ use tissue_scenes::{Organ, Tray};
 use crate::cli::Cli;
 use crate::failure::{self, Exit, Failure};
 
-/// Gravity (cm/s²).
-const GRAVITY: f64 = 981.0;
-
 /// Runs the scenario.
 pub fn run(cli: &Cli) -> Result<(), Failure> {
     let organ = Organ::cantilever(cli.length, cli.thickness, cli.cells)
         .map_err(|e| failure::from_scene(&e))?;
     let material = cli.elastic_material();
     let (l, h) = (f64::from(cli.length), f64::from(cli.thickness));
-    let beam = material.density * GRAVITY * h * h * l.powi(4)
+    let beam = material.density * tissue_fem::GRAVITY * h * h * l.powi(4)
         / (8.0 * material.young() * h.powi(4) / 12.0);
     if cli.reference {
         crate::reference::print(

@@ -776,13 +776,7 @@ impl StaticProblem {
         let tol = self.settings.residual_tolerance;
         for _ in 0..self.settings.max_iterations {
             let forces = self.gradient(&ws.u, t, &mut ws.grad);
-            report.residual = forces.residual;
-            report.force_scale = forces.scale;
-            report.relative_residual = if forces.scale > 0.0 {
-                forces.residual / forces.scale
-            } else {
-                0.0
-            };
+            forces.record(report);
             tracing::debug!(
                 iteration = report.iterations,
                 residual = forces.residual,
@@ -817,13 +811,7 @@ impl StaticProblem {
             }
         }
         let forces = self.gradient(&ws.u, t, &mut ws.grad);
-        report.residual = forces.residual;
-        report.force_scale = forces.scale;
-        report.relative_residual = if forces.scale > 0.0 {
-            forces.residual / forces.scale
-        } else {
-            0.0
-        };
+        forces.record(report);
         Ok(forces.residual <= tol * forces.scale)
     }
 
@@ -935,6 +923,19 @@ struct Forces {
     residual: f64,
     scale: f64,
     max_penetration: f64,
+}
+
+impl Forces {
+    /// The residual, its scale and their ratio into `report`.
+    fn record(&self, report: &mut StaticReport) {
+        report.residual = self.residual;
+        report.force_scale = self.scale;
+        report.relative_residual = if self.scale > 0.0 {
+            self.residual / self.scale
+        } else {
+            0.0
+        };
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
