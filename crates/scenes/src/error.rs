@@ -48,6 +48,15 @@ pub enum SceneError {
         /// The size asked for (cm).
         size: f32,
     },
+    /// A damping relaxation time that is not a positive number of seconds.
+    #[error(
+        "a relaxation time of {seconds} s: give a positive time in seconds (0.1 s damps an \
+         organ's wobble in a few tenths of a second)"
+    )]
+    RelaxationTime {
+        /// The time given (s).
+        seconds: f32,
+    },
     /// The solver refused a parameter or diverged.
     #[error("the simulation: {0}")]
     Pbd(#[from] tissue_pbd::PbdError),
@@ -139,7 +148,9 @@ impl SceneError {
             SceneError::Mesh { .. } => SceneErrorKind::Mesh,
             SceneError::Meshing { .. } => SceneErrorKind::Meshing,
             SceneError::TooLarge { .. } => SceneErrorKind::TooLarge,
-            SceneError::Size { .. } => SceneErrorKind::Parameters,
+            SceneError::Size { .. } | SceneError::RelaxationTime { .. } => {
+                SceneErrorKind::Parameters
+            }
             SceneError::Pbd(e) => SceneErrorKind::of_pbd(e),
             SceneError::Surgery(_) => SceneErrorKind::Simulation,
             SceneError::Tool(_) => SceneErrorKind::Tool,

@@ -82,6 +82,79 @@ impl Default for SessionOptions {
     }
 }
 
+/// A physical organ material for a session (issue 32): what the trainer's `--young-kpa`,
+/// `--poisson`, `--density`, `--relaxation-time`, the studio's sliders and the C ABI's
+/// material fields all give, turned into a session's settings once
+/// ([`SessionOptions::material`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrganMaterial {
+    /// Young's modulus `E` (kPa), Poisson's ratio `ν` (0 to 0.495), density `ρ` (g/cm³).
+    pub elastic: tissue_fem::ElasticMaterial,
+    /// The relaxation time `τ` (s) of the damping: every motion relative to the organ's rigid
+    /// motion decays as `e^{−t/τ}` ([`StepSettings::with_relaxation_time`]).
+    pub relaxation_time: f32,
+}
+
+impl OrganMaterial {
+    /// The material scheme's default organ: 10 kPa, `ν = 0.45`, 1.05 g/cm³, `τ = 0.1 s`.
+    pub fn soft_organ() -> Self {
+        OrganMaterial {
+            elastic: tissue_fem::ElasticMaterial {
+                young_kpa: f64::from(Material::ORGAN_YOUNG_KPA),
+                poisson: f64::from(Material::ORGAN_POISSON),
+                density: f64::from(Material::ORGAN_DENSITY),
+            },
+            relaxation_time: StepSettings::MATERIAL_RELAXATION_TIME,
+        }
+    }
+
+    /// A preset tissue's `E`, `ν`, `ρ` with the default relaxation time.
+    pub fn preset(tissue: crate::TissuePreset) -> Self {
+        OrganMaterial {
+            elastic: tissue.material(),
+            ..Self::soft_organ()
+        }
+    }
+
+    /// The solver's material (stable neo-Hookean pairs, no distance or volume constraints).
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] naming the parameter out of its range (`E ≤ 0`, `ν` outside
+    /// 0–0.495, `ρ ≤ 0`, or not finite) and the range.
+    pub fn pbd(&self) -> Result<Material, SceneError> {
+        Ok(Material::elastic(
+            self.elastic.young_kpa as f32,
+            self.elastic.poisson as f32,
+            self.elastic.density as f32,
+        )?)
+    }
+}
+
+impl SessionOptions {
+    /// A session of the material scheme: `material`'s organ, stepped as
+    /// [`StepSettings::material`] (32 XPBD substeps of 10 ms, in parallel) with its relaxation
+    /// time; contact, tools and scalpel as [`SessionOptions::default`].
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] naming the material parameter out of range.
+    pub fn material(material: &OrganMaterial) -> Result<SessionOptions, SceneError> {
+        if !(material.relaxation_time.is_finite() && material.relaxation_time > 0.0) {
+            return Err(SceneError::RelaxationTime {
+                seconds: material.relaxation_time,
+            });
+        }
+        Ok(SessionOptions {
+            material: material.pbd()?,
+            step: StepSettings {
+                parallel: true,
+                ..StepSettings::material()
+            }
+            .with_relaxation_time(material.relaxation_time),
+            ..SessionOptions::default()
+        })
+    }
+}
+
 #[derive(Debug, Clone)]
 struct Grab {
     /// (node, attachment id, the node's offset from the grabbed point).

@@ -3,8 +3,12 @@
 //! the cantilever both solve on the same mesh.
 #![allow(clippy::unwrap_used)]
 
+use tissue_fem::ElasticMaterial;
 use tissue_pbd::{ContactParams, Material, StepSettings};
-use tissue_scenes::{reference, Organ, ReferencePlan, Tray};
+use tissue_scenes::{
+    reference, Organ, OrganMaterial, ReferencePlan, SceneError, SceneErrorKind, Session,
+    SessionOptions, Tray,
+};
 
 /// A 4 × 1 × 1 cm beam of organ tissue (10 kPa, ν = 0.45, 1.05 g/cm³) clamped at x = 0: the
 /// material scheme's tip deflection, averaged over the last 3 s of 6 s (its bending swings
@@ -68,5 +72,56 @@ fn the_material_schemes_cantilever_sags_as_its_reference() {
     assert!(
         (tip64 / tip32 - 1.0).abs() < 0.05,
         "{tip64} against {tip32}"
+    );
+}
+
+/// The session's material entry point (used by the studio and the C ABI) refuses what the
+/// solver cannot take, naming the parameter, and a stiffer organ sags less on its tray.
+#[test]
+fn a_session_takes_a_material_and_refuses_a_bad_one() {
+    let bad = OrganMaterial {
+        elastic: ElasticMaterial {
+            poisson: 0.6,
+            ..OrganMaterial::soft_organ().elastic
+        },
+        ..OrganMaterial::soft_organ()
+    };
+    let e = SessionOptions::material(&bad).unwrap_err();
+    assert_eq!(e.kind(), SceneErrorKind::Parameters, "{e}");
+    assert!(e.to_string().contains("poisson"), "{e}");
+    let slow = OrganMaterial {
+        relaxation_time: 0.0,
+        ..OrganMaterial::soft_organ()
+    };
+    assert!(matches!(
+        SessionOptions::material(&slow),
+        Err(SceneError::RelaxationTime { .. })
+    ));
+
+    // A 4 cm box on its tray: the top's settled sag at 10 kPa and at 20 kPa.
+    let cube = tissue_mesh::tet_box(6, 6, 6, glam::Vec3::splat(4.0)).unwrap();
+    let organ = Organ::from_tets(&cube, "cube").unwrap();
+    let sag = |young_kpa: f64| {
+        let m = OrganMaterial {
+            elastic: ElasticMaterial {
+                young_kpa,
+                ..OrganMaterial::soft_organ().elastic
+            },
+            ..OrganMaterial::soft_organ()
+        };
+        let mut s = Session::new(&organ, SessionOptions::material(&m).unwrap()).unwrap();
+        let top0 = s.positions().iter().map(|p| p.y).fold(f32::MIN, f32::max);
+        for _ in 0..150 {
+            s.step().unwrap();
+        }
+        let top = s.positions().iter().map(|p| p.y).fold(f32::MIN, f32::max);
+        top0 - top
+    };
+    let (soft, stiff) = (sag(10.0), sag(20.0));
+    assert!(soft > 0.0, "the organ sags: {soft} cm");
+    let ratio = stiff / soft;
+    assert!(
+        (0.4..0.65).contains(&ratio),
+        "twice E: sag × {ratio} ({soft} → {stiff} cm)"
     );
 }
