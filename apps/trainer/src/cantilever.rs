@@ -55,9 +55,9 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
         ));
     }
     let mut seconds = Vec::with_capacity(cli.settle_steps);
-    // The tip's mean over the last half of the steps: a pinned beam's bending looks to the
-    // rigid-mode damping much like a rigid turn about the clamp, so it swings on, lightly
-    // damped, about its equilibrium.
+    // The tip's mean over the last half of the steps beside its last value: once settled the
+    // two agree (the damping fits the body's rigid motion with the clamp's nodes in it, so
+    // the beam's swing is damped).
     let (mut sum, mut count) = (0.0f64, 0usize);
     for k in 0..cli.settle_steps {
         let t = Instant::now();

@@ -180,6 +180,10 @@ pub struct Cli {
     /// rigid motion decays as exp(-t/tau) [default: 0.1].
     #[arg(long, value_name = "S")]
     pub relaxation_time: Option<f32>,
+    /// Over-relaxation beta of the neo-Hookean pairs, 0 to 1 (material scheme; 0 is plain XPBD,
+    /// which leaves the organ softer than its material by about (h omega)^2) [default: 1].
+    #[arg(long, value_name = "BETA")]
+    pub over_relaxation: Option<f32>,
     /// Time step per frame (s) [default: 0.01, every scheme].
     #[arg(long, value_name = "S")]
     pub dt: Option<f32>,
@@ -265,13 +269,14 @@ pub struct Cli {
 }
 
 impl Cli {
-    /// Whether a material flag (--young-kpa, --poisson, --density, --relaxation-time) or
+    /// Whether a material flag (--young-kpa, --poisson, --density, --relaxation-time, --over-relaxation) or
     /// --reference is given.
     fn material_flags(&self) -> bool {
         self.young_kpa.is_some()
             || self.poisson.is_some()
             || self.density.is_some()
             || self.relaxation_time.is_some()
+            || self.over_relaxation.is_some()
             || self.reference
     }
 
@@ -300,7 +305,7 @@ impl Cli {
     pub fn check(&self) -> Result<(), String> {
         if self.material_flags() && self.scheme() != Scheme::Material {
             return Err(format!(
-                "--young-kpa, --poisson, --density, --relaxation-time and --reference need the \
+                "--young-kpa, --poisson, --density, --relaxation-time, --over-relaxation and --reference need the \
                  material scheme's organ; the {:?} scheme has no physical material: drop them or \
                  use --scheme material",
                 self.scheme()
@@ -373,6 +378,10 @@ impl Cli {
         }
         if self.no_piece_volumes {
             material.hold_piece_volumes = false;
+        }
+        if let Some(b) = self.over_relaxation {
+            // Validated when the settings are set (tissue-pbd's error names the parameter).
+            settings.over_relaxation = b;
         }
         (material, settings)
     }

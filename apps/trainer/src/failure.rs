@@ -36,6 +36,7 @@ pub fn flag_of(param: PbdParam) -> Option<&'static str> {
         P::YoungModulus => Some("--young-kpa"),
         P::PoissonRatio => Some("--poisson"),
         P::Solver => Some("--solver"),
+        P::OverRelaxation => Some("--over-relaxation"),
         P::VolumeStiffness
         | P::VolumeCompliance
         | P::GravityX

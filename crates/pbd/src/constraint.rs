@@ -627,7 +627,8 @@ fn centroid_apex<
 
 /// Projects a batch of stable neo-Hookean constraint pairs (see [`NeoHookeanConstraint`]) on
 /// their gathered nodes: both constraints of a tet at once, by the linearised XPBD system
-/// `(∇C M⁻¹ ∇Cᵀ + α̃) Δλ = −C − α̃ λ` of the pair (2×2, solved exactly), then
+/// `(keep · ∇C M⁻¹ ∇Cᵀ + α̃) Δλ = −C − α̃ λ` of the pair (2×2, solved exactly; `keep = 1 − β`,
+/// `β` the step's [`crate::StepSettings::over_relaxation`]), then
 /// `Δx_i = w_i (∇_i C_H Δλ_H + ∇_i C_D Δλ_D)`. At rest (`F = I`) `∇C_D = ∇C_H/√3` and the
 /// solution moves nothing: the coupled solve keeps the rest state still where projecting the two
 /// one after the other would not (each alone is far from zero there). Lanes with `C_D` below
@@ -639,6 +640,7 @@ pub(crate) fn project_neo_hookean(
     w: &[F; 4],
     b: &NeoHookeanBatch,
     lambda: &mut [F],
+    one_minus_beta: F,
 ) {
     let e = [q[1].sub(q[0]), q[2].sub(q[0]), q[3].sub(q[0])];
     let m = &b.dm_inv;
@@ -681,6 +683,13 @@ pub(crate) fn project_neo_hookean(
         hd = hd + w[k + 1] * gh[k].dot(gd[k]);
     }
     let [ah, ad] = b.param;
+    // Over-relaxation (StepSettings::over_relaxation): `A` scaled by one factor per tet (so
+    // that the rest state stays still), `(K + (1 − β) α̃)/(K + α̃)` of its stiffer constraint.
+    // (The stiffer has the larger `K/α̃`: compared without dividing.)
+    let h_stiffer = (hh * ad).cmpgt(dd * ah);
+    let (k, a) = (F::select(h_stiffer, hh, dd), F::select(h_stiffer, ah, ad));
+    let keep = (k + one_minus_beta * a) / (k + a);
+    let (hh, dd, hd) = (hh * keep, dd * keep, hd * keep);
     let rh = -ch - ah * lambda[0];
     let rd = -cd - ad * lambda[1];
     // det = (hh + α̃_H)(dd + α̃_D) − hd², its Gram part hh·dd − hd² ≥ 0 kept so in rounding.

@@ -201,11 +201,13 @@ pub enum PbdParam {
     PoissonRatio,
     /// [`crate::StepSettings::solver`] (0 = PBD, 1 = linearised PBD, 2 = XPBD).
     Solver,
+    /// [`crate::StepSettings::over_relaxation`].
+    OverRelaxation,
 }
 
 impl PbdParam {
     /// Every parameter, in declaration order.
-    pub const ALL: [PbdParam; 35] = [
+    pub const ALL: [PbdParam; 36] = [
         PbdParam::Density,
         PbdParam::DistanceStiffness,
         PbdParam::VolumeStiffness,
@@ -241,6 +243,7 @@ impl PbdParam {
         PbdParam::YoungModulus,
         PbdParam::PoissonRatio,
         PbdParam::Solver,
+        PbdParam::OverRelaxation,
     ];
 
     /// The parameter's name as the messages give it: the field's name (`distance_stiffness`,
@@ -282,6 +285,7 @@ impl PbdParam {
             PbdParam::YoungModulus => "elastic.young_kpa",
             PbdParam::PoissonRatio => "elastic.poisson",
             PbdParam::Solver => "solver",
+            PbdParam::OverRelaxation => "over_relaxation",
         }
     }
 }

@@ -231,6 +231,19 @@ pub struct StepSettings {
     /// Project the blocks of the domain decomposition on rayon's current pool (sibling subtrees
     /// at the same time). Bit-identical to the serial projection (see the crate docs).
     pub parallel: bool,
+    /// Over-relaxation `β ∈ [0, 1]` of an elastic material's pair solve (XPBD). Each tet's
+    /// 2 × 2 system `(A + α̃) Δλ = −C − α̃λ` (`A = ∇C M⁻¹ ∇Cᵀ`) is solved with `A` scaled by
+    /// `(K + (1 − β) α̃)/(K + α̃)`, `K` and `α̃` those of the tet's stiffer constraint (the
+    /// larger `r = K/α̃`; one factor for both, so that the stress-free rest state stays still).
+    /// What the iterations converge to (`C + α̃λ = 0`) does not depend on `β`. With one
+    /// iteration per substep (λ starting at 0 in every substep) a settled body is softer than
+    /// its material by about `r = (hω)²` (`h` the substep, `ω` the mesh's highest
+    /// frequencies); the scaling takes `β·r` of that back to first order, so fewer substeps reach
+    /// the material. It over-relaxes the Gauss–Seidel update by at most `4/(4 − β)` (at
+    /// `r = 1`), and not at all for stiff or sliver tets (`r ≫ 1`), so it stays stable where a
+    /// constant over-relaxation factor diverges (one of 1.7 did, on the cut appendix).
+    /// Ignored by the other materials.
+    pub over_relaxation: f32,
 }
 
 impl Default for StepSettings {
@@ -247,6 +260,7 @@ impl Default for StepSettings {
             damping: 0.01,
             linear_damping: 0.0,
             parallel: false,
+            over_relaxation: 0.0,
         }
     }
 }
@@ -285,15 +299,20 @@ impl StepSettings {
 
     /// The material scheme (`trainer --scheme material`, with [`Material::elastic`] or
     /// [`Material::soft_organ`]): a 10 ms step as [`StepSettings::MATERIAL_SUBSTEPS`] XPBD
-    /// substeps of one iteration each (small steps, Macklin et al. 2019), and damping with the
-    /// relaxation time [`StepSettings::MATERIAL_RELAXATION_TIME`] (see
-    /// [`StepSettings::with_relaxation_time`]).
+    /// substeps of one iteration each (small steps, Macklin et al. 2019), the pairs'
+    /// [`StepSettings::over_relaxation`] `β = 0.5` (a clamped 4 × 1 × 1 cm beam's tip then
+    /// deflects 2.7 % more than the finite-element reference's and moves 2.3 % from 32 to 64
+    /// substeps, against 5.3 % and 3.5 % with `β = 0`; a column's compression is 0.991 × and
+    /// 0.996 × the analytic one at 32 and 64 substeps; `β = 1` over-corrects the column to
+    /// 0.945 ×), and damping with the relaxation time
+    /// [`StepSettings::MATERIAL_RELAXATION_TIME`] (see [`StepSettings::with_relaxation_time`]).
     pub fn material() -> Self {
         Self {
             dt: 0.01,
             substeps: Self::MATERIAL_SUBSTEPS,
             iterations: 1,
             solver: Solver::Xpbd,
+            over_relaxation: 0.5,
             ..Self::default()
         }
         .with_relaxation_time(Self::MATERIAL_RELAXATION_TIME)
@@ -368,6 +387,7 @@ impl StepSettings {
         }
         unit(PbdParam::Damping, self.damping)?;
         unit(PbdParam::LinearDamping, self.linear_damping)?;
+        unit(PbdParam::OverRelaxation, self.over_relaxation)?;
         Ok(())
     }
 

@@ -36,6 +36,10 @@ fn project_batches<B, const N: usize, const L: usize>(
     }
 }
 
+/// How many times its mass a pinned node weighs in the rigid-mode damping's
+/// fit of the body's rigid motion ([`SoftBody::step`], step 5).
+const HELD_WEIGHT: f32 = 1e3;
+
 /// One Gauss–Seidel sweep over the block tree (see [`crate::partition`]).
 struct Sweep<'a> {
     blocks: &'a [Block],
@@ -52,10 +56,14 @@ struct Sweep<'a> {
 /// What the body projects per tet and edge: the volume constraints of a
 /// [`VolumeConstraintKind`] with the distance constraints, or (an elastic material) the
 /// neo-Hookean pairs alone.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum TetKind {
     Volume(VolumeConstraintKind),
-    NeoHookean,
+    /// The pairs, with `1 − β` of their over-relaxation
+    /// ([`crate::StepSettings::over_relaxation`]).
+    NeoHookean {
+        keep: f32,
+    },
 }
 
 impl TetKind {
@@ -65,7 +73,7 @@ impl TetKind {
             TetKind::Volume(VolumeConstraintKind::None) => 0,
             TetKind::Volume(VolumeConstraintKind::Classic) => 1,
             TetKind::Volume(VolumeConstraintKind::Centroid) => 4,
-            TetKind::NeoHookean => 2,
+            TetKind::NeoHookean { .. } => 2,
         }
     }
 }
@@ -242,16 +250,16 @@ fn project_set<const XPBD: bool>(
                 ),
             }
         }
-        TetKind::NeoHookean => {
+        TetKind::NeoHookean { keep } => {
             // Through a closure, so that the kernel is inlined into the loop (passed as the
             // function itself it went through a call shim that was not inlined).
-            #[allow(clippy::redundant_closure)]
+            let keep = F::splat(keep);
             project_batches::<_, 4, 2>(
                 neo_hookean,
                 lv,
                 p,
                 |b| &b.nodes,
-                |q, w, b, l| project_neo_hookean(q, w, b, l),
+                |q, w, b, l| project_neo_hookean(q, w, b, l, keep),
             )
         }
     }
@@ -269,7 +277,10 @@ impl SoftBody {
     ///    in the order of the crate docs, in solver node order), then the contacts with friction;
     ///    XPBD multipliers start at 0 each step;
     /// 4. `v = (1 − c)(p − x)/h` (`c` the linear damping per substep, default 0), `x = p` (the old `x` becomes [`SoftBody::previous_positions`]);
-    /// 5. after the last substep, rigid-mode damping of the free nodes.
+    /// 5. after the last substep, rigid-mode damping of the free nodes (about the rigid motion
+    ///    the pinned nodes allow for an elastic body: they weigh `HELD_WEIGHT` = 1000 times
+    ///    their mass in its fit; attached nodes, and every held node of the other materials,
+    ///    have no part in it).
     ///
     /// With substeps, [`SoftBody::contacts`] and [`SoftBody::previous_positions`] are those of
     /// the last substep, and nodes the constraints pushed into a collider or tool are put back
@@ -383,6 +394,13 @@ impl SoftBody {
         let scale = (1.0 - s.per_substep(s.linear_damping)) / dt;
         let mut rigid = RigidSums::default();
         let damp = s.damping > 0.0 && last;
+        // The pins' weight in the rigid fit: an elastic body's (material scheme); the other
+        // materials' damping keeps its fit to the free nodes (their scripts were tuned to it).
+        let pinned = if self.elastic.is_some() {
+            HELD_WEIGHT
+        } else {
+            0.0
+        };
         for ((x, prev), (v, (&r, (&m, &w)))) in self.x.iter_mut().zip(&mut self.p).zip(
             self.v
                 .iter_mut()
@@ -392,11 +410,20 @@ impl SoftBody {
             *v = (p - *x) * scale;
             *prev = *x;
             *x = p;
-            if damp && w > 0.0 {
-                rigid.add(m, p, *v);
+            if damp {
+                // Pinned nodes (`w = 0`) weigh `HELD_WEIGHT` times their mass in the rigid fit,
+                // so that it is a motion the pins allow (none for a clamped beam, a turn about a
+                // single pin) and a pinned body's swing is damped as the deformation it is.
+                rigid.add(if w > 0.0 { m } else { pinned * m }, p, *v);
             }
         }
         if damp {
+            // Attached nodes (`w = 0` too) are moved by the host: they take no part in the fit
+            // (the organ's rigid motion is free to follow a grab), as before the pins had one.
+            for (node, _) in self.attachments.iter() {
+                let i = node as usize;
+                rigid.add(-pinned * self.mass[i], self.x[i], self.v[i]);
+            }
             self.damp_rigid_modes(s.damping, &rigid);
         }
     }
@@ -443,13 +470,16 @@ impl SoftBody {
         let serial = &e.sets[self.blocks.len()];
         match kind {
             TetKind::Volume(VolumeConstraintKind::None) => {}
-            TetKind::NeoHookean => project_batches::<_, 4, 2>(
-                &serial.neo_hookean_batches,
-                serial_dv,
-                p,
-                |b| &b.nodes,
-                project_neo_hookean,
-            ),
+            TetKind::NeoHookean { keep } => {
+                let keep = F::splat(keep);
+                project_batches::<_, 4, 2>(
+                    &serial.neo_hookean_batches,
+                    serial_dv,
+                    p,
+                    |b| &b.nodes,
+                    |q, w, b, l| project_neo_hookean(q, w, b, l, keep),
+                )
+            }
             TetKind::Volume(VolumeConstraintKind::Classic) => project_batches::<_, 4, 1>(
                 &serial.tet_batches,
                 serial_dv,
@@ -465,7 +495,7 @@ impl SoftBody {
                 project_centroid::<XPBD>,
             ),
         }
-        if !serial.distance_batches.is_empty() && kind != TetKind::NeoHookean {
+        if !serial.distance_batches.is_empty() && !matches!(kind, TetKind::NeoHookean { .. }) {
             project_batches::<_, 2, 1>(
                 &serial.distance_batches,
                 serial_dd,
@@ -504,16 +534,20 @@ impl SoftBody {
     /// What the body projects per tet and edge.
     pub(crate) fn tet_kind(&self) -> TetKind {
         if self.elastic.is_some() {
-            TetKind::NeoHookean
+            TetKind::NeoHookean {
+                keep: 1.0 - self.settings.over_relaxation,
+            }
         } else {
             TetKind::Volume(self.volume_kind)
         }
     }
 
     /// Rigid-mode damping (Müller et al.): with `x_cm`, `v_cm`, `L = Σ rᵢ × mᵢvᵢ`,
-    /// `I = Σ r̃ᵢ r̃ᵢᵀ mᵢ`, `ω = I⁻¹L`: `vᵢ += k (v_cm + ω × rᵢ − vᵢ)` over the free nodes. Keeps
-    /// their linear and angular momentum; damps everything else by `(1 − k)`. `sums` are the
-    /// free nodes' raw moments; about the centre of mass (`Σ mᵢrᵢ = 0`)
+    /// `I = Σ r̃ᵢ r̃ᵢᵀ mᵢ`, `ω = I⁻¹L`: `vᵢ += k (v_cm + ω × rᵢ − vᵢ)` over the free nodes. A free
+    /// body keeps its linear and angular momentum; everything else is damped by `(1 − k)`.
+    /// `sums` are the free nodes' raw moments and (an elastic body) the pinned nodes' with
+    /// `HELD_WEIGHT` times their mass: the fitted motion is then one the pins allow (nothing for a clamped beam,
+    /// whose swing is damped), and the pins take the momentum the damping removes. About the centre of mass (`Σ mᵢrᵢ = 0`)
     /// `L = Σ mᵢ xᵢ × vᵢ − x_cm × Σ mᵢvᵢ` and `Σ mᵢ rᵢrᵢᵀ = Σ mᵢ xᵢxᵢᵀ − M x_cm x_cmᵀ`.
     fn damp_rigid_modes(&mut self, k: f32, sums: &RigidSums) {
         let _span = tracing::trace_span!("damp").entered();

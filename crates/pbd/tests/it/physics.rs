@@ -20,6 +20,7 @@ fn free_settings(solver: Solver) -> StepSettings {
         damping: 0.0,
         linear_damping: 0.0,
         parallel: false,
+        over_relaxation: 0.0,
     }
 }
 

@@ -11,10 +11,11 @@ use tissue_scenes::{
 };
 
 /// A 4 × 1 × 1 cm beam of organ tissue (10 kPa, ν = 0.45, 1.05 g/cm³) clamped at x = 0: the
-/// material scheme's tip deflection, averaged over the last 3 s of 6 s (its bending swings
-/// about the equilibrium: the rigid-mode damping leaves a pinned body's bending lightly
-/// damped), within 5 % of the reference's static solve; with 64 substeps instead of 32 it
-/// moves by less than 5 %.
+/// material scheme's tip deflection after 3 s, settled (the damping takes the clamp's nodes
+/// into its fit of the rigid motion, so the beam's swing is damped), within 5 % of the
+/// reference's static solve (measured +2.7 %; plain XPBD, `over_relaxation` 0: +5.3 %), and
+/// converged: with 64 substeps instead of 32 it moves by less than 3 % (measured 2.3 %; plain
+/// XPBD 3.5 %).
 #[test]
 fn the_material_schemes_cantilever_sags_as_its_reference() {
     let organ = Organ::cantilever(4.0, 1.0, 4).unwrap();
@@ -50,15 +51,18 @@ fn the_material_schemes_cantilever_sags_as_its_reference() {
                 Tray::for_extent(4.0),
             )
             .unwrap();
-        let (mut sum, mut n) = (0.0, 0);
-        for k in 0..600 {
+        let mut last = 0.0;
+        for _ in 0..299 {
             body.step().unwrap();
-            if k >= 300 {
-                sum += organ.tip_deflection(body.positions()).unwrap();
-                n += 1;
-            }
+            last = organ.tip_deflection(body.positions()).unwrap();
         }
-        sum / f64::from(n)
+        body.step().unwrap();
+        let tip = organ.tip_deflection(body.positions()).unwrap();
+        assert!(
+            (tip - last).abs() < 1e-3 * tip,
+            "{substeps} substeps: the tip still moves ({last} → {tip} cm in a step)"
+        );
+        tip
     };
     let (tip32, tip64) = (pbd_tip(32), pbd_tip(64));
     eprintln!(
@@ -70,7 +74,7 @@ fn the_material_schemes_cantilever_sags_as_its_reference() {
         "{tip32} against {fem_tip}"
     );
     assert!(
-        (tip64 / tip32 - 1.0).abs() < 0.05,
+        (tip64 / tip32 - 1.0).abs() < 0.03,
         "{tip64} against {tip32}"
     );
 }
