@@ -30,7 +30,7 @@ fn surgery_failure(e: &tissue_surgery::SurgeryError) -> Failure {
 pub fn run(cli: &Cli) -> Result<(), Failure> {
     let organ = Organ::shipped(ShippedOrgan::Appendix)
         .map_err(|e| Failure::new(Exit::Meshing, format!("the appendix: {e}")))?;
-    let (material, mut settings) = cli.physics();
+    let (material, mut settings) = cli.physics()?;
     if cli.scheme() == Scheme::Legacy {
         // The scenario's own damping before the real-time preset (the library's default step).
         settings.damping = StepSettings::default().damping;

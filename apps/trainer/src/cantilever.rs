@@ -31,7 +31,7 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
         println!("  beam theory   {beam:.4} cm (Euler–Bernoulli, small deflection)");
         return Ok(());
     }
-    let (pbd_material, settings) = cli.physics();
+    let (pbd_material, settings) = cli.physics()?;
     let mut body = organ
         .body(
             &pbd_material,

@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 
 use clap::{Parser, ValueEnum};
-use tissue_scenes::PressPlan;
+use tissue_scenes::{OrganMaterial, PressPlan, TissuePreset};
+
+use crate::failure::{self, Failure};
 
 const ABOUT: &str = "Headless surgical-trainer run: an organ settles on a tray, a probe presses \
 into it and drags along a path; prints per-step timing and the volume drift, writes surface \
@@ -34,9 +36,10 @@ StepSettings::material and Material::elastic): a physical material, stable neo-H
 10 kPa), Poisson's ratio --poisson (0 to 0.495, default 0.45) and density --density (default \
 1.05 g/cm3), no distance or volume constraints; each 10 ms step is 32 XPBD substeps of one \
 iteration; damping: every motion relative to the organ's rigid motion decays as exp(-t/tau), \
-tau = --relaxation-time (default 0.1 s). Giving any of these four flags without --scheme \
-selects `material`; with `--scheme realtime` or `legacy` they are refused. docs/trainer.md \
-compares the schemes.
+tau = --relaxation-time (default 0.1 s). --tissue PRESET (liver, kidney, bowel, fat, skin) \
+takes a preset tissue's E, nu and rho instead of the defaults; the explicit flags override it. \
+Giving any of these five flags without --scheme selects `material`; with `--scheme realtime` \
+or `legacy` they are refused. docs/trainer.md compares the schemes.
 
 UNITS: centimetres, grams, seconds. --size, --depth, --tool-radius, --cell, the waypoints in cm \
 (x and z of the tray plane, the organ centred at x = z = 0); --dt in s.";
@@ -167,13 +170,19 @@ pub struct Cli {
     /// or material when a material flag is given].
     #[arg(long, value_enum)]
     pub scheme: Option<Scheme>,
-    /// Young's modulus of the organ (kPa; material scheme) [default: 10].
+    /// A preset tissue's Young's modulus, Poisson's ratio and density for the organ (material
+    /// scheme): liver, kidney, bowel, fat or skin (docs/materials.md); --young-kpa, --poisson
+    /// and --density override its values.
+    #[arg(long, value_name = "PRESET", value_parser = parse_tissue)]
+    pub tissue: Option<TissuePreset>,
+    /// Young's modulus of the organ (kPa; material scheme) [default: 10, or --tissue's].
     #[arg(long, value_name = "E")]
     pub young_kpa: Option<f32>,
-    /// Poisson's ratio of the organ, 0 to 0.495 (material scheme) [default: 0.45].
+    /// Poisson's ratio of the organ, 0 to 0.495 (material scheme) [default: 0.45, or
+    /// --tissue's].
     #[arg(long, value_name = "NU")]
     pub poisson: Option<f32>,
-    /// Density of the organ (g/cm³; material scheme) [default: 1.05].
+    /// Density of the organ (g/cm³; material scheme) [default: 1.05, or --tissue's].
     #[arg(long, value_name = "RHO")]
     pub density: Option<f32>,
     /// Relaxation time of the damping (s; material scheme): motion relative to the organ's
@@ -269,10 +278,11 @@ pub struct Cli {
 }
 
 impl Cli {
-    /// Whether a material flag (--young-kpa, --poisson, --density, --relaxation-time, --over-relaxation) or
-    /// --reference is given.
+    /// Whether a material flag (--tissue, --young-kpa, --poisson, --density,
+    /// --relaxation-time, --over-relaxation) or --reference is given.
     fn material_flags(&self) -> bool {
-        self.young_kpa.is_some()
+        self.tissue.is_some()
+            || self.young_kpa.is_some()
             || self.poisson.is_some()
             || self.density.is_some()
             || self.relaxation_time.is_some()
@@ -280,14 +290,33 @@ impl Cli {
             || self.reference
     }
 
+    /// The material scheme's organ (tissue-scenes' `OrganMaterial`, the studio's and the C
+    /// ABI's too): `--tissue`'s preset or the default soft organ, with `--young-kpa`,
+    /// `--poisson`, `--density` and `--relaxation-time` as given. Unchecked: its `pbd()` checks
+    /// E, ν and ρ (naming the parameter, which `failure` turns into its flag).
+    pub fn organ_material(&self) -> OrganMaterial {
+        let mut m = match self.tissue {
+            Some(tissue) => OrganMaterial::preset(tissue),
+            None => OrganMaterial::soft_organ(),
+        };
+        if let Some(e) = self.young_kpa {
+            m.elastic.young_kpa = f64::from(e);
+        }
+        if let Some(nu) = self.poisson {
+            m.elastic.poisson = f64::from(nu);
+        }
+        if let Some(rho) = self.density {
+            m.elastic.density = f64::from(rho);
+        }
+        if let Some(tau) = self.relaxation_time {
+            m.relaxation_time = tau;
+        }
+        m
+    }
+
     /// The material scheme's organ as the finite-element reference takes it (E, ν, ρ).
     pub fn elastic_material(&self) -> tissue_fem::ElasticMaterial {
-        use tissue_pbd::Material;
-        tissue_fem::ElasticMaterial {
-            young_kpa: f64::from(self.young_kpa.unwrap_or(Material::ORGAN_YOUNG_KPA)),
-            poisson: f64::from(self.poisson.unwrap_or(Material::ORGAN_POISSON)),
-            density: f64::from(self.density.unwrap_or(Material::ORGAN_DENSITY)),
-        }
+        self.organ_material().elastic
     }
 
     /// The scheme of the run: `--scheme` as given; without it `material` when a material flag
@@ -305,8 +334,9 @@ impl Cli {
     pub fn check(&self) -> Result<(), String> {
         if self.material_flags() && self.scheme() != Scheme::Material {
             return Err(format!(
-                "--young-kpa, --poisson, --density, --relaxation-time, --over-relaxation and --reference need the \
-                 material scheme's organ; the {:?} scheme has no physical material: drop them or \
+                "--tissue, --young-kpa, --poisson, --density, --relaxation-time, --over-relaxation \
+                 and --reference need the material scheme's organ; the {:?} scheme has no \
+                 physical material: drop them or \
                  use --scheme material",
                 self.scheme()
             )
@@ -317,21 +347,17 @@ impl Cli {
 
     /// The material and step settings of the run: the scheme's library preset with the
     /// overrides given.
-    pub fn physics(&self) -> (tissue_pbd::Material, tissue_pbd::StepSettings) {
-        use tissue_pbd::{Elastic, Material, StepSettings, VolumeConstraintKind};
+    ///
+    /// # Errors
+    /// The material scheme's E, ν or ρ out of range (exit code `Parameters`, naming the flag).
+    pub fn physics(&self) -> Result<(tissue_pbd::Material, tissue_pbd::StepSettings), Failure> {
+        use tissue_pbd::{Material, StepSettings, VolumeConstraintKind};
         let scheme = self.scheme();
+        let organ = self.organ_material();
         let (mut material, mut settings) = match scheme {
             Scheme::Realtime => (Material::soft_tissue(), StepSettings::realtime()),
             Scheme::Material => (
-                // Validated when the body is built (tissue-pbd's error names the parameter).
-                Material {
-                    density: self.density.unwrap_or(Material::ORGAN_DENSITY),
-                    elastic: Some(Elastic {
-                        young_kpa: self.young_kpa.unwrap_or(Material::ORGAN_YOUNG_KPA),
-                        poisson: self.poisson.unwrap_or(Material::ORGAN_POISSON),
-                    }),
-                    ..Material::soft_organ()
-                },
+                organ.pbd().map_err(|e| failure::from_scene(&e))?,
                 StepSettings::material(),
             ),
             Scheme::Legacy => (
@@ -371,10 +397,7 @@ impl Cli {
         settings.parallel = self.parallel;
         if scheme == Scheme::Material {
             // After --dt: the damping per step follows the step.
-            settings = settings.with_relaxation_time(
-                self.relaxation_time
-                    .unwrap_or(StepSettings::MATERIAL_RELAXATION_TIME),
-            );
+            settings = settings.with_relaxation_time(organ.relaxation_time);
         }
         if self.no_piece_volumes {
             material.hold_piece_volumes = false;
@@ -383,8 +406,15 @@ impl Cli {
             // Validated when the settings are set (tissue-pbd's error names the parameter).
             settings.over_relaxation = b;
         }
-        (material, settings)
+        Ok((material, settings))
     }
+}
+
+fn parse_tissue(s: &str) -> Result<TissuePreset, String> {
+    TissuePreset::from_id(s).ok_or_else(|| {
+        let ids: Vec<&str> = TissuePreset::ALL.iter().map(|t| t.id()).collect();
+        format!("{s:?} is not a preset tissue: one of {}", ids.join(", "))
+    })
 }
 
 fn parse_xz(s: &str) -> Result<[f32; 2], String> {
@@ -451,7 +481,7 @@ mod tests {
         let cli = parse(&["trainer", "--young-kpa", "20", "--poisson", "0.49"]);
         assert_eq!(cli.scheme(), Scheme::Material);
         assert!(cli.check().is_ok());
-        let (material, settings) = cli.physics();
+        let (material, settings) = cli.physics().unwrap_or_else(|e| panic!("{e:?}"));
         let e = material
             .elastic
             .unwrap_or_else(|| panic!("no elastic material"));
@@ -463,15 +493,59 @@ mod tests {
             tissue_pbd::StepSettings::MATERIAL_SUBSTEPS
         );
         let cli = parse(&["trainer", "--scheme", "material"]);
-        assert!(cli.physics().0.elastic.is_some());
+        assert!(cli
+            .physics()
+            .unwrap_or_else(|e| panic!("{e:?}"))
+            .0
+            .elastic
+            .is_some());
         for scheme in ["realtime", "legacy"] {
             let cli = parse(&["trainer", "--scheme", scheme, "--density", "1.1"]);
             let err = cli.check().unwrap_err();
             assert!(err.contains("--scheme material"), "{err}");
         }
         // The old schemes are as they were.
-        let (m, s) = parse(&["trainer"]).physics();
+        let (m, s) = parse(&["trainer"])
+            .physics()
+            .unwrap_or_else(|e| panic!("{e:?}"));
         assert!(m.elastic.is_none());
         assert_eq!(s, tissue_pbd::StepSettings::realtime());
+    }
+
+    /// --tissue takes a preset's E, ν, ρ into the one organ material (the flags override it),
+    /// implies the material scheme, and a bad value is refused naming its flag.
+    #[test]
+    fn a_tissue_preset_fills_the_organ_material_and_flags_override_it() {
+        let parse = |args: &[&str]| Cli::try_parse_from(args).unwrap_or_else(|e| panic!("{e}"));
+        let cli = parse(&["trainer", "--tissue", "skin", "--poisson", "0.49"]);
+        assert_eq!(cli.scheme(), Scheme::Material);
+        let skin = TissuePreset::Skin.material();
+        let m = cli.organ_material();
+        assert_eq!(
+            (m.elastic.young_kpa, m.elastic.density),
+            (skin.young_kpa, skin.density)
+        );
+        assert_eq!(m.elastic.poisson, f64::from(0.49f32));
+        assert_eq!(cli.elastic_material(), m.elastic);
+        let (material, settings) = cli.physics().unwrap_or_else(|e| panic!("{e:?}"));
+        let pbd = m.pbd().unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            (material.elastic, material.density),
+            (pbd.elastic, pbd.density)
+        );
+        assert_eq!(
+            settings.relaxation_time(),
+            tissue_pbd::StepSettings::material()
+                .with_relaxation_time(m.relaxation_time)
+                .relaxation_time()
+        );
+        assert!(Cli::try_parse_from(["trainer", "--tissue", "bone"]).is_err());
+        let refused = parse(&["trainer", "--tissue", "liver", "--scheme", "realtime"]);
+        assert!(refused.check().unwrap_err().contains("--tissue"));
+        let bad = parse(&["trainer", "--poisson", "0.6"])
+            .physics()
+            .unwrap_err();
+        assert_eq!(bad.code, failure::Exit::Parameters);
+        assert!(bad.message.contains("--poisson"), "{}", bad.message);
     }
 }

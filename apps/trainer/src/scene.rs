@@ -105,7 +105,7 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
         }
         e => failure::from_scene(&e),
     })?;
-    let (material, settings) = cli.physics();
+    let (material, settings) = cli.physics()?;
     let contact = ContactParams {
         static_friction: cli.friction,
         kinetic_friction: cli.friction,

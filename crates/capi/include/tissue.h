@@ -171,6 +171,36 @@ typedef enum tissue_shipped_organ {
   TISSUE_ORGAN_APPENDIX = 2,
 } tissue_shipped_organ;
 
+// How a body is simulated (`tissue_material.scheme`).
+typedef enum tissue_scheme {
+  // The material scheme: a stable neo-Hookean organ of the struct's Young's modulus,
+  // Poisson's ratio and density, its damping of the struct's relaxation time, in 10 ms steps
+  // of 32 XPBD substeps (tissue-pbd's `Material::elastic` and `StepSettings::material`;
+  // `docs/trainer.md`, "The material scheme"). 0, so that a zeroed struct is refused (a
+  // modulus of 0) rather than silently taken for the real-time preset.
+  TISSUE_SCHEME_MATERIAL = 0,
+  // The real-time preset `tissue_body_new` uses: soft tissue held by distance and volume
+  // constraints, 10 ms steps of 9 substeps. It has no physical parameters: the struct's
+  // other fields are not used (a body reports 0 for the modulus and the ratio, its density,
+  // and the relaxation time of its damping).
+  TISSUE_SCHEME_REALTIME = 1,
+} tissue_scheme;
+
+// A preset tissue (`tissue_material_preset`): Young's modulus, Poisson's ratio and density
+// from the literature (tissue-scenes' `TissuePreset`; `docs/materials.md`).
+typedef enum tissue_preset {
+  // Liver parenchyma.
+  TISSUE_PRESET_LIVER = 0,
+  // Kidney.
+  TISSUE_PRESET_KIDNEY = 1,
+  // Bowel wall.
+  TISSUE_PRESET_BOWEL = 2,
+  // Fat.
+  TISSUE_PRESET_FAT = 3,
+  // Skin.
+  TISSUE_PRESET_SKIN = 4,
+} tissue_preset;
+
 // A trainee's soft body: its simulation behind a mutex, its haptic state apart (module docs).
 // Every `tissue_body_*` and `tissue_tool_*` call but `tissue_body_free` may be made from any
 // thread.
@@ -188,6 +218,27 @@ typedef struct tissue_mesh tissue_mesh;
 // A patient surface, in its file's unit and in cm (the planner's `Patient`). Immutable: any
 // thread may use it at once, e.g. to start several jobs.
 typedef struct tissue_patient tissue_patient;
+
+// A body's material. Fill it with `tissue_material_default`, `tissue_material_preset` or
+// `tissue_material_shipped`, then change what you need; `tissue_body_get_material` reads back
+// the one in force.
+//
+// Bounds (checked when a body is made, `TISSUE_PARAMETERS` with a message naming the field):
+// `young_kpa` positive, `poisson` from 0 to 0.495, `density` positive, `relaxation_time`
+// positive, all finite.
+typedef struct tissue_material {
+  // A `tissue_scheme`.
+  uint32_t scheme;
+  // Young's modulus `E`, kPa (soft organs 1–20, skin about 200).
+  double young_kpa;
+  // Poisson's ratio `ν`, 0 to 0.495 (tissue: 0.45–0.49).
+  double poisson;
+  // Density `ρ`, g/cm³.
+  double density;
+  // The damping's relaxation time `τ`, s: every motion relative to the organ's rigid motion
+  // decays as `exp(−t/τ)` (0.1 s damps a wobble in a few tenths of a second).
+  double relaxation_time;
+} tissue_material;
 
 // The common fields of a planning request (the planner's `PlanRequest`; every other field at
 // the library's default, the solver `explicit` among them: use the JSON entry points for
@@ -386,6 +437,28 @@ const char *tissue_version(void);
 // Thread safety: any thread.
 enum tissue_status tissue_debug_panic(void);
 
+// Fills `material` with the material scheme's default organ: 10 kPa, `ν = 0.45`,
+// 1.05 g/cm³, `τ = 0.1 s` (soft parenchyma; tissue-scenes' `OrganMaterial::soft_organ`).
+//
+// Thread safety: any thread.
+enum tissue_status tissue_material_default(struct tissue_material *material);
+
+// Fills `material` with a preset tissue's (a `tissue_preset`) Young's modulus, Poisson's ratio
+// and density in the material scheme, with the default relaxation time (0.1 s).
+//
+// Errors: `TISSUE_INVALID_ARGUMENT` for a value that is not a `tissue_preset`.
+//
+// Thread safety: any thread.
+enum tissue_status tissue_material_preset(uint32_t tissue, struct tissue_material *material);
+
+// Fills `material` with the preset of a shipped organ's (a `tissue_shipped_organ`) tissue in
+// the material scheme: liver for the bunny and the liver, bowel for the appendix.
+//
+// Errors: `TISSUE_INVALID_ARGUMENT` for a value that is not a `tissue_shipped_organ`.
+//
+// Thread safety: any thread.
+enum tissue_status tissue_material_shipped(uint32_t organ, struct tissue_material *material);
+
 // Loads `path`: `.obj`, `.ply`, `.stl` as a surface; `.vtu`, `.msh` (Gmsh 1, 2.2, 4.1),
 // `.node`/`.ele` (TetGen) as tets; a legacy `.vtk` as tets when it has tetrahedra, else as a
 // surface. Coordinates as in the file (no unit). The new mesh is the caller's
@@ -413,10 +486,11 @@ enum tissue_status tissue_mesh_from_triangles(const float *positions,
                                               struct tissue_mesh **out);
 
 // A tet mesh from the caller's arrays: `positions` holds `vertex_count` × 3 floats, `tets`
-// `tet_count` × 4 node indices from 0 (either orientation; each tet is stored positive).
+// `tet_count` × 4 node indices from 0, each tet positively oriented (`(b−a)×(c−a)·(d−a) > 0`).
 // Copied.
 //
-// Errors: `TISSUE_INVALID_MESH` naming the first defect.
+// Errors: `TISSUE_INVALID_MESH` naming the first defect (an inverted tet: swap two of its
+// nodes).
 //
 // Thread safety: any thread.
 enum tissue_status tissue_mesh_from_tets(const float *positions,
@@ -689,10 +763,34 @@ enum tissue_status tissue_body_new(const struct tissue_mesh *mesh,
                                    float cm_per_unit,
                                    struct tissue_body **out);
 
+// A body from a mesh, as `tissue_body_new`, of the material `material` (a
+// `tissue_material`: `tissue_material_default`, `tissue_material_preset`, or the caller's
+// values).
+//
+// Errors: as `tissue_body_new`; `TISSUE_PARAMETERS` for a material value out of its range (the
+// message names the field: `material->poisson`, ...); `TISSUE_INVALID_ARGUMENT` for a scheme
+// that is not a `tissue_scheme`.
+//
+// Thread safety: any thread.
+enum tissue_status tissue_body_new_with_material(const struct tissue_mesh *mesh,
+                                                 float cm_per_unit,
+                                                 const struct tissue_material *material,
+                                                 struct tissue_body **out);
+
 // A body of a shipped organ (a `tissue_shipped_organ`).
 //
 // Thread safety: any thread.
 enum tissue_status tissue_body_new_shipped(uint32_t organ, struct tissue_body **out);
+
+// A body of a shipped organ (a `tissue_shipped_organ`) of the material `material` (a
+// `tissue_material`; `tissue_material_shipped` gives the organ's own tissue's).
+//
+// Errors: as `tissue_body_new_with_material`.
+//
+// Thread safety: any thread.
+enum tissue_status tissue_body_new_shipped_with_material(uint32_t organ,
+                                                         const struct tissue_material *material,
+                                                         struct tissue_body **out);
 
 // Frees a body. NULL does nothing.
 //
@@ -716,6 +814,15 @@ enum tissue_status tissue_body_step(const struct tissue_body *body, size_t *even
 // Thread safety: any thread (waits for a running step).
 enum tissue_status tissue_body_get_info(const struct tissue_body *body,
                                         struct tissue_body_info *info);
+
+// The body's material in force: for the material scheme the values it was made with; for the
+// real-time preset (`tissue_body_new`, or `TISSUE_SCHEME_REALTIME`) `scheme`
+// `TISSUE_SCHEME_REALTIME`, 0 for the modulus and the ratio (it has none), its density and the
+// relaxation time of its damping.
+//
+// Thread safety: any thread (waits for a running step).
+enum tissue_status tissue_body_get_material(const struct tissue_body *body,
+                                            struct tissue_material *material);
 
 // Copies every node's position (x, y, z, cm) into `out` (`capacity` floats: at least 3 ×
 // `tissue_body_info.nodes`), and sets `*revision` (may be NULL) to the positions' revision

@@ -16,6 +16,12 @@
 //!   deformed patient; sweeps and the inverse search), [`tissue_body`] (the trainer's body,
 //!   tissue-scenes' `Session`: steps, surface with revision counters, tools, scalpel, needle,
 //!   events, and [`tissue_tool_force`] for haptics).
+//! - The body's material, [`tissue_material`] (issue 32): the material scheme's physical organ
+//!   (Young's modulus, Poisson's ratio, density, relaxation time; presets by tissue or shipped
+//!   organ) given to [`tissue_body_new_with_material`] or
+//!   [`tissue_body_new_shipped_with_material`], checked by tissue-scenes'
+//!   `SessionOptions::material` (the trainer's and the studio's entry point too), and read back
+//!   by [`tissue_body_get_material`].
 //! - Conventions (those of rustls-ffi and wasmtime's C API): every fallible call returns a
 //!   [`tissue_status`]; the message of the last failure on the calling thread is copied out by
 //!   [`tissue_last_error`]; every entry point catches panics (`TISSUE_PANIC`, never an unwind
@@ -54,11 +60,16 @@
 #![allow(unsafe_code, clippy::not_unsafe_ptr_arg_deref, non_camel_case_types)]
 
 mod ffi;
+mod material;
 mod mesh;
 mod plan;
 mod trainer;
 
 pub use ffi::{tissue_debug_panic, tissue_last_error, tissue_status, tissue_version};
+pub use material::{
+    tissue_material, tissue_material_default, tissue_material_preset, tissue_material_shipped,
+    tissue_preset, tissue_scheme,
+};
 pub use mesh::{
     tissue_mesh, tissue_mesh_copy_indices, tissue_mesh_copy_positions, tissue_mesh_free,
     tissue_mesh_from_tets, tissue_mesh_from_triangles, tissue_mesh_kind, tissue_mesh_load,
@@ -78,8 +89,9 @@ pub use plan::{
 pub use trainer::{
     tissue_body, tissue_body_add_blade, tissue_body_add_capsule, tissue_body_copy_positions,
     tissue_body_copy_triangles, tissue_body_cut, tissue_body_cut_sweep, tissue_body_drag,
-    tissue_body_free, tissue_body_get_info, tissue_body_grab, tissue_body_grasp_force,
-    tissue_body_info, tissue_body_new, tissue_body_new_shipped, tissue_body_next_event,
+    tissue_body_free, tissue_body_get_info, tissue_body_get_material, tissue_body_grab,
+    tissue_body_grasp_force, tissue_body_info, tissue_body_new, tissue_body_new_shipped,
+    tissue_body_new_shipped_with_material, tissue_body_new_with_material, tissue_body_next_event,
     tissue_body_release, tissue_body_step, tissue_body_suture, tissue_event, tissue_event_kind,
     tissue_pose, tissue_shipped_organ, tissue_tool_force, tissue_tool_set_pose, TISSUE_EVENT_TEXT,
 };

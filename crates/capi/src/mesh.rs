@@ -141,10 +141,11 @@ pub extern "C" fn tissue_mesh_from_triangles(
 }
 
 /// A tet mesh from the caller's arrays: `positions` holds `vertex_count` × 3 floats, `tets`
-/// `tet_count` × 4 node indices from 0 (either orientation; each tet is stored positive).
+/// `tet_count` × 4 node indices from 0, each tet positively oriented (`(b−a)×(c−a)·(d−a) > 0`).
 /// Copied.
 ///
-/// Errors: `TISSUE_INVALID_MESH` naming the first defect.
+/// Errors: `TISSUE_INVALID_MESH` naming the first defect (an inverted tet: swap two of its
+/// nodes).
 ///
 /// Thread safety: any thread.
 #[no_mangle]

@@ -15,12 +15,13 @@ use std::sync::{Arc, Mutex, MutexGuard, RwLock};
 use ::tissue_mesh::{TetMesh, TriMesh};
 use glam::{Quat, Vec3};
 use tissue_pbd::{ContactForceModel, Pose, ToolShape};
-use tissue_scenes::{Organ, Session, SessionOptions, ShippedOrgan, TrainerEvent, TrainerEventKind};
+use tissue_scenes::{Organ, Session, SessionOptions, TrainerEvent, TrainerEventKind};
 
 use crate::ffi::{
     copy_out, free_handle, get, guard, guard_void, into_handle, poisoned, put, put_opt, slice,
     tissue_status, vec3, Error,
 };
+use crate::material::{shipped_of, tissue_material, tissue_scheme};
 use crate::mesh::{bytemuck_vec3, tissue_mesh, MeshKind};
 
 /// A rigid placement: `world = rotation · local + translation`, cm.
@@ -149,6 +150,8 @@ struct Sim {
     events: VecDeque<TrainerEvent>,
     /// Changes with every step and edit.
     positions_revision: u64,
+    /// The material scheme's material as given (checked); `None`: the real-time preset.
+    material: Option<tissue_material>,
 }
 
 #[derive(Default)]
@@ -160,13 +163,23 @@ struct Haptic {
 }
 
 impl tissue_body {
+    /// A body of the real-time preset.
     fn new(organ: &Organ) -> Result<Self, Error> {
-        let session = Session::new(organ, SessionOptions::default())?;
+        Self::with_options(organ, SessionOptions::default(), None)
+    }
+
+    fn with_options(
+        organ: &Organ,
+        options: SessionOptions,
+        material: Option<tissue_material>,
+    ) -> Result<Self, Error> {
+        let session = Session::new(organ, options)?;
         Ok(tissue_body {
             sim: Mutex::new(Sim {
                 session,
                 events: VecDeque::new(),
                 positions_revision: 1,
+                material,
             }),
             haptic: Haptic::default(),
         })
@@ -226,39 +239,75 @@ pub extern "C" fn tissue_body_new(
     cm_per_unit: f32,
     out: *mut *mut tissue_body,
 ) -> tissue_status {
-    guard(|| {
-        // SAFETY: the header's contract.
-        let mesh = unsafe { get(mesh, "mesh") }?;
-        if !(cm_per_unit.is_finite() && cm_per_unit > 0.0) {
-            return Err(Error::invalid(format!(
-                "`cm_per_unit` must be a positive scale (1 for cm, 0.1 for mm), got {cm_per_unit}"
-            )));
-        }
-        let invalid = |e: ::tissue_mesh::MeshError| {
-            Error::new(
-                tissue_status::TISSUE_INVALID_MESH,
-                format!("the mesh is not valid once scaled by {cm_per_unit}: {e}"),
+    guard(|| give_body(out, tissue_body::new(&organ_of(mesh, cm_per_unit)?)?))
+}
+
+/// A session's settings for the caller's material (checked by tissue-scenes'
+/// `SessionOptions::material`), and the material the body reports.
+fn options_of(
+    material: *const tissue_material,
+) -> Result<(SessionOptions, Option<tissue_material>), Error> {
+    // SAFETY: the header's contract: NULL or a valid struct.
+    unsafe { get(material, "material") }?.session_options()
+}
+
+/// The organ of a caller's mesh in cm × `cm_per_unit` (`tissue_body_new`).
+fn organ_of(mesh: *const tissue_mesh, cm_per_unit: f32) -> Result<Organ, Error> {
+    // SAFETY: the header's contract.
+    let mesh = unsafe { get(mesh, "mesh") }?;
+    if !(cm_per_unit.is_finite() && cm_per_unit > 0.0) {
+        return Err(Error::invalid(format!(
+            "`cm_per_unit` must be a positive scale (1 for cm, 0.1 for mm), got {cm_per_unit}"
+        )));
+    }
+    let invalid = |e: ::tissue_mesh::MeshError| {
+        Error::new(
+            tissue_status::TISSUE_INVALID_MESH,
+            format!("the mesh is not valid once scaled by {cm_per_unit}: {e}"),
+        )
+    };
+    let organ = match &mesh.kind {
+        MeshKind::Surface(m) => {
+            let scaled = TriMesh::new(
+                m.positions().iter().map(|&p| p * cm_per_unit).collect(),
+                m.triangles().to_vec(),
             )
-        };
-        let organ = match &mesh.kind {
-            MeshKind::Surface(m) => {
-                let scaled = TriMesh::new(
-                    m.positions().iter().map(|&p| p * cm_per_unit).collect(),
-                    m.triangles().to_vec(),
-                )
-                .map_err(invalid)?;
-                Organ::from_surface(&scaled, "caller's surface")?
-            }
-            MeshKind::Tets(m) => {
-                let scaled = TetMesh::new(
-                    m.positions().iter().map(|&p| p * cm_per_unit).collect(),
-                    m.tets().to_vec(),
-                )
-                .map_err(invalid)?;
-                Organ::from_tets(&scaled, "caller's tet mesh")?
-            }
-        };
-        give_body(out, tissue_body::new(&organ)?)
+            .map_err(invalid)?;
+            Organ::from_surface(&scaled, "caller's surface")?
+        }
+        MeshKind::Tets(m) => {
+            let scaled = TetMesh::new(
+                m.positions().iter().map(|&p| p * cm_per_unit).collect(),
+                m.tets().to_vec(),
+            )
+            .map_err(invalid)?;
+            Organ::from_tets(&scaled, "caller's tet mesh")?
+        }
+    };
+    Ok(organ)
+}
+
+/// A body from a mesh, as `tissue_body_new`, of the material `material` (a
+/// `tissue_material`: `tissue_material_default`, `tissue_material_preset`, or the caller's
+/// values).
+///
+/// Errors: as `tissue_body_new`; `TISSUE_PARAMETERS` for a material value out of its range (the
+/// message names the field: `material->poisson`, ...); `TISSUE_INVALID_ARGUMENT` for a scheme
+/// that is not a `tissue_scheme`.
+///
+/// Thread safety: any thread.
+#[no_mangle]
+pub extern "C" fn tissue_body_new_with_material(
+    mesh: *const tissue_mesh,
+    cm_per_unit: f32,
+    material: *const tissue_material,
+    out: *mut *mut tissue_body,
+) -> tissue_status {
+    guard(|| {
+        // The material first: it is checked in no time, a surface is filled in seconds.
+        let (options, reported) = options_of(material)?;
+        let organ = organ_of(mesh, cm_per_unit)?;
+        give_body(out, tissue_body::with_options(&organ, options, reported)?)
     })
 }
 
@@ -268,17 +317,28 @@ pub extern "C" fn tissue_body_new(
 #[no_mangle]
 pub extern "C" fn tissue_body_new_shipped(organ: u32, out: *mut *mut tissue_body) -> tissue_status {
     guard(|| {
-        let which = match organ {
-            0 => ShippedOrgan::Bunny,
-            1 => ShippedOrgan::Liver,
-            2 => ShippedOrgan::Appendix,
-            o => {
-                return Err(Error::invalid(format!(
-                    "`organ` {o} is not a tissue_shipped_organ (0 bunny, 1 liver, 2 appendix)"
-                )))
-            }
-        };
+        let which = shipped_of(organ)?;
         give_body(out, tissue_body::new(&Organ::shipped(which)?)?)
+    })
+}
+
+/// A body of a shipped organ (a `tissue_shipped_organ`) of the material `material` (a
+/// `tissue_material`; `tissue_material_shipped` gives the organ's own tissue's).
+///
+/// Errors: as `tissue_body_new_with_material`.
+///
+/// Thread safety: any thread.
+#[no_mangle]
+pub extern "C" fn tissue_body_new_shipped_with_material(
+    organ: u32,
+    material: *const tissue_material,
+    out: *mut *mut tissue_body,
+) -> tissue_status {
+    guard(|| {
+        let which = shipped_of(organ)?;
+        let (options, reported) = options_of(material)?;
+        let organ = Organ::shipped(which)?;
+        give_body(out, tissue_body::with_options(&organ, options, reported)?)
     })
 }
 
@@ -351,6 +411,34 @@ pub extern "C" fn tissue_body_get_info(
         };
         // SAFETY: `info` is NULL or valid.
         unsafe { put(info, "info", out) }
+    })
+}
+
+/// The body's material in force: for the material scheme the values it was made with; for the
+/// real-time preset (`tissue_body_new`, or `TISSUE_SCHEME_REALTIME`) `scheme`
+/// `TISSUE_SCHEME_REALTIME`, 0 for the modulus and the ratio (it has none), its density and the
+/// relaxation time of its damping.
+///
+/// Thread safety: any thread (waits for a running step).
+#[no_mangle]
+pub extern "C" fn tissue_body_get_material(
+    body: *const tissue_body,
+    material: *mut tissue_material,
+) -> tissue_status {
+    guard(|| {
+        let sim = body_of(body)?.sim()?;
+        let out = match sim.material {
+            Some(m) => m,
+            None => tissue_material {
+                scheme: tissue_scheme::TISSUE_SCHEME_REALTIME as u32,
+                young_kpa: 0.0,
+                poisson: 0.0,
+                density: f64::from(sim.session.body().density()),
+                relaxation_time: f64::from(sim.session.body().settings().relaxation_time()),
+            },
+        };
+        // SAFETY: `material` is NULL or valid.
+        unsafe { put(material, "material", out) }
     })
 }
 

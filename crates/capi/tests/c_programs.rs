@@ -136,3 +136,8 @@ fn cpp17_cancels_from_another_thread_sweeps_and_searches() {
 fn cpp17_trainer_cuts_sutures_plays_the_demonstration_and_renders_force_at_1khz() {
     build_and_run("trainer.cpp", &[]);
 }
+
+#[test]
+fn c99_material_twice_the_modulus_sags_half_as_much_and_pushes_back_twice_as_hard() {
+    build_and_run("material.c", &[]);
+}
