@@ -825,6 +825,7 @@ struct Live {
     id: String,
     session: Session,
     surface: Arc<(u64, Vec<u32>)>,
+    /// The material it was built with.
     material: TissueMaterial,
     /// The organ's top as loaded (cm).
     top: f32,
