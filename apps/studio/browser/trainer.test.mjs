@@ -6,7 +6,8 @@
 //
 // Environment: STUDIO_BIN, STUDIO_URL, CHROMIUM (see harness.mjs).
 
-import { ok, check, shot, serverUrl, launchBrowser, newPage, stopServer, run } from './harness.mjs';
+import path from 'node:path';
+import { ok, check, shot, shots, serverUrl, launchBrowser, newPage, stopServer, run } from './harness.mjs';
 
 const trainer = (page, fn, arg) => page.evaluate(fn, arg);
 const hookOf = (page) => trainer(page, () => {
@@ -50,6 +51,49 @@ async function waitSettled(page, timeout) {
     await sleep(250);
   }
   return null;
+}
+
+/**
+ * The organ's top once it has come to rest: read every 500 ms until it moves less than 0.003 cm
+ * between two reads, twice in a row. Returns the top (cm), or null after `timeout` ms.
+ */
+async function restingTop(page, timeout) {
+  const t0 = Date.now();
+  let last = null;
+  let calm = 0;
+  while (Date.now() - t0 < timeout) {
+    await sleep(500);
+    const top = await trainer(page, () => window.tissueStudio.trainer.organBox()?.max[1] ?? null);
+    calm = top !== null && last !== null && Math.abs(top - last) < 0.003 ? calm + 1 : 0;
+    if (calm >= 2) return top;
+    last = top;
+  }
+  return null;
+}
+
+/** The Tissue panel's number input `id` set as a person types it: select all, type, Tab. */
+async function typeInto(page, id, value) {
+  await page.click(`#${id}`, { clickCount: 3 });
+  await page.keyboard.type(String(value));
+  await page.keyboard.press('Tab');
+}
+
+/** Reset pressed; resolves with the material in force once the new scene's first frame is drawn. */
+async function resetAndWait(page) {
+  const before = await trainer(page, () => window.tissueStudio.trainer.scenes);
+  await page.getByRole('button', { name: 'Reset', exact: true }).click();
+  await page.waitForFunction((n) => {
+    const t = window.tissueStudio.trainer;
+    return t.scenes > n && t.ready === true;
+  }, before, { timeout: 60000 });
+  return trainer(page, () => ({ ...window.tissueStudio.trainer.material, top: window.tissueStudio.trainer.scene.top }));
+}
+
+/** The settled sag of the organ after a reset: its top as loaded less its top at rest (cm). */
+async function settledSag(page) {
+  const top = await restingTop(page, 90000);
+  const loaded = await trainer(page, () => window.tissueStudio.trainer.scene.top);
+  return top === null ? null : { sag: loaded - top, loaded, top };
 }
 
 /** The screen rectangle of the organ's bounding box (its 8 corners projected). */
@@ -250,14 +294,106 @@ async function main() {
     await sleep(300);
     await shot(page, 't5-demo.png');
 
-    // g. no script errors
+    // g. the Tissue panel (issue 32): the material set with the page's own controls, applied on
+    // Reset, seen in the organ's sag; an out-of-range value refused at its input.
+    await page.selectOption('#organ-select', 'bunny');
+    await page.waitForFunction(() => {
+      const t = window.tissueStudio.trainer;
+      return t.organ === 'bunny' && t.ready === true;
+    }, null, { timeout: 60000 });
+    const m0 = await trainer(page, () => window.tissueStudio.trainer.material);
+    check(m0 && (m0.scheme === 'material' || m0.scheme === 'realtime') && m0.pending === null,
+      `the hook reports the material in force on the bunny: ${JSON.stringify(m0)}`);
+    await page.selectOption('#tissue-preset', 'liver');
+    const liver = await trainer(page, () => ['young-kpa', 'poisson', 'density'].map((id) => [
+      Number(document.getElementById(id).value), Number(document.getElementById(`${id}-slider`).value)]));
+    check(liver[0][0] === 5.4 && liver[1][0] === 0.49 && liver[2][0] === 1.06 && liver[0][1] === 296
+      && liver[1][1] === 0.49 && liver[2][1] === 1.06,
+      `the liver preset moves the sliders: E ${liver[0][0]} kPa (slider ${liver[0][1]} of 1000, log scale), ν ${liver[1][0]}, ρ ${liver[2][0]} g/cm³`);
+    // A slider moved with the keyboard makes the material custom and pending.
+    await page.focus('#poisson-slider');
+    for (let i = 0; i < 8; i++) await page.keyboard.press('ArrowLeft');
+    const moved = await trainer(page, () => ({
+      preset: document.getElementById('tissue-preset').value,
+      poisson: Number(document.getElementById('poisson').value),
+      note: !document.getElementById('tissue-pending').hidden,
+      pending: window.tissueStudio.trainer.material.pending,
+    }));
+    check(moved.preset === 'custom' && Math.abs(moved.poisson - 0.45) < 1e-9 && moved.note && moved.pending?.poisson === moved.poisson,
+      `moving the ν slider 8 steps makes it custom: ν ${moved.poisson}, "applied on the next reset" shown, pending ${JSON.stringify(moved.pending)}`);
+    const E = 5;
+    await typeInto(page, 'young-kpa', E);
+    await typeInto(page, 'density', 1.05);
+    const pending = await trainer(page, () => window.tissueStudio.trainer.material.pending);
+    check(pending && pending.young_kpa === E && pending.density === 1.05,
+      `typed E ${E} kPa and ρ 1.05 g/cm³ wait for Reset: ${JSON.stringify(pending)}`);
+    await page.locator('section.tissue').screenshot({ path: path.join(shots, 't6-tissue-pending.png') });
+    console.log('# screenshot screenshots/t6-tissue-pending.png');
+    const applied = await resetAndWait(page);
+    check(applied.scheme === 'material' && applied.young_kpa === E && applied.poisson === 0.45 && applied.density === 1.05 && applied.pending === null,
+      `Reset applies it: the hook reports ${JSON.stringify(applied)}`);
+    const noteAfter = await trainer(page, () => document.getElementById('tissue-pending').hidden);
+    check(noteAfter, 'the note "applied on the next reset" is gone once applied');
+    const s1 = await settledSag(page);
+    check(s1 && s1.sag > 0.05, `at E = ${E} kPa the bunny settles ${fmt(s1?.sag, 3)} cm below its top as loaded (${fmt(s1?.loaded, 3)} → ${fmt(s1?.top, 3)} cm)`);
+    const q0 = await hookOf(page);
+    await sleep(2000);
+    const q1 = await hookOf(page);
+    figures.materialStepsPerSecond = q1.stats.steps_per_s;
+    figures.materialStepMs = q1.stepMs;
+    await page.locator('section.tissue').screenshot({ path: path.join(shots, 't7-tissue-applied.png') });
+    console.log('# screenshot screenshots/t7-tissue-applied.png');
+    await shot(page, 't7-tissue-bunny.png');
+    check(q1.steps > q0.steps, `the material scheme runs on the bunny: ${fmt(q1.stats.steps_per_s, 1)} steps/s, step ${fmt(q1.stepMs.median)} ms median`);
+    await typeInto(page, 'young-kpa', 2 * E);
+    const applied2 = await resetAndWait(page);
+    check(applied2.young_kpa === 2 * E && applied2.pending === null, `Reset applies E = ${2 * E} kPa: ${JSON.stringify(applied2)}`);
+    const s2 = await settledSag(page);
+    const ratio = s2 && s1 ? s2.sag / s1.sag : NaN;
+    figures.sagRatio = ratio;
+    check(ratio >= 0.4 && ratio <= 0.65,
+      `twice E, about half the sag: ${fmt(s2?.sag, 3)} cm at ${2 * E} kPa against ${fmt(s1?.sag, 3)} cm at ${E} kPa, ratio ${fmt(ratio, 3)} (0.4–0.65)`);
+    // An out-of-range value: the server's refusal, naming the field, shown at its input.
+    await typeInto(page, 'poisson', 0.6);
+    const refusedAt = await page.waitForFunction(() => {
+      const p = document.getElementById('poisson-error');
+      return p && p.textContent ? p.textContent : false;
+    }, null, { timeout: 5000 }).then((h) => h.jsonValue()).catch(() => null);
+    const invalid = await trainer(page, () => ({
+      aria: document.getElementById('poisson').getAttribute('aria-invalid'),
+      alert: window.tissueStudio.trainer.error,
+      others: ['young-kpa-error', 'density-error'].filter((id) => document.getElementById(id)),
+    }));
+    check(refusedAt && /Poisson/.test(refusedAt) && invalid.aria === 'true' && invalid.others.length === 0,
+      `ν = 0.6 is refused by the server at the ν input: "${refusedAt}"`, JSON.stringify(invalid));
+    await page.locator('section.tissue').screenshot({ path: path.join(shots, 't8-tissue-refused.png') });
+    console.log('# screenshot screenshots/t8-tissue-refused.png');
+    const kept = await resetAndWait(page);
+    check(kept.young_kpa === 2 * E && kept.poisson === 0.45, `the refused value is not applied: Reset keeps ${JSON.stringify(kept)}`);
+    // The classic realtime preset, kept for comparison.
+    await page.selectOption('#tissue-preset', 'realtime');
+    const classic = await resetAndWait(page);
+    check(classic.scheme === 'realtime' && classic.young_kpa === null && classic.pending === null,
+      `"classic (realtime)" and Reset: ${JSON.stringify(classic)}`);
+    const n0 = await trainer(page, () => document.getElementById('poisson-error'));
+    check(!n0, 'the refusal at the ν input is gone once another material is chosen');
+    await sleep(1500);
+    const c0 = await hookOf(page);
+    await sleep(2000);
+    const c1 = await hookOf(page);
+    figures.realtimeStepsPerSecond = c1.stats.steps_per_s;
+    check(c1.steps > c0.steps, `realtime runs on the bunny: ${fmt(c1.stats.steps_per_s, 1)} steps/s`);
+
+    // h. no script errors
     check(pageErrors.length === 0, 'no script errors in the page', pageErrors.join(' | '));
   } finally {
     await browser.close();
   }
   console.log(`# figures: simulation ${fmt(figures.stepsPerSecond, 1)} steps/s (stats), `
     + `${fmt(figures.framesDrawnPerSecond, 1)} frames drawn/s and ${figures.framesReceivedPerSecond} received/s (page), `
-    + `step ${fmt(figures.stepMs?.median)} ms median, ${fmt(figures.stepMs?.p99)} ms p99`);
+    + `step ${fmt(figures.stepMs?.median)} ms median, ${fmt(figures.stepMs?.p99)} ms p99 (default scheme); `
+    + `bunny: material scheme ${fmt(figures.materialStepsPerSecond, 1)} steps/s (step ${fmt(figures.materialStepMs?.median)} ms median), `
+    + `realtime ${fmt(figures.realtimeStepsPerSecond, 1)} steps/s; sag ratio at 2E ${fmt(figures.sagRatio, 3)}`);
 
   await stopServer();
 }

@@ -15,7 +15,7 @@ use serde_json::json;
 use tissue_planner::{
     ErrorKind as PlanKind, Patient, PlanError, PlanRequest, Scenario, Shipped, Unit,
 };
-use tissue_scenes::{Organ, ShippedOrgan};
+use tissue_scenes::{Organ, ShippedOrgan, TissuePreset};
 
 use crate::access::{self, Access};
 use crate::assets;
@@ -35,6 +35,7 @@ pub fn router(studio: Studio, access: Access) -> Router {
         .route("/planner", get(|| async { assets::serve("planner.html") }))
         .route("/trainer", get(|| async { assets::serve("trainer.html") }))
         .route("/api/organs", get(organs).post(upload_organ))
+        .route("/api/tissues", get(tissues))
         .route("/api/trainer/ws", get(trainer_socket))
         .route("/static/{*path}", get(static_file))
         .route("/api/meshes", get(meshes))
@@ -92,6 +93,22 @@ async fn organs() -> Json<Vec<serde_json::Value>> {
         ShippedOrgan::ALL
             .iter()
             .map(|&o| json!({ "id": o.id(), "label": o.label(), "default": o == ShippedOrgan::Bunny }))
+            .collect(),
+    )
+}
+
+/// The tissue presets the trainer's Tissue panel offers: their constants and sources.
+async fn tissues() -> Json<Vec<serde_json::Value>> {
+    Json(
+        TissuePreset::ALL
+            .iter()
+            .map(|&t| {
+                json!({
+                    "id": t.id(), "label": crate::material::preset_label(t),
+                    "young_kpa": t.young_kpa(), "poisson": t.poisson(), "density": t.density(),
+                    "source": t.source(),
+                })
+            })
             .collect(),
     )
 }

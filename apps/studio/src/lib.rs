@@ -74,6 +74,7 @@ mod access;
 mod api;
 pub mod assets;
 mod jobs;
+pub mod material;
 pub mod messages;
 mod preview;
 mod serve;

@@ -13,11 +13,10 @@ use std::time::{Duration, Instant};
 use axum::extract::ws::{Message, WebSocket};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
-use tissue_scenes::{
-    Organ, SceneError, SceneErrorKind, Session, SessionOptions, ShippedOrgan, TrainerEvent,
-};
+use tissue_scenes::{Organ, SceneError, SceneErrorKind, Session, ShippedOrgan, TrainerEvent};
 use tokio::sync::{mpsc, watch};
 
+use crate::material::{MaterialError, TissueMaterial};
 use crate::messages::{ErrorBody, ErrorKind};
 use crate::serve::send_within;
 use crate::state::Studio;
@@ -162,6 +161,12 @@ pub enum Command {
     },
     /// One step while paused.
     Step,
+    /// The organ's material, applied on the next reset, load or demonstration (checked now:
+    /// refused naming the field out of range); answered with a `material` message.
+    Material {
+        /// The material asked for.
+        material: TissueMaterial,
+    },
 }
 
 /// A text message from the server to the page (`{"type": "scene", …}`). `E` is the error's
@@ -189,6 +194,19 @@ pub enum TrainerMessage<E = ErrorBody> {
         /// Why.
         error: E,
     },
+    /// The answer to a `material` command: the material in force and the one waiting for the
+    /// next reset.
+    Material(MaterialState),
+}
+
+/// The `material` message.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MaterialState {
+    /// The live session's material (null before an organ is loaded).
+    pub in_force: Option<TissueMaterial>,
+    /// The material applied on the next reset, load or demonstration (null when none waits:
+    /// never asked for, or the one in force).
+    pub pending: Option<TissueMaterial>,
 }
 
 /// The `scene` message: the organ and the buffers the page allocates.
@@ -206,6 +224,10 @@ pub struct SceneInfo {
     pub capacity: Capacity,
     /// The tray the organ lies on.
     pub tray: TrayInfo,
+    /// The organ's top as loaded, before it settles (cm above the tray's top).
+    pub top: f32,
+    /// The material in force.
+    pub material: TissueMaterial,
 }
 
 /// Buffer sizes of [`SceneInfo`].
@@ -262,6 +284,8 @@ pub fn error_body(fault: Fault, message: impl Into<String>) -> ErrorBody {
 pub struct Refusal {
     /// Its kind.
     pub fault: Fault,
+    /// The command's member at fault (its JSON name), if one is: the page marks its input.
+    pub field: Option<&'static str>,
     /// One sentence for the user.
     pub message: String,
 }
@@ -270,12 +294,26 @@ impl Refusal {
     fn new(fault: Fault, message: impl Into<String>) -> Refusal {
         Refusal {
             fault,
+            field: None,
             message: message.into(),
         }
     }
 
     fn body(self) -> ErrorBody {
-        error_body(self.fault, self.message)
+        ErrorBody {
+            field: self.field.map(str::to_owned),
+            ..error_body(self.fault, self.message)
+        }
+    }
+}
+
+impl From<MaterialError> for Refusal {
+    fn from(e: MaterialError) -> Refusal {
+        Refusal {
+            fault: Fault::Scene(SceneErrorKind::Parameters),
+            field: e.field(),
+            message: e.to_string(),
+        }
     }
 }
 
@@ -615,6 +653,11 @@ impl Simulation {
                 self.single = true;
                 None
             }
+            Command::Material { material } => {
+                let state = self.desk.set_material(material)?;
+                out.send(TrainerMessage::Material(state));
+                None
+            }
             tool => {
                 match self.desk.live.as_mut() {
                     Some(live) => live.apply(tool, out)?,
@@ -690,22 +733,51 @@ impl Simulation {
 
 /// The organ loaded and its live session. The organ outlives a session that failed, so that
 /// Reset (and the demonstration) rebuild it: the failure message tells the user to press Reset.
+///
+/// The material: a `material` command waits in `pending` until the next reset, load or
+/// demonstration, which makes it the chosen one; the chosen one stays for every later session
+/// (another organ too) until another is chosen. Until the page chooses one, each organ starts
+/// with its own ([`TissueMaterial::default_for`]).
 #[derive(Default)]
 struct Desk {
     /// The organ and its id, from the last `load`.
     loaded: Option<(Arc<Organ>, String)>,
     /// Its session; `None` before a load and after a failed step.
     live: Option<Live>,
+    /// The material the page chose, applied (`None`: each organ's default).
+    chosen: Option<TissueMaterial>,
+    /// The material the page chose, for the next session.
+    pending: Option<TissueMaterial>,
 }
 
 impl Desk {
-    /// Starts a session on `organ`; the `scene` message.
+    /// Starts a session on `organ` (the pending material applied); the `scene` message.
     fn load(&mut self, organ: Arc<Organ>, id: &str) -> Result<SceneInfo, Refusal> {
-        let live = Live::new(&organ, id)?;
+        let live = Live::new(&organ, id, self.next_material(id))?;
         let scene = live.scene();
         self.loaded = Some((organ, id.to_owned()));
         self.live = Some(live);
         Ok(scene)
+    }
+
+    /// The material of the next session on organ `id`: the pending one becomes the chosen one.
+    fn next_material(&mut self, id: &str) -> TissueMaterial {
+        if let Some(m) = self.pending.take() {
+            self.chosen = Some(m);
+        }
+        self.chosen
+            .unwrap_or_else(|| TissueMaterial::default_for(ShippedOrgan::from_id(id)))
+    }
+
+    /// Keeps `material` for the next session once it is checked; the `material` message.
+    fn set_material(&mut self, material: TissueMaterial) -> Result<MaterialState, Refusal> {
+        material.options()?;
+        let in_force = self.live.as_ref().map(|l| l.material);
+        self.pending = (in_force != Some(material)).then_some(material);
+        Ok(MaterialState {
+            in_force,
+            pending: self.pending,
+        })
     }
 
     /// The loaded organ's session afresh (also after a failure); nothing before a load.
@@ -722,7 +794,8 @@ impl Desk {
         let Some((organ, id)) = self.loaded.clone() else {
             return Err(self.not_live());
         };
-        let mut fresh = Live::new(&organ, &id)?;
+        let material = self.next_material(&id);
+        let mut fresh = Live::new(&organ, &id, material)?;
         let started = fresh.session.play()?;
         let scene = fresh.scene();
         self.live = Some(fresh);
@@ -752,15 +825,26 @@ struct Live {
     id: String,
     session: Session,
     surface: Arc<(u64, Vec<u32>)>,
+    /// The material it was built with.
+    material: TissueMaterial,
+    /// The organ's top as loaded (cm).
+    top: f32,
 }
 
 impl Live {
-    fn new(organ: &Organ, id: &str) -> Result<Live, SceneError> {
-        let session = Session::new(organ, SessionOptions::default())?;
+    fn new(organ: &Organ, id: &str, material: TissueMaterial) -> Result<Live, Refusal> {
+        let session = Session::new(organ, material.options()?)?;
+        let top = session
+            .positions()
+            .iter()
+            .map(|p| p.y)
+            .fold(f32::NEG_INFINITY, f32::max);
         Ok(Live {
             id: id.to_owned(),
             surface: Arc::new((0, Vec::new())),
             session,
+            material,
+            top,
         })
     }
 
@@ -781,6 +865,8 @@ impl Live {
                 size: [s.tray_side(), s.tray_side()],
                 top: 0.0,
             },
+            top: self.top,
+            material: self.material,
         }
     }
 
@@ -801,7 +887,8 @@ impl Live {
             | Command::Reset
             | Command::Demo
             | Command::Pause { .. }
-            | Command::Step => {}
+            | Command::Step
+            | Command::Material { .. } => {}
         }
         Ok(())
     }
@@ -862,6 +949,127 @@ mod tests {
         desk.diverged();
         assert!(desk.demo().is_ok());
         assert!(desk.live.is_some());
+    }
+
+    /// The material command: checked at once (out of range refused naming the field, nothing
+    /// kept), kept pending until the next reset, then in force there and in the scene message,
+    /// and kept for the resets after; a load applies a pending one too.
+    #[test]
+    fn a_material_waits_for_the_next_reset() {
+        let organs = Organs::default();
+        let (frames, _f) = watch::channel(None);
+        let (stats, _s) = watch::channel(Stats::default());
+        let (texts, mut received) = mpsc::unbounded_channel();
+        let out = Outlets {
+            frames,
+            stats,
+            texts,
+        };
+        let mut sim = Simulation::default();
+        let mut last = || {
+            let mut m = None;
+            while let Ok(x) = received.try_recv() {
+                m = Some(x);
+            }
+            m
+        };
+        let stiff = TissueMaterial::Material {
+            young_kpa: 20.0,
+            poisson: 0.45,
+            density: 1.05,
+        };
+        let material = |m| Command::Material { material: m };
+        // Before a load: kept, nothing in force.
+        sim.apply(material(stiff), &organs, &out).unwrap();
+        let expected = MaterialState {
+            in_force: None,
+            pending: Some(stiff),
+        };
+        assert_eq!(last(), Some(TrainerMessage::Material(expected)));
+        // The load applies it.
+        let load = Command::Load {
+            organ: "appendix".to_owned(),
+        };
+        assert!(sim.apply(load, &organs, &out).unwrap());
+        let Some(TrainerMessage::Scene(scene)) = last() else {
+            panic!("a scene after the load")
+        };
+        assert_eq!(scene.material, stiff);
+        assert!(
+            scene.top > 1.0,
+            "the appendix's top as loaded: {}",
+            scene.top
+        );
+        // Out of range: refused naming the field; what waits and what is in force stay.
+        let soft = TissueMaterial::Material {
+            young_kpa: 10.0,
+            poisson: 0.45,
+            density: 1.05,
+        };
+        sim.apply(material(soft), &organs, &out).unwrap();
+        for (bad, field) in [
+            (
+                TissueMaterial::Material {
+                    young_kpa: 10.0,
+                    poisson: 0.5,
+                    density: 1.05,
+                },
+                "poisson",
+            ),
+            (
+                TissueMaterial::Material {
+                    young_kpa: 1e6,
+                    poisson: 0.45,
+                    density: 1.05,
+                },
+                "young_kpa",
+            ),
+        ] {
+            let refusal = sim.apply(material(bad), &organs, &out).unwrap_err();
+            assert_eq!(refusal.field, Some(field), "{}", refusal.message);
+            let body = refusal.body();
+            assert_eq!(body.kind, ErrorKind::Parameters);
+            assert_eq!(body.field.as_deref(), Some(field));
+        }
+        assert_eq!(sim.desk.pending, Some(soft));
+        let live = sim.desk.live.as_ref().unwrap();
+        assert_eq!(
+            live.material, stiff,
+            "applied on the next reset, not before"
+        );
+        // Reset applies it; the next reset keeps it.
+        for _ in 0..2 {
+            assert!(sim.apply(Command::Reset, &organs, &out).unwrap());
+            let Some(TrainerMessage::Scene(scene)) = last() else {
+                panic!("a scene after Reset")
+            };
+            assert_eq!(scene.material, soft);
+            assert_eq!(sim.desk.pending, None);
+        }
+        // The realtime scheme, and the one in force asked for again: nothing waits then.
+        sim.apply(material(TissueMaterial::Realtime {}), &organs, &out)
+            .unwrap();
+        sim.apply(material(soft), &organs, &out).unwrap();
+        let expected = MaterialState {
+            in_force: Some(soft),
+            pending: None,
+        };
+        assert_eq!(last(), Some(TrainerMessage::Material(expected)));
+        sim.apply(material(TissueMaterial::Realtime {}), &organs, &out)
+            .unwrap();
+        assert!(sim.apply(Command::Reset, &organs, &out).unwrap());
+        let live = sim.desk.live.as_mut().unwrap();
+        assert_eq!(live.material, TissueMaterial::Realtime {});
+        live.session.step().unwrap();
+        // The JSON of the command, and an unknown member refused.
+        let c: Command = serde_json::from_str(
+            r#"{"type": "material", "material": {"scheme": "material", "young_kpa": 20,
+                "poisson": 0.45, "density": 1.05}}"#,
+        )
+        .unwrap();
+        assert_eq!(c, material(stiff));
+        let unknown = r#"{"type": "material", "material": {"scheme": "realtime", "e": 1}}"#;
+        assert!(serde_json::from_str::<Command>(unknown).is_err());
     }
 
     /// The kinds the page reads: "load an organ first" is a usage error, an unknown organ is not

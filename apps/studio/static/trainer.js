@@ -4,6 +4,7 @@
 import * as THREE from 'three';
 import { TrainerSocket, listOrgans, uploadOrgan, MAX_UPLOAD } from './trainer-socket.js';
 import { TrainerView, ARROW_CM_PER_N } from './trainer-view.js';
+import { TissuePanel } from './trainer-material.js';
 import { $, clearErrorIn, el, fmt, fmtInt, setText, showErrorIn } from './common.js';
 
 const TOOLS = ['probe', 'scalpel', 'needle'];
@@ -35,9 +36,11 @@ const state = {
   paused: false, // the server's word (the stats), or what was asked until it had time to land
   organ: null, // the organ asked for last, then the scene's
   scene: null,
+  scenes: 0, // scene messages received (each load, reset or demonstration)
   stats: null,
   reallocations: 0,
   lastCut: null, // { path: [[x,y,z], ...], viewDir, fromVertex }
+  material: null, // { scheme, young_kpa, poisson, density, pending } (trainer-material.js)
   // The page's own.
   organs: [],
   awaitingScene: false,
@@ -60,6 +63,7 @@ const clearError = () => clearErrorIn(state);
 
 let view;
 let socket;
+let tissue;
 
 // ---------------------------------------------------------------- formatting
 
@@ -114,6 +118,7 @@ async function load(id, label = organLabel(id)) {
   $('view-empty').hidden = false;
   setText('view-empty', `Loading ${label}…`);
   try {
+    tissue.flush(); // a material waiting in the panel applies to this organ
     await socket.send({ type: 'load', organ: id });
   } catch (e) {
     showError(e.message);
@@ -174,7 +179,11 @@ function onMessage(msg) {
       setText('view-empty', 'The trainer is in use in another tab or window.');
       setReady(false);
       break;
+    case 'material':
+      tissue.onMaterial(msg);
+      break;
     case 'failed':
+      if (tissue.onFailed(msg.error)) break; // shown at its input
       showError(msg.error?.message || 'The simulation failed.');
       setText('organ-status', '');
       if (state.awaitingScene) {
@@ -190,12 +199,14 @@ function onMessage(msg) {
 function onScene(msg) {
   const newOrgan = msg.organ !== state.scene?.organ || state.fitPending;
   state.scene = msg;
+  state.scenes++;
   state.organ = msg.organ;
   state.awaitingScene = false;
   state.fitPending = newOrgan;
   socket.dropFrames(); // anything before the scene belongs to the previous one
   view.allocate(msg.capacity.vertices, msg.capacity.triangles);
   if (msg.tray) view.setTray(msg.tray.size, msg.tray.top ?? 0);
+  tissue.onScene(msg);
   state.steps = 0;
   state.triangles = 0;
   setReady(false);
@@ -352,6 +363,9 @@ function renderHud() {
   setText('h-mesh', `${fmtInt(nodes)} nodes · ${fmtInt(tets)} tets`);
   setText('h-surface', `${fmtInt(view.vertices)} vertices · ${fmtInt(state.triangles)} triangles`);
   setText('h-steps', fmtInt(state.steps));
+  const box = state.ready ? view.organBox() : null;
+  const top = state.scene?.top;
+  setText('h-sag', box && Number.isFinite(top) ? `${fmt(box.max[1], 2)} cm (sag ${fmt(top - box.max[1], 2)} cm)` : '—');
   let status;
   if (state.refused) status = 'refused';
   else if (!state.ready) status = 'loading';
@@ -528,6 +542,7 @@ function reset() {
   cancelGesture();
   setNeedleFirst(null);
   state.lastCut = null;
+  tissue.flush(); // the panel's material applies from this reset on
   socket.send({ type: 'reset' }).catch((e) => showError(e.message));
 }
 
@@ -535,6 +550,7 @@ function demo() {
   cancelGesture();
   setNeedleFirst(null);
   state.lastCut = null;
+  tissue.flush();
   socket.send({ type: 'demo' }).catch((e) => showError(e.message));
 }
 
@@ -604,6 +620,7 @@ function woundSides() {
 function main() {
   view = new TrainerView($('view'));
   socket = new TrainerSocket({ onMessage, onOpen: onSocketOpened, onClose: onSocketClosed, onFrameReceived });
+  tissue = new TissuePanel({ send: (m) => socket.send(m).catch((e) => showError(e.message)), state });
   Object.assign(state, {
     screenOf: (p) => view.screenOf(p),
     surfacePointAt: (x, y) => view.pick(x, y)?.point ?? null,
@@ -622,7 +639,7 @@ function main() {
   updateControls();
   setInterval(renderHud, 250);
   requestAnimationFrame(loop);
-  initOrgans();
+  tissue.init().finally(initOrgans);
 }
 
 main();

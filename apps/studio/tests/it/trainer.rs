@@ -350,3 +350,58 @@ async fn trainer_errors_arrive_with_their_kinds() -> Result {
     server.abort();
     Ok(())
 }
+
+/// The material over the socket: out of range refused naming the field, taken with a
+/// `material` message, in force from the next reset (the scene says so), and the realtime
+/// scheme back the same way.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_material_is_applied_on_the_next_reset() -> Result {
+    use tissue_studio::material::TissueMaterial;
+    let (studio, addr, server) = crate::serve().await?;
+    let url = format!("ws://{addr}/api/trainer/ws");
+    let (mut tab, _) = tokio_tungstenite::connect_async(&url).await?;
+    send(&mut tab, &load("appendix")).await?;
+    let first = scene(&mut tab).await?;
+    assert_eq!(
+        first.material,
+        TissueMaterial::default_for(Some(tissue_scenes::ShippedOrgan::Appendix))
+    );
+    let material = |young_kpa, poisson| Command::Material {
+        material: TissueMaterial::Material {
+            young_kpa,
+            poisson,
+            density: 1.04,
+        },
+    };
+    send(&mut tab, &material(7.0, 0.5)).await?;
+    let error = failed(&mut tab).await?;
+    assert_eq!(error["kind"], "parameters", "{error}");
+    assert_eq!(error["field"], "poisson", "{error}");
+    send(&mut tab, &material(7.0, 0.49)).await?;
+    let state = until(&mut tab, "the material message", |m| match m {
+        Msg::Material(s) => Some(*s),
+        _ => None,
+    })
+    .await?;
+    assert_eq!(state.in_force, Some(first.material));
+    let custom = TissueMaterial::Material {
+        young_kpa: 7.0,
+        poisson: 0.49,
+        density: 1.04,
+    };
+    assert_eq!(state.pending, Some(custom));
+    send(&mut tab, &Command::Reset).await?;
+    let after = scene(&mut tab).await?;
+    assert_eq!(after.material, custom);
+    assert_eq!(after.top, first.top, "the organ's top as loaded");
+    frame_with(&mut tab, false).await?;
+    let realtime = Command::Material {
+        material: TissueMaterial::Realtime {},
+    };
+    send(&mut tab, &realtime).await?;
+    send(&mut tab, &Command::Reset).await?;
+    assert_eq!(scene(&mut tab).await?.material, TissueMaterial::Realtime {});
+    studio.shutdown();
+    server.abort();
+    Ok(())
+}
