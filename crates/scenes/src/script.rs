@@ -528,12 +528,7 @@ impl Script for PressAndDrag {
             }
         }
         if k == p.settle + 1 {
-            if let Some(linear_damping) = self.damping.take() {
-                body.set_settings(StepSettings {
-                    linear_damping,
-                    ..*body.settings()
-                })?;
-            }
+            end_settling(&mut self.damping, body)?;
             let xz = p.waypoints[0];
             let top = top_at(body, xz, p.reach).ok_or_else(|| {
                 SceneError::Tool(format!(
@@ -560,12 +555,27 @@ impl Script for PressAndDrag {
 
     fn after_step(
         &mut self,
-        _k: usize,
-        _body: &mut SoftBody,
+        k: usize,
+        body: &mut SoftBody,
         _surgery: &mut Surgery,
     ) -> Result<ScriptStep, SceneError> {
+        // A plan without press or drag ends with its settling: the body's damping back.
+        if k >= self.steps() {
+            end_settling(&mut self.damping, body)?;
+        }
         Ok(ScriptStep::default())
     }
+}
+
+/// Gives the body back the plain velocity damping the settling raised (once: `damping` taken).
+fn end_settling(damping: &mut Option<f32>, body: &mut SoftBody) -> Result<(), SceneError> {
+    if let Some(linear_damping) = damping.take() {
+        body.set_settings(StepSettings {
+            linear_damping,
+            ..*body.settings()
+        })?;
+    }
+    Ok(())
 }
 
 /// Height of the organ's top under the point (x, z): the highest node within `reach`
