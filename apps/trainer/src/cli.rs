@@ -14,7 +14,8 @@ frames and pictures.";
 const LONG_ABOUT: &str = "\
 Headless surgical-trainer run (position-based dynamics, tissue-pbd): a tetrahedral organ is \
 scaled to --size, centred above the origin and set on a 2 cm thick tray (a static voxel collider \
-with friction) whose top is the plane y = 0; gravity is -y. It settles for --settle-steps, then a \
+with friction) whose top is the plane y = 0; gravity is -y. It settles for --settle-steps (every \
+motion damped with a relaxation time of 0.05 s, so that it comes to rest), then a \
 vertical probe (a capsule of --tool-radius, tip down) comes down over the first --waypoint and \
 presses --depth cm below the organ's top there in --press-steps, then drags along the waypoints \
 (a polyline at constant height) in --drag-steps.
@@ -230,7 +231,8 @@ pub struct Cli {
     /// from -size/4,0 to size/4,0].
     #[arg(long = "waypoint", value_name = "X,Z", value_parser = parse_xz, allow_hyphen_values = true)]
     pub waypoints: Vec<[f32; 2]>,
-    /// Steps to let the organ settle on the tray (the defaults of the timeline are tissue-scenes'
+    /// Steps to let the organ settle on the tray, every motion damped (τ = 0.05 s) so that the
+    /// press starts from an organ at rest (the defaults of the timeline are tissue-scenes'
     /// PressPlan::default(), the studio's demonstration's too).
     #[arg(long, value_name = "N", default_value_t = PressPlan::default().settle)]
     pub settle_steps: usize,

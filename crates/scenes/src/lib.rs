@@ -93,7 +93,10 @@ pub use error::{SceneError, SceneErrorKind};
 pub use event::{TrainerEvent, TrainerEventKind};
 pub use organ::{Organ, Setting, ShippedOrgan, Tray, APPENDIX_BASE_X, MAX_TETS};
 pub use reference::{reference, ReferencePlan, ReferencePress, ReferenceSummary};
-pub use script::{AppendixPlan, AppendixProcedure, PressAndDrag, PressPlan, Script, ScriptStep};
+pub use script::{
+    AppendixPlan, AppendixProcedure, PressAndDrag, PressPlan, Script, ScriptStep,
+    SETTLE_RELAXATION_TIME,
+};
 pub use session::{
     OrganMaterial, Session, SessionOptions, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS, SUTURE_SPACING_CM,
 };

@@ -14,7 +14,7 @@
 //!   presses down to a depth below its top and drags along waypoints.
 
 use glam::{Quat, Vec3, Vec3A};
-use tissue_pbd::{AttachmentId, ContactParams, Pose, SoftBody, ToolShape};
+use tissue_pbd::{AttachmentId, ContactParams, Pose, SoftBody, StepSettings, ToolShape};
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent};
 
 use crate::error::SceneError;
@@ -289,7 +289,8 @@ fn top_near(body: &SoftBody, x: f32) -> f32 {
 /// run the studio's demonstration on a tray plays and the headless `trainer`'s defaults.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PressPlan {
-    /// Steps while the organ settles (the probe parked above).
+    /// Steps while the organ settles (the probe parked above), every motion damped with
+    /// [`SETTLE_RELAXATION_TIME`] so that it comes to rest.
     pub settle: usize,
     /// Steps of the press, from 0.5 cm above the top to `depth` below it.
     pub press: usize,
@@ -393,7 +394,17 @@ pub struct PressAndDrag {
     /// The press's start and end (the tip, cm), known once the organ has settled.
     start: Vec3,
     end: Vec3,
+    /// The body's plain velocity damping before the settling raised it (restored after it).
+    damping: Option<f32>,
 }
+
+/// The relaxation time (s) of the plain velocity damping that brings the organ to rest while it
+/// settles ([`PressAndDrag`]): the rigid-mode damping of the step settings keeps the organ's
+/// centre-of-mass motion, and the bounce of an organ set down on its tray carries some, so
+/// without it a 10 cm box at 10 kPa still swung ±0.06 cm at its top after the default 1 s (its
+/// top read 0.06 cm low, each press went that much deeper than planned and the probe's force
+/// came out 27 % high at 0.25 cm). A static state is the same with or without damping.
+pub const SETTLE_RELAXATION_TIME: f32 = 0.05;
 
 impl PressAndDrag {
     /// The run of tool `tool` (a capsule of [`PressPlan::radius`], already in the body) along
@@ -426,6 +437,7 @@ impl PressAndDrag {
             tool,
             start: Vec3::ZERO,
             end: Vec3::ZERO,
+            damping: None,
         })
     }
 
@@ -501,7 +513,22 @@ impl Script for PressAndDrag {
 
     fn before_step(&mut self, k: usize, body: &mut SoftBody) -> Result<(), SceneError> {
         let p = &self.plan;
+        if k == 1 && p.settle > 0 {
+            // The settling brings the organ to rest: every motion damped with
+            // `SETTLE_RELAXATION_TIME` (its centre of mass's too), the body's own damping back
+            // before the press.
+            let settings = *body.settings();
+            let c = 1.0 - (-settings.dt / SETTLE_RELAXATION_TIME).exp();
+            if c > settings.linear_damping {
+                self.damping = Some(settings.linear_damping);
+                body.set_settings(StepSettings {
+                    linear_damping: c,
+                    ..settings
+                })?;
+            }
+        }
         if k == p.settle + 1 {
+            end_settling(&mut self.damping, body)?;
             let xz = p.waypoints[0];
             let top = top_at(body, xz, p.reach).ok_or_else(|| {
                 SceneError::Tool(format!(
@@ -528,12 +555,27 @@ impl Script for PressAndDrag {
 
     fn after_step(
         &mut self,
-        _k: usize,
-        _body: &mut SoftBody,
+        k: usize,
+        body: &mut SoftBody,
         _surgery: &mut Surgery,
     ) -> Result<ScriptStep, SceneError> {
+        // A plan without press or drag ends with its settling: the body's damping back.
+        if k >= self.steps() {
+            end_settling(&mut self.damping, body)?;
+        }
         Ok(ScriptStep::default())
     }
+}
+
+/// Gives the body back the plain velocity damping the settling raised (once: `damping` taken).
+fn end_settling(damping: &mut Option<f32>, body: &mut SoftBody) -> Result<(), SceneError> {
+    if let Some(linear_damping) = damping.take() {
+        body.set_settings(StepSettings {
+            linear_damping,
+            ..*body.settings()
+        })?;
+    }
+    Ok(())
 }
 
 /// Height of the organ's top under the point (x, z): the highest node within `reach`

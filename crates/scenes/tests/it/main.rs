@@ -3,4 +3,5 @@
 
 mod material;
 mod moving_body;
+mod probe;
 mod session;
