@@ -7,7 +7,7 @@
 use std::ops::RangeInclusive;
 
 use serde::{Deserialize, Serialize};
-use tissue_pbd::{PbdError, PbdParam};
+use tissue_pbd::PbdError;
 use tissue_scenes::{OrganMaterial, SceneError, SessionOptions, ShippedOrgan, TissuePreset};
 
 /// The scheme a trainer session is stepped with.
@@ -114,12 +114,10 @@ impl MaterialError {
         else {
             return MaterialError::Scene(source);
         };
-        let (field, value) = match param {
-            PbdParam::YoungModulus => ("young_kpa", m.elastic.young_kpa),
-            PbdParam::PoissonRatio => ("poisson", m.elastic.poisson),
-            PbdParam::Density => ("density", m.elastic.density),
-            _ => return MaterialError::Scene(source),
+        let Some(f) = tissue_scenes::MaterialField::of_param(*param) else {
+            return MaterialError::Scene(source);
         };
+        let (field, value) = (f.name(), f.of(m));
         MaterialError::Parameter {
             field,
             label: label(field),

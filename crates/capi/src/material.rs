@@ -4,7 +4,6 @@
 //! `SessionOptions::material`, which checks it (the messages here only say which field of
 //! `tissue_material` the refused parameter is).
 
-use tissue_pbd::{PbdError, PbdParam};
 use tissue_scenes::{OrganMaterial, SceneError, SessionOptions, ShippedOrgan, TissuePreset};
 
 use crate::ffi::{guard, put, status_of, tissue_status, Error};
@@ -163,57 +162,10 @@ impl tissue_material {
     }
 }
 
-/// The field of `tissue_material` that sets a solver parameter, if one does.
-fn field_of(param: PbdParam) -> Option<&'static str> {
-    use PbdParam as P;
-    match param {
-        P::YoungModulus => Some("young_kpa"),
-        P::PoissonRatio => Some("poisson"),
-        P::Density => Some("density"),
-        P::DistanceStiffness
-        | P::VolumeStiffness
-        | P::DistanceCompliance
-        | P::VolumeCompliance
-        | P::Dt
-        | P::Substeps
-        | P::Iterations
-        | P::GravityX
-        | P::GravityY
-        | P::GravityZ
-        | P::Damping
-        | P::LinearDamping
-        | P::Margin
-        | P::Detection
-        | P::StaticFriction
-        | P::KineticFriction
-        | P::ContactReach
-        | P::CellSize
-        | P::ColliderReach
-        | P::Shapes
-        | P::FloorAxis
-        | P::FloorHeight
-        | P::NodeTetCount
-        | P::NodeCount
-        | P::TetCount
-        | P::Mass
-        | P::ConstraintNodes
-        | P::RestVolume
-        | P::RestLength
-        | P::Stiffness
-        | P::Compliance
-        | P::Solver
-        | P::OverRelaxation => None,
-    }
-}
-
 /// A material the session refused: `TISSUE_PARAMETERS`, the message led by the field of
 /// `tissue_material` it is about.
 fn refused(e: &SceneError) -> Error {
-    let field = match e {
-        SceneError::RelaxationTime { .. } => Some("relaxation_time"),
-        SceneError::Pbd(PbdError::InvalidParameter { param, .. }) => field_of(*param),
-        _ => None,
-    };
+    let field = e.material_field().map(|f| f.name());
     let status = match e.kind() {
         tissue_scenes::SceneErrorKind::Parameters => tissue_status::TISSUE_PARAMETERS,
         kind => status_of(kind),

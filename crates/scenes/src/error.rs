@@ -89,6 +89,20 @@ fn too_large(name: &str, tets: usize, estimated: bool, decimate_to: Option<usize
     }
 }
 
+impl SceneError {
+    /// The material field this error refuses ([`crate::SessionOptions::material`]): `E`, `ν`,
+    /// `ρ` out of range, or the relaxation time; `None` for any other error.
+    pub fn material_field(&self) -> Option<crate::MaterialField> {
+        match self {
+            SceneError::RelaxationTime { .. } => Some(crate::MaterialField::RelaxationTime),
+            SceneError::Pbd(tissue_pbd::PbdError::InvalidParameter { param, .. }) => {
+                crate::MaterialField::of_param(*param)
+            }
+            _ => None,
+        }
+    }
+}
+
 /// What kind of failure a [`SceneError`] is ([`SceneError::kind`]): the classes a front end
 /// maps to its own codes (the `trainer`'s exit codes, the C ABI's statuses, the studio's error
 /// kinds) in one `match`.

@@ -98,6 +98,7 @@ pub use script::{
     SETTLE_RELAXATION_TIME,
 };
 pub use session::{
-    OrganMaterial, Session, SessionOptions, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS, SUTURE_SPACING_CM,
+    MaterialField, OrganMaterial, Session, SessionOptions, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS,
+    SUTURE_SPACING_CM,
 };
 pub use tissue::TissuePreset;

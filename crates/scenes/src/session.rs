@@ -130,6 +130,87 @@ impl OrganMaterial {
     }
 }
 
+/// A parameter of an [`OrganMaterial`]: what a front end names when the session refuses a
+/// material ([`SceneError::material_field`]), each in its own words (the trainer's flag, the C
+/// ABI's struct field, the studio's input).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MaterialField {
+    /// `E` (kPa).
+    YoungKpa,
+    /// `ν`.
+    Poisson,
+    /// `ρ` (g/cm³).
+    Density,
+    /// `τ` (s).
+    RelaxationTime,
+}
+
+impl MaterialField {
+    /// The field's name in [`OrganMaterial`] and in the front ends' JSON and C structs
+    /// (`young_kpa`, `poisson`, `density`, `relaxation_time`).
+    pub fn name(self) -> &'static str {
+        match self {
+            MaterialField::YoungKpa => "young_kpa",
+            MaterialField::Poisson => "poisson",
+            MaterialField::Density => "density",
+            MaterialField::RelaxationTime => "relaxation_time",
+        }
+    }
+
+    /// The field's value in `m`.
+    pub fn of(self, m: &OrganMaterial) -> f64 {
+        match self {
+            MaterialField::YoungKpa => m.elastic.young_kpa,
+            MaterialField::Poisson => m.elastic.poisson,
+            MaterialField::Density => m.elastic.density,
+            MaterialField::RelaxationTime => f64::from(m.relaxation_time),
+        }
+    }
+
+    /// The material field a solver parameter is, if it is one.
+    pub fn of_param(param: tissue_pbd::PbdParam) -> Option<MaterialField> {
+        use tissue_pbd::PbdParam as P;
+        match param {
+            P::YoungModulus => Some(MaterialField::YoungKpa),
+            P::PoissonRatio => Some(MaterialField::Poisson),
+            P::Density => Some(MaterialField::Density),
+            P::DistanceStiffness
+            | P::VolumeStiffness
+            | P::DistanceCompliance
+            | P::VolumeCompliance
+            | P::Dt
+            | P::Substeps
+            | P::Iterations
+            | P::GravityX
+            | P::GravityY
+            | P::GravityZ
+            | P::Damping
+            | P::LinearDamping
+            | P::Margin
+            | P::Detection
+            | P::StaticFriction
+            | P::KineticFriction
+            | P::ContactReach
+            | P::CellSize
+            | P::ColliderReach
+            | P::Shapes
+            | P::FloorAxis
+            | P::FloorHeight
+            | P::NodeTetCount
+            | P::NodeCount
+            | P::TetCount
+            | P::Mass
+            | P::ConstraintNodes
+            | P::RestVolume
+            | P::RestLength
+            | P::Stiffness
+            | P::Compliance
+            | P::Solver
+            | P::OverRelaxation => None,
+        }
+    }
+}
+
 impl SessionOptions {
     /// A session of the material scheme: `material`'s organ, stepped as
     /// [`StepSettings::material`] (32 XPBD substeps of 10 ms, in parallel) with its relaxation
