@@ -7,7 +7,6 @@
 use std::ops::RangeInclusive;
 
 use serde::{Deserialize, Serialize};
-use tissue_pbd::PbdError;
 use tissue_scenes::{OrganMaterial, SceneError, SessionOptions, ShippedOrgan, TissuePreset};
 
 /// The scheme a trainer session is stepped with.
@@ -108,13 +107,7 @@ impl MaterialError {
 
     /// tissue-scenes' refusal of `m`'s constants, naming the field when it is one of them.
     fn scene(source: SceneError, m: &OrganMaterial) -> MaterialError {
-        let SceneError::Pbd(PbdError::InvalidParameter {
-            param, expected, ..
-        }) = &source
-        else {
-            return MaterialError::Scene(source);
-        };
-        let Some(f) = tissue_scenes::MaterialField::of_param(*param) else {
+        let Some((f, expected)) = source.material_refusal() else {
             return MaterialError::Scene(source);
         };
         let (field, value) = (f.name(), f.of(m));

@@ -93,11 +93,20 @@ impl SceneError {
     /// The material field this error refuses ([`crate::SessionOptions::material`]): `E`, `ν`,
     /// `ρ` out of range, or the relaxation time; `None` for any other error.
     pub fn material_field(&self) -> Option<crate::MaterialField> {
+        self.material_refusal().map(|(field, _)| field)
+    }
+
+    /// The material field this error refuses and what the field expects (`"in [0, 0.495]"`,
+    /// …), for a front end that words the refusal itself.
+    pub fn material_refusal(&self) -> Option<(crate::MaterialField, &'static str)> {
         match self {
-            SceneError::RelaxationTime { .. } => Some(crate::MaterialField::RelaxationTime),
-            SceneError::Pbd(tissue_pbd::PbdError::InvalidParameter { param, .. }) => {
-                crate::MaterialField::of_param(*param)
-            }
+            SceneError::RelaxationTime { .. } => Some((
+                crate::MaterialField::RelaxationTime,
+                "a positive time in seconds",
+            )),
+            SceneError::Pbd(tissue_pbd::PbdError::InvalidParameter {
+                param, expected, ..
+            }) => crate::MaterialField::of_param(*param).map(|f| (f, *expected)),
             _ => None,
         }
     }
