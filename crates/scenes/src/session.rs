@@ -218,6 +218,18 @@ impl SessionOptions {
     ///
     /// # Errors
     /// [`SceneError::Pbd`] naming the material parameter out of range.
+    ///
+    /// ```
+    /// use tissue_scenes::{MaterialField, OrganMaterial, SessionOptions, TissuePreset};
+    /// let liver = OrganMaterial::preset(TissuePreset::Liver);
+    /// let options = SessionOptions::material(&liver)?;
+    /// assert_eq!(options.step.substeps, 32);
+    /// let mut wrong = liver;
+    /// wrong.elastic.poisson = 0.5;
+    /// let refused = SessionOptions::material(&wrong).unwrap_err();
+    /// assert_eq!(refused.material_field(), Some(MaterialField::Poisson));
+    /// # Ok::<(), tissue_scenes::SceneError>(())
+    /// ```
     pub fn material(material: &OrganMaterial) -> Result<SessionOptions, SceneError> {
         if !(material.relaxation_time.is_finite() && material.relaxation_time > 0.0) {
             return Err(SceneError::RelaxationTime {
