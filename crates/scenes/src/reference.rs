@@ -119,33 +119,49 @@ fn problem(organ: &Organ, material: ElasticMaterial) -> Result<StaticProblem, Sc
     })?;
     match organ.setting {
         Setting::Tray => {
-            // The lowest node held in x and z, and the bottom node farthest from it along x
-            // held in z: no sliding, no spin about y, nothing else constrained.
+            // The lowest node held in x and z, and the bottom node farthest from it held
+            // across the line between them (in z when that line runs more along x, else in x):
+            // no sliding, no spin about y, nothing else constrained. "Bottom": within 1 % of
+            // the height of the lowest node, so that an organ touching the tray at one node
+            // (the bunny) is still held across its base, not by a neighbour of that node,
+            // whose short lever would leave the spin all but free.
             let rest = p.rest_positions().to_vec();
-            let lowest = rest.iter().map(|q| q.y).fold(f64::INFINITY, f64::min);
-            let bottom: Vec<u32> = p.nodes_where(|q| q.y <= lowest + 1e-6);
-            let Some(&a) = bottom.first() else {
+            let (lowest, highest) = rest
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+                    (lo.min(q.y), hi.max(q.y))
+                });
+            let Some(a) = (0..rest.len() as u32)
+                .min_by(|&i, &j| rest[i as usize].y.total_cmp(&rest[j as usize].y))
+            else {
                 return Err(SceneError::mesh(&organ.label, "an organ without nodes"));
             };
-            let far = bottom
-                .iter()
-                .copied()
-                .max_by(|&i, &j| {
-                    let d = |n: u32| (rest[n as usize].x - rest[a as usize].x).abs();
-                    d(i).total_cmp(&d(j))
-                })
-                .unwrap_or(a);
+            let pa = rest[a as usize];
+            let band = lowest + 0.01 * (highest - lowest);
+            let across = |n: u32| {
+                let d = rest[n as usize] - pa;
+                d.x.hypot(d.z)
+            };
+            let far = p
+                .nodes_where(|q| q.y <= band)
+                .into_iter()
+                .max_by(|&i, &j| across(i).total_cmp(&across(j)))
+                .filter(|&n| across(n) > 0.0)
+                .or_else(|| {
+                    // A body without a base: the nearest node beside the lowest one.
+                    (0..rest.len() as u32)
+                        .filter(|&n| across(n) > 0.0)
+                        .min_by(|&i, &j| rest[i as usize].y.total_cmp(&rest[j as usize].y))
+                });
             p.fix_axes(a, [true, false, true])?;
-            if far != a {
-                p.fix_axes(far, [false, false, true])?;
-            } else {
-                // One bottom node only: hold the lowest node above it in x as well.
-                let other = (0..rest.len() as u32)
-                    .filter(|&n| n != a)
-                    .min_by(|&i, &j| rest[i as usize].y.total_cmp(&rest[j as usize].y));
-                if let Some(b) = other {
-                    p.fix_axes(b, [false, false, true])?;
-                }
+            if let Some(b) = far {
+                let d = rest[b as usize] - pa;
+                let held = if d.x.abs() >= d.z.abs() {
+                    [false, false, true]
+                } else {
+                    [true, false, false]
+                };
+                p.fix_axes(b, held)?;
             }
         }
         Setting::Appendix => {
