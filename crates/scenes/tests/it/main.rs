@@ -4,3 +4,4 @@
 mod material;
 mod moving_body;
 mod session;
+mod shipped;
