@@ -31,7 +31,8 @@
 //! shape-function gradients, energy `V Ψ(F)`, gradient `V P bₐ` with
 //! `P = μ'(1 − 1/(I_C + 1)) F + λ'(J − α) cof F`, and the Hessian `V Bᵀ (∂²Ψ/∂F²) B`, where
 //! `∂²Ψ/∂F²` (9×9) is projected to positive semidefinite by clamping its negative eigenvalues
-//! (Jacobi eigen-decomposition) so every Newton direction descends.
+//! (Jacobi eigen-decomposition) where the assembled exact tangent is not positive definite, so
+//! every Newton direction descends.
 //!
 //! ## Loads, supports and contact
 //! - Gravity: `mᵢ g` on each node, `mᵢ = ρ Σ V/4` over its tetrahedra (lumped).
@@ -58,9 +59,11 @@
 //! tangent assembled into a fixed sparse pattern (lower triangle, free degrees of freedom),
 //! factored by faer's sparse Cholesky (symbolic factorisation once per solve, numeric refactor
 //! per iteration, `Par::Seq`), with a diagonal shift as fallback when the factorisation fails;
-//! backtracking Armijo line search on `Π`. Below a relative residual of `10⁻³` the exact
-//! (unprojected) tangent is tried first and used when it is positive definite: the projected
-//! one converges only linearly where they differ (compressed elements). Stop when `‖r‖₂ ≤ tol · scale` over the free degrees
+//! backtracking Armijo line search on `Π`. Each iteration tries the exact (unprojected)
+//! tangent first and uses it when it is positive definite: the projected one converges only
+//! linearly where they differ (compressed elements), and its eigen-decompositions are most of
+//! the assembly's cost (on the bunny, 0.38 s against 0.013 s); after one failure in a load step
+//! the projected one is used for the rest of it. Stop when `‖r‖₂ ≤ tol · scale` over the free degrees
 //! of freedom, `scale` the largest of the norms of gravity, contact forces and support
 //! reactions (default `tol = 10⁻⁸`, [`SolverSettings::residual_tolerance`]). Loads can be
 //! ramped ([`SolverSettings::load_steps`]). Nothing is allocated inside the Newton loop.

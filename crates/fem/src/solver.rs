@@ -16,9 +16,6 @@ use crate::material::{ElasticMaterial, FemError};
 
 const NONE: u32 = u32::MAX;
 
-/// Below this relative residual Newton tries the exact (unprojected) tangent first.
-const EXACT_TANGENT_BELOW: f64 = 1e-3;
-
 /// Standard gravity, cm/s².
 pub const GRAVITY: f64 = 981.0;
 
@@ -91,7 +88,11 @@ pub struct SolverSettings {
     /// cube root of the node's lumped volume: this many times the stiffness of an elastic cube
     /// the node's size. Default `1e3`.
     pub contact_stiffness: f64,
-    /// Project each element's `∂²Ψ/∂F²` to positive semidefinite (default `true`).
+    /// Where the exact tangent is not positive definite, project each element's `∂²Ψ/∂F²` to
+    /// positive semidefinite (default `true`; the exact tangent is tried first in each Newton
+    /// iteration, and after one failure the projected one is used for the rest of the load
+    /// step). With `false` the exact tangent is always used, shifted when it cannot be
+    /// factored.
     pub project_hessian: bool,
 }
 
@@ -880,9 +881,9 @@ impl StaticProblem {
             .map_err(|e| format!("{e:?}"))
     }
 
-    /// Near the solution, the tangent without the projection to positive semidefinite (the
-    /// exact Hessian, so Newton converges quadratically) when it is positive definite; whether
-    /// it is, and then it is factored.
+    /// The tangent without the projection to positive semidefinite (the exact Hessian, so
+    /// Newton converges quadratically), assembled and factored; whether it is positive
+    /// definite.
     fn exact_tangent(&self, ws: &mut Workspace, t: f64) -> bool {
         self.assemble_hessian(ws, t, false);
         self.eliminate_held(ws);
@@ -914,6 +915,7 @@ impl StaticProblem {
         }
         self.project_onto_floor(&mut ws.u);
         let tol = self.settings.residual_tolerance;
+        let mut exact_refused = false;
         for _ in 0..self.settings.max_iterations {
             let forces = self.gradient(&ws.u, t, &mut ws.grad);
             let mut held = 0usize;
@@ -936,10 +938,14 @@ impl StaticProblem {
             }
             report.iterations += 1;
             // The projected tangent converges only linearly where it differs from the exact
-            // one (compressed elements): near the solution the exact one is used if it can be.
-            let exact = self.settings.project_hessian
-                && forces.residual <= EXACT_TANGENT_BELOW * forces.scale
-                && self.exact_tangent(ws, t);
+            // one (compressed elements), and its eigen-decompositions are most of the
+            // assembly's cost: the exact one is used where it is positive definite (once it
+            // is not, not again in this load step).
+            let exact = self.settings.project_hessian && !exact_refused && {
+                let ok = self.exact_tangent(ws, t);
+                exact_refused = !ok;
+                ok
+            };
             if !exact {
                 self.assemble_hessian(ws, t, self.settings.project_hessian);
                 self.eliminate_held(ws);
