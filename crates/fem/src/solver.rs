@@ -90,8 +90,8 @@ pub struct SolverSettings {
     pub contact_stiffness: f64,
     /// Where the exact tangent is not positive definite, project each element's `∂²Ψ/∂F²` to
     /// positive semidefinite (default `true`; the exact tangent is tried first in each Newton
-    /// iteration, and after one failure the projected one is used for the rest of the load
-    /// step). With `false` the exact tangent is always used, shifted when it cannot be
+    /// iteration, and after a failure the projected one is used until the residual has fallen
+    /// tenfold). With `false` the exact tangent is always used, shifted when it cannot be
     /// factored.
     pub project_hessian: bool,
 }
@@ -915,7 +915,7 @@ impl StaticProblem {
         }
         self.project_onto_floor(&mut ws.u);
         let tol = self.settings.residual_tolerance;
-        let mut exact_refused = false;
+        let mut exact_below = f64::INFINITY;
         for _ in 0..self.settings.max_iterations {
             let forces = self.gradient(&ws.u, t, &mut ws.grad);
             let mut held = 0usize;
@@ -940,10 +940,12 @@ impl StaticProblem {
             // The projected tangent converges only linearly where it differs from the exact
             // one (compressed elements), and its eigen-decompositions are most of the
             // assembly's cost: the exact one is used where it is positive definite (once it
-            // is not, not again in this load step).
-            let exact = self.settings.project_hessian && !exact_refused && {
+            // is not, not again until the residual has fallen tenfold).
+            let exact = self.settings.project_hessian && forces.residual < exact_below && {
                 let ok = self.exact_tangent(ws, t);
-                exact_refused = !ok;
+                if !ok {
+                    exact_below = 0.1 * forces.residual;
+                }
                 ok
             };
             if !exact {
