@@ -620,7 +620,7 @@ impl StaticProblem {
     }
 
     /// The floor's reaction on node `i` (along its normal, dyn) when the floor holds it: the
-    /// node is on the floor (within [`StaticProblem::bound_slack`]) and the rest of the model
+    /// node is on the floor (within `bound_slack`) and the rest of the model
     /// pushes it into the floor (`grad` is the energy gradient at the node).
     #[inline]
     fn floor_holds(&self, i: usize, u: DVec3, grad: DVec3) -> Option<f64> {
