@@ -31,15 +31,22 @@
 //! shape-function gradients, energy `V Ψ(F)`, gradient `V P bₐ` with
 //! `P = μ'(1 − 1/(I_C + 1)) F + λ'(J − α) cof F`, and the Hessian `V Bᵀ (∂²Ψ/∂F²) B`, where
 //! `∂²Ψ/∂F²` (9×9) is projected to positive semidefinite by clamping its negative eigenvalues
-//! (Jacobi eigen-decomposition) so every Newton direction descends.
+//! (Jacobi eigen-decomposition) where the assembled exact tangent is not positive definite, so
+//! every Newton direction descends.
 //!
 //! ## Loads, supports and contact
 //! - Gravity: `mᵢ g` on each node, `mᵢ = ρ Σ V/4` over its tetrahedra (lumped).
 //! - Clamped (or prescribed) degrees of freedom have no unknown; their reaction is the net force
 //!   the rest of the model puts on them, reported in [`StaticSolution::reactions`].
-//! - Floor, plate and sphere are rigid and frictionless and act on the boundary vertices only,
-//!   through a **penalty** `½ kᵢ min(gᵢ, 0)²` on the signed gap `gᵢ` of vertex `i`, with
-//!   `kᵢ = κ E ℓᵢ` (`ℓᵢ` the cube root of the vertex's lumped volume, `κ =`
+//! - A floor whose normal is a coordinate axis (`Plane::floor`, or `y` up) is a **bound** on
+//!   the boundary vertices' coordinate along it: a vertex on the floor that the rest of the body
+//!   pushes into it is held there (its degree of freedom taken out of the Newton system), one
+//!   that the floor would have to pull is released, one that a step carries through the floor
+//!   ends on it (a projected search, Bertsekas 1982). No penetration, and the floor's reaction
+//!   is exactly the net force on the held vertices.
+//! - A tilted floor, the plate and the sphere are rigid and frictionless and act on the
+//!   boundary vertices only, through a **penalty** `½ kᵢ min(gᵢ, 0)²` on the signed gap `gᵢ`
+//!   of vertex `i`, with `kᵢ = κ E ℓᵢ` (`ℓᵢ` the cube root of the vertex's lumped volume, `κ =`
 //!   [`SolverSettings::contact_stiffness`], default 10³): a thousand times as stiff as the
 //!   elastic cube a vertex stands for, so a vertex penetrates `fᵢ / kᵢ`, about 10⁻³ of the
 //!   elastic displacement the same force causes (reported as [`StaticReport::max_penetration`]).
@@ -52,7 +59,11 @@
 //! tangent assembled into a fixed sparse pattern (lower triangle, free degrees of freedom),
 //! factored by faer's sparse Cholesky (symbolic factorisation once per solve, numeric refactor
 //! per iteration, `Par::Seq`), with a diagonal shift as fallback when the factorisation fails;
-//! backtracking Armijo line search on `Π`. Stop when `‖r‖₂ ≤ tol · scale` over the free degrees
+//! backtracking Armijo line search on `Π`. Each iteration tries the exact (unprojected)
+//! tangent first and uses it when it is positive definite: the projected one converges only
+//! linearly where they differ (compressed elements), and its eigen-decompositions are most of
+//! the assembly's cost (on the bunny, 0.38 s against 0.013 s); after a failure the projected
+//! one is used until the residual has fallen tenfold. Stop when `‖r‖₂ ≤ tol · scale` over the free degrees
 //! of freedom, `scale` the largest of the norms of gravity, contact forces and support
 //! reactions (default `tol = 10⁻⁸`, [`SolverSettings::residual_tolerance`]). Loads can be
 //! ramped ([`SolverSettings::load_steps`]). Nothing is allocated inside the Newton loop.

@@ -88,7 +88,11 @@ pub struct SolverSettings {
     /// cube root of the node's lumped volume: this many times the stiffness of an elastic cube
     /// the node's size. Default `1e3`.
     pub contact_stiffness: f64,
-    /// Project each element's `∂²Ψ/∂F²` to positive semidefinite (default `true`).
+    /// Where the exact tangent is not positive definite, project each element's `∂²Ψ/∂F²` to
+    /// positive semidefinite (default `true`; the exact tangent is tried first in each Newton
+    /// iteration, and after a failure the projected one is used until the residual has fallen
+    /// tenfold). With `false` the exact tangent is always used, shifted when it cannot be
+    /// factored.
     pub project_hessian: bool,
 }
 
@@ -201,6 +205,14 @@ pub struct StaticProblem {
     surface: Vec<u32>,
     /// Per-node contact penalty, g/s² (0 off the surface).
     contact_k: Vec<f64>,
+    /// Whether a node is a boundary vertex.
+    on_surface: Vec<bool>,
+    /// The floor as a bound on one coordinate when its normal is a coordinate axis (see
+    /// [`StaticProblem::set_floor`]); `None` for no floor or a tilted one (penalty contact).
+    floor_bound: Option<FloorBound>,
+    /// How far above the floor (cm) a vertex still counts as on it: round-off, `10⁻¹²` of the
+    /// body's size.
+    bound_slack: f64,
     fixed: Vec<[bool; 3]>,
     targets: Vec<DVec3>,
     gravity: DVec3,
@@ -272,6 +284,12 @@ impl StaticProblem {
             }
         }
         let surface = (0..n as u32).filter(|&i| on_surface[i as usize]).collect();
+        let extent = rest
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
+        let size = (extent.1 - extent.0).length();
         let settings = SolverSettings::default();
         let mut p = StaticProblem {
             material,
@@ -284,6 +302,9 @@ impl StaticProblem {
             referenced,
             surface,
             contact_k: Vec::new(),
+            on_surface,
+            floor_bound: None,
+            bound_slack: 1e-12 * if size.is_finite() { size.max(1.0) } else { 1.0 },
             fixed: vec![[false; 3]; n],
             gravity: DVec3::new(0.0, 0.0, -GRAVITY),
             floor: None,
@@ -442,7 +463,10 @@ impl StaticProblem {
         nodes.len()
     }
 
-    /// Puts a rigid frictionless floor under the body (replacing any).
+    /// Puts a rigid frictionless floor under the body (replacing any). A floor whose normal is
+    /// a coordinate axis bounds the boundary vertices' coordinate along it (exact contact, no
+    /// penetration; see the crate's documentation); a tilted one acts through the contact
+    /// penalty of [`SolverSettings::contact_stiffness`].
     ///
     /// # Errors
     /// [`FemError::Problem`] for a non-finite point or a zero normal.
@@ -450,6 +474,13 @@ impl StaticProblem {
         finite_point(floor.point, "floor point")?;
         let normal = unit(floor.normal, "floor normal")?;
         self.floor = Some(Plane { normal, ..floor });
+        self.floor_bound = (0..3)
+            .find(|&a| (normal[a].abs() - 1.0).abs() <= 1e-12)
+            .map(|axis| FloorBound {
+                axis,
+                sign: normal[axis].signum(),
+                level: floor.point[axis],
+            });
         Ok(())
     }
 
@@ -511,9 +542,10 @@ impl StaticProblem {
     /// `10⁻⁸, 10⁻⁶, …, 10⁻²` times its largest diagonal entry before giving up; when the line
     /// search rejects a Newton step (a nearly singular tangent) the step is recomputed with
     /// `10⁻⁶, 10⁻⁴, 10⁻², 1` times that entry on the diagonal (towards gradient descent).
-    /// The first Newton step starts from the rest shape; vertices touching an obstacle exactly
-    /// (gap 0) already get its stiffness in the tangent, so a body resting on the floor at
-    /// the start is supported from the first step.
+    /// The first Newton step starts from the rest shape (vertices below an axis-aligned floor
+    /// put onto it); vertices touching the floor hold from the first step, and vertices
+    /// touching a penalty obstacle exactly (gap 0) already get its stiffness in the tangent, so
+    /// a body resting on the floor at the start is supported from the first step.
     ///
     /// # Errors
     /// [`FemError::Factorisation`] when the tangent stiffness cannot be factored even so.
@@ -575,10 +607,50 @@ impl StaticProblem {
         self.referenced[i] && !self.fixed[i][a]
     }
 
-    /// The obstacles at load fraction `t`: `[floor, plate, indenter]`.
+    /// The floor's bound on node `i` if the node can touch it (a boundary vertex whose
+    /// coordinate along the floor's normal is free): the bound and the node's gap above it at
+    /// displacement `u`, cm.
+    #[inline]
+    fn floor_gap(&self, i: usize, u: DVec3) -> Option<(FloorBound, f64)> {
+        let b = self.floor_bound?;
+        if !(self.on_surface[i] && self.is_free(i, b.axis)) {
+            return None;
+        }
+        Some((b, b.sign * (self.rest[i][b.axis] + u[b.axis] - b.level)))
+    }
+
+    /// The floor's reaction on node `i` (along its normal, dyn) when the floor holds it: the
+    /// node is on the floor (within `bound_slack`) and the rest of the model
+    /// pushes it into the floor (`grad` is the energy gradient at the node).
+    #[inline]
+    fn floor_holds(&self, i: usize, u: DVec3, grad: DVec3) -> Option<f64> {
+        let (b, gap) = self.floor_gap(i, u)?;
+        let reaction = b.sign * grad[b.axis];
+        (gap <= self.bound_slack && reaction >= 0.0).then_some(reaction)
+    }
+
+    /// Moves every node below the floor back onto it.
+    fn project_onto_floor(&self, u: &mut [DVec3]) {
+        if self.floor_bound.is_none() {
+            return;
+        }
+        for &i in &self.surface {
+            let i = i as usize;
+            if let Some((b, gap)) = self.floor_gap(i, u[i]) {
+                if gap < 0.0 {
+                    u[i][b.axis] = b.level - self.rest[i][b.axis];
+                }
+            }
+        }
+    }
+
+    /// The obstacles at load fraction `t`: `[floor, plate, indenter]`; the floor only when it
+    /// is tilted (a penalty contact; an axis-aligned floor is a bound on the unknowns).
     fn obstacles(&self, t: f64) -> [Option<Obstacle>; 3] {
         [
-            self.floor.map(|p| Obstacle::Plane(p.point, p.normal)),
+            self.floor
+                .filter(|_| self.floor_bound.is_none())
+                .map(|p| Obstacle::Plane(p.point, p.normal)),
             self.plate.map(|p| {
                 Obstacle::Plane(
                     p.rest.point + p.rest.normal * (t * p.displacement),
@@ -655,10 +727,35 @@ impl StaticProblem {
                 _ => forces.indenter = total,
             }
         }
+        if let Some(b) = self.floor_bound {
+            // The floor holds the nodes on it that the rest pushes into it; its reaction there
+            // is what is left of the gradient along its normal.
+            let mut normal = DVec3::ZERO;
+            normal[b.axis] = b.sign;
+            let mut total = DVec3::ZERO;
+            for &i in &self.surface {
+                let i = i as usize;
+                if let Some((_, gap)) = self.floor_gap(i, u[i]) {
+                    forces.max_penetration = forces.max_penetration.max(-gap);
+                    if let Some(reaction) = self.floor_holds(i, u[i], grad[i]) {
+                        total += normal * reaction;
+                        contact_norm2 += reaction * reaction;
+                    }
+                }
+            }
+            forces.floor = total;
+        }
         let mut residual2 = 0.0;
         let mut reaction2 = 0.0;
         for (i, gi) in grad.iter().enumerate() {
+            let held = self
+                .floor_bound
+                .filter(|_| self.floor_holds(i, u[i], *gi).is_some())
+                .map(|b| b.axis);
             for a in 0..3 {
+                if held == Some(a) {
+                    continue;
+                }
                 if self.is_free(i, a) {
                     residual2 += gi[a] * gi[a];
                 } else {
@@ -676,13 +773,13 @@ impl StaticProblem {
 
     /// Assembles the (projected) tangent stiffness of the free degrees of freedom into the
     /// matrix's values.
-    fn assemble_hessian(&self, ws: &mut Workspace, t: f64) {
-        let _span = tracing::trace_span!("assemble").entered();
+    fn assemble_hessian(&self, ws: &mut Workspace, t: f64, project: bool) {
+        let _span = tracing::trace_span!("assemble", project).entered();
         let values = &mut ws.assembled;
         values.iter_mut().for_each(|v| *v = 0.0);
         for (e, (tet, element)) in self.tets.iter().zip(&self.elements).enumerate() {
             let f = element.displacement_gradient(&tet.map(|i| ws.u[i as usize]));
-            let h = element.hessian_at(&self.model, &f, self.settings.project_hessian);
+            let h = element.hessian_at(&self.model, &f, project);
             let map = &ws.scatter[e * 144..e * 144 + 144];
             for (r, row) in h.iter().enumerate() {
                 for (c, &v) in row.iter().enumerate() {
@@ -716,6 +813,25 @@ impl StaticProblem {
         }
     }
 
+    /// Takes the degrees of freedom the floor holds out of the assembled tangent: their rows
+    /// and columns are zeroed but for the diagonal, so their Newton step is zero and the rest
+    /// is solved as if they were fixed.
+    fn eliminate_held(&self, ws: &mut Workspace) {
+        if !ws.held.iter().any(|&h| h) {
+            return;
+        }
+        let symbolic = ws.matrix.symbolic();
+        let (col_ptr, row_idx) = (symbolic.col_ptr(), symbolic.row_idx());
+        for (c, window) in col_ptr.windows(2).enumerate() {
+            let range = window[0]..window[1];
+            for (v, &r) in ws.assembled[range.clone()].iter_mut().zip(&row_idx[range]) {
+                if r != c && (ws.held[r] || ws.held[c]) {
+                    *v = 0.0;
+                }
+            }
+        }
+    }
+
     /// Factors the assembled matrix plus `shift` times its largest diagonal entry on the
     /// diagonal, raising the shift (`10⁻⁸, 10⁻⁶, …, 10⁻²`) while the factorisation fails.
     /// Returns the shift used.
@@ -730,15 +846,29 @@ impl StaticProblem {
         let mut last = String::new();
         for fallback in [0.0, 1e-8, 1e-6, 1e-4, 1e-2] {
             let used = shift.max(fallback);
-            let values = ws.matrix.val_mut();
-            values.copy_from_slice(&ws.assembled);
-            if used > 0.0 {
-                for &d in &ws.diagonal_at {
-                    values[d] += used * max_diag;
+            match Self::try_factor(ws, used * max_diag) {
+                Ok(()) => return Ok(used),
+                Err(e) => {
+                    tracing::debug!(used, "factorisation failed: {e}");
+                    last = e;
                 }
             }
-            let stack = MemStack::new(&mut ws.stack);
-            match ws.cholesky.factorize_numeric_llt::<f64>(
+        }
+        Err(FemError::Factorisation { what: last })
+    }
+
+    /// Factors the assembled matrix plus `shift` on the diagonal.
+    fn try_factor(ws: &mut Workspace, shift: f64) -> Result<(), String> {
+        let values = ws.matrix.val_mut();
+        values.copy_from_slice(&ws.assembled);
+        if shift > 0.0 {
+            for &d in &ws.diagonal_at {
+                values[d] += shift;
+            }
+        }
+        let stack = MemStack::new(&mut ws.stack);
+        ws.cholesky
+            .factorize_numeric_llt::<f64>(
                 &mut ws.factor,
                 ws.matrix.rb(),
                 Side::Lower,
@@ -746,15 +876,25 @@ impl StaticProblem {
                 Par::Seq,
                 stack,
                 Default::default(),
-            ) {
-                Ok(_) => return Ok(used),
-                Err(e) => {
-                    tracing::debug!(used, "factorisation failed: {e:?}");
-                    last = format!("{e:?}");
-                }
+            )
+            .map(|_| ())
+            .map_err(|e| format!("{e:?}"))
+    }
+
+    /// The tangent without the projection to positive semidefinite (the exact Hessian, so
+    /// Newton converges quadratically), assembled and factored; whether it is positive
+    /// definite.
+    fn exact_tangent(&self, ws: &mut Workspace, t: f64) -> bool {
+        self.assemble_hessian(ws, t, false);
+        self.eliminate_held(ws);
+        let _span = tracing::trace_span!("factor_exact").entered();
+        match Self::try_factor(ws, 0.0) {
+            Ok(()) => true,
+            Err(e) => {
+                tracing::debug!("the exact tangent is not positive definite: {e}");
+                false
             }
         }
-        Err(FemError::Factorisation { what: last })
     }
 
     /// Newton iterations at load fraction `t`; returns whether the tolerance was met.
@@ -773,28 +913,54 @@ impl StaticProblem {
                 }
             }
         }
+        self.project_onto_floor(&mut ws.u);
         let tol = self.settings.residual_tolerance;
+        let mut exact_below = f64::INFINITY;
         for _ in 0..self.settings.max_iterations {
             let forces = self.gradient(&ws.u, t, &mut ws.grad);
+            let mut held = 0usize;
+            for (d, &(i, a)) in ws.dofs.iter().enumerate() {
+                let i = i as usize;
+                ws.held[d] = self.floor_bound.is_some_and(|b| b.axis == a as usize)
+                    && self.floor_holds(i, ws.u[i], ws.grad[i]).is_some();
+                held += usize::from(ws.held[d]);
+            }
             forces.record(report);
             tracing::debug!(
                 iteration = report.iterations,
                 residual = forces.residual,
                 relative = report.relative_residual,
+                held,
                 "newton"
             );
             if forces.residual <= tol * forces.scale || forces.residual == 0.0 {
                 return Ok(true);
             }
             report.iterations += 1;
-            self.assemble_hessian(ws, t);
+            // The projected tangent converges only linearly where it differs from the exact
+            // one (compressed elements), and its eigen-decompositions are most of the
+            // assembly's cost: the exact one is used where it is positive definite (once it
+            // is not, not again until the residual has fallen tenfold).
+            let exact = self.settings.project_hessian && forces.residual < exact_below && {
+                let ok = self.exact_tangent(ws, t);
+                if !ok {
+                    exact_below = 0.1 * forces.residual;
+                }
+                ok
+            };
+            if !exact {
+                self.assemble_hessian(ws, t, self.settings.project_hessian);
+                self.eliminate_held(ws);
+            }
             // A step the line search rejects (a nearly singular tangent: a body barely held) is
             // retried with a growing diagonal shift, towards gradient descent.
             let mut moved = false;
             for shift in [0.0, 1e-6, 1e-4, 1e-2, 1.0] {
-                let used = self.factor(ws, shift)?;
-                if used > 0.0 {
-                    report.shifted_factorisations += 1;
+                if !(exact && shift == 0.0) {
+                    let used = self.factor(ws, shift)?;
+                    if used > 0.0 {
+                        report.shifted_factorisations += 1;
+                    }
                 }
                 let slope = self.newton_direction(ws);
                 if !(slope.is_finite() && slope < 0.0) {
@@ -819,7 +985,11 @@ impl StaticProblem {
     /// returns the slope `∇Π·dx`.
     fn newton_direction(&self, ws: &mut Workspace) -> f64 {
         for (d, &(i, a)) in ws.dofs.iter().enumerate() {
-            ws.rhs[(d, 0)] = -ws.grad[i as usize][a as usize];
+            ws.rhs[(d, 0)] = if ws.held[d] {
+                0.0
+            } else {
+                -ws.grad[i as usize][a as usize]
+            };
         }
         {
             let _span = tracing::trace_span!("solve").entered();
@@ -855,8 +1025,22 @@ impl StaticProblem {
                 for ((ut, u), d) in ws.trial.iter_mut().zip(&ws.u).zip(&ws.dx) {
                     *ut = *u + *d * alpha;
                 }
+                // A step through the floor ends on it (a projected search): the decrease
+                // expected is the gradient along the projected step.
+                self.project_onto_floor(&mut ws.trial);
+                let expected = if self.floor_bound.is_some() {
+                    ws.trial
+                        .iter()
+                        .zip(&ws.u)
+                        .zip(&ws.grad)
+                        .map(|((ut, u), g)| (*ut - *u).dot(*g))
+                        .sum::<f64>()
+                        .min(0.0)
+                } else {
+                    alpha * slope
+                };
                 let e1 = self.energy(&ws.trial, t);
-                if e1.total.is_finite() && e1.total - e0.total <= 1e-4 * alpha * slope {
+                if e1.total.is_finite() && e1.total - e0.total <= 1e-4 * expected {
                     std::mem::swap(&mut ws.u, &mut ws.trial);
                     return true;
                 }
@@ -868,7 +1052,9 @@ impl StaticProblem {
             for ((ut, u), d) in ws.trial.iter_mut().zip(&ws.u).zip(&ws.dx) {
                 *ut = *u + *d * alpha;
             }
-            let forces = self.gradient(&ws.trial, t, &mut ws.grad);
+            self.project_onto_floor(&mut ws.trial);
+            // Into its own buffer: a rejected search leaves the gradient at `u` for a retry.
+            let forces = self.gradient(&ws.trial, t, &mut ws.trial_grad);
             if forces.residual <= (1.0 - 1e-4 * alpha) * residual {
                 std::mem::swap(&mut ws.u, &mut ws.trial);
                 return true;
@@ -878,6 +1064,14 @@ impl StaticProblem {
         tracing::debug!(slope, energy = e0.total, "line search failed");
         false
     }
+}
+
+/// An axis-aligned floor as a bound on one coordinate: `sign (x[axis] − level) ≥ 0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct FloorBound {
+    axis: usize,
+    sign: f64,
+    level: f64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -952,8 +1146,11 @@ struct Workspace {
     trial: Vec<DVec3>,
     dx: Vec<DVec3>,
     grad: Vec<DVec3>,
+    trial_grad: Vec<DVec3>,
     /// Free degree of freedom → (node, axis).
     dofs: Vec<(u32, u8)>,
+    /// Whether the floor holds a free degree of freedom in this Newton iteration.
+    held: Vec<bool>,
     /// Per tetrahedron, 12×12 local entry → position in the matrix's values (NONE: not stored).
     scatter: Vec<u32>,
     /// Per surface node, its 3×3 block → position in the values.
@@ -1096,6 +1293,8 @@ impl Workspace {
             trial: vec![DVec3::ZERO; n_nodes],
             dx: vec![DVec3::ZERO; n_nodes],
             grad: vec![DVec3::ZERO; n_nodes],
+            trial_grad: vec![DVec3::ZERO; n_nodes],
+            held: vec![false; n],
             dofs,
             scatter,
             surface_block,

@@ -123,9 +123,18 @@ fn problem(organ: &Organ, material: ElasticMaterial) -> Result<StaticProblem, Sc
             // bottom nodes held in x and z, free to lift off. (Two of them held, the rest
             // sliding freely, left the organ's top free to shear under the probe: its pressed
             // nodes slid off the sphere's apex and the force at a depth came out 15–20 % below
-            // a sticking tray's on the 10 cm box.)
+            // a sticking tray's on the 10 cm box.) An organ that touches the tray at one node
+            // (the bunny) is held as well by the bottom node farthest from it — "bottom":
+            // within 1 % of the height above the lowest — across the line between them (in z
+            // when that line runs more along x, else in x): no spin about y. (Held by the
+            // lowest node's neighbour instead, the short lever left the spin all but free and
+            // Newton crept along it for hundreds of iterations.)
             let rest = p.rest_positions().to_vec();
-            let lowest = rest.iter().map(|q| q.y).fold(f64::INFINITY, f64::min);
+            let (lowest, highest) = rest
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+                    (lo.min(q.y), hi.max(q.y))
+                });
             let bottom: Vec<u32> = p.nodes_where(|q| q.y <= lowest + 1e-6);
             let Some(&a) = bottom.first() else {
                 return Err(SceneError::mesh(&organ.label, "an organ without nodes"));
@@ -134,12 +143,31 @@ fn problem(organ: &Organ, material: ElasticMaterial) -> Result<StaticProblem, Sc
                 p.fix_axes(n, [true, false, true])?;
             }
             if bottom.len() == 1 {
-                // One bottom node only: hold the lowest node above it in x as well.
-                let other = (0..rest.len() as u32)
-                    .filter(|&n| n != a)
-                    .min_by(|&i, &j| rest[i as usize].y.total_cmp(&rest[j as usize].y));
-                if let Some(b) = other {
-                    p.fix_axes(b, [false, false, true])?;
+                let pa = rest[a as usize];
+                let band = lowest + 0.01 * (highest - lowest);
+                let across = |n: u32| {
+                    let d = rest[n as usize] - pa;
+                    d.x.hypot(d.z)
+                };
+                let far = p
+                    .nodes_where(|q| q.y <= band)
+                    .into_iter()
+                    .max_by(|&i, &j| across(i).total_cmp(&across(j)))
+                    .filter(|&n| across(n) > 0.0)
+                    .or_else(|| {
+                        // A body without a base: the nearest node beside the lowest one.
+                        (0..rest.len() as u32)
+                            .filter(|&n| across(n) > 0.0)
+                            .min_by(|&i, &j| rest[i as usize].y.total_cmp(&rest[j as usize].y))
+                    });
+                if let Some(b) = far {
+                    let d = rest[b as usize] - pa;
+                    let held = if d.x.abs() >= d.z.abs() {
+                        [false, false, true]
+                    } else {
+                        [true, false, false]
+                    };
+                    p.fix_axes(b, held)?;
                 }
             }
         }

@@ -5,3 +5,4 @@ mod material;
 mod moving_body;
 mod probe;
 mod session;
+mod shipped;
