@@ -138,6 +138,25 @@ fn elastic_parameters_are_validated() {
             ..
         }
     ));
+    // The over-relaxation is a fraction in [0, 1].
+    for beta in [-0.1, 1.5, f32::NAN] {
+        let err = body
+            .set_settings(StepSettings {
+                over_relaxation: beta,
+                ..StepSettings::material()
+            })
+            .unwrap_err();
+        assert!(
+            matches!(
+                err,
+                PbdError::InvalidParameter {
+                    param: PbdParam::OverRelaxation,
+                    ..
+                }
+            ),
+            "{beta}: {err}"
+        );
+    }
 }
 
 /// Column height (cm): 2 × 2 cm across, short enough not to buckle under its own weight.

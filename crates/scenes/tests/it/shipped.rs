@@ -27,11 +27,13 @@ fn height(ys: impl Iterator<Item = f64>) -> f64 {
 
 /// The material scheme's organ settled `steps` steps on its support as the trainer holds it
 /// (the tray's friction `friction`): its height as loaded and settled (cm).
-fn pbd_heights(organ: &Organ, material: &OrganMaterial, friction: f32, steps: usize) -> (f64, f64) {
-    let substeps = std::env::var("TISSUE_SUBSTEPS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(StepSettings::MATERIAL_SUBSTEPS);
+fn pbd_heights(
+    organ: &Organ,
+    material: &OrganMaterial,
+    friction: f32,
+    steps: usize,
+    substeps: u32,
+) -> (f64, f64) {
     let settings = StepSettings {
         parallel: true,
         substeps,
@@ -77,7 +79,13 @@ fn sags(
 ) -> (f64, tissue_fem::StaticReport, f64) {
     let organ = Organ::shipped(which).unwrap();
     let fem = reference(&organ, &fem_plan(material.elastic)).unwrap();
-    let (loaded, settled) = pbd_heights(&organ, material, 0.5, steps);
+    let (loaded, settled) = pbd_heights(
+        &organ,
+        material,
+        0.5,
+        steps,
+        StepSettings::MATERIAL_SUBSTEPS,
+    );
     assert!((loaded - fem.height_loaded).abs() < 1e-4);
     (
         fem.height_loaded - fem.height_settled,
@@ -140,7 +148,7 @@ fn the_shipped_bunny_settles_as_its_reference() {
     );
 }
 
-/// Measuring aid: `TISSUE_ORGAN=bunny TISSUE_MATERIAL=default|preset TISSUE_STEPS=100
+/// Measuring aid: `TISSUE_ORGAN=bunny TISSUE_MATERIAL=default|preset TISSUE_STEPS=100[,300] [TISSUE_SUBSTEPS=64]
 /// [RUST_LOG=tissue_fem=debug] cargo test --release -p tissue-scenes --test it
 /// shipped::measure -- --ignored --nocapture`.
 #[test]
@@ -183,10 +191,14 @@ fn measure() {
         .split(',')
         .filter_map(|s| s.parse().ok())
         .collect();
+    let substeps = std::env::var("TISSUE_SUBSTEPS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(StepSettings::MATERIAL_SUBSTEPS);
     for friction in [0.5, 0.0] {
         for &steps in &steps {
             let start = Instant::now();
-            let (loaded, settled) = pbd_heights(&organ, &material, friction, steps);
+            let (loaded, settled) = pbd_heights(&organ, &material, friction, steps, substeps);
             let sag = loaded - settled;
             eprintln!(
                 "{id}: material scheme, friction {friction}, {steps} steps: loaded {loaded:.4} \
