@@ -7,7 +7,9 @@
 use std::ops::RangeInclusive;
 
 use serde::{Deserialize, Serialize};
-use tissue_scenes::{OrganMaterial, SceneError, SessionOptions, ShippedOrgan, TissuePreset};
+use tissue_scenes::{
+    MaterialField, OrganMaterial, SceneError, SessionOptions, ShippedOrgan, TissuePreset,
+};
 
 /// The scheme a trainer session is stepped with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -20,10 +22,10 @@ pub enum Scheme {
     Realtime,
 }
 
-/// The scheme a session starts with until the page chooses a material. Measured on this shared
-/// 2-core machine (load 8–12) with the browser test on the bunny (39 706 tets): the material
-/// scheme's step takes 27–31 ms (median), so it runs at 16–37 steps per second; realtime's
-/// 6–7 ms, 45–61 steps per second. Realtime stays the default until the material scheme
+/// The scheme a session starts with until the page chooses a material. Measured by the browser
+/// test in `.ci/run` on a clean clone (2 cores) on the bunny (39 706 tets): the material
+/// scheme's step takes 29–33 ms (median), 26–31 steps per second; realtime 60 steps per
+/// second. Realtime stays the default until the material scheme
 /// reaches 60 steps per second (`docs/trainer.md`, "The trainer in the browser"); with
 /// `Scheme::Material` here every check of the browser test passes too, at 17 steps per second.
 pub const DEFAULT_SCHEME: Scheme = Scheme::Realtime;
@@ -76,8 +78,7 @@ pub enum MaterialError {
         unit: &'static str,
     },
     /// One of the three constants refused by tissue-scenes ([`SessionOptions::material`],
-    /// the solver's [`PbdError::InvalidParameter`]), with the value as given (the solver's is
-    /// an `f32`).
+    /// [`SceneError::material_refusal`]), with the value as given (the solver's is an `f32`).
     #[error("{label} of {value}: expected {expected}")]
     Parameter {
         /// The field (`young_kpa`, `poisson`, `density`).
@@ -110,23 +111,22 @@ impl MaterialError {
         let Some((f, expected)) = source.material_refusal() else {
             return MaterialError::Scene(source);
         };
-        let (field, value) = (f.name(), f.of(m));
         MaterialError::Parameter {
-            field,
-            label: label(field),
-            value,
+            field: f.name(),
+            label: label(f),
+            value: f.of(m),
             expected,
         }
     }
 }
 
 /// How the page labels a material field.
-fn label(field: &str) -> &'static str {
+fn label(field: MaterialField) -> &'static str {
     match field {
-        "young_kpa" => "Young's modulus E",
-        "poisson" => "Poisson's ratio ν",
-        "density" => "density ρ",
-        _ => "the material",
+        MaterialField::YoungKpa => "Young's modulus E",
+        MaterialField::Poisson => "Poisson's ratio ν",
+        MaterialField::Density => "density ρ",
+        MaterialField::RelaxationTime => "relaxation time τ",
     }
 }
 
@@ -197,14 +197,14 @@ impl TissueMaterial {
         organ.elastic.density = density;
         let options =
             SessionOptions::material(&organ).map_err(|e| MaterialError::scene(e, &organ))?;
-        within("young_kpa", young_kpa, &YOUNG_KPA_BOUNDS, "kPa")?;
-        within("density", density, &DENSITY_BOUNDS, "g/cm³")?;
+        within(MaterialField::YoungKpa, young_kpa, &YOUNG_KPA_BOUNDS, "kPa")?;
+        within(MaterialField::Density, density, &DENSITY_BOUNDS, "g/cm³")?;
         Ok(options)
     }
 }
 
 fn within(
-    field: &'static str,
+    field: MaterialField,
     value: f64,
     bounds: &RangeInclusive<f64>,
     unit: &'static str,
@@ -213,7 +213,7 @@ fn within(
         return Ok(());
     }
     Err(MaterialError::Bounds {
-        field,
+        field: field.name(),
         label: label(field),
         value,
         min: *bounds.start(),
