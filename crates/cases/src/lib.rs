@@ -1,0 +1,523 @@
+//! # tissue-cases: the case library
+//!
+//! A planning system keeps its cases: the patients (their scans), every plan run on them, and
+//! its result, in one embedded SQLite database (`cases.sqlite` in a data folder) that needs no
+//! server and no set-up. `insert --save`, the `tissue-cases` command and the studio all go
+//! through this crate, so that a plan saved by one is opened by the others.
+//!
+//! ## Key types
+//! - [`Library`]: the database in a folder ([`Library::open`], [`default_data_dir`]); `Send +
+//!   Sync` (one connection behind a mutex), so a server shares one.
+//! - [`Scan`]: a patient's scan as it came (file name, unit, bytes); its SHA-256 identifies the
+//!   patient (same bytes and unit: same patient).
+//! - [`PatientInfo`], [`PlanInfo`]: what a list shows. [`StoredPlan`]: a plan opened, with its
+//!   job and report JSON exactly as the planner wrote them and its result on the patient
+//!   ([`tissue_planner::PatientResult`]), so nothing is recomputed.
+//! - [`Comparison`]: two plans of one patient, their figures side by side and the per-vertex
+//!   difference map.
+//! - [`CaseError`]: what went wrong, where, and what to do.
+//!
+//! ## Storage (schema version [`SCHEMA_VERSION`], `PRAGMA user_version`)
+//! - `patients`: uid, label, unit, scan file name, scan SHA-256, the scan's summary (JSON), when
+//!   added, the scan bytes' blob and its decoded mesh's blob.
+//! - `plans`: uid, patient, name, note, mode, tool, solver, library version, when run, the job
+//!   JSON and the report JSON (text, byte for byte as the planner wrote it), key figures for
+//!   lists, and the result's blob (a single run's patient after and its fields) and an
+//!   expansion's chart.
+//! - `blobs`: content-addressed (SHA-256) bytes, each stored once however many rows name it;
+//!   a blob no row names is removed with the row that named it last.
+//!
+//! ## Invariants
+//! - Every write is one transaction; the database runs in WAL mode with `synchronous=FULL`, so a
+//!   process killed at any moment loses at most the plan being written, and the file always
+//!   passes `PRAGMA integrity_check`.
+//! - Schema migrations run in order from version 1 at [`Library::open`]; a database written by a
+//!   newer version is refused ([`CaseError::Newer`]), never altered.
+//! - The folder is made with mode 0700 and the database file 0600 (SQLite gives its `-wal` and
+//!   `-shm` files the database's mode).
+//! - `secure_delete` is on: deleted rows are overwritten with zeros. [`Library::erase_patient`]
+//!   also checkpoints the WAL, truncates it, and vacuums, so the patient's scan bytes are gone
+//!   from every file of the library afterwards.
+//! - Identifiers (`uid`) are 128 random bits in hex with a prefix (`p…` patient, `c…` plan),
+//!   so that one cannot be guessed from another.
+//!
+//! No HTTP, no terminal, no threads of its own.
+#![forbid(unsafe_code)]
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+use tissue_planner::{Finished, JobSpec, Patient, PatientResult, Unit};
+
+/// The schema version this library writes (`PRAGMA user_version`).
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// The database file's name in the data folder.
+pub const DATABASE_FILE: &str = "cases.sqlite";
+
+/// The platform's data folder for tissue: `$XDG_DATA_HOME/tissue` or `~/.local/share/tissue` on
+/// Linux, `~/Library/Application Support/tissue` on macOS, `%APPDATA%\tissue` on Windows.
+///
+/// # Errors
+/// [`CaseError::NoDataDir`] when the platform has none (no home folder): pass a folder.
+pub fn default_data_dir() -> Result<PathBuf, CaseError> {
+    dirs::data_dir()
+        .map(|d| d.join("tissue"))
+        .ok_or(CaseError::NoDataDir)
+}
+
+/// What went wrong with the library, where, and what to do.
+#[derive(Debug, thiserror::Error)]
+pub enum CaseError {
+    /// The platform has no user data folder.
+    #[error("this computer has no user data folder (no home folder?): give the library's folder with --data DIR")]
+    NoDataDir,
+    /// The folder or database file could not be made or opened.
+    #[error("cannot open the case library in {path}: {source}; check the folder is writable, or give another with --data DIR")]
+    Open {
+        /// The folder or file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The database was written by a newer version of tissue.
+    #[error("the case library {path} has schema version {found}, newer than this program's {supported}: update tissue (the library was not changed)")]
+    Newer {
+        /// The database file.
+        path: PathBuf,
+        /// Its version.
+        found: u32,
+        /// Ours.
+        supported: u32,
+    },
+    /// SQLite failed (a full disk, a damaged file, a lock held too long).
+    #[error("the case library's database failed while {doing}: {source}")]
+    Database {
+        /// What it was doing (`saving the plan`, …).
+        doing: &'static str,
+        /// SQLite's error.
+        source: rusqlite::Error,
+    },
+    /// No patient or plan of that id.
+    #[error("no {what} {id:?} in the case library: list them with `tissue-cases list`")]
+    NotFound {
+        /// `patient` or `plan`.
+        what: &'static str,
+        /// The id asked for.
+        id: String,
+    },
+    /// A value given is not acceptable (an empty name, a note too long).
+    #[error("{field}: {message}")]
+    Invalid {
+        /// The field (`name`, `note`, `label`).
+        field: &'static str,
+        /// What is wrong and what to do.
+        message: String,
+    },
+    /// Stored data does not decode (a blob of the wrong length or hash).
+    #[error("the case library holds damaged data ({what}): {message}")]
+    Damaged {
+        /// Which record.
+        what: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A case archive (zip) that cannot be imported.
+    #[error("the case archive cannot be imported: {message}")]
+    Archive {
+        /// What is wrong with it and what to do.
+        message: String,
+    },
+    /// The plan or patient given cannot be stored (the planner failed to encode it).
+    #[error("cannot store the plan: {0}")]
+    Plan(#[from] tissue_planner::PlanError),
+    /// Writing an export failed.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+}
+
+/// A patient's scan as it came: the file name (its extension names the format), its unit and its
+/// bytes. The shipped meshes are stored as OBJ written from their mesh.
+#[derive(Debug, Clone)]
+pub struct Scan {
+    /// File name, no folder (`p17.ply`).
+    pub name: String,
+    /// The file's unit.
+    pub unit: Unit,
+    /// The bytes.
+    pub bytes: Vec<u8>,
+}
+
+impl Scan {
+    /// The file at `path` in `unit`.
+    ///
+    /// # Errors
+    /// [`CaseError::Open`] when it cannot be read.
+    pub fn read(path: &Path, unit: Unit) -> Result<Scan, CaseError> {
+        let _ = (path, unit);
+        todo!()
+    }
+
+    /// The scan of a patient that was not read from bytes (a shipped or generated mesh): its
+    /// file mesh written as OBJ, named after `name` with `.obj`.
+    ///
+    /// # Errors
+    /// [`CaseError::Plan`] when it cannot be written.
+    pub fn of_mesh(patient: &Patient, name: &str) -> Result<Scan, CaseError> {
+        let _ = (patient, name);
+        todo!()
+    }
+
+    /// The patient these bytes are (parsed as the planner parses an upload).
+    ///
+    /// # Errors
+    /// [`CaseError::Plan`] when they do not parse.
+    pub fn patient(&self) -> Result<Patient, CaseError> {
+        todo!()
+    }
+
+    /// Its SHA-256 in hex.
+    pub fn sha256(&self) -> String {
+        todo!()
+    }
+}
+
+/// A patient as a list shows it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PatientInfo {
+    /// Its id (`p` and 32 hex digits).
+    pub uid: String,
+    /// What the surgeon calls it (the scan's file name until renamed).
+    pub label: String,
+    /// The scan's unit (`mm`, `cm`, `dm`, `m`).
+    pub unit: String,
+    /// The scan's file name.
+    pub scan_name: String,
+    /// The scan's SHA-256 (hex).
+    pub scan_sha256: String,
+    /// The scan's size (bytes).
+    pub scan_bytes: u64,
+    /// The scan's summary as the planner gives it ([`tissue_planner::MeshSummary`] JSON).
+    pub summary: serde_json::Value,
+    /// When it was added (RFC 3339, UTC).
+    pub added_at: String,
+    /// Its plans.
+    pub plans: u64,
+    /// When its newest plan ran (RFC 3339, UTC), if it has one.
+    pub last_plan_at: Option<String>,
+}
+
+/// A plan as a list shows it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PlanInfo {
+    /// Its id (`c` and 32 hex digits).
+    pub uid: String,
+    /// Its patient's id.
+    pub patient_uid: String,
+    /// Its name.
+    pub name: String,
+    /// Its note (may be empty).
+    pub note: String,
+    /// The job's mode (`single`, `sweep`, `target-gain`, `expansion`).
+    pub mode: String,
+    /// The front end that ran it (`insert`, `studio`, …: the report's `tool`).
+    pub tool: String,
+    /// The solver its runs used (the report's `inputs.solver`).
+    pub solver: String,
+    /// The library version that ran it (the report's version).
+    pub library_version: String,
+    /// When it was run (RFC 3339, UTC).
+    pub run_at: String,
+    /// Skin gained (cm²), for a single run and the search's final run.
+    pub area_gain_cm2: Option<f64>,
+    /// The implant's volume (cm³), for a single run.
+    pub volume_cm3: Option<f64>,
+    /// Whether it has a result on the patient (a single run: a 3D view and meshes).
+    pub has_result: bool,
+}
+
+/// A plan to store: its name and note, the job that ran and what it finished with.
+#[derive(Debug, Clone, Copy)]
+pub struct NewPlan<'a> {
+    /// Its name (1 to 200 characters).
+    pub name: &'a str,
+    /// A note (up to 10 000 characters; may be empty).
+    pub note: &'a str,
+    /// The job as it was asked.
+    pub spec: &'a JobSpec,
+    /// What it finished with.
+    pub finished: &'a Finished,
+}
+
+/// A plan opened: everything the studio shows and the downloads, without recomputing.
+#[derive(Debug, Clone)]
+pub struct StoredPlan {
+    /// The plan.
+    pub info: PlanInfo,
+    /// Its patient.
+    pub patient: PatientInfo,
+    /// The job JSON as stored.
+    pub job_json: String,
+    /// The report JSON exactly as the planner wrote it.
+    pub report_json: String,
+    /// A single run's patient before and after, with its fields (in the scan's unit; `after_cm`
+    /// in cm), as the run gave them.
+    pub result: Option<PatientResult>,
+    /// An expansion's chart (PNG).
+    pub chart_png: Option<Vec<u8>>,
+}
+
+/// One figure of two plans side by side.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FigureRow {
+    /// The report field (`area_gain_cm2`, …).
+    pub name: String,
+    /// Plan A's value.
+    pub a: Option<f64>,
+    /// Plan B's value.
+    pub b: Option<f64>,
+    /// B − A, when both have it.
+    pub difference: Option<f64>,
+}
+
+/// Two plans of one patient compared.
+#[derive(Debug, Clone)]
+pub struct Comparison {
+    /// Plan A.
+    pub a: PlanInfo,
+    /// Plan B.
+    pub b: PlanInfo,
+    /// Their report figures side by side.
+    pub figures: Vec<FigureRow>,
+    /// Per patient vertex: |after_B − after_A| in the scan's unit (both single runs), else empty.
+    pub difference: Vec<f32>,
+    /// The largest entry of `difference` (scan unit).
+    pub max_difference: f32,
+}
+
+/// What an import added.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ImportSummary {
+    /// The patient (existing, when the same scan and unit were in the library already).
+    pub patient: PatientInfo,
+    /// Plans added.
+    pub plans_added: u64,
+    /// Plans already in the library (same id), left as they were.
+    pub plans_skipped: u64,
+}
+
+/// The case library: one SQLite database in a folder.
+#[derive(Debug)]
+pub struct Library {
+    dir: PathBuf,
+}
+
+impl Library {
+    /// Opens (or makes) the library in `dir`: the folder (mode 0700) and `cases.sqlite` (0600),
+    /// WAL, migrations to [`SCHEMA_VERSION`].
+    ///
+    /// # Errors
+    /// [`CaseError::Open`], [`CaseError::Newer`], [`CaseError::Database`].
+    pub fn open(dir: &Path) -> Result<Library, CaseError> {
+        let _ = dir;
+        todo!()
+    }
+
+    /// The folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The database file.
+    pub fn database_path(&self) -> PathBuf {
+        self.dir.join(DATABASE_FILE)
+    }
+
+    /// Stores `plan` for the patient of `scan` (added, labelled `label` or the file name, unless
+    /// the same scan in the same unit is there already), in one transaction.
+    ///
+    /// # Errors
+    /// [`CaseError::Invalid`] for a bad name or note; [`CaseError::Database`].
+    pub fn save(
+        &self,
+        scan: &Scan,
+        label: Option<&str>,
+        plan: NewPlan<'_>,
+    ) -> Result<PlanInfo, CaseError> {
+        let _ = (scan, label, plan);
+        todo!()
+    }
+
+    /// Adds the patient of `scan` without a plan (or finds it).
+    ///
+    /// # Errors
+    /// [`CaseError::Database`], [`CaseError::Plan`] when the scan does not parse.
+    pub fn add_patient(&self, scan: &Scan, label: Option<&str>) -> Result<PatientInfo, CaseError> {
+        let _ = (scan, label);
+        todo!()
+    }
+
+    /// The patients, newest plan (or addition) first; `search` keeps those whose label contains
+    /// it (case-insensitive).
+    ///
+    /// # Errors
+    /// [`CaseError::Database`].
+    pub fn patients(&self, search: Option<&str>) -> Result<Vec<PatientInfo>, CaseError> {
+        let _ = search;
+        todo!()
+    }
+
+    /// Patient `uid`.
+    ///
+    /// # Errors
+    /// [`CaseError::NotFound`], [`CaseError::Database`].
+    pub fn patient(&self, uid: &str) -> Result<PatientInfo, CaseError> {
+        let _ = uid;
+        todo!()
+    }
+
+    /// Patient `uid`'s scan as it came.
+    ///
+    /// # Errors
+    /// [`CaseError::NotFound`], [`CaseError::Database`].
+    pub fn scan(&self, uid: &str) -> Result<Scan, CaseError> {
+        let _ = uid;
+        todo!()
+    }
+
+    /// Patient `uid` ready to plan on (its stored mesh, no parsing).
+    ///
+    /// # Errors
+    /// [`CaseError::NotFound`], [`CaseError::Damaged`], [`CaseError::Database`].
+    pub fn load_patient(&self, uid: &str) -> Result<Patient, CaseError> {
+        let _ = uid;
+        todo!()
+    }
+
+    /// Patient `uid`'s plans, newest first.
+    ///
+    /// # Errors
+    /// [`CaseError::NotFound`], [`CaseError::Database`].
+    pub fn plans(&self, patient_uid: &str) -> Result<Vec<PlanInfo>, CaseError> {
+        let _ = patient_uid;
+        todo!()
+    }
+
+    /// Plan `uid` as a list shows it.
+    ///
+    /// # Errors
+    /// [`CaseError::NotFound`], [`CaseError::Database`].
+    pub fn plan(&self, uid: &str) -> Result<PlanInfo, CaseError> {
+        let _ = uid;
+        todo!()
+    }
+
+    /// Plan `uid` opened: its report, job and result, as stored.
+    ///
+    /// # Errors
+    /// [`CaseError::NotFound`], [`CaseError::Damaged`], [`CaseError::Database`].
+    pub fn open_plan(&self, uid: &str) -> Result<StoredPlan, CaseError> {
+        let _ = uid;
+        todo!()
+    }
+
+    /// Plans `a` and `b` of one patient compared.
+    ///
+    /// # Errors
+    /// [`CaseError::NotFound`]; [`CaseError::Invalid`] when they are of two patients.
+    pub fn compare(&self, a: &str, b: &str) -> Result<Comparison, CaseError> {
+        let _ = (a, b);
+        todo!()
+    }
+
+    /// Renames plan `uid`.
+    ///
+    /// # Errors
+    /// [`CaseError::Invalid`], [`CaseError::NotFound`], [`CaseError::Database`].
+    pub fn rename_plan(&self, uid: &str, name: &str) -> Result<PlanInfo, CaseError> {
+        let _ = (uid, name);
+        todo!()
+    }
+
+    /// Sets plan `uid`'s note.
+    ///
+    /// # Errors
+    /// [`CaseError::Invalid`], [`CaseError::NotFound`], [`CaseError::Database`].
+    pub fn set_note(&self, uid: &str, note: &str) -> Result<PlanInfo, CaseError> {
+        let _ = (uid, note);
+        todo!()
+    }
+
+    /// Renames patient `uid`.
+    ///
+    /// # Errors
+    /// [`CaseError::Invalid`], [`CaseError::NotFound`], [`CaseError::Database`].
+    pub fn rename_patient(&self, uid: &str, label: &str) -> Result<PatientInfo, CaseError> {
+        let _ = (uid, label);
+        todo!()
+    }
+
+    /// Deletes plan `uid` (and blobs no other row names).
+    ///
+    /// # Errors
+    /// [`CaseError::NotFound`], [`CaseError::Database`].
+    pub fn delete_plan(&self, uid: &str) -> Result<(), CaseError> {
+        let _ = uid;
+        todo!()
+    }
+
+    /// Erases patient `uid` and everything of theirs, leaving no trace in the library's files:
+    /// the rows and blobs deleted under `secure_delete`, the WAL checkpointed and truncated, the
+    /// database vacuumed.
+    ///
+    /// # Errors
+    /// [`CaseError::NotFound`], [`CaseError::Database`].
+    pub fn erase_patient(&self, uid: &str) -> Result<(), CaseError> {
+        let _ = uid;
+        todo!()
+    }
+
+    /// Patient `uid`'s case as one zip: `case.json` (the patient, the plans and a SHA-256 of
+    /// every file), the scan as it came, and per plan its job and report JSON, its result (the
+    /// patient after as PLY and VTK with fields, and the exact stored result) and an
+    /// expansion's chart.
+    ///
+    /// # Errors
+    /// [`CaseError::NotFound`], [`CaseError::Database`].
+    pub fn export_case(&self, uid: &str) -> Result<Vec<u8>, CaseError> {
+        let _ = uid;
+        todo!()
+    }
+
+    /// [`Library::export_case`] written atomically to `path`.
+    ///
+    /// # Errors
+    /// As [`Library::export_case`]; [`CaseError::Write`].
+    pub fn export_case_to(&self, uid: &str, path: &Path) -> Result<(), CaseError> {
+        let _ = (uid, path);
+        todo!()
+    }
+
+    /// Imports a case zip made by [`Library::export_case`] (on this computer or another): every
+    /// file's hash checked, sizes bounded (a zip bomb is refused), in one transaction.
+    ///
+    /// # Errors
+    /// [`CaseError::Archive`] for a damaged, foreign or oversized archive; [`CaseError::Database`].
+    pub fn import_case(&self, zip: &[u8]) -> Result<ImportSummary, CaseError> {
+        let _ = zip;
+        todo!()
+    }
+
+    /// `PRAGMA integrity_check`'s answer (`ok` when sound).
+    ///
+    /// # Errors
+    /// [`CaseError::Database`].
+    pub fn integrity_check(&self) -> Result<String, CaseError> {
+        todo!()
+    }
+}
