@@ -33,7 +33,9 @@ fn out(text: &str) -> Result<(), Failure> {
 }
 
 /// The library for a command that only reads, or the not-found error for `id`.
+/// An id of the wrong kind is refused first, whether or not there is a library.
 fn existing(dir: &std::path::Path, kind: Kind, id: &str) -> Result<Library, Failure> {
+    ids::expect(id, kind)?;
     ids::open_existing(dir)?.ok_or_else(|| ids::not_found(kind, id))
 }
 

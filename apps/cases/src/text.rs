@@ -142,7 +142,9 @@ pub fn plan(plan: &StoredPlan) -> String {
     let mut s = format!("plan {}\n", i.uid);
     s.push_str(&format!("  name         {}\n", i.name));
     if !i.note.is_empty() {
-        s.push_str(&format!("  note         {}\n", i.note));
+        // A note of several lines: each under the first.
+        let note = i.note.lines().collect::<Vec<_>>().join("\n               ");
+        s.push_str(&format!("  note         {note}\n"));
     }
     s.push_str(&format!(
         "  patient      {} {:?}\n",

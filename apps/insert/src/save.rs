@@ -55,13 +55,23 @@ fn check_name(flag: &str, value: &str) -> Result<(), Failure> {
     }
 }
 
-/// Refuses a note longer than the library takes.
+/// Refuses a note the library would refuse: longer than [`MAX_NOTE_CHARS`], or with a control
+/// character other than a line break or a tab.
 fn check_note(note: &str) -> Result<(), Failure> {
     let n = note.chars().count();
     if n > MAX_NOTE_CHARS {
         return Err(Failure::new(
             Exit::Usage,
             format!("--note has {n} characters; give at most {MAX_NOTE_CHARS}"),
+        ));
+    }
+    if let Some(c) = note
+        .chars()
+        .find(|&c| c.is_control() && !matches!(c, '\n' | '\r' | '\t'))
+    {
+        return Err(Failure::new(
+            Exit::Usage,
+            format!("--note holds a control character ({c:?}); use text, line breaks and tabs"),
         ));
     }
     Ok(())
@@ -184,7 +194,8 @@ mod tests {
             assert!(f.message.starts_with("--save "), "{}", f.message);
         }
         assert!(check_note("").is_ok());
-        assert!(check_note("line one\nline two").is_ok());
+        assert!(check_note("line one\nline two\tand a tab").is_ok());
+        assert_eq!(check_note("bell\u{7}").unwrap_err().code, Exit::Usage);
         assert_eq!(
             check_note(&"n".repeat(10_001)).unwrap_err().code,
             Exit::Usage

@@ -169,15 +169,20 @@ fn delete_and_erase_remove_them_and_erase_asks_for_yes() {
     let data = dir.join("library");
     let a = insert_save(&data, &dir, "a", &table2("100"));
     let b = insert_save(&data, &dir, "b", &table2("60"));
-    // A second patient: the fixture's plane, its own file.
+    // A second patient: the Table 2 plane's file with a comment added, so other bytes (the
+    // fixture as it is would be the same scan as the generated plane, so the same patient).
     let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/plane_20cm_65.obj");
+    let mut bytes = std::fs::read(&fixture).unwrap();
+    bytes.extend_from_slice(b"# the second patient\n");
+    let second = dir.join("second.obj");
+    std::fs::write(&second, bytes).unwrap();
     let other = insert_save(
         &data,
         &dir,
         "other",
         &[
             "--mesh",
-            fixture.to_str().unwrap(),
+            second.to_str().unwrap(),
             "--at",
             "0,0,0",
             "--scan-triangles",
@@ -218,7 +223,7 @@ fn delete_and_erase_remove_them_and_erase_asks_for_yes() {
     assert_eq!(
         ids_and_names(&list),
         [
-            (other.patient.clone(), "plane_20cm_65.obj".to_owned()),
+            (other.patient.clone(), "second.obj".to_owned()),
             (other.plan.clone(), "other".to_owned())
         ]
     );
