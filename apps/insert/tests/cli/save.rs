@@ -176,6 +176,53 @@ fn a_scan_in_mm_is_saved_with_its_bytes_and_unit() {
     assert_eq!(names, ["one run", "a sweep"], "newest first");
 }
 
+/// A search and an expansion are saved like a single run: their mode, their report byte for
+/// byte, the search's answer among the list's figures, the expansion's chart.
+#[test]
+fn a_search_and_an_expansion_are_saved_with_their_report() {
+    let dir = scratch("save-modes");
+    let data = dir.join("library");
+    let mut saved = Vec::new();
+    for (name, mode_args) in [
+        (
+            "search",
+            &["--target-gain", "10", "--bracket", "50,150"][..],
+        ),
+        (
+            "expansion",
+            &["--expand-weeks", "2", "--band-samples", "0"][..],
+        ),
+    ] {
+        let report = dir.join(format!("{name}.json"));
+        let o = bin()
+            .args(SHORT_TABLE2)
+            .args(mode_args)
+            .args(["--quiet", "--save", name, "--data"])
+            .arg(&data)
+            .arg("--report")
+            .arg(&report)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let (plan, _) = saved_ids(&stderr(&o), name, &data);
+        saved.push((plan, std::fs::read(&report).unwrap()));
+    }
+    let library = Library::open(&data).unwrap();
+    let search = library.open_plan(&saved[0].0).unwrap();
+    assert_eq!(search.info.mode, "target-gain");
+    assert_eq!(search.report_json.as_bytes(), saved[0].1);
+    let report: Value = serde_json::from_slice(&saved[0].1).unwrap();
+    assert_eq!(search.info.volume_cm3, report["volume_cm3"].as_f64());
+    assert_eq!(search.info.area_gain_cm2, report["area_gain_cm2"].as_f64());
+    assert!(search.info.volume_cm3.is_some());
+    let expansion = library.open_plan(&saved[1].0).unwrap();
+    assert_eq!(expansion.info.mode, "expansion");
+    assert_eq!(expansion.report_json.as_bytes(), saved[1].1);
+    assert!(!expansion.info.has_result && expansion.result.is_none());
+    let chart = expansion.chart_png.expect("an expansion's chart");
+    assert_eq!(&chart[1..4], b"PNG");
+}
+
 #[test]
 fn a_bad_name_or_library_is_refused_before_the_run() {
     let dir = scratch("save-refused");
@@ -291,4 +338,52 @@ fn the_default_library_is_in_the_data_folder() {
     let data = dir.join("tissue");
     saved_ids(&stderr(&o), "default", &data);
     assert!(data.join(tissue_cases::DATABASE_FILE).is_file());
+}
+
+/// Ctrl-C once the outputs are written, while the plan is being saved: the save is not cut (the
+/// handler only sets the cancel flag), the program ends as it would have, and the library holds
+/// the plan and passes its integrity check.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_during_the_save_does_not_cut_it() {
+    let dir = scratch("save-ctrl-c");
+    let data = dir.join("library");
+    let report = dir.join("r.json");
+    let mut child = bin()
+        .args(SHORT_TABLE2)
+        .args(["--quiet", "--save", "interrupted?", "--data"])
+        .arg(&data)
+        .arg("--report")
+        .arg(&report)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let mut seen = Vec::new();
+    for line in lines.by_ref() {
+        let line = line.unwrap();
+        let wrote = line.starts_with("insert: wrote");
+        seen.push(line);
+        if wrote {
+            // The outputs are in place: the save comes next. Interrupt it, several times.
+            for _ in 0..3 {
+                let _ = Command::new("kill")
+                    .args(["-INT", &child.id().to_string()])
+                    .status();
+            }
+            break;
+        }
+    }
+    seen.extend(lines.map_while(Result::ok));
+    let exit = child.wait().unwrap();
+    let err = seen.join("\n");
+    assert!(exit.success(), "{exit}: {err}");
+    let (plan, _) = saved_ids(&err, "interrupted?", &data);
+    let library = Library::open(&data).unwrap();
+    assert_eq!(library.integrity_check().unwrap(), "ok");
+    assert_eq!(
+        library.open_plan(&plan).unwrap().report_json.as_bytes(),
+        std::fs::read(&report).unwrap()
+    );
 }
