@@ -32,6 +32,38 @@ fn out(text: &str) -> Result<(), Failure> {
         .map_err(|e| Failure::output("standard output", e))
 }
 
+/// The most of a file `import` reads: more than any archive the library takes (it bounds them
+/// again, and tighter), so that a wrong file is not read whole into memory.
+const MAX_IMPORT_BYTES: u64 = 1 << 30;
+
+/// The archive to import, read up to [`MAX_IMPORT_BYTES`].
+fn read_archive(path: &std::path::Path) -> Result<Vec<u8>, Failure> {
+    use std::io::Read;
+    let unreadable = |e: std::io::Error| {
+        Failure::new(
+            Exit::Input,
+            format!("cannot read the case archive {}: {e}", path.display()),
+        )
+    };
+    let file = std::fs::File::open(path).map_err(unreadable)?;
+    let mut bytes = Vec::new();
+    file.take(MAX_IMPORT_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(unreadable)?;
+    if bytes.len() as u64 > MAX_IMPORT_BYTES {
+        return Err(Failure::new(
+            Exit::Input,
+            format!(
+                "{} is larger than {} MiB, so it is not a case archive: import a .zip made by \
+                 `tissue-cases export`",
+                path.display(),
+                MAX_IMPORT_BYTES >> 20
+            ),
+        ));
+    }
+    Ok(bytes)
+}
+
 /// The library for a command that only reads, or the not-found error for `id`.
 /// An id of the wrong kind is refused first, whether or not there is a library.
 fn existing(dir: &std::path::Path, kind: Kind, id: &str) -> Result<Library, Failure> {
@@ -126,12 +158,7 @@ fn run(cli: &Cli) -> Result<(), Failure> {
             Ok(())
         }
         Command::Import { file, json } => {
-            let bytes = std::fs::read(file).map_err(|e| {
-                Failure::new(
-                    Exit::Input,
-                    format!("cannot read the case archive {}: {e}", file.display()),
-                )
-            })?;
+            let bytes = read_archive(file)?;
             let library = ids::open(&dir)?;
             let summary = library.import_case(&bytes).map_err(|e| from_case(&e))?;
             out(&if *json {

@@ -67,6 +67,19 @@ fn two_saves_are_listed_newest_first_and_a_report_is_shown_byte_for_byte() {
         text.contains("first") && text.contains("\"mode\": \"single\""),
         "{text}"
     );
+    // A beginning that fits both plans is refused, naming them; a patient has no report.
+    fails(
+        &data,
+        &["show", "c", "--report"],
+        Exit::Usage,
+        &["2 plans' ids", &first.plan, &second.plan],
+    );
+    fails(
+        &data,
+        &["show", &first.patient, "--report"],
+        Exit::Usage,
+        &["--report", "patient"],
+    );
     // A patient: its details and plans.
     let shown: Value =
         serde_json::from_slice(&ok(&data, &["show", &first.patient, "--json"]).stdout).unwrap();

@@ -28,6 +28,23 @@ fn a_folder_with_no_library_lists_nothing_and_is_not_made() {
     assert!(!data.exists(), "a command that only reads made the library");
 }
 
+/// Without --data the library is the platform's data folder: `$XDG_DATA_HOME/tissue` on Linux
+/// (a scratch folder here).
+#[cfg(target_os = "linux")]
+#[test]
+fn the_default_library_is_in_the_data_folder() {
+    let dir = scratch("default");
+    let o = cases()
+        .arg("list")
+        .env("XDG_DATA_HOME", &*dir)
+        .env("HOME", &*dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let expected = format!("no patients in {}", dir.join("tissue").display());
+    assert!(stderr(&o).contains(&expected), "{}", stderr(&o));
+}
+
 #[test]
 fn each_error_has_its_exit_code_and_a_message_that_says_what_to_change() {
     let dir = scratch("errors");
