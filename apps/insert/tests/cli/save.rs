@@ -387,3 +387,22 @@ fn ctrl_c_during_the_save_does_not_cut_it() {
         std::fs::read(&report).unwrap()
     );
 }
+
+#[test]
+fn help_documents_the_case_library() {
+    let o = run(&["--help"]);
+    assert!(o.status.success());
+    let help = stdout(&o).split_whitespace().collect::<Vec<_>>().join(" ");
+    for needle in [
+        "--save <NAME>",
+        "--note <TEXT>",
+        "--label <TEXT>",
+        "--data <DIR>",
+        "~/.local/share/tissue",
+        "CASE LIBRARY",
+        "docs/cases.md",
+        "the plan could not be stored",
+    ] {
+        assert!(help.contains(needle), "no {needle:?} in:\n{help}");
+    }
+}
