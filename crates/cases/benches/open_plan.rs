@@ -22,8 +22,7 @@ fn open_plan(c: &mut Criterion) {
     assert!(mesh.triangles().len() > 160_000);
     let patient = Patient::from_mesh(mesh, Unit::Cm, "grid284.obj".into()).expect("patient");
     let scan = Scan::of_mesh(&patient, "grid284").expect("scan");
-    let spec: JobSpec =
-        serde_json::from_str(r#"{ "request": { "max_steps": 5 } }"#).expect("job");
+    let spec: JobSpec = serde_json::from_str(r#"{ "request": { "max_steps": 5 } }"#).expect("job");
     let scenario = Scenario::new(patient, spec.request.clone()).expect("scenario");
     let finished = spec
         .plan(&scenario)

@@ -119,11 +119,11 @@ mod schema;
 mod store;
 mod temp;
 
-use schema::db;
 pub use archive::{
     FORMAT as ARCHIVE_FORMAT, FORMAT_VERSION as ARCHIVE_FORMAT_VERSION, MAX_ARCHIVE_BYTES,
     MAX_ARCHIVE_ENTRIES, MAX_ENTRY_BYTES, MAX_TOTAL_BYTES,
 };
+use schema::db;
 pub use schema::MIGRATIONS;
 pub use store::{MAX_NAME_CHARS, MAX_NOTE_CHARS};
 
