@@ -7,7 +7,7 @@
 //!
 //! The scan is `tissue_mesh::grid(284, 20 cm)`: 284² = 80 656 vertices, 2·283² = 160 178
 //! triangles, written as OBJ through tissue-meshio ([`Scan::of_mesh`]). The plan is a short
-//! single run on it (the default round 100 cm³ implant at the centre, 5 steps: the stored
+//! single run on it (the default round 100 cm³ implant at the centre, `at` [0, 0, 0], 5 steps: the stored
 //! result has every vertex either way), saved once in the set-up.
 #![allow(clippy::expect_used, clippy::unwrap_used)]
 
@@ -22,7 +22,8 @@ fn open_plan(c: &mut Criterion) {
     assert!(mesh.triangles().len() > 160_000);
     let patient = Patient::from_mesh(mesh, Unit::Cm, "grid284.obj".into()).expect("patient");
     let scan = Scan::of_mesh(&patient, "grid284").expect("scan");
-    let spec: JobSpec = serde_json::from_str(r#"{ "request": { "max_steps": 5 } }"#).expect("job");
+    let spec: JobSpec =
+        serde_json::from_str(r#"{ "request": { "at": [0, 0, 0], "max_steps": 5 } }"#).expect("job");
     let scenario = Scenario::new(patient, spec.request.clone()).expect("scenario");
     let finished = spec
         .plan(&scenario)
