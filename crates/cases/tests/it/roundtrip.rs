@@ -185,3 +185,47 @@ fn the_same_scan_and_unit_is_one_patient_and_another_unit_another() {
         .unwrap();
     assert_eq!(blobs, 2);
 }
+
+#[test]
+fn a_noisy_holed_mm_scan_read_from_a_ply_file_reopens_byte_identical() {
+    let tmp = Tmp::new("noisy");
+    let face = tissue_testscans::noisy_face_scan(1).unwrap();
+    assert_eq!(face.unit_name, "mm");
+    let path = tmp.path().join("face.ply");
+    tissue_meshio::write_ply(&path, &face.mesh).unwrap();
+    let scan = tissue_cases::Scan::read(&path, tissue_planner::Unit::Mm).unwrap();
+    assert_eq!(scan.name, "face.ply");
+    let patient = scan.patient().unwrap();
+    let forehead = face.points.iter().find(|p| p.name == "forehead").unwrap();
+    let (spec, finished) = crate::common::run(
+        &patient,
+        &format!(
+            r#"{{ "request": {{ "vertex": {}, "diameter_cm": 2.5, "volume_cm3": 2, "max_steps": 40 }} }}"#,
+            forehead.vertex
+        ),
+    );
+    let lib = Library::open(&tmp.lib_dir()).unwrap();
+    let saved = save(&lib, &scan, "forehead", &spec, &finished);
+    drop(lib);
+    let lib = Library::open(&tmp.lib_dir()).unwrap();
+    let opened = lib.open_plan(&saved.uid).unwrap();
+    assert_eq!(opened.report_json, finished.report.to_json().unwrap());
+    let (orig, back) = (
+        finished.patient.as_ref().unwrap(),
+        opened.result.as_ref().unwrap(),
+    );
+    assert!(orig.displacement.iter().any(|&d| d > 0.0));
+    assert_same_result(orig, back);
+    assert_eq!(
+        downloads(orig, tmp.path(), "orig"),
+        downloads(back, tmp.path(), "back")
+    );
+    // Planning again on the stored patient needs no parse and gives the same mesh.
+    let loaded = lib.load_patient(&saved.patient_uid).unwrap();
+    assert_eq!(loaded.file.positions(), patient.file.positions());
+    assert_eq!(loaded.file.triangles(), patient.file.triangles());
+    assert_eq!(
+        lib.patient(&saved.patient_uid).unwrap().summary["vertices"],
+        patient.file.positions().len()
+    );
+}
