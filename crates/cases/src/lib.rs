@@ -881,15 +881,13 @@ impl Library {
     /// # Errors
     /// [`CaseError::Database`].
     pub fn integrity_check(&self) -> Result<String, CaseError> {
-        let conn = self.lock();
-        let mut stmt = conn
-            .prepare("PRAGMA integrity_check")
-            .map_err(db("checking the database"))?;
-        let rows = stmt
-            .query_map([], |row| row.get::<_, String>(0))
-            .map_err(db("checking the database"))?
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(db("checking the database"))?;
+        let rows = store::all_rows(
+            &self.lock(),
+            "PRAGMA integrity_check",
+            [],
+            |row| row.get::<_, String>(0),
+            "checking the database",
+        )?;
         Ok(rows.join("\n"))
     }
 }
