@@ -65,6 +65,8 @@
 //!   its vertex count, then writes in one transaction; ids are kept, plans already present are
 //!   skipped.
 //! - [`MIGRATIONS`] lists the schema's migrations (entry `i` takes version `i` to `i + 1`).
+//! - When the system's random source fails (no identifier can be drawn), the write is refused
+//!   as [`CaseError::Open`]; no variant was added for it.
 //!
 //! ## Example: save a plan, list it, open it
 //! ```
@@ -820,7 +822,10 @@ impl Library {
     /// database vacuumed.
     ///
     /// # Errors
-    /// [`CaseError::NotFound`], [`CaseError::Database`].
+    /// [`CaseError::NotFound`], [`CaseError::Database`] (also when another program keeps a read
+    /// of the library open past the 10 s busy timeout, so that the WAL cannot be truncated:
+    /// the rows are deleted then, but old copies of their pages may stay in the WAL until the
+    /// next erasure checkpoints it).
     pub fn erase_patient(&self, uid: &str) -> Result<(), CaseError> {
         let _span = tracing::info_span!("cases_erase_patient").entered();
         let mut conn = self.lock();
