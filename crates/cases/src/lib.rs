@@ -135,6 +135,10 @@ pub const CHART_SIZE: (u32, u32) = (1200, 600);
 /// The schema version this library writes (`PRAGMA user_version`).
 pub const SCHEMA_VERSION: u32 = 1;
 
+/// How old a leftover export folder (`.tissue-cases-*` in the library's folder, left by an export
+/// that was killed) must be for [`Library::open`] to remove it: 10 minutes.
+pub const STALE_EXPORT: std::time::Duration = std::time::Duration::from_secs(600);
+
 /// The database file's name in the data folder.
 pub const DATABASE_FILE: &str = "cases.sqlite";
 
@@ -436,6 +440,8 @@ impl Library {
     pub fn open(dir: &Path) -> Result<Library, CaseError> {
         let _span = tracing::info_span!("cases_open", dir = %dir.display()).entered();
         let conn = schema::open(dir)?;
+        // An export killed mid-way leaves its folder of meshes: gone at the next open.
+        temp::sweep_stale(dir, STALE_EXPORT);
         Ok(Library {
             dir: dir.to_path_buf(),
             conn: Mutex::new(conn),
