@@ -482,13 +482,20 @@ pub(crate) fn patients(
          WHERE c.patient_id = p.id), p.added_at)) DESC, p.id DESC"
     );
     let pattern = search.map(like_pattern);
-    let mut stmt = conn.prepare(&sql).map_err(db("listing patients"))?;
-    let rows = stmt
-        .query_map([pattern], patient_info_of)
-        .map_err(db("listing patients"))?
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(db("listing patients"))?;
-    Ok(rows)
+    all_rows(conn, &sql, [pattern], patient_info_of, "listing patients")
+}
+
+/// Every row of `sql` with `params`, mapped by `map`.
+pub(crate) fn all_rows<T, P: rusqlite::Params>(
+    conn: &Connection,
+    sql: &str,
+    params: P,
+    map: impl FnMut(&rusqlite::Row<'_>) -> rusqlite::Result<T>,
+    doing: &'static str,
+) -> Result<Vec<T>, CaseError> {
+    let mut stmt = conn.prepare(sql).map_err(db(doing))?;
+    let rows = stmt.query_map(params, map).map_err(db(doing))?;
+    rows.collect::<Result<Vec<_>, _>>().map_err(db(doing))
 }
 
 const PLAN_INFO: &str = "SELECT c.uid, p.uid, c.name, c.note, c.mode, c.tool, c.solver, \
@@ -526,17 +533,13 @@ pub(crate) fn plan_info(conn: &Connection, uid: &str) -> Result<PlanInfo, CaseEr
 
 /// The plans of patient row `patient_id`, newest first.
 pub(crate) fn plans_of(conn: &Connection, patient_id: i64) -> Result<Vec<PlanInfo>, CaseError> {
-    let mut stmt = conn
-        .prepare(&format!(
-            "{PLAN_INFO} WHERE c.patient_id = ?1 ORDER BY c.run_at DESC, c.id DESC"
-        ))
-        .map_err(db("listing plans"))?;
-    let rows = stmt
-        .query_map([patient_id], plan_info_of)
-        .map_err(db("listing plans"))?
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(db("listing plans"))?;
-    Ok(rows)
+    all_rows(
+        conn,
+        &format!("{PLAN_INFO} WHERE c.patient_id = ?1 ORDER BY c.run_at DESC, c.id DESC"),
+        [patient_id],
+        plan_info_of,
+        "listing plans",
+    )
 }
 
 /// A plan's stored parts, not yet decoded.
@@ -637,6 +640,32 @@ mod tests {
         assert!(check_note(&"n".repeat(10_000)).is_ok());
         assert!(check_note(&"n".repeat(10_001)).is_err());
         assert!(check_note("line\nline").is_ok());
+    }
+
+    #[test]
+    fn list_figures_are_read_from_every_modes_golden_report() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/reports");
+        let read = |mode: &str| {
+            let text = std::fs::read_to_string(dir.join(format!("{mode}.json"))).unwrap();
+            ReportFigures::read(&text).unwrap()
+        };
+        let single = read("single");
+        assert_eq!(
+            (single.mode.as_str(), single.solver.as_str()),
+            ("single", "explicit")
+        );
+        assert_eq!(single.area_gain_cm2, Some(34.97813738911668));
+        assert_eq!(single.volume_cm3, Some(100.0));
+        let search = read("target-gain");
+        assert_eq!(search.area_gain_cm2, Some(20.594834752596853));
+        assert_eq!(search.volume_cm3, Some(69.3786993695329));
+        for mode in ["sweep", "expansion"] {
+            let f = read(mode);
+            assert_eq!(f.mode, mode);
+            assert_eq!((f.area_gain_cm2, f.volume_cm3), (None, None));
+        }
+        assert!(ReportFigures::read("{}").is_err());
+        assert!(ReportFigures::read("not json").is_err());
     }
 
     #[test]
