@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use tissue_cases::{CaseError, Library, NewPlan, PlanInfo, Scan};
+use tissue_cases::{CaseError, Library, NewPlan, PlanInfo, Scan, MAX_NAME_CHARS, MAX_NOTE_CHARS};
 use tissue_planner::{Finished, JobSpec, Scenario};
 
 use crate::cli::Cli;
@@ -18,12 +18,6 @@ pub const TABLE2_LABEL: &str = "Table 2 plane";
 /// The scan's name in the library when the patient is the generated Table 2 plane.
 const TABLE2_SCAN: &str = "table2";
 
-/// The longest plan name and patient label the library takes (characters, after trimming).
-const MAX_NAME_CHARS: usize = 200;
-
-/// The longest note the library takes (characters).
-const MAX_NOTE_CHARS: usize = 10_000;
-
 /// A run to be saved: the library, open, and what the plan is called.
 #[derive(Debug)]
 pub struct Saving {
@@ -34,7 +28,9 @@ pub struct Saving {
 }
 
 /// Refuses a name or label the library would refuse: empty after trimming, longer than
-/// [`MAX_NAME_CHARS`], or with a control character (a line break, a tab).
+/// [`MAX_NAME_CHARS`], or with a control character (a line break, a tab). The library's own
+/// check is not public, so its rule is repeated here to refuse before the run; its limits are
+/// the library's constants.
 fn check_name(flag: &str, value: &str) -> Result<(), Failure> {
     let trimmed = value.trim();
     let problem = if trimmed.is_empty() {
