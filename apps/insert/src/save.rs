@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use tissue_cases::{CaseError, Library, NewPlan, PlanInfo, Scan, MAX_NAME_CHARS, MAX_NOTE_CHARS};
+use tissue_cases::{CaseError, Library, NewPlan, PlanInfo, Scan};
 use tissue_planner::{Finished, JobSpec, Scenario};
 
 use crate::cli::Cli;
@@ -27,50 +27,26 @@ pub struct Saving {
     label: Option<String>,
 }
 
-/// Refuses a name or label the library would refuse: empty after trimming, longer than
-/// [`MAX_NAME_CHARS`], or with a control character (a line break, a tab). The library's own
-/// check is not public, so its rule is repeated here to refuse before the run; its limits are
-/// the library's constants.
+/// Refuses a name or label the library would refuse (its own check), naming the flag.
 fn check_name(flag: &str, value: &str) -> Result<(), Failure> {
-    let trimmed = value.trim();
-    let problem = if trimmed.is_empty() {
-        Some("is empty; give a name, e.g. --save \"first plan\"".to_owned())
-    } else if trimmed.chars().count() > MAX_NAME_CHARS {
-        Some(format!(
-            "has {} characters; give at most {MAX_NAME_CHARS}",
-            trimmed.chars().count()
-        ))
-    } else if trimmed.chars().any(char::is_control) {
-        Some("has a control character (a line break, a tab); give one line of text".to_owned())
-    } else {
-        None
-    };
-    match problem {
-        Some(p) => Err(Failure::new(Exit::Usage, format!("{flag} {value:?} {p}"))),
-        None => Ok(()),
-    }
+    tissue_cases::check_name("name", value)
+        .map(drop)
+        .map_err(|e| Failure::new(Exit::Usage, format!("{flag} {value:?}: {}", invalid(&e))))
 }
 
-/// Refuses a note the library would refuse: longer than [`MAX_NOTE_CHARS`], or with a control
-/// character other than a line break or a tab.
+/// Refuses a note the library would refuse (its own check).
 fn check_note(note: &str) -> Result<(), Failure> {
-    let n = note.chars().count();
-    if n > MAX_NOTE_CHARS {
-        return Err(Failure::new(
-            Exit::Usage,
-            format!("--note has {n} characters; give at most {MAX_NOTE_CHARS}"),
-        ));
+    tissue_cases::check_note(note)
+        .map(drop)
+        .map_err(|e| Failure::new(Exit::Usage, format!("--note: {}", invalid(&e))))
+}
+
+/// The message of a refused value, without the library's field prefix.
+fn invalid(e: &CaseError) -> String {
+    match e {
+        CaseError::Invalid { message, .. } => message.clone(),
+        other => other.to_string(),
     }
-    if let Some(c) = note
-        .chars()
-        .find(|&c| c.is_control() && !matches!(c, '\n' | '\r' | '\t'))
-    {
-        return Err(Failure::new(
-            Exit::Usage,
-            format!("--note holds a control character ({c:?}); use text, line breaks and tabs"),
-        ));
-    }
-    Ok(())
 }
 
 /// The library's folder: `--data` or the platform's data folder.

@@ -127,7 +127,7 @@ pub use archive::{
 };
 use schema::db;
 pub use schema::MIGRATIONS;
-pub use store::{MAX_NAME_CHARS, MAX_NOTE_CHARS};
+pub use store::{check_name, check_note, MAX_NAME_CHARS, MAX_NOTE_CHARS};
 
 /// An expansion's chart as stored (pixels, width × height).
 pub const CHART_SIZE: (u32, u32) = (1200, 600);

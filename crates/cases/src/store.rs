@@ -17,8 +17,12 @@ pub const MAX_NOTE_CHARS: usize = 10_000;
 /// SQLite's "now" as RFC 3339 UTC with milliseconds.
 const NOW: &str = "strftime('%Y-%m-%dT%H:%M:%fZ','now')";
 
-/// A name or label: trimmed, 1 to [`MAX_NAME_CHARS`] characters, no control characters.
-pub(crate) fn check_name(field: &'static str, value: &str) -> Result<String, CaseError> {
+/// A name or label as the library stores it: trimmed, 1 to [`MAX_NAME_CHARS`] characters, no
+/// control characters. Front ends call it to refuse a name before a run.
+///
+/// # Errors
+/// [`CaseError::Invalid`] naming `field`.
+pub fn check_name(field: &'static str, value: &str) -> Result<String, CaseError> {
     let v = value.trim();
     let n = v.chars().count();
     if n == 0 {
@@ -47,8 +51,12 @@ pub(crate) fn check_name(field: &'static str, value: &str) -> Result<String, Cas
     Ok(v.to_owned())
 }
 
-/// A note: at most [`MAX_NOTE_CHARS`] characters (line breaks and tabs allowed).
-pub(crate) fn check_note(value: &str) -> Result<String, CaseError> {
+/// A note as the library stores it: at most [`MAX_NOTE_CHARS`] characters, line breaks and tabs
+/// allowed, no other control character.
+///
+/// # Errors
+/// [`CaseError::Invalid`] naming `note`.
+pub fn check_note(value: &str) -> Result<String, CaseError> {
     let n = value.chars().count();
     if n > MAX_NOTE_CHARS {
         return Err(CaseError::Invalid {

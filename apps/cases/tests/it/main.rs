@@ -1,4 +1,4 @@
-//! The real `tissue-cases` binary, end to end, on plans that the real `insert --save` stored in
+//! The real `tissue-cases` binary, end to end, on plans stored as `insert --save` stores them, in
 //! scratch libraries (`--data`; never the user's data folder): the list, a report byte for byte,
 //! export and import into another library, rename and note, delete and erase, the integrity
 //! check, and each error's exit code.
@@ -9,41 +9,12 @@ mod errors;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use std::sync::OnceLock;
 
 use serde_json::Value;
 
 /// The `tissue-cases` binary.
 fn cases() -> Command {
     Command::new(env!("CARGO_BIN_EXE_tissue-cases"))
-}
-
-/// The `insert` binary of this build's profile, in this target folder. Cargo builds only this
-/// package's binaries for its tests, so it is built here once (a no-op when it is up to date:
-/// `cargo test --workspace` has built it).
-fn insert_bin() -> &'static Path {
-    static INSERT: OnceLock<PathBuf> = OnceLock::new();
-    INSERT.get_or_init(|| {
-        let ours = Path::new(env!("CARGO_BIN_EXE_tissue-cases"));
-        let profile_dir = ours.parent().unwrap();
-        let target = profile_dir.parent().unwrap();
-        let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-        let mut build = Command::new(cargo);
-        build
-            .current_dir(&workspace)
-            .args(["build", "--quiet", "-p", "tissue-insert", "--bin", "insert"])
-            .arg("--target-dir")
-            .arg(target);
-        if profile_dir.file_name().is_some_and(|n| n == "release") {
-            build.arg("--release");
-        }
-        let status = build.status().expect("cargo runs");
-        assert!(status.success(), "building insert failed: {status}");
-        let insert = profile_dir.join(format!("insert{}", std::env::consts::EXE_SUFFIX));
-        assert!(insert.is_file(), "no {}", insert.display());
-        insert
-    })
 }
 
 /// A test's scratch folder in the temporary directory, removed when the test passes (kept to be
@@ -124,29 +95,80 @@ struct Saved {
     report: Vec<u8>,
 }
 
-/// Runs `insert ARGS… --save NAME --data DATA --report DIR/NAME.json --quiet` and reads the
-/// ids from its `insert: saved plan c… "NAME" for patient p… in …` line.
+/// A plan saved as `insert ARGS… --save NAME --data DATA` saves it (the same planner run and
+/// library call, `tissue_cases::Library::save`, in this process: a test of this package cannot
+/// run another package's binary; `insert`'s own tests run `insert --save`): its ids and its
+/// report as `insert --report` writes it. `ARGS` may hold `--max-steps N`, `--volume V`,
+/// `--sweep V1,V2`, `--mesh FILE` (cm), `--at X,Y,Z` and `--scan-triangles`.
 fn insert_save(data: &Path, dir: &Path, name: &str, args: &[&str]) -> Saved {
-    let report = dir.join(format!("{}.json", name.replace(' ', "_")));
-    let o = Command::new(insert_bin())
-        .args(args)
-        .args(["--quiet", "--save", name, "--data"])
-        .arg(data)
-        .arg("--report")
-        .arg(&report)
-        .output()
+    use tissue_cases::{Library, NewPlan, Scan};
+    use tissue_planner::{CancelToken, JobSpec, Patient, Scenario, Tool, Unit};
+    let mut request = serde_json::Map::new();
+    let mut job = serde_json::Map::new();
+    let mut mesh: Option<PathBuf> = None;
+    let mut it = args.iter();
+    let numbers = |v: &str| -> Vec<f64> { v.split(',').map(|x| x.parse().unwrap()).collect() };
+    while let Some(&flag) = it.next() {
+        match flag {
+            "--scan-triangles" => {
+                request.insert("scan_triangles".into(), true.into());
+            }
+            "--max-steps" => {
+                let n: u64 = it.next().unwrap().parse().unwrap();
+                request.insert("max_steps".into(), n.into());
+            }
+            "--volume" => {
+                request.insert("volume_cm3".into(), numbers(it.next().unwrap())[0].into());
+            }
+            "--at" => {
+                request.insert("at".into(), numbers(it.next().unwrap()).into());
+            }
+            "--sweep" => {
+                job.insert("mode".into(), "sweep".into());
+                job.insert("volumes_cm3".into(), numbers(it.next().unwrap()).into());
+            }
+            "--mesh" => mesh = Some(PathBuf::from(it.next().unwrap())),
+            other => panic!("insert_save does not know {other}"),
+        }
+    }
+    job.insert("request".into(), request.into());
+    let spec: JobSpec = serde_json::from_value(job.into()).unwrap();
+    let (patient, scan, label) = match &mesh {
+        Some(path) => (
+            Patient::read(path, Unit::Cm).unwrap(),
+            Scan::read(path, Unit::Cm).unwrap(),
+            None,
+        ),
+        None => {
+            let p = Patient::table2().unwrap();
+            let scan = Scan::of_mesh(&p, "table2").unwrap();
+            (p, scan, Some("Table 2 plane"))
+        }
+    };
+    let scenario = Scenario::new(patient, spec.request.clone()).unwrap();
+    let finished = spec
+        .plan(&scenario)
+        .unwrap()
+        .run(&scenario, Tool::Insert, &CancelToken::new(), |_| {})
         .unwrap();
-    let err = stderr(&o);
-    assert!(o.status.success(), "insert {args:?}: {err}");
-    let line = err
-        .lines()
-        .find(|l| l.starts_with("insert: saved plan "))
-        .unwrap_or_else(|| panic!("no saved line: {err}"));
-    let words: Vec<&str> = line.split(' ').collect();
-    let at = line.find("for patient ").unwrap() + "for patient ".len();
+    let report = dir.join(format!("{}.json", name.replace(' ', "_")));
+    finished.report.write(&report).unwrap();
+    let library = Library::open(data).unwrap();
+    let plan = library
+        .save(
+            &scan,
+            label,
+            NewPlan {
+                name,
+                note: "",
+                spec: &spec,
+                finished: &finished,
+            },
+        )
+        .unwrap();
     Saved {
-        plan: words[3].to_owned(),
-        patient: line[at..at + 33].to_owned(),
+        plan: plan.uid,
+        patient: plan.patient_uid,
         report: std::fs::read(&report).unwrap(),
     }
 }
