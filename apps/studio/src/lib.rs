@@ -73,6 +73,7 @@
 mod access;
 mod api;
 pub mod assets;
+mod cases;
 mod jobs;
 pub mod material;
 pub mod messages;
@@ -84,4 +85,4 @@ pub mod trainer;
 pub use access::{content_security_policy, Access};
 pub use api::router;
 pub use serve::{serve, BodyTimeout};
-pub use state::{Limits, Studio, JOB_SOCKETS, KEPT, UPLOAD_LIMIT};
+pub use state::{KeptJob, Limits, Loaded, Studio, JOB_SOCKETS, KEPT, UPLOAD_LIMIT};
