@@ -45,9 +45,23 @@
 #![forbid(unsafe_code)]
 
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
+use rusqlite::{Connection, TransactionBehavior};
 use serde::Serialize;
-use tissue_planner::{Finished, JobSpec, Patient, PatientResult, Unit};
+use tissue_planner::{Finished, JobReport, JobSpec, Patient, PatientResult, Unit};
+
+mod archive;
+mod blob;
+mod schema;
+mod store;
+mod temp;
+
+use schema::db;
+pub use schema::MIGRATIONS;
+
+/// An expansion's chart as stored (pixels, width × height).
+pub const CHART_SIZE: (u32, u32) = (1200, 600);
 
 /// The schema version this library writes (`PRAGMA user_version`).
 pub const SCHEMA_VERSION: u32 = 1;
@@ -159,8 +173,15 @@ impl Scan {
     /// # Errors
     /// [`CaseError::Open`] when it cannot be read.
     pub fn read(path: &Path, unit: Unit) -> Result<Scan, CaseError> {
-        let _ = (path, unit);
-        todo!()
+        let bytes = std::fs::read(path).map_err(|source| CaseError::Open {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| path.display().to_string());
+        Ok(Scan { name, unit, bytes })
     }
 
     /// The scan of a patient that was not read from bytes (a shipped or generated mesh): its
@@ -169,8 +190,27 @@ impl Scan {
     /// # Errors
     /// [`CaseError::Plan`] when it cannot be written.
     pub fn of_mesh(patient: &Patient, name: &str) -> Result<Scan, CaseError> {
-        let _ = (patient, name);
-        todo!()
+        use tissue_planner::{ErrorKind, PlanError};
+        let name = if name.to_ascii_lowercase().ends_with(".obj") {
+            name.to_owned()
+        } else {
+            format!("{name}.obj")
+        };
+        let output = |e: &dyn std::fmt::Display| {
+            PlanError::new(
+                ErrorKind::Output,
+                format!("cannot write the patient's mesh as OBJ: {e}; check the temporary folder is writable"),
+            )
+        };
+        let tmp = temp::TempDir::new_in(&std::env::temp_dir()).map_err(|e| output(&e))?;
+        let path = tmp.path().join("scan.obj");
+        tissue_meshio::write_obj(&path, &patient.file).map_err(|e| output(&e))?;
+        let bytes = std::fs::read(&path).map_err(|e| output(&e))?;
+        Ok(Scan {
+            name,
+            unit: patient.unit,
+            bytes,
+        })
     }
 
     /// The patient these bytes are (parsed as the planner parses an upload).
@@ -178,12 +218,12 @@ impl Scan {
     /// # Errors
     /// [`CaseError::Plan`] when they do not parse.
     pub fn patient(&self) -> Result<Patient, CaseError> {
-        todo!()
+        Ok(Patient::parse(&self.bytes, &self.name, self.unit)?)
     }
 
     /// Its SHA-256 in hex.
     pub fn sha256(&self) -> String {
-        todo!()
+        blob::sha256_hex(&self.bytes)
     }
 }
 
@@ -315,6 +355,7 @@ pub struct ImportSummary {
 #[derive(Debug)]
 pub struct Library {
     dir: PathBuf,
+    conn: Mutex<Connection>,
 }
 
 impl Library {
@@ -324,8 +365,12 @@ impl Library {
     /// # Errors
     /// [`CaseError::Open`], [`CaseError::Newer`], [`CaseError::Database`].
     pub fn open(dir: &Path) -> Result<Library, CaseError> {
-        let _ = dir;
-        todo!()
+        let _span = tracing::info_span!("cases_open", dir = %dir.display()).entered();
+        let conn = schema::open(dir)?;
+        Ok(Library {
+            dir: dir.to_path_buf(),
+            conn: Mutex::new(conn),
+        })
     }
 
     /// The folder.
@@ -336,6 +381,12 @@ impl Library {
     /// The database file.
     pub fn database_path(&self) -> PathBuf {
         self.dir.join(DATABASE_FILE)
+    }
+
+    /// The connection; a mutex poisoned by a panicking thread is taken as it is (every write is
+    /// a transaction, rolled back when its guard dropped).
+    pub(crate) fn lock(&self) -> MutexGuard<'_, Connection> {
+        self.conn.lock().unwrap_or_else(PoisonError::into_inner)
     }
 
     /// Stores `plan` for the patient of `scan` (added, labelled `label` or the file name, unless
@@ -349,8 +400,102 @@ impl Library {
         label: Option<&str>,
         plan: NewPlan<'_>,
     ) -> Result<PlanInfo, CaseError> {
-        let _ = (scan, label, plan);
-        todo!()
+        let _span = tracing::info_span!("cases_save").entered();
+        let name = store::check_name("name", plan.name)?;
+        let note = store::check_note(plan.note)?;
+        let label = label.map(|l| store::check_name("label", l)).transpose()?;
+        let job = serde_json::to_string(plan.spec).map_err(|e| CaseError::Invalid {
+            field: "job",
+            message: format!("the job cannot be written as JSON: {e}"),
+        })?;
+        let report = plan.finished.report.to_json()?;
+        let figures =
+            store::ReportFigures::read(&report).map_err(|message| CaseError::Invalid {
+                field: "report",
+                message,
+            })?;
+        let result = plan
+            .finished
+            .patient
+            .as_ref()
+            .map(blob::encode_result)
+            .transpose()?;
+        let chart = match &plan.finished.report {
+            JobReport::Expansion(r) => Some(r.chart(CHART_SIZE)?),
+            _ => None,
+        };
+        let new = store::NewPlanRow {
+            uid: store::new_uid('c')?,
+            name,
+            note,
+            job,
+            report,
+            figures,
+            run_at: None,
+            result,
+            chart,
+        };
+        let result_vertices = plan
+            .finished
+            .patient
+            .as_ref()
+            .map(|p| p.after.positions().len());
+        let info = self.with_patient(scan, label.as_deref(), None, |tx, patient| {
+            if let Some(n) = result_vertices {
+                if n != patient.vertices {
+                    return Err(CaseError::Invalid {
+                        field: "scan",
+                        message: format!(
+                            "the result has {n} vertices but the scan {} has {}: save the plan with the scan it ran on",
+                            scan.name, patient.vertices
+                        ),
+                    });
+                }
+            }
+            store::insert_plan(tx, patient.id, &new)?;
+            store::plan_info(tx, &new.uid)
+        })?;
+        Ok(info)
+    }
+
+    /// Finds the patient of `scan` or adds it (parsed outside the lock), then runs `then` in the
+    /// same `BEGIN IMMEDIATE` transaction and commits.
+    fn with_patient<T>(
+        &self,
+        scan: &Scan,
+        label: Option<&str>,
+        keep: Option<(&str, &str)>,
+        then: impl FnOnce(&rusqlite::Transaction<'_>, &store::PatientRow) -> Result<T, CaseError>,
+    ) -> Result<T, CaseError> {
+        let sha = scan.sha256();
+        let unit = scan.unit.symbol();
+        let known = store::find_patient(&self.lock(), &sha, unit)?;
+        let mut prepared = match known {
+            Some(_) => None,
+            None => Some(store::PreparedPatient::of(scan)?),
+        };
+        loop {
+            let mut conn = self.lock();
+            let tx = conn
+                .transaction_with_behavior(TransactionBehavior::Immediate)
+                .map_err(db("starting a write"))?;
+            let row = match store::find_patient(&tx, &sha, unit)? {
+                Some(row) => row,
+                None => match &prepared {
+                    Some(p) => store::insert_patient(&tx, scan, &sha, label, keep, p)?,
+                    None => {
+                        // Erased between the look-up and the write: parse it after all.
+                        drop(tx);
+                        drop(conn);
+                        prepared = Some(store::PreparedPatient::of(scan)?);
+                        continue;
+                    }
+                },
+            };
+            let out = then(&tx, &row)?;
+            tx.commit().map_err(db("committing"))?;
+            return Ok(out);
+        }
     }
 
     /// Adds the patient of `scan` without a plan (or finds it).
@@ -358,8 +503,11 @@ impl Library {
     /// # Errors
     /// [`CaseError::Database`], [`CaseError::Plan`] when the scan does not parse.
     pub fn add_patient(&self, scan: &Scan, label: Option<&str>) -> Result<PatientInfo, CaseError> {
-        let _ = (scan, label);
-        todo!()
+        let _span = tracing::info_span!("cases_add_patient").entered();
+        let label = label.map(|l| store::check_name("label", l)).transpose()?;
+        self.with_patient(scan, label.as_deref(), None, |tx, row| {
+            store::patient_info(tx, &row.uid)
+        })
     }
 
     /// The patients, newest plan (or addition) first; `search` keeps those whose label contains
@@ -368,8 +516,8 @@ impl Library {
     /// # Errors
     /// [`CaseError::Database`].
     pub fn patients(&self, search: Option<&str>) -> Result<Vec<PatientInfo>, CaseError> {
-        let _ = search;
-        todo!()
+        let _span = tracing::info_span!("cases_patients").entered();
+        store::patients(&self.lock(), search)
     }
 
     /// Patient `uid`.
@@ -377,8 +525,7 @@ impl Library {
     /// # Errors
     /// [`CaseError::NotFound`], [`CaseError::Database`].
     pub fn patient(&self, uid: &str) -> Result<PatientInfo, CaseError> {
-        let _ = uid;
-        todo!()
+        store::patient_info(&self.lock(), uid)
     }
 
     /// Patient `uid`'s scan as it came.
@@ -386,8 +533,15 @@ impl Library {
     /// # Errors
     /// [`CaseError::NotFound`], [`CaseError::Database`].
     pub fn scan(&self, uid: &str) -> Result<Scan, CaseError> {
-        let _ = uid;
-        todo!()
+        let _span = tracing::info_span!("cases_scan").entered();
+        let conn = self.lock();
+        let row = store::patient_row(&conn, uid)?;
+        let bytes = store::blob(&conn, &row.scan_blob, "the patient's scan")?;
+        Ok(Scan {
+            name: row.scan_name,
+            unit: row.unit,
+            bytes,
+        })
     }
 
     /// Patient `uid` ready to plan on (its stored mesh, no parsing).
@@ -395,8 +549,15 @@ impl Library {
     /// # Errors
     /// [`CaseError::NotFound`], [`CaseError::Damaged`], [`CaseError::Database`].
     pub fn load_patient(&self, uid: &str) -> Result<Patient, CaseError> {
-        let _ = uid;
-        todo!()
+        let _span = tracing::info_span!("cases_load_patient").entered();
+        let (row, bytes) = {
+            let conn = self.lock();
+            let row = store::patient_row(&conn, uid)?;
+            let bytes = store::blob(&conn, &row.mesh_blob, "the patient's mesh")?;
+            (row, bytes)
+        };
+        let mesh = blob::decode_mesh(&bytes, &format!("patient {uid}'s mesh"))?;
+        Ok(Patient::from_mesh(mesh, row.unit, row.scan_name)?)
     }
 
     /// Patient `uid`'s plans, newest first.
@@ -404,8 +565,9 @@ impl Library {
     /// # Errors
     /// [`CaseError::NotFound`], [`CaseError::Database`].
     pub fn plans(&self, patient_uid: &str) -> Result<Vec<PlanInfo>, CaseError> {
-        let _ = patient_uid;
-        todo!()
+        let conn = self.lock();
+        let row = store::patient_row(&conn, patient_uid)?;
+        store::plans_of(&conn, row.id)
     }
 
     /// Plan `uid` as a list shows it.
@@ -413,8 +575,7 @@ impl Library {
     /// # Errors
     /// [`CaseError::NotFound`], [`CaseError::Database`].
     pub fn plan(&self, uid: &str) -> Result<PlanInfo, CaseError> {
-        let _ = uid;
-        todo!()
+        store::plan_info(&self.lock(), uid)
     }
 
     /// Plan `uid` opened: its report, job and result, as stored.
@@ -422,8 +583,38 @@ impl Library {
     /// # Errors
     /// [`CaseError::NotFound`], [`CaseError::Damaged`], [`CaseError::Database`].
     pub fn open_plan(&self, uid: &str) -> Result<StoredPlan, CaseError> {
-        let _ = uid;
-        todo!()
+        let _span = tracing::info_span!("cases_open_plan").entered();
+        let stored = {
+            let mut conn = self.lock();
+            // One read transaction: the plan, its patient and their blobs as of one moment.
+            let tx = conn.transaction().map_err(db("reading a plan"))?;
+            let stored = store::stored_plan(&tx, uid)?;
+            tx.finish().map_err(db("reading a plan"))?;
+            stored
+        };
+        let result = match (&stored.result, &stored.mesh) {
+            (Some(bytes), Some(mesh)) => {
+                let what = format!("plan {uid}'s result");
+                let before = blob::decode_mesh(mesh, &what)?;
+                let data = blob::decode_result(bytes, before.positions().len(), &what)?;
+                let unit = stored.unit;
+                Some(blob::rebuild_result(
+                    &before,
+                    data,
+                    unit.cm_per_unit(),
+                    &what,
+                )?)
+            }
+            _ => None,
+        };
+        Ok(StoredPlan {
+            info: stored.info,
+            patient: stored.patient,
+            job_json: stored.job,
+            report_json: stored.report,
+            result,
+            chart_png: stored.chart,
+        })
     }
 
     /// Plans `a` and `b` of one patient compared.
@@ -431,8 +622,37 @@ impl Library {
     /// # Errors
     /// [`CaseError::NotFound`]; [`CaseError::Invalid`] when they are of two patients.
     pub fn compare(&self, a: &str, b: &str) -> Result<Comparison, CaseError> {
-        let _ = (a, b);
-        todo!()
+        let _span = tracing::info_span!("cases_compare").entered();
+        let pa = self.open_plan(a)?;
+        let pb = self.open_plan(b)?;
+        if pa.patient.uid != pb.patient.uid {
+            return Err(CaseError::Invalid {
+                field: "b",
+                message: format!(
+                    "plan {b} is of patient {} and plan {a} of patient {}: compare two plans of one patient",
+                    pb.patient.uid, pa.patient.uid
+                ),
+            });
+        }
+        let figures = store::figures(&pa.report_json, &pb.report_json)?;
+        let difference: Vec<f32> = match (&pa.result, &pb.result) {
+            (Some(ra), Some(rb)) => ra
+                .after
+                .positions()
+                .iter()
+                .zip(rb.after.positions())
+                .map(|(&x, &y)| (y - x).length())
+                .collect(),
+            _ => Vec::new(),
+        };
+        let max_difference = difference.iter().copied().fold(0.0_f32, f32::max);
+        Ok(Comparison {
+            a: pa.info,
+            b: pb.info,
+            figures,
+            difference,
+            max_difference,
+        })
     }
 
     /// Renames plan `uid`.
@@ -440,8 +660,8 @@ impl Library {
     /// # Errors
     /// [`CaseError::Invalid`], [`CaseError::NotFound`], [`CaseError::Database`].
     pub fn rename_plan(&self, uid: &str, name: &str) -> Result<PlanInfo, CaseError> {
-        let _ = (uid, name);
-        todo!()
+        let name = store::check_name("name", name)?;
+        self.update_plan(uid, "UPDATE plans SET name = ?2 WHERE uid = ?1", &name)
     }
 
     /// Sets plan `uid`'s note.
@@ -449,8 +669,21 @@ impl Library {
     /// # Errors
     /// [`CaseError::Invalid`], [`CaseError::NotFound`], [`CaseError::Database`].
     pub fn set_note(&self, uid: &str, note: &str) -> Result<PlanInfo, CaseError> {
-        let _ = (uid, note);
-        todo!()
+        let note = store::check_note(note)?;
+        self.update_plan(uid, "UPDATE plans SET note = ?2 WHERE uid = ?1", &note)
+    }
+
+    fn update_plan(&self, uid: &str, sql: &str, value: &str) -> Result<PlanInfo, CaseError> {
+        let _span = tracing::info_span!("cases_update_plan").entered();
+        self.write(|tx| {
+            let n = tx
+                .execute(sql, rusqlite::params![uid, value])
+                .map_err(db("updating a plan"))?;
+            if n == 0 {
+                return Err(store::not_found("plan", uid));
+            }
+            store::plan_info(tx, uid)
+        })
     }
 
     /// Renames patient `uid`.
@@ -458,8 +691,34 @@ impl Library {
     /// # Errors
     /// [`CaseError::Invalid`], [`CaseError::NotFound`], [`CaseError::Database`].
     pub fn rename_patient(&self, uid: &str, label: &str) -> Result<PatientInfo, CaseError> {
-        let _ = (uid, label);
-        todo!()
+        let _span = tracing::info_span!("cases_rename_patient").entered();
+        let label = store::check_name("label", label)?;
+        self.write(|tx| {
+            let n = tx
+                .execute(
+                    "UPDATE patients SET label = ?2 WHERE uid = ?1",
+                    rusqlite::params![uid, label],
+                )
+                .map_err(db("renaming a patient"))?;
+            if n == 0 {
+                return Err(store::not_found("patient", uid));
+            }
+            store::patient_info(tx, uid)
+        })
+    }
+
+    /// Runs `f` in one `BEGIN IMMEDIATE` transaction and commits it (rolled back on error).
+    pub(crate) fn write<T>(
+        &self,
+        f: impl FnOnce(&rusqlite::Transaction<'_>) -> Result<T, CaseError>,
+    ) -> Result<T, CaseError> {
+        let mut conn = self.lock();
+        let tx = conn
+            .transaction_with_behavior(TransactionBehavior::Immediate)
+            .map_err(db("starting a write"))?;
+        let out = f(&tx)?;
+        tx.commit().map_err(db("committing"))?;
+        Ok(out)
     }
 
     /// Deletes plan `uid` (and blobs no other row names).
@@ -467,8 +726,16 @@ impl Library {
     /// # Errors
     /// [`CaseError::NotFound`], [`CaseError::Database`].
     pub fn delete_plan(&self, uid: &str) -> Result<(), CaseError> {
-        let _ = uid;
-        todo!()
+        let _span = tracing::info_span!("cases_delete_plan").entered();
+        self.write(|tx| {
+            let n = tx
+                .execute("DELETE FROM plans WHERE uid = ?1", [uid])
+                .map_err(db("deleting a plan"))?;
+            if n == 0 {
+                return Err(store::not_found("plan", uid));
+            }
+            store::collect_blobs(tx)
+        })
     }
 
     /// Erases patient `uid` and everything of theirs, leaving no trace in the library's files:
@@ -478,8 +745,26 @@ impl Library {
     /// # Errors
     /// [`CaseError::NotFound`], [`CaseError::Database`].
     pub fn erase_patient(&self, uid: &str) -> Result<(), CaseError> {
-        let _ = uid;
-        todo!()
+        let _span = tracing::info_span!("cases_erase_patient").entered();
+        let mut conn = self.lock();
+        {
+            let tx = conn
+                .transaction_with_behavior(TransactionBehavior::Immediate)
+                .map_err(db("starting a write"))?;
+            let n = tx
+                .execute("DELETE FROM patients WHERE uid = ?1", [uid])
+                .map_err(db("erasing a patient"))?;
+            if n == 0 {
+                return Err(store::not_found("patient", uid));
+            }
+            store::collect_blobs(&tx)?;
+            tx.commit().map_err(db("committing"))?;
+        }
+        store::checkpoint(&conn)?;
+        conn.execute_batch("VACUUM")
+            .map_err(db("vacuuming after an erasure"))?;
+        store::checkpoint(&conn)?;
+        Ok(())
     }
 
     /// Patient `uid`'s case as one zip: `case.json` (the patient, the plans and a SHA-256 of
@@ -490,8 +775,7 @@ impl Library {
     /// # Errors
     /// [`CaseError::NotFound`], [`CaseError::Database`].
     pub fn export_case(&self, uid: &str) -> Result<Vec<u8>, CaseError> {
-        let _ = uid;
-        todo!()
+        archive::export(self, uid)
     }
 
     /// [`Library::export_case`] written atomically to `path`.
@@ -499,8 +783,11 @@ impl Library {
     /// # Errors
     /// As [`Library::export_case`]; [`CaseError::Write`].
     pub fn export_case_to(&self, uid: &str, path: &Path) -> Result<(), CaseError> {
-        let _ = (uid, path);
-        todo!()
+        let bytes = self.export_case(uid)?;
+        tissue_meshio::write_bytes(path, &bytes).map_err(|e| CaseError::Write {
+            path: path.to_path_buf(),
+            source: std::io::Error::other(e.to_string()),
+        })
     }
 
     /// Imports a case zip made by [`Library::export_case`] (on this computer or another): every
@@ -509,8 +796,7 @@ impl Library {
     /// # Errors
     /// [`CaseError::Archive`] for a damaged, foreign or oversized archive; [`CaseError::Database`].
     pub fn import_case(&self, zip: &[u8]) -> Result<ImportSummary, CaseError> {
-        let _ = zip;
-        todo!()
+        archive::import(self, zip)
     }
 
     /// `PRAGMA integrity_check`'s answer (`ok` when sound).
@@ -518,6 +804,15 @@ impl Library {
     /// # Errors
     /// [`CaseError::Database`].
     pub fn integrity_check(&self) -> Result<String, CaseError> {
-        todo!()
+        let conn = self.lock();
+        let mut stmt = conn
+            .prepare("PRAGMA integrity_check")
+            .map_err(db("checking the database"))?;
+        let rows = stmt
+            .query_map([], |row| row.get::<_, String>(0))
+            .map_err(db("checking the database"))?
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(db("checking the database"))?;
+        Ok(rows.join("\n"))
     }
 }

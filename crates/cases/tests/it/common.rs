@@ -1,0 +1,94 @@
+//! Shared helpers: temporary folders and short real planning runs.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use tissue_cases::{Library, NewPlan, PlanInfo, Scan};
+use tissue_planner::{CancelToken, Finished, JobSpec, Patient, Scenario, Shipped, Tool};
+
+static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// A temporary folder removed on drop.
+pub struct Tmp(pub PathBuf);
+
+impl Tmp {
+    pub fn new(tag: &str) -> Tmp {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .as_nanos();
+        let path = std::env::temp_dir().join(format!(
+            "tissue-cases-test-{tag}-{}-{nanos}-{}",
+            std::process::id(),
+            COUNTER.fetch_add(1, Ordering::Relaxed)
+        ));
+        std::fs::create_dir_all(&path).unwrap();
+        Tmp(path)
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.0
+    }
+
+    /// A library folder inside (not yet made).
+    pub fn lib_dir(&self) -> PathBuf {
+        self.0.join("library")
+    }
+}
+
+impl Drop for Tmp {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Runs `job` (JSON) on `patient`.
+pub fn run(patient: &Patient, job: &str) -> (JobSpec, Finished) {
+    let spec: JobSpec = serde_json::from_str(job).unwrap();
+    let scenario = Scenario::new(patient.clone(), spec.request.clone()).unwrap();
+    let finished = spec
+        .clone()
+        .plan(&scenario)
+        .unwrap()
+        .run(&scenario, Tool::Insert, &CancelToken::new(), |_| {})
+        .map_err(tissue_planner::PlanError::from)
+        .unwrap();
+    (spec, finished)
+}
+
+/// The Table 2 plane as a scan (OBJ of its mesh).
+pub fn table2() -> (Patient, Scan) {
+    let patient = Patient::shipped(Shipped::Table2).unwrap();
+    let scan = Scan::of_mesh(&patient, "table2").unwrap();
+    (patient, scan)
+}
+
+/// A short Table 2 single run of `volume` cm³.
+pub fn table2_single(volume: f64, steps: u32) -> (JobSpec, Finished) {
+    let (patient, _) = table2();
+    run(
+        &patient,
+        &format!(r#"{{ "request": {{ "volume_cm3": {volume}, "max_steps": {steps} }} }}"#),
+    )
+}
+
+/// Saves `finished` as `name`.
+pub fn save(
+    lib: &Library,
+    scan: &Scan,
+    name: &str,
+    spec: &JobSpec,
+    finished: &Finished,
+) -> PlanInfo {
+    lib.save(
+        scan,
+        None,
+        NewPlan {
+            name,
+            note: "",
+            spec,
+            finished,
+        },
+    )
+    .unwrap()
+}

@@ -1,0 +1,4 @@
+//! tissue-cases' integration tests (one binary, one module per area).
+
+mod common;
+mod roundtrip;
