@@ -467,13 +467,23 @@ impl Library {
         keep: Option<(&str, &str)>,
         then: impl FnOnce(&rusqlite::Transaction<'_>, &store::PatientRow) -> Result<T, CaseError>,
     ) -> Result<T, CaseError> {
+        self.with_prepared_patient(scan, label, keep, None, then)
+    }
+
+    /// [`Library::with_patient`] with the scan already parsed (`prepared`), as an import has it.
+    pub(crate) fn with_prepared_patient<T>(
+        &self,
+        scan: &Scan,
+        label: Option<&str>,
+        keep: Option<(&str, &str)>,
+        mut prepared: Option<store::PreparedPatient>,
+        then: impl FnOnce(&rusqlite::Transaction<'_>, &store::PatientRow) -> Result<T, CaseError>,
+    ) -> Result<T, CaseError> {
         let sha = scan.sha256();
         let unit = scan.unit.symbol();
-        let known = store::find_patient(&self.lock(), &sha, unit)?;
-        let mut prepared = match known {
-            Some(_) => None,
-            None => Some(store::PreparedPatient::of(scan)?),
-        };
+        if prepared.is_none() && store::find_patient(&self.lock(), &sha, unit)?.is_none() {
+            prepared = Some(store::PreparedPatient::of(scan)?);
+        }
         loop {
             let mut conn = self.lock();
             let tx = conn

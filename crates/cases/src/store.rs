@@ -94,7 +94,6 @@ pub(crate) fn new_uid(prefix: char) -> Result<String, CaseError> {
 }
 
 /// Whether `uid` has the shape of an identifier of `prefix`.
-#[allow(dead_code)] // used by the archive import (next step)
 pub(crate) fn is_uid(uid: &str, prefix: char) -> bool {
     uid.len() == 33
         && uid.starts_with(prefix)
@@ -274,6 +273,7 @@ pub(crate) struct PreparedPatient {
     pub mesh_blob: Vec<u8>,
     pub mesh_hash: String,
     pub summary: String,
+    pub vertices: usize,
 }
 
 impl PreparedPatient {
@@ -287,6 +287,7 @@ impl PreparedPatient {
                 message: format!("the scan's summary cannot be written as JSON: {e}"),
             })?;
         Ok(PreparedPatient {
+            vertices: patient.file.positions().len(),
             mesh_hash: sha256_hex(&mesh_blob),
             mesh_blob,
             summary,

@@ -92,3 +92,34 @@ pub fn save(
     )
     .unwrap()
 }
+
+/// The shipped chest (dm) as a scan, and a short single run at vertex 2277.
+pub fn chest_single(steps: u32) -> (Scan, JobSpec, Finished) {
+    let patient = Patient::shipped(Shipped::Chest).unwrap();
+    let scan = Scan::of_mesh(&patient, "chest").unwrap();
+    let (spec, finished) = run(
+        &patient,
+        &format!(r#"{{ "request": {{ "vertex": 2277, "max_steps": {steps} }} }}"#),
+    );
+    (scan, spec, finished)
+}
+
+/// FNV-1a (64 bits) of `bytes`: a report's fingerprint passed between processes.
+pub fn fnv(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// A fixed-seed sequence (an LCG's high bits).
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    pub fn next(&mut self) -> u64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        self.0 >> 33
+    }
+}

@@ -73,3 +73,115 @@ fn a_single_run_reopens_byte_identical_from_a_new_handle() {
     assert_eq!(loaded.cm.positions(), parsed.cm.positions());
     assert_eq!(lib.integrity_check().unwrap(), "ok");
 }
+
+#[test]
+fn a_dm_scan_reopens_with_its_downloads_and_cm_positions() {
+    let tmp = Tmp::new("chest");
+    let (scan, spec, finished) = crate::common::chest_single(40);
+    let lib = Library::open(&tmp.lib_dir()).unwrap();
+    let saved = save(&lib, &scan, "chest", &spec, &finished);
+    drop(lib);
+    let lib = Library::open(&tmp.lib_dir()).unwrap();
+    let opened = lib.open_plan(&saved.uid).unwrap();
+    assert_eq!(opened.patient.unit, "dm");
+    assert_eq!(opened.report_json, finished.report.to_json().unwrap());
+    let (orig, back) = (
+        finished.patient.as_ref().unwrap(),
+        opened.result.as_ref().unwrap(),
+    );
+    assert_same_result(orig, back);
+    assert_eq!(
+        downloads(orig, tmp.path(), "orig"),
+        downloads(back, tmp.path(), "back")
+    );
+    // after_cm is the positions after in cm (10 cm per dm), within f32 rounding of the run's.
+    let moved = orig
+        .after
+        .positions()
+        .iter()
+        .zip(orig.before.positions())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(moved > 0, "the run moved nothing");
+    for ((c, o), a) in back
+        .after_cm
+        .positions()
+        .iter()
+        .zip(orig.after_cm.positions())
+        .zip(back.after.positions())
+    {
+        assert_eq!(*c, *a * 10.0);
+        assert!(
+            (*c - *o).length() <= 1e-5 * o.length().max(1.0),
+            "{c} vs {o}"
+        );
+    }
+    assert!(back.scan.is_none());
+}
+
+#[test]
+fn a_sweep_and_an_expansion_round_trip_with_the_chart() {
+    let tmp = Tmp::new("modes");
+    let (patient, scan) = table2();
+    let (sweep_spec, sweep) = crate::common::run(
+        &patient,
+        r#"{ "mode": "sweep", "volumes_cm3": [20, 40], "request": { "max_steps": 40 } }"#,
+    );
+    let (exp_spec, expansion) = crate::common::run(
+        &patient,
+        r#"{ "mode": "expansion", "request": { "expand_weeks": 2, "band_samples": 8, "max_steps": 40 } }"#,
+    );
+    let lib = Library::open(&tmp.lib_dir()).unwrap();
+    let s = save(&lib, &scan, "sweep", &sweep_spec, &sweep);
+    let e = save(&lib, &scan, "expansion", &exp_spec, &expansion);
+    assert_eq!((s.mode.as_str(), s.has_result), ("sweep", false));
+    assert_eq!((e.mode.as_str(), e.has_result), ("expansion", false));
+    assert_eq!(s.area_gain_cm2, None);
+    drop(lib);
+    let lib = Library::open(&tmp.lib_dir()).unwrap();
+    // Newest first.
+    let listed: Vec<String> = lib
+        .plans(&s.patient_uid)
+        .unwrap()
+        .into_iter()
+        .map(|p| p.uid)
+        .collect();
+    assert_eq!(listed, vec![e.uid.clone(), s.uid.clone()]);
+    let os = lib.open_plan(&s.uid).unwrap();
+    assert_eq!(os.report_json, sweep.report.to_json().unwrap());
+    assert!(os.result.is_none() && os.chart_png.is_none());
+    let oe = lib.open_plan(&e.uid).unwrap();
+    assert_eq!(oe.report_json, expansion.report.to_json().unwrap());
+    let tissue_planner::JobReport::Expansion(r) = &expansion.report else {
+        panic!("not an expansion")
+    };
+    let chart = oe.chart_png.expect("the expansion's chart");
+    assert!(chart.starts_with(b"\x89PNG"));
+    assert_eq!(chart, r.chart(tissue_cases::CHART_SIZE).unwrap());
+}
+
+#[test]
+fn the_same_scan_and_unit_is_one_patient_and_another_unit_another() {
+    let tmp = Tmp::new("same");
+    let (_, scan) = table2();
+    let lib = Library::open(&tmp.lib_dir()).unwrap();
+    let a = lib.add_patient(&scan, Some("Ms A")).unwrap();
+    let again = lib.add_patient(&scan, Some("ignored")).unwrap();
+    assert_eq!(a.uid, again.uid);
+    assert_eq!(again.label, "Ms A");
+    assert!(a.uid.starts_with('p') && a.uid.len() == 33);
+    assert_eq!(a.summary["vertices"], 4225);
+    let mut in_mm = scan.clone();
+    in_mm.unit = tissue_planner::Unit::Mm;
+    let b = lib.add_patient(&in_mm, None).unwrap();
+    assert_ne!(a.uid, b.uid);
+    assert_eq!(b.label, "table2.obj");
+    assert_eq!(lib.patients(None).unwrap().len(), 2);
+    // One blob for the shared scan bytes, one mesh blob per unit? No: the file mesh is the
+    // same in both units, so it too is stored once.
+    let conn = rusqlite::Connection::open(lib.database_path()).unwrap();
+    let blobs: i64 = conn
+        .query_row("SELECT COUNT(*) FROM blobs", [], |r| r.get(0))
+        .unwrap();
+    assert_eq!(blobs, 2);
+}
