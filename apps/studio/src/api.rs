@@ -329,7 +329,7 @@ async fn upload(
         }
         Source::Upload { name, unit, bytes }
     };
-    let (patient, scan, suggested) = blocking(move || {
+    let (patient, scan, label, suggested) = blocking(move || {
         let _span = tracing::info_span!("studio_load").entered();
         match source {
             Source::Shipped(s) => {
@@ -337,29 +337,32 @@ async fn upload(
                 let v = s.suggested_vertex(&p.cm);
                 let scan = tissue_cases::Scan::of_mesh(&p, s.id())
                     .map_err(|e| crate::cases::case_error(&e))?;
-                Ok((p, scan, Some(v)))
+                Ok((p, scan, s.label().to_owned(), Some(v)))
             }
             Source::Upload { name, unit, bytes } => {
                 let p = Patient::parse(&bytes, &name, unit).map_err(|e| ApiError::plan(&e))?;
                 let scan = tissue_cases::Scan {
-                    name,
+                    name: name.clone(),
                     unit,
                     bytes: bytes.to_vec(),
                 };
-                Ok((p, scan, None))
+                Ok((p, scan, name, None))
             }
         }
     })
     .await?;
-    Ok(Json(patient_answer(&studio, patient, scan, suggested)))
+    Ok(Json(patient_answer(
+        &studio, patient, scan, label, suggested,
+    )))
 }
 
-/// Keeps `patient` (and its `scan`) and gives the `/api/patients` answer: its id, label, unit,
+/// Keeps `patient` (with its `scan` and its `label` in the case library) and gives the `/api/patients` answer: its id, label, unit,
 /// summary, mesh (cm) and the suggested placement.
 pub(crate) fn patient_answer(
     studio: &Studio,
     patient: Patient,
     scan: tissue_cases::Scan,
+    case_label: String,
     suggested: Option<u32>,
 ) -> serde_json::Value {
     let summary = patient.summary();
@@ -374,7 +377,7 @@ pub(crate) fn patient_answer(
         .map(|v| json!({ "vertex": v, "point": patient.cm.positions()[v as usize].to_array() }));
     let label = patient.label.clone();
     let unit = patient.unit;
-    let id = studio.add_patient(patient, scan);
+    let id = studio.add_patient(patient, scan, case_label);
     json!({
         "patient": id,
         "label": label,

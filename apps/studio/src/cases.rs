@@ -147,7 +147,7 @@ async fn save(
         let label = request
             .label
             .as_deref()
-            .unwrap_or(kept.patient.patient.label.as_str());
+            .unwrap_or(kept.patient.label.as_str());
         let plan = NewPlan {
             name: &request.name,
             note: &request.note,
@@ -625,8 +625,8 @@ async fn open_patient(
         let info = library.patient(&uid).map_err(|e| case_error(&e))?;
         let mut patient = library.load_patient(&uid).map_err(|e| case_error(&e))?;
         let scan = library.scan(&uid).map_err(|e| case_error(&e))?;
-        patient.label = info.label;
-        let mut answer = patient_answer(&studio, patient, scan, None);
+        patient.label.clone_from(&info.label);
+        let mut answer = patient_answer(&studio, patient, scan, info.label, None);
         answer["case_patient"] = json!(uid);
         Ok(Json(answer))
     })

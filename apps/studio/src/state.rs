@@ -94,6 +94,9 @@ pub struct Loaded {
     pub patient: Arc<Patient>,
     /// Its scan as it came (an upload's bytes, a shipped mesh written as OBJ, a stored scan).
     pub scan: Scan,
+    /// What the case library calls it when a plan on it is saved without a label (an upload's
+    /// file name, a shipped mesh's label, a stored patient's label).
+    pub label: String,
 }
 
 /// The running job: its id, its cancel flag, and how far it is.
@@ -238,8 +241,9 @@ impl Studio {
         &self.temp
     }
 
-    /// Keeps `patient` (with the scan it came from) under a new id.
-    pub fn add_patient(&self, patient: Patient, scan: Scan) -> String {
+    /// Keeps `patient` (with the scan it came from and its label in the case library) under a
+    /// new id.
+    pub fn add_patient(&self, patient: Patient, scan: Scan, label: String) -> String {
         let id = self.id("p");
         let mut inner = self.lock();
         inner.patients.push_back((
@@ -247,6 +251,7 @@ impl Studio {
             Arc::new(Loaded {
                 patient: Arc::new(patient),
                 scan,
+                label,
             }),
         ));
         while inner.patients.len() > KEPT {

@@ -107,7 +107,8 @@ function patientItem({ patient, plans }) {
     `${patient.scan_name} · ${patient.unit} · ${fmtInt(plans.length)} plan${plans.length === 1 ? '' : 's'} · added ${when(patient.added_at)}`);
   const head = el('div', { class: 'case-head' }, label, meta);
   const actions = el('div', { class: 'case-actions' });
-  const again = el('a', { class: 'button small', href: `/planner?case=${enc(patient.uid)}` }, 'Plan on this patient');
+  const again = el('a', { class: 'button small', href: `/planner?case=${enc(patient.uid)}` }, 'Plan again');
+  again.setAttribute('aria-label', `Plan again on ${patient.label}`);
   const exp = el('a', { class: 'button small', href: `/api/cases/patients/${enc(patient.uid)}/export`, download: '' }, 'Export');
   exp.setAttribute('aria-label', `Export ${patient.label} as a zip`);
   const rename = el('button', { type: 'button', class: 'small' }, 'Rename');
@@ -218,6 +219,7 @@ function renderPlan() {
   const o = state.opened;
   const { plan, patient, report } = o;
   $('compare-detail').hidden = true;
+  $('detail-empty').hidden = true;
   $('plan-detail').hidden = false;
   setText('plan-title', plan.name);
   setText('plan-meta', `${patient.label} · ${planSummary(plan)} · ${plan.tool} ${plan.library_version}, solver ${plan.solver || '—'}`);
@@ -310,6 +312,7 @@ function closeDetail() {
   state.colorRange = null;
   $('plan-detail').hidden = true;
   $('compare-detail').hidden = true;
+  $('detail-empty').hidden = false;
   $('colorbar').hidden = true;
   setText('case-badge', '');
   if (view.mesh) {
@@ -323,23 +326,54 @@ function closeDetail() {
 
 // ---------------------------------------------------------------- two plans side by side
 
+// The figures a comparison shows first, in this order, with their labels; the others follow in the
+// library's order, labelled from their JSON names (`dome_height_cm` → "Dome height (cm)").
 const FIGURE_LABELS = {
-  area_gain_cm2: ['Area gain', 'cm²'],
-  area_before_cm2: ['Area before', 'cm²'],
-  area_after_cm2: ['Area after', 'cm²'],
-  volume_difference_cm3: ['Volume difference', 'cm³'],
-  volume_cm3: ['Implant volume', 'cm³'],
-  implant_compression: ['Implant compression', ''],
-  max_displacement_cm: ['Max displacement', 'cm'],
-  steps: ['Steps', ''],
-  wall_time_s: ['Wall time', 's'],
-  region_vertices: ['Region vertices', ''],
-  region_radius_cm: ['Region radius', 'cm'],
+  area_gain_cm2: 'Area gain (cm²)',
+  implant_volume_cm3: 'Implant volume (cm³)',
+  volume_cm3: 'Implant volume (cm³)',
+  max_displacement_cm: 'Max displacement (cm)',
+  dome_height_cm: 'Dome height (cm)',
+  volume_difference_cm3: 'Volume difference (cm³)',
+  area_before_cm2: 'Area before (cm²)',
+  area_after_cm2: 'Area after (cm²)',
+  implant_compression: 'Implant compression',
+  steps: 'Steps',
+  max_steps: 'Step limit',
+  wall_time_s: 'Wall time (s)',
 };
+const UNITS = [['_cm2', 'cm²'], ['_cm3', 'cm³'], ['_cm', 'cm'], ['_s', 's']];
 
 function figureLabel(name) {
-  const [label, unit] = FIGURE_LABELS[name] || [name.replace(/_/g, ' '), ''];
-  return unit ? `${label} (${unit})` : label;
+  if (FIGURE_LABELS[name]) return FIGURE_LABELS[name];
+  let text = name;
+  let unit = '';
+  for (const [suffix, u] of UNITS) {
+    if (text.endsWith(suffix)) {
+      text = text.slice(0, -suffix.length);
+      unit = u;
+      break;
+    }
+  }
+  text = text.replace(/_/g, ' ');
+  text = text.charAt(0).toUpperCase() + text.slice(1);
+  return unit ? `${text} (${unit})` : text;
+}
+
+/** Key figures first (FIGURE_LABELS' order), then the others as the library lists them. */
+function orderFigures(figures) {
+  const rank = Object.keys(FIGURE_LABELS);
+  const r = (f) => (rank.includes(f.name) ? rank.indexOf(f.name) : rank.length);
+  return figures.map((f, i) => [f, i]).sort((x, y) => r(x[0]) - r(y[0]) || x[1] - y[1]).map(([f]) => f);
+}
+
+/** A figure with the digits it needs: counts whole, small values with 4 significant digits. */
+function fmtFigure(v, whole) {
+  if (v == null) return '—';
+  if (whole) return fmtInt(v);
+  const a = Math.abs(v);
+  if (a !== 0 && a < 0.01) return v.toPrecision(3);
+  return fmt(v, a < 1 ? 3 : 2);
 }
 
 async function comparePlans(a, b) {
@@ -367,16 +401,17 @@ async function comparePlans(a, b) {
 function renderComparison() {
   const c = state.comparison;
   $('plan-detail').hidden = true;
+  $('detail-empty').hidden = true;
   $('compare-detail').hidden = false;
   setText('case-badge', `${c.patient.label} · ${c.a.name} and ${c.b.name}`);
   const head = el('tr', {}, el('th', { scope: 'col' }, 'Figure'), el('th', { scope: 'col' }, `A: ${c.a.name}`),
     el('th', { scope: 'col' }, `B: ${c.b.name}`), el('th', { scope: 'col' }, 'B − A'));
   const body = el('tbody');
-  for (const f of c.figures) {
-    const digits = Number.isInteger(f.a) && Number.isInteger(f.b) ? 0 : 2;
-    const diff = f.difference == null ? '—' : `${f.difference > 0 ? '+' : ''}${fmt(f.difference, digits)}`;
-    body.append(el('tr', {}, el('th', { scope: 'row' }, figureLabel(f.name)), el('td', {}, fmt(f.a, digits)),
-      el('td', {}, fmt(f.b, digits)), el('td', { class: 'diff' }, diff)));
+  for (const f of orderFigures(c.figures)) {
+    const whole = Number.isInteger(f.a ?? 0) && Number.isInteger(f.b ?? 0);
+    const diff = f.difference == null ? '—' : `${f.difference > 0 ? '+' : ''}${fmtFigure(f.difference, whole)}`;
+    body.append(el('tr', {}, el('th', { scope: 'row' }, figureLabel(f.name)), el('td', {}, fmtFigure(f.a, whole)),
+      el('td', {}, fmtFigure(f.b, whole)), el('td', { class: 'diff' }, diff)));
   }
   $('compare-table').replaceChildren(el('thead', {}, head), body);
   view.setMesh(c.mesh.positions, c.mesh.triangles);

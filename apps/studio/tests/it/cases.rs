@@ -337,9 +337,14 @@ async fn two_tabs_finish_one_after_the_other_then_save_at_the_same_instant() -> 
         Some(3 * 4225)
     );
     let again = run(&mut one, &opened["patient"], short(60.0)).await?;
-    assert_eq!(
-        again["report"]["area_gain_cm2"], a["report"]["area_gain_cm2"],
-        "the same patient, the same run"
+    // The stored patient is the scan as stored (the shipped plane written as OBJ, a file
+    // patient now): the same run on it gains what it gained on the shipped plane, within 1 %.
+    let gain = |m: &Value| m["report"]["area_gain_cm2"].as_f64().unwrap_or(f64::NAN);
+    assert!(
+        (gain(&again) - gain(&a)).abs() < 0.01 * gain(&a),
+        "{} on the stored patient, {} on the shipped one",
+        gain(&again),
+        gain(&a)
     );
     let (s, third) = post_json(
         &app,

@@ -16,7 +16,7 @@ async fn every_golden_job_gives_the_golden_report_over_the_socket() -> Result {
     let (studio, addr, server) = crate::serve().await?;
     let table2 = tissue_planner::Patient::shipped(tissue_planner::Shipped::Table2)?;
     let scan = tissue_cases::Scan::of_mesh(&table2, "table2")?;
-    let patient = studio.add_patient(table2, scan);
+    let patient = studio.add_patient(table2, scan, "Table 2".to_owned());
     let (mut tab, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/api/ws")).await?;
     for name in golden::JOBS {
         let (_, text) = golden::job(name)?;
