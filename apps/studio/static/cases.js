@@ -404,8 +404,11 @@ function renderComparison() {
   $('detail-empty').hidden = true;
   $('compare-detail').hidden = false;
   setText('case-badge', `${c.patient.label} · ${c.a.name} and ${c.b.name}`);
-  const head = el('tr', {}, el('th', { scope: 'col' }, 'Figure'), el('th', { scope: 'col' }, `A: ${c.a.name}`),
-    el('th', { scope: 'col' }, `B: ${c.b.name}`), el('th', { scope: 'col' }, 'B − A'));
+  const head = el('tr', {}, el('th', { scope: 'col' }, 'Figure'), el('th', { scope: 'col' }, 'A'),
+    el('th', { scope: 'col' }, 'B'), el('th', { scope: 'col' }, 'B − A'));
+  $('compare-plans').replaceChildren(
+    el('dt', {}, 'A'), el('dd', {}, `${c.a.name} (${when(c.a.run_at)})`),
+    el('dt', {}, 'B'), el('dd', {}, `${c.b.name} (${when(c.b.run_at)})`));
   const body = el('tbody');
   for (const f of orderFigures(c.figures)) {
     const whole = Number.isInteger(f.a ?? 0) && Number.isInteger(f.b ?? 0);
