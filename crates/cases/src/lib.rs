@@ -41,6 +41,68 @@
 //! - Identifiers (`uid`) are 128 random bits in hex with a prefix (`p…` patient, `c…` plan),
 //!   so that one cannot be guessed from another.
 //!
+//! ## Limits and formats
+//! - Names and labels are trimmed and hold 1 to [`MAX_NAME_CHARS`] characters without control
+//!   characters; a note holds up to [`MAX_NOTE_CHARS`] (line breaks and tabs allowed). A
+//!   patient added without a label is labelled with its scan's file name.
+//! - A plan's `volume_cm3` is the search's volume (target-gain) or a single run's asked volume
+//!   (`inputs.volume_cm3`); `area_gain_cm2` is the report's, where it has one.
+//! - The result blob is little-endian: magic `TSCRSLT\0`, format version 1 (`u32`), the vertex
+//!   count (`u32`), the positions after (scan unit, f32×3 each), then `displacement`, `stretch`
+//!   and `in_region` (f32 each). The patient's mesh blob: magic `TSCMESH\0`, version 1, vertex
+//!   and triangle counts, positions (f32×3) and triangles (u32×3). [`Library::open_plan`]
+//!   rebuilds the result from both: `after_cm` is the positions after × the unit's cm, `scan`
+//!   is `None`; the mesh downloads written from it are byte for byte those of the run.
+//! - An expansion's chart is stored as drawn at [`CHART_SIZE`].
+//! - The case archive ([`Library::export_case`]): `case.json` (format [`ARCHIVE_FORMAT`],
+//!   version [`ARCHIVE_FORMAT_VERSION`]: the patient, each plan, and the SHA-256 and size of
+//!   every other file), `scan/<file name>`, and per plan `plans/<uid>/job.json`,
+//!   `report.json`, for a single run `result.bin` (the stored blob) with `patient.ply` and
+//!   `patient.vtk` (for people; not read on import), and an expansion's `chart.png`. An import
+//!   takes at most [`MAX_ARCHIVE_BYTES`], [`MAX_ARCHIVE_ENTRIES`] entries of at most
+//!   [`MAX_ENTRY_BYTES`] each and [`MAX_TOTAL_BYTES`] in all (counted as they unpack, whatever
+//!   the headers say), checks every hash, parses the scan again and checks each result against
+//!   its vertex count, then writes in one transaction; ids are kept, plans already present are
+//!   skipped.
+//! - [`MIGRATIONS`] lists the schema's migrations (entry `i` takes version `i` to `i + 1`).
+//!
+//! ## Example: save a plan, list it, open it
+//! ```
+//! use tissue_cases::{Library, NewPlan, Scan};
+//! use tissue_planner::{CancelToken, JobSpec, Patient, PlanError, Scenario, Shipped, Tool};
+//!
+//! let dir = std::env::temp_dir().join(format!("tissue-cases-doc-{}", std::process::id()));
+//! let library = Library::open(&dir)?;
+//!
+//! // A short Table 2 run, as every front end plans it.
+//! let patient = Patient::shipped(Shipped::Table2)?;
+//! let scan = Scan::of_mesh(&patient, "table2")?;
+//! let spec: JobSpec = serde_json::from_str(r#"{ "request": { "max_steps": 40 } }"#)?;
+//! let scenario = Scenario::new(patient, spec.request.clone())?;
+//! let finished = spec
+//!     .plan(&scenario)?
+//!     .run(&scenario, Tool::Insert, &CancelToken::new(), |_| {})
+//!     .map_err(PlanError::from)?;
+//!
+//! let plan = NewPlan { name: "100 cm³ round", note: "", spec: &spec, finished: &finished };
+//! let saved = library.save(&scan, Some("Table 2 plane"), plan)?;
+//!
+//! let patients = library.patients(Some("table"))?;
+//! assert_eq!(patients[0].label, "Table 2 plane");
+//! assert_eq!(library.plans(&patients[0].uid)?[0].uid, saved.uid);
+//!
+//! // Opened again: the report as the planner wrote it and the result, nothing recomputed.
+//! let opened = library.open_plan(&saved.uid)?;
+//! assert_eq!(opened.report_json, finished.report.to_json()?);
+//! assert_eq!(
+//!     opened.result.as_ref().map(|r| r.after.positions().to_vec()),
+//!     finished.patient.as_ref().map(|r| r.after.positions().to_vec())
+//! );
+//! # drop(library);
+//! # std::fs::remove_dir_all(&dir)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! No HTTP, no terminal, no threads of its own.
 #![forbid(unsafe_code)]
 
@@ -57,8 +119,13 @@ mod schema;
 mod store;
 mod temp;
 
+pub use archive::{
+    FORMAT as ARCHIVE_FORMAT, FORMAT_VERSION as ARCHIVE_FORMAT_VERSION, MAX_ARCHIVE_BYTES,
+    MAX_ARCHIVE_ENTRIES, MAX_ENTRY_BYTES, MAX_TOTAL_BYTES,
+};
 use schema::db;
 pub use schema::MIGRATIONS;
+pub use store::{MAX_NAME_CHARS, MAX_NOTE_CHARS};
 
 /// An expansion's chart as stored (pixels, width × height).
 pub const CHART_SIZE: (u32, u32) = (1200, 600);
@@ -814,15 +881,13 @@ impl Library {
     /// # Errors
     /// [`CaseError::Database`].
     pub fn integrity_check(&self) -> Result<String, CaseError> {
-        let conn = self.lock();
-        let mut stmt = conn
-            .prepare("PRAGMA integrity_check")
-            .map_err(db("checking the database"))?;
-        let rows = stmt
-            .query_map([], |row| row.get::<_, String>(0))
-            .map_err(db("checking the database"))?
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(db("checking the database"))?;
+        let rows = store::all_rows(
+            &self.lock(),
+            "PRAGMA integrity_check",
+            [],
+            |row| row.get::<_, String>(0),
+            "checking the database",
+        )?;
         Ok(rows.join("\n"))
     }
 }

@@ -482,13 +482,20 @@ pub(crate) fn patients(
          WHERE c.patient_id = p.id), p.added_at)) DESC, p.id DESC"
     );
     let pattern = search.map(like_pattern);
-    let mut stmt = conn.prepare(&sql).map_err(db("listing patients"))?;
-    let rows = stmt
-        .query_map([pattern], patient_info_of)
-        .map_err(db("listing patients"))?
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(db("listing patients"))?;
-    Ok(rows)
+    all_rows(conn, &sql, [pattern], patient_info_of, "listing patients")
+}
+
+/// Every row of `sql` with `params`, mapped by `map`.
+pub(crate) fn all_rows<T, P: rusqlite::Params>(
+    conn: &Connection,
+    sql: &str,
+    params: P,
+    map: impl FnMut(&rusqlite::Row<'_>) -> rusqlite::Result<T>,
+    doing: &'static str,
+) -> Result<Vec<T>, CaseError> {
+    let mut stmt = conn.prepare(sql).map_err(db(doing))?;
+    let rows = stmt.query_map(params, map).map_err(db(doing))?;
+    rows.collect::<Result<Vec<_>, _>>().map_err(db(doing))
 }
 
 const PLAN_INFO: &str = "SELECT c.uid, p.uid, c.name, c.note, c.mode, c.tool, c.solver, \
@@ -526,17 +533,13 @@ pub(crate) fn plan_info(conn: &Connection, uid: &str) -> Result<PlanInfo, CaseEr
 
 /// The plans of patient row `patient_id`, newest first.
 pub(crate) fn plans_of(conn: &Connection, patient_id: i64) -> Result<Vec<PlanInfo>, CaseError> {
-    let mut stmt = conn
-        .prepare(&format!(
-            "{PLAN_INFO} WHERE c.patient_id = ?1 ORDER BY c.run_at DESC, c.id DESC"
-        ))
-        .map_err(db("listing plans"))?;
-    let rows = stmt
-        .query_map([patient_id], plan_info_of)
-        .map_err(db("listing plans"))?
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(db("listing plans"))?;
-    Ok(rows)
+    all_rows(
+        conn,
+        &format!("{PLAN_INFO} WHERE c.patient_id = ?1 ORDER BY c.run_at DESC, c.id DESC"),
+        [patient_id],
+        plan_info_of,
+        "listing plans",
+    )
 }
 
 /// A plan's stored parts, not yet decoded.

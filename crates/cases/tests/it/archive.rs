@@ -35,6 +35,28 @@ fn rezip(entries: &[(String, Vec<u8>)]) -> Vec<u8> {
     w.finish().unwrap().into_inner()
 }
 
+/// `zip` with the uncompressed size of entry `name` set to `size` in its local and central
+/// headers (no zip64, no data descriptor: what `ZipWriter` writes to a `Cursor`).
+fn claim_size(zip: &[u8], name: &str, size: u32) -> Vec<u8> {
+    let mut out = zip.to_vec();
+    let mut patched = 0;
+    for i in 0..out.len().saturating_sub(46) {
+        // (where the name starts, the uncompressed size, the name's length) per header.
+        let (name_at, size_at, len_at) = match &out[i..i + 4] {
+            b"PK\x03\x04" => (30, 22, 26),
+            b"PK\x01\x02" => (46, 24, 28),
+            _ => continue,
+        };
+        let len = u16::from_le_bytes([out[i + len_at], out[i + len_at + 1]]) as usize;
+        if out.get(i + name_at..i + name_at + len) == Some(name.as_bytes()) {
+            out[i + size_at..i + size_at + 4].copy_from_slice(&size.to_le_bytes());
+            patched += 1;
+        }
+    }
+    assert_eq!(patched, 2, "the entry's two headers");
+    out
+}
+
 /// Everything a library holds, to see that a refused import changed nothing.
 fn snapshot(lib: &Library) -> Vec<String> {
     let mut out = Vec::new();
@@ -204,6 +226,10 @@ fn damaged_foreign_and_oversized_archives_are_refused_and_change_nothing() {
     let bomb = w.finish().unwrap().into_inner();
     assert!(bomb.len() < 2 << 20, "the bomb is {} bytes", bomb.len());
     assert_archive_error(to.import_case(&bomb), "MiB");
+
+    // The same bomb with headers that claim 1000 bytes: the unpacking itself is bounded.
+    let lying = claim_size(&bomb, "scan/table2.obj", 1000);
+    assert_archive_error(to.import_case(&lying), "scan/table2.obj does not unpack");
 
     assert_eq!(snapshot(&to), before);
     assert_eq!(to.integrity_check().unwrap(), "ok");

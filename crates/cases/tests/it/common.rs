@@ -123,3 +123,11 @@ impl Lcg {
         self.0 >> 33
     }
 }
+
+/// How many blobs the library's database holds (read through a second connection).
+pub fn blob_count(lib: &Library) -> i64 {
+    rusqlite::Connection::open(lib.database_path())
+        .unwrap()
+        .query_row("SELECT COUNT(*) FROM blobs", [], |r| r.get(0))
+        .unwrap()
+}

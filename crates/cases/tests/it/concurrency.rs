@@ -2,7 +2,8 @@
 
 use std::collections::BTreeSet;
 
-use tissue_cases::Library;
+use tissue_cases::{Library, Scan};
+use tissue_planner::{Finished, JobSpec};
 
 use crate::common::{save, table2, table2_single, Tmp};
 
@@ -15,49 +16,49 @@ fn uids(lib: &Library) -> BTreeSet<String> {
         .collect()
 }
 
+/// Ten saves on each of `libs`, on two threads at once: the uids saved.
+fn ten_each(
+    libs: [&Library; 2],
+    tag: &str,
+    scan: &Scan,
+    spec: &JobSpec,
+    finished: &Finished,
+) -> Vec<String> {
+    std::thread::scope(|s| {
+        let workers: Vec<_> = libs
+            .into_iter()
+            .enumerate()
+            .map(|(t, lib)| {
+                s.spawn(move || {
+                    (0..10)
+                        .map(|i| save(lib, scan, &format!("{tag} {t} #{i}"), spec, finished).uid)
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|w| w.join().unwrap())
+            .collect()
+    })
+}
+
 #[test]
 fn two_threads_on_one_handle_and_two_handles_on_one_folder_lose_nothing() {
     let tmp = Tmp::new("threads");
     let (_, scan) = table2();
     let (spec, finished) = table2_single(100.0, 40);
-    let one = Library::open(&tmp.lib_dir()).unwrap();
     // Two threads, one Library (Send + Sync).
-    let saved: Vec<String> = std::thread::scope(|s| {
-        let workers: Vec<_> = (0..2)
-            .map(|t| {
-                let (one, scan, spec, finished) = (&one, &scan, &spec, &finished);
-                s.spawn(move || {
-                    (0..10)
-                        .map(|i| save(one, scan, &format!("t{t} #{i}"), spec, finished).uid)
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        workers
-            .into_iter()
-            .flat_map(|w| w.join().unwrap())
-            .collect()
-    });
+    let one = Library::open(&tmp.lib_dir()).unwrap();
+    let saved = ten_each([&one, &one], "thread", &scan, &spec, &finished);
     assert_eq!(saved.len(), 20);
     assert_eq!(uids(&one), saved.iter().cloned().collect());
     // Two handles on one folder, each on its own thread.
-    let more: Vec<String> = std::thread::scope(|s| {
-        let workers: Vec<_> = (0..2)
-            .map(|t| {
-                let (dir, scan, spec, finished) = (tmp.lib_dir(), &scan, &spec, &finished);
-                s.spawn(move || {
-                    let lib = Library::open(&dir).unwrap();
-                    (0..10)
-                        .map(|i| save(&lib, scan, &format!("h{t} #{i}"), spec, finished).uid)
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        workers
-            .into_iter()
-            .flat_map(|w| w.join().unwrap())
-            .collect()
-    });
+    let (h0, h1) = (
+        Library::open(&tmp.lib_dir()).unwrap(),
+        Library::open(&tmp.lib_dir()).unwrap(),
+    );
+    let more = ten_each([&h0, &h1], "handle", &scan, &spec, &finished);
     assert_eq!(more.len(), 20);
     let all: BTreeSet<String> = saved.into_iter().chain(more).collect();
     assert_eq!(all.len(), 40);

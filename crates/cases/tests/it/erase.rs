@@ -3,7 +3,7 @@
 use tissue_cases::{Library, Scan};
 use tissue_planner::Unit;
 
-use crate::common::{chest_single, run, save, table2, Lcg, Tmp};
+use crate::common::{blob_count, chest_single, run, save, table2, Lcg, Tmp};
 
 fn contains(hay: &[u8], needle: &[u8]) -> bool {
     hay.windows(needle.len()).any(|w| w == needle)
@@ -89,11 +89,7 @@ fn an_erased_patients_scan_is_in_no_file_and_the_other_is_intact() {
     assert_eq!(opened.report_json, chest.report.to_json().unwrap());
     assert_eq!(lib.scan(&kept.patient_uid).unwrap().bytes, chest_scan.bytes);
     // Only the kept patient's blobs remain: scan, mesh, result.
-    let conn = rusqlite::Connection::open(lib.database_path()).unwrap();
-    let blobs: i64 = conn
-        .query_row("SELECT COUNT(*) FROM blobs", [], |r| r.get(0))
-        .unwrap();
-    assert_eq!(blobs, 3);
+    assert_eq!(blob_count(&lib), 3);
 }
 
 #[test]
@@ -106,11 +102,7 @@ fn deleting_a_plan_removes_its_unshared_blobs_only() {
     let pa = save(&lib, &scan, "a", &spec, &a);
     let pa2 = save(&lib, &scan, "a again", &spec, &a);
     let pb = save(&lib, &scan, "b", &spec_b, &b);
-    let count = || {
-        let conn = rusqlite::Connection::open(lib.database_path()).unwrap();
-        conn.query_row("SELECT COUNT(*) FROM blobs", [], |r| r.get::<_, i64>(0))
-            .unwrap()
-    };
+    let count = || blob_count(&lib);
     assert_eq!(count(), 4); // scan, mesh, two results
     lib.delete_plan(&pb.uid).unwrap();
     assert_eq!(count(), 3);

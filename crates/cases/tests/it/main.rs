@@ -1,4 +1,6 @@
-//! tissue-cases' integration tests (one binary, one module per area).
+//! tissue-cases' integration tests (one binary, one module per area). Helpers outside the
+//! tests unwrap and panic as the tests do.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 mod archive;
 mod common;

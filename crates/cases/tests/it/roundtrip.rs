@@ -1,7 +1,8 @@
 //! Save, reopen from a new handle, and compare everything a front end shows or downloads.
 
 use tissue_cases::Library;
-use tissue_planner::PatientResult;
+use tissue_cases::StoredPlan;
+use tissue_planner::{Finished, PatientResult};
 
 use crate::common::{save, table2, table2_single, Tmp};
 
@@ -15,6 +16,23 @@ fn downloads(r: &PatientResult, dir: &std::path::Path, tag: &str) -> Vec<Vec<u8>
             std::fs::read(&path).unwrap()
         })
         .collect()
+}
+
+/// The reopened plan's report is the run's byte for byte, its result bit for bit, and its
+/// three mesh downloads byte for byte; returns both results.
+fn assert_reopened<'a>(
+    finished: &'a Finished,
+    opened: &'a StoredPlan,
+    dir: &std::path::Path,
+) -> (&'a PatientResult, &'a PatientResult) {
+    assert_eq!(opened.report_json, finished.report.to_json().unwrap());
+    let (orig, back) = (
+        finished.patient.as_ref().unwrap(),
+        opened.result.as_ref().unwrap(),
+    );
+    assert_same_result(orig, back);
+    assert_eq!(downloads(orig, dir, "orig"), downloads(back, dir, "back"));
+    (orig, back)
 }
 
 fn assert_same_result(a: &PatientResult, b: &PatientResult) {
@@ -53,17 +71,8 @@ fn a_single_run_reopens_byte_identical_from_a_new_handle() {
     assert_eq!(patients[0].scan_bytes, scan.bytes.len() as u64);
     assert_eq!(lib.plans(&patients[0].uid).unwrap(), vec![saved.clone()]);
     let opened = lib.open_plan(&saved.uid).unwrap();
-    assert_eq!(opened.report_json, finished.report.to_json().unwrap());
     assert_eq!(opened.job_json, serde_json::to_string(&spec).unwrap());
-    let (orig, back) = (
-        finished.patient.as_ref().unwrap(),
-        opened.result.as_ref().unwrap(),
-    );
-    assert_same_result(orig, back);
-    assert_eq!(
-        downloads(orig, tmp.path(), "orig"),
-        downloads(back, tmp.path(), "back")
-    );
+    assert_reopened(&finished, &opened, tmp.path());
     // The scan comes back as it went in, and the stored mesh is the parsed one.
     let stored_scan = lib.scan(&patients[0].uid).unwrap();
     assert_eq!(stored_scan.bytes, scan.bytes);
@@ -84,16 +93,7 @@ fn a_dm_scan_reopens_with_its_downloads_and_cm_positions() {
     let lib = Library::open(&tmp.lib_dir()).unwrap();
     let opened = lib.open_plan(&saved.uid).unwrap();
     assert_eq!(opened.patient.unit, "dm");
-    assert_eq!(opened.report_json, finished.report.to_json().unwrap());
-    let (orig, back) = (
-        finished.patient.as_ref().unwrap(),
-        opened.result.as_ref().unwrap(),
-    );
-    assert_same_result(orig, back);
-    assert_eq!(
-        downloads(orig, tmp.path(), "orig"),
-        downloads(back, tmp.path(), "back")
-    );
+    let (orig, back) = assert_reopened(&finished, &opened, tmp.path());
     // after_cm is the positions after in cm (10 cm per dm), within f32 rounding of the run's.
     let moved = orig
         .after
@@ -179,9 +179,40 @@ fn the_same_scan_and_unit_is_one_patient_and_another_unit_another() {
     assert_eq!(lib.patients(None).unwrap().len(), 2);
     // One blob for the shared scan bytes, one mesh blob per unit? No: the file mesh is the
     // same in both units, so it too is stored once.
-    let conn = rusqlite::Connection::open(lib.database_path()).unwrap();
-    let blobs: i64 = conn
-        .query_row("SELECT COUNT(*) FROM blobs", [], |r| r.get(0))
-        .unwrap();
-    assert_eq!(blobs, 2);
+    assert_eq!(crate::common::blob_count(&lib), 2);
+}
+
+#[test]
+fn a_noisy_holed_mm_scan_read_from_a_ply_file_reopens_byte_identical() {
+    let tmp = Tmp::new("noisy");
+    let face = tissue_testscans::noisy_face_scan(1).unwrap();
+    assert_eq!(face.unit_name, "mm");
+    let path = tmp.path().join("face.ply");
+    tissue_meshio::write_ply(&path, &face.mesh).unwrap();
+    let scan = tissue_cases::Scan::read(&path, tissue_planner::Unit::Mm).unwrap();
+    assert_eq!(scan.name, "face.ply");
+    let patient = scan.patient().unwrap();
+    let forehead = face.points.iter().find(|p| p.name == "forehead").unwrap();
+    let (spec, finished) = crate::common::run(
+        &patient,
+        &format!(
+            r#"{{ "request": {{ "vertex": {}, "diameter_cm": 2.5, "volume_cm3": 2, "max_steps": 40 }} }}"#,
+            forehead.vertex
+        ),
+    );
+    let lib = Library::open(&tmp.lib_dir()).unwrap();
+    let saved = save(&lib, &scan, "forehead", &spec, &finished);
+    drop(lib);
+    let lib = Library::open(&tmp.lib_dir()).unwrap();
+    let opened = lib.open_plan(&saved.uid).unwrap();
+    let (orig, _) = assert_reopened(&finished, &opened, tmp.path());
+    assert!(orig.displacement.iter().any(|&d| d > 0.0));
+    // Planning again on the stored patient needs no parse and gives the same mesh.
+    let loaded = lib.load_patient(&saved.patient_uid).unwrap();
+    assert_eq!(loaded.file.positions(), patient.file.positions());
+    assert_eq!(loaded.file.triangles(), patient.file.triangles());
+    assert_eq!(
+        lib.patient(&saved.patient_uid).unwrap().summary["vertices"],
+        patient.file.positions().len()
+    );
 }
