@@ -546,7 +546,9 @@ function main() {
     pixelStats: () => view.pixelStats(),
   });
   wire();
-  loadList();
+  // /cases?plan=ID (the planner's "Open in Cases"): that plan opened once the list is in.
+  const plan = new URLSearchParams(location.search).get('plan');
+  loadList().then(() => (plan ? openPlan(plan) : null));
 }
 
 main();

@@ -740,6 +740,7 @@ function renderSave() {
   $('save-case').hidden = !finished;
   $('save-button').disabled = !finished || !!state.saved;
   $('save-open').hidden = !state.saved;
+  if (state.saved) $('save-open').href = `/cases?plan=${encodeURIComponent(state.saved.uid)}`;
 }
 
 async function saveCase(e) {
