@@ -224,8 +224,16 @@ async function main() {
       'the exported case imports back: the patient and its plan');
     fs.rmSync(path.dirname(zip), { recursive: true, force: true });
     await shot(page, 'cases-5-imported.png');
-
     check(cases.pageErrors.length === 0, 'no script errors or CSP violations in the Cases page', cases.pageErrors.join(' | '));
+
+    // l. Plan again: the planner opens on the stored patient (its label, its mesh), ready to place
+    await page.getByRole('link', { name: 'Plan again on Mrs T., left breast' }).click();
+    await page.waitForFunction(() => window.tissueStudio?.planner?.ready === true, null, { timeout: 60000 });
+    const again = await page.evaluate(() => ({ label: window.tissueStudio.planner.patient.label,
+      vertices: window.tissueStudio.planner.patient.summary.vertices, case: window.tissueStudio.planner.patient.case_patient }));
+    check(again.label === 'Mrs T., left breast' && again.vertices === small.vertices && again.case === imported.patient.uid,
+      `Plan again opens the planner on the stored patient (${again.label}, ${again.vertices} vertices)`, JSON.stringify(again));
+    check(cases.pageErrors.length === 0, 'no script errors in the planner opened on it', cases.pageErrors.join(' | '));
   } finally {
     await browser.close();
   }
