@@ -67,7 +67,13 @@ studio, the C ABI): the same request gives the same report, whatever wrote it, a
 only ever added (a change that is not an addition raises schema_version). Every report has \
 schema_version, tool, version, mode (single | sweep | target-gain | expansion) and inputs; the \
 fields of each mode are documented in the rustdoc of tissue_planner::report, and \
-fixtures/reports/ holds one example report per mode (checked against every front end).";
+fixtures/reports/ holds one example report per mode (checked against every front end).
+
+CASE LIBRARY (--save NAME): after a successful run and its outputs, the run is stored as a plan \
+(its job, its report byte for byte, a single run's result) for the patient of the scan, in the \
+library's database (cases.sqlite in --data), in one transaction: `insert: saved plan c… \"NAME\" \
+for patient p… in PATH` on stderr. The name, note and label are checked, and the library opened, \
+before the run. `tissue-cases list` shows the plans; docs/cases.md is the guide.";
 
 /// The text after the options in `--help`: outputs, the report, and the exit codes (the table
 /// every tissue binary shares, with what each code means here).
@@ -88,6 +94,17 @@ fn after_long_help() -> String {
                 Exit::Placement,
                 "point off the surface, vertex out of range, region empty, covering the whole \
                  surface or too small for the implant, badly shaped triangles at the point",
+            ),
+            (
+                Exit::Usage,
+                "an empty or too long --save name or --label, a --note over 10000 characters \
+                 (checked before the run)",
+            ),
+            (
+                Exit::Output,
+                "an output file, or the case library of --save: --data is not a usable folder \
+                 (before the run), or the plan could not be stored (after the run: its outputs \
+                 are written, the plan is not saved)",
             ),
             (
                 Exit::Parameters,
@@ -452,6 +469,42 @@ pub struct Cli {
     /// No progress on stderr.
     #[arg(long, short, help_heading = "Outputs")]
     pub quiet: bool,
+
+    /// Store this run in the case library as a plan named NAME (1 to 200 characters, one line),
+    /// for the patient of the scan (added the first time its scan is seen in its unit). Every
+    /// mode is saved; `tissue-cases` lists, shows, exports and erases them.
+    #[arg(long, value_name = "NAME", help_heading = "Case library")]
+    pub save: Option<String>,
+
+    /// The saved plan's note (up to 10000 characters).
+    #[arg(
+        long,
+        value_name = "TEXT",
+        requires = "save",
+        help_heading = "Case library"
+    )]
+    pub note: Option<String>,
+
+    /// The patient's label, when the scan is new to the library [default: the scan's file
+    /// name, or "Table 2 plane"].
+    #[arg(
+        long,
+        value_name = "TEXT",
+        requires = "save",
+        help_heading = "Case library"
+    )]
+    pub label: Option<String>,
+
+    /// The case library's folder [default: the platform's data folder: $XDG_DATA_HOME/tissue or
+    /// ~/.local/share/tissue on Linux, ~/Library/Application Support/tissue on macOS,
+    /// %APPDATA%\tissue on Windows]. Opened only with --save.
+    #[arg(
+        long,
+        value_name = "DIR",
+        requires = "save",
+        help_heading = "Case library"
+    )]
+    pub data: Option<PathBuf>,
 }
 
 impl Cli {

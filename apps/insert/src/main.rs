@@ -14,6 +14,7 @@ mod failure;
 mod output;
 mod progress;
 mod report;
+mod save;
 mod setup;
 
 use std::process::ExitCode;
@@ -25,6 +26,7 @@ use crate::cli::Cli;
 use crate::failure::{Exit, Failure, FromPlan};
 use crate::output::Staged;
 use crate::progress::{Display, Interrupt};
+use crate::save::Saving;
 
 fn run(cli: &Cli) -> Result<(), Failure> {
     let interrupt = Interrupt::install()?;
@@ -41,7 +43,13 @@ fn run(cli: &Cli) -> Result<(), Failure> {
     }
     // The numbers are checked before the file is read: a typo costs no load.
     spec.check().map_err(|e| Failure::from_plan(&e))?;
+    // So are the plan's name and the library of --save: a typo or an unusable --data costs no run.
+    let saving = Saving::prepare(cli)?;
     let scenario = setup::scenario(cli, &spec)?;
+    let scan = match &saving {
+        Some(_) => Some(Saving::scan(cli, &scenario)?),
+        None => None,
+    };
     interrupt.check()?;
     let planned = spec.plan(&scenario).map_err(|e| Failure::from_plan(&e))?;
     let mut display = Display::new(cli.quiet, spec.mode != JobMode::Single);
@@ -60,6 +68,18 @@ fn run(cli: &Cli) -> Result<(), Failure> {
     let staged = stage(cli, &scenario, &finished)?;
     for path in staged.commit(&interrupt)? {
         eprintln!("insert: wrote {}", path.display());
+    }
+    // The plan is saved after the outputs, in one transaction; Ctrl-C only sets the token, so
+    // the process does not end in the middle of it.
+    if let (Some(saving), Some(scan)) = (&saving, &scan) {
+        let plan = saving.save(scan, &spec, &finished)?;
+        eprintln!(
+            "insert: saved plan {} {:?} for patient {} in {}",
+            plan.uid,
+            plan.name,
+            plan.patient_uid,
+            saving.database_path().display()
+        );
     }
     Ok(())
 }

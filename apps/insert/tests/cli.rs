@@ -951,3 +951,7 @@ fn a_bad_protocol_is_refused_naming_its_flag() {
     assert_eq!(o.status.code(), Some(6), "{}", stderr(&o));
     assert!(stderr(&o).contains("--expand-weeks"), "{}", stderr(&o));
 }
+
+/// `--save`: the run stored in the case library (`tests/cli/save.rs`).
+#[path = "cli/save.rs"]
+mod save;

@@ -65,6 +65,8 @@
 //!   its vertex count, then writes in one transaction; ids are kept, plans already present are
 //!   skipped.
 //! - [`MIGRATIONS`] lists the schema's migrations (entry `i` takes version `i` to `i + 1`).
+//! - When the system's random source fails (no identifier can be drawn), the write is refused
+//!   as [`CaseError::Open`]; no variant was added for it.
 //!
 //! ## Example: save a plan, list it, open it
 //! ```
@@ -132,6 +134,10 @@ pub const CHART_SIZE: (u32, u32) = (1200, 600);
 
 /// The schema version this library writes (`PRAGMA user_version`).
 pub const SCHEMA_VERSION: u32 = 1;
+
+/// How old a leftover export folder (`.tissue-cases-*` in the library's folder, left by an export
+/// that was killed) must be for [`Library::open`] to remove it: 10 minutes.
+pub const STALE_EXPORT: std::time::Duration = std::time::Duration::from_secs(600);
 
 /// The database file's name in the data folder.
 pub const DATABASE_FILE: &str = "cases.sqlite";
@@ -434,6 +440,8 @@ impl Library {
     pub fn open(dir: &Path) -> Result<Library, CaseError> {
         let _span = tracing::info_span!("cases_open", dir = %dir.display()).entered();
         let conn = schema::open(dir)?;
+        // An export killed mid-way leaves its folder of meshes: gone at the next open.
+        temp::sweep_stale(dir, STALE_EXPORT);
         Ok(Library {
             dir: dir.to_path_buf(),
             conn: Mutex::new(conn),
@@ -820,7 +828,10 @@ impl Library {
     /// database vacuumed.
     ///
     /// # Errors
-    /// [`CaseError::NotFound`], [`CaseError::Database`].
+    /// [`CaseError::NotFound`], [`CaseError::Database`] (also when another program keeps a read
+    /// of the library open past the 10 s busy timeout, so that the WAL cannot be truncated:
+    /// the rows are deleted then, but old copies of their pages may stay in the WAL until the
+    /// next erasure checkpoints it).
     pub fn erase_patient(&self, uid: &str) -> Result<(), CaseError> {
         let _span = tracing::info_span!("cases_erase_patient").entered();
         let mut conn = self.lock();

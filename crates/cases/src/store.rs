@@ -643,6 +643,32 @@ mod tests {
     }
 
     #[test]
+    fn list_figures_are_read_from_every_modes_golden_report() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/reports");
+        let read = |mode: &str| {
+            let text = std::fs::read_to_string(dir.join(format!("{mode}.json"))).unwrap();
+            ReportFigures::read(&text).unwrap()
+        };
+        let single = read("single");
+        assert_eq!(
+            (single.mode.as_str(), single.solver.as_str()),
+            ("single", "explicit")
+        );
+        assert_eq!(single.area_gain_cm2, Some(34.97813738911668));
+        assert_eq!(single.volume_cm3, Some(100.0));
+        let search = read("target-gain");
+        assert_eq!(search.area_gain_cm2, Some(20.594834752596853));
+        assert_eq!(search.volume_cm3, Some(69.3786993695329));
+        for mode in ["sweep", "expansion"] {
+            let f = read(mode);
+            assert_eq!(f.mode, mode);
+            assert_eq!((f.area_gain_cm2, f.volume_cm3), (None, None));
+        }
+        assert!(ReportFigures::read("{}").is_err());
+        assert!(ReportFigures::read("not json").is_err());
+    }
+
+    #[test]
     fn like_patterns_escape_wildcards() {
         assert_eq!(like_pattern("50%_a\\"), "%50\\%\\_a\\\\%");
     }
