@@ -161,9 +161,14 @@ async function main() {
     await page.getByRole('button', { name: 'Rename', exact: true }).click();
     await page.fill('#plan-note', 'too little skin');
     await page.getByRole('button', { name: 'Save note' }).click();
-    await page.waitForFunction(() => window.tissueStudio.cases.lastAction?.kind === 'note', null, { timeout: 10000 });
-    const renamed = await page.evaluate(() => window.tissueStudio.cases.patients[0].plans.find((p) => p.name === 'Small plan'));
-    check(renamed?.note === 'too little skin', 'the plan renamed and its note set, in the list');
+    // The list is reloaded after each change: wait for the one that shows both.
+    const renamed = await page.waitForFunction(() => {
+      const k = window.tissueStudio.cases;
+      const p = k.patients[0]?.plans.find((q) => q.name === 'Small plan');
+      return k.lastAction?.kind === 'note' && !k.loading && p?.note === 'too little skin' ? p : null;
+    }, null, { timeout: 10000 }).then((h) => h.jsonValue()).catch(() => null);
+    const listed2 = await page.textContent('#patients');
+    check(renamed && listed2.includes('Small plan') && listed2.includes('too little skin'), 'the plan renamed and its note set, in the list');
 
     // g. delete a plan (confirmed)
     await page.getByRole('button', { name: `Open ${large.saved.name}` }).click();

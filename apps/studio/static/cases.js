@@ -72,12 +72,17 @@ function planSummary(p) {
 
 // ---------------------------------------------------------------- the list
 
+let listSeq = 0;
+
+/** Loads the list (for the search typed); an answer overtaken by a newer request is dropped. */
 async function loadList() {
+  const seq = ++listSeq;
   state.loading = true;
   setText('list-status', 'Loading the cases…');
   try {
     const q = state.search ? `?search=${enc(state.search)}` : '';
     const answer = await call(`/api/cases/patients${q}`);
+    if (seq !== listSeq) return;
     state.patients = answer.patients;
     const known = new Set(state.patients.flatMap((e) => e.plans.map((p) => p.uid)));
     state.checked = state.checked.filter((uid) => known.has(uid));
@@ -87,11 +92,14 @@ async function loadList() {
       ? (state.search ? `No patient's label contains "${state.search}".` : 'No cases yet: save a plan from the planner, or import a case.')
       : `${fmtInt(state.patients.length)} patient${state.patients.length === 1 ? '' : 's'}, ${fmtInt(plans)} plan${plans === 1 ? '' : 's'}.`);
   } catch (e) {
+    if (seq !== listSeq) return;
     showError(e.message);
     setText('list-status', '');
   } finally {
-    state.loading = false;
-    state.ready = true;
+    if (seq === listSeq) {
+      state.loading = false;
+      state.ready = true;
+    }
   }
 }
 
@@ -268,9 +276,9 @@ async function renamePlan() {
   try {
     const plan = await postJson(`${planUrl(uid)}/rename`, { name: $('plan-name').value });
     state.opened.plan = plan;
-    state.lastAction = { kind: 'rename-plan', uid, answer: plan };
     setText('plan-title', plan.name);
     await loadList();
+    state.lastAction = { kind: 'rename-plan', uid, answer: plan };
   } catch (e) {
     showError(e.message);
   }
@@ -283,8 +291,8 @@ async function saveNote() {
   try {
     const plan = await postJson(`${planUrl(uid)}/note`, { note: $('plan-note').value });
     state.opened.plan = plan;
-    state.lastAction = { kind: 'note', uid, answer: plan };
     await loadList();
+    state.lastAction = { kind: 'note', uid, answer: plan };
   } catch (e) {
     showError(e.message);
   }
@@ -297,9 +305,9 @@ async function deletePlan() {
   clearError();
   try {
     const answer = await postJson(`${planUrl(plan.uid)}/delete`);
-    state.lastAction = { kind: 'delete-plan', uid: plan.uid, answer };
     closeDetail();
     await loadList();
+    state.lastAction = { kind: 'delete-plan', uid: plan.uid, answer };
   } catch (e) {
     showError(e.message);
   }
@@ -444,8 +452,8 @@ async function renamePatient(uid, label) {
   clearError();
   try {
     const answer = await postJson(`/api/cases/patients/${enc(uid)}/rename`, { label });
-    state.lastAction = { kind: 'rename-patient', uid, answer };
     await loadList();
+    state.lastAction = { kind: 'rename-patient', uid, answer };
     return true;
   } catch (e) {
     showError(e.message);
