@@ -520,18 +520,24 @@ async fn download(
             format!("job {job} has no {file} (a sweep or a search has the report only, an expansion the report and chart.png)"),
         )
     })?;
-    let mime = mime_guess::from_path(&file).first_or_octet_stream();
-    Ok((
+    Ok(attachment(&format!("{job}-{file}"), bytes))
+}
+
+/// `bytes` as a download named `name` (its extension gives the content type). `name` is made of
+/// checked ids and known file names only.
+pub(crate) fn attachment(name: &str, bytes: Vec<u8>) -> Response {
+    let mime = mime_guess::from_path(name).first_or_octet_stream();
+    (
         [
             (header::CONTENT_TYPE, mime.as_ref().to_owned()),
             (
                 header::CONTENT_DISPOSITION,
-                format!("attachment; filename=\"{job}-{file}\""),
+                format!("attachment; filename=\"{name}\""),
             ),
         ],
         bytes,
     )
-        .into_response())
+        .into_response()
 }
 
 async fn socket(State(studio): State<Studio>, ws: WebSocketUpgrade) -> Response {

@@ -27,7 +27,7 @@ use serde_json::{json, Value};
 use tissue_cases::{CaseError, FigureRow, NewPlan, PatientInfo, PlanInfo, StoredPlan};
 use tissue_planner::{PatientResult, Unit};
 
-use crate::api::{blocking, patient_answer, read_upload, shorten, ApiError};
+use crate::api::{attachment, blocking, patient_answer, read_upload, shorten, ApiError};
 use crate::messages::{ErrorKind, Fields};
 use crate::state::Studio;
 
@@ -367,18 +367,7 @@ async fn plan_file(
         }
     })
     .await?;
-    let mime = mime_guess::from_path(&name).first_or_octet_stream();
-    Ok((
-        [
-            (header::CONTENT_TYPE, mime.as_ref().to_owned()),
-            (
-                header::CONTENT_DISPOSITION,
-                format!("attachment; filename=\"{name}\""),
-            ),
-        ],
-        bytes,
-    )
-        .into_response())
+    Ok(attachment(&name, bytes))
 }
 
 /// A stored result written as `file` (`patient.ply`, …) by the call that wrote the job's
@@ -576,17 +565,7 @@ async fn export(
     let name = format!("case-{uid}.zip");
     let library = Arc::clone(studio.library());
     let zip = blocking(move || library.export_case(&uid).map_err(|e| case_error(&e))).await?;
-    Ok((
-        [
-            (header::CONTENT_TYPE, "application/zip".to_owned()),
-            (
-                header::CONTENT_DISPOSITION,
-                format!("attachment; filename=\"{name}\""),
-            ),
-        ],
-        zip,
-    )
-        .into_response())
+    Ok(attachment(&name, zip))
 }
 
 async fn import(
