@@ -3,12 +3,15 @@
 //
 // Environment:
 //   STUDIO_BIN  the studio binary (default ../../../target/release/studio from this folder); may be
-//               a command with arguments, e.g. "node /tmp/mock.mjs". Started with --port 0.
+//               a command with arguments, e.g. "node /tmp/mock.mjs". Started with --port 0 and
+//               --data in a fresh temporary folder (the case library; removed when the test
+//               ends), so a test never writes in the user's own library.
 //   STUDIO_URL  use a server already running at this URL instead (nothing is started or stopped).
 //   CHROMIUM    the browser (default /usr/bin/chromium).
 
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { chromium } from 'playwright-core';
@@ -32,11 +35,20 @@ export function check(cond, what, detail = '') {
   throw new Error(`check failed: ${what}`);
 }
 
+/** The test's case library (`--data`): made on first use, removed when the test ends. */
+let dataDir = null;
+
+export function dataFolder() {
+  if (!dataDir) dataDir = fs.mkdtempSync(path.join(os.tmpdir(), 'studio-browser-data-'));
+  return dataDir;
+}
+
 function startServer(args) {
   const bin = process.env.STUDIO_BIN || path.resolve(here, '../../../target/release/studio');
   // A path to an existing file is the binary; otherwise the value is split into a command line.
   const argv = fs.existsSync(bin) ? [bin] : bin.split(/\s+/).filter(Boolean);
-  const proc = spawn(argv[0], [...argv.slice(1), '--port', '0', ...args], { stdio: ['ignore', 'pipe', 'inherit'] });
+  const data = ['--data', dataFolder()];
+  const proc = spawn(argv[0], [...argv.slice(1), '--port', '0', ...data, ...args], { stdio: ['ignore', 'pipe', 'inherit'] });
   const exited = new Promise((resolve) => proc.on('exit', (code, signal) => resolve({ code, signal })));
   const url = new Promise((resolve, reject) => {
     let buf = '';
@@ -121,6 +133,20 @@ export async function newPage(browser, viewport = { width: 1400, height: 900 }) 
   return { page, pageErrors };
 }
 
+/**
+ * Stops the server (SIGINT, checked as stopServer does) and starts another with the same `args`
+ * and the same case library: the restart. Its base URL (another port). Null when STUDIO_URL.
+ */
+export async function restartServer(args = []) {
+  if (!server) return null;
+  await stopServer();
+  server = startServer(args);
+  let base = await server.url;
+  if (!base.endsWith('/') && !base.includes('?')) base += '/';
+  console.log(`# studio restarted at ${base}`);
+  return base;
+}
+
 /** Sends the server SIGINT and checks it exits with code 0 within 5 s (nothing when STUDIO_URL). */
 export async function stopServer() {
   if (!server) return;
@@ -142,6 +168,7 @@ export function run(main) {
     })
     .finally(() => {
       if (server && server.proc.exitCode === null && server.proc.signalCode === null) server.proc.kill('SIGKILL');
+      if (dataDir) fs.rmSync(dataDir, { recursive: true, force: true });
       console.log(`${passed} passed, ${failed} failed`);
       process.exit(failed === 0 ? 0 : 1);
     });

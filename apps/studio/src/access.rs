@@ -325,7 +325,7 @@ pub fn content_security_policy() -> &'static str {
     static CSP: OnceLock<String> = OnceLock::new();
     CSP.get_or_init(|| {
         let mut hashes = Vec::new();
-        for page in ["index.html", "planner.html", "trainer.html"] {
+        for page in ["index.html", "planner.html", "trainer.html", "cases.html"] {
             let Some(file) = crate::assets::Assets::get(page) else {
                 continue;
             };

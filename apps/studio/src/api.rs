@@ -34,6 +34,7 @@ pub fn router(studio: Studio, access: Access) -> Router {
         .route("/", get(|| async { assets::serve("index.html") }))
         .route("/planner", get(|| async { assets::serve("planner.html") }))
         .route("/trainer", get(|| async { assets::serve("trainer.html") }))
+        .route("/cases", get(|| async { assets::serve("cases.html") }))
         .route("/api/organs", get(organs).post(upload_organ))
         .route("/api/tissues", get(tissues))
         .route("/api/trainer/ws", get(trainer_socket))
@@ -43,6 +44,7 @@ pub fn router(studio: Studio, access: Access) -> Router {
         .route("/api/preview", post(preview))
         .route("/api/results/{job}/{file}", get(download))
         .route("/api/ws", get(socket))
+        .merge(crate::cases::routes())
         .fallback(|| async {
             ApiError::new(StatusCode::NOT_FOUND, ErrorKind::NotFound, "no such page")
         })
@@ -70,7 +72,20 @@ impl ApiError {
         }
     }
 
-    fn plan(e: &PlanError) -> ApiError {
+    /// An error of `kind` with `status` about request field `field`.
+    pub fn with_field(
+        status: StatusCode,
+        kind: ErrorKind,
+        field: Option<&str>,
+        message: impl Into<String>,
+    ) -> ApiError {
+        let mut body = ErrorBody::new(kind, message);
+        body.field = field.map(str::to_owned);
+        ApiError { status, body }
+    }
+
+    /// The planner's error with its status (500 for a run or output failure, else 400).
+    pub(crate) fn plan(e: &PlanError) -> ApiError {
         let status = match e.kind {
             PlanKind::Run | PlanKind::Output => StatusCode::INTERNAL_SERVER_ERROR,
             _ => StatusCode::BAD_REQUEST,
@@ -158,7 +173,7 @@ fn name_and_unit(query: &HashMap<String, String>) -> Result<(String, Unit), ApiE
 /// An upload's bytes, read once its content type is the page's and a place among
 /// [`crate::Limits::uploads`] is free (the place is held until the returned permit drops, so
 /// the parsing counts too). Bounded by [`UPLOAD_LIMIT`] and the body's deadlines.
-async fn read_upload(
+pub(crate) async fn read_upload(
     studio: &Studio,
     headers: &HeaderMap,
     body: Body,
@@ -273,7 +288,7 @@ async fn meshes() -> Json<Vec<MeshEntry>> {
 }
 
 /// Runs `f` off the async threads (loading, remeshing and the set-up take seconds on a scan).
-async fn blocking<T: Send + 'static>(
+pub(crate) async fn blocking<T: Send + 'static>(
     f: impl FnOnce() -> Result<T, ApiError> + Send + 'static,
 ) -> Result<T, ApiError> {
     tokio::task::spawn_blocking(f).await.unwrap_or_else(|e| {
@@ -314,21 +329,42 @@ async fn upload(
         }
         Source::Upload { name, unit, bytes }
     };
-    let (patient, suggested) = blocking(move || {
+    let (patient, scan, label, suggested) = blocking(move || {
         let _span = tracing::info_span!("studio_load").entered();
         match source {
             Source::Shipped(s) => {
                 let p = Patient::shipped(s).map_err(|e| ApiError::plan(&e))?;
                 let v = s.suggested_vertex(&p.cm);
-                Ok((p, Some(v)))
+                let scan = tissue_cases::Scan::of_mesh(&p, s.id())
+                    .map_err(|e| crate::cases::case_error(&e))?;
+                Ok((p, scan, s.label().to_owned(), Some(v)))
             }
             Source::Upload { name, unit, bytes } => {
                 let p = Patient::parse(&bytes, &name, unit).map_err(|e| ApiError::plan(&e))?;
-                Ok((p, None))
+                let scan = tissue_cases::Scan {
+                    name: name.clone(),
+                    unit,
+                    bytes: bytes.to_vec(),
+                };
+                Ok((p, scan, name, None))
             }
         }
     })
     .await?;
+    Ok(Json(patient_answer(
+        &studio, patient, scan, label, suggested,
+    )))
+}
+
+/// Keeps `patient` (with its `scan` and its `label` in the case library) and gives the `/api/patients` answer: its id, label, unit,
+/// summary, mesh (cm) and the suggested placement.
+pub(crate) fn patient_answer(
+    studio: &Studio,
+    patient: Patient,
+    scan: tissue_cases::Scan,
+    case_label: String,
+    suggested: Option<u32>,
+) -> serde_json::Value {
     let summary = patient.summary();
     let positions: Vec<f32> = patient
         .cm
@@ -341,8 +377,8 @@ async fn upload(
         .map(|v| json!({ "vertex": v, "point": patient.cm.positions()[v as usize].to_array() }));
     let label = patient.label.clone();
     let unit = patient.unit;
-    let id = studio.add_patient(patient);
-    Ok(Json(json!({
+    let id = studio.add_patient(patient, scan, case_label);
+    json!({
         "patient": id,
         "label": label,
         "unit": unit.symbol(),
@@ -350,7 +386,7 @@ async fn upload(
         "summary": summary,
         "mesh": { "positions": positions, "triangles": triangles },
         "suggested": suggested,
-    })))
+    })
 }
 
 enum Source {
@@ -372,13 +408,9 @@ pub struct PatientRequest {
     pub request: PlanRequest,
 }
 
-/// The scenario of `patient` and `request`, or why not.
-pub fn scenario(
-    studio: &Studio,
-    patient: &str,
-    request: PlanRequest,
-) -> Result<Scenario, PlanError> {
-    let p = studio.patient(patient).ok_or_else(|| {
+/// The patient `patient` the studio holds, or why not.
+pub fn loaded(studio: &Studio, patient: &str) -> Result<Arc<crate::state::Loaded>, PlanError> {
+    studio.patient(patient).ok_or_else(|| {
         PlanError::new(
             PlanKind::Usage,
             format!(
@@ -386,12 +418,21 @@ pub fn scenario(
                 shorten(patient)
             ),
         )
-    })?;
-    Scenario::new(Patient::clone(&p), request)
+    })
+}
+
+/// The scenario of `patient` and `request`, or why not.
+pub fn scenario(
+    studio: &Studio,
+    patient: &str,
+    request: PlanRequest,
+) -> Result<Scenario, PlanError> {
+    let p = loaded(studio, patient)?;
+    Scenario::new(Patient::clone(&p.patient), request)
 }
 
 /// `text` cut to 40 characters (an id echoed back in a message: a client may send megabytes).
-fn shorten(text: &str) -> String {
+pub(crate) fn shorten(text: &str) -> String {
     match text.char_indices().nth(40) {
         Some((i, _)) => format!("{}…", &text[..i]),
         None => text.to_owned(),
@@ -479,18 +520,24 @@ async fn download(
             format!("job {job} has no {file} (a sweep or a search has the report only, an expansion the report and chart.png)"),
         )
     })?;
-    let mime = mime_guess::from_path(&file).first_or_octet_stream();
-    Ok((
+    Ok(attachment(&format!("{job}-{file}"), bytes))
+}
+
+/// `bytes` as a download named `name` (its extension gives the content type). `name` is made of
+/// checked ids and known file names only.
+pub(crate) fn attachment(name: &str, bytes: Vec<u8>) -> Response {
+    let mime = mime_guess::from_path(name).first_or_octet_stream();
+    (
         [
             (header::CONTENT_TYPE, mime.as_ref().to_owned()),
             (
                 header::CONTENT_DISPOSITION,
-                format!("attachment; filename=\"{job}-{file}\""),
+                format!("attachment; filename=\"{name}\""),
             ),
         ],
         bytes,
     )
-        .into_response())
+        .into_response()
 }
 
 async fn socket(State(studio): State<Studio>, ws: WebSocketUpgrade) -> Response {

@@ -9,12 +9,12 @@ use axum::extract::ws::{Message, WebSocket};
 use tissue_planner::{Finished, JobReport, PlanError, Stopped, Tool};
 use tokio::sync::mpsc;
 
-use crate::api::scenario;
+use crate::api::loaded;
 use crate::messages::{
     ClientMessage, ErrorBody, ErrorKind, FailedRow, Fields, JobMessage, RunMessage,
 };
 use crate::serve::send_within;
-use crate::state::{Running, Studio};
+use crate::state::{KeptJob, Running, Studio};
 
 /// The least time between two progress messages.
 const PROGRESS_EVERY: Duration = Duration::from_millis(50);
@@ -162,7 +162,11 @@ fn run_job(
     run: RunMessage,
     tx: &mpsc::UnboundedSender<JobMessage>,
 ) -> Result<JobMessage, Stopped> {
-    let scenario = scenario(studio, &run.patient, run.spec.request.clone())?;
+    let patient = loaded(studio, &run.patient)?;
+    let scenario = tissue_planner::Scenario::new(
+        tissue_planner::Patient::clone(&patient.patient),
+        run.spec.request.clone(),
+    )?;
     let planned = run.spec.plan(&scenario)?;
     let runs = planned.runs;
     let mut last: Option<Instant> = None;
@@ -176,13 +180,20 @@ fn run_job(
         .job_dir(&running.id)
         .map_err(|e| PlanError::new(tissue_planner::ErrorKind::Output, e.to_string()))?;
     write_files(&dir, &finished)?;
-    studio.add_finished(&running.id, dir);
-    finished_message(&running.id, &finished, scenario.cm_per_unit()).map_err(Stopped::from)
+    let message = finished_message(&running.id, &finished, scenario.cm_per_unit())?;
+    let kept = KeptJob {
+        spec: run.spec,
+        finished,
+        patient,
+    };
+    studio.add_finished(&running.id, dir, kept);
+    Ok(message)
 }
 
 /// The job's files: `report.json`, a single run's patient as PLY, OBJ and VTK (with its fields),
-/// an expansion's `chart.png`.
-fn write_files(dir: &std::path::Path, finished: &Finished) -> Result<(), PlanError> {
+/// an expansion's `chart.png`. A stored plan's downloads are written by the same calls
+/// (`cases.rs`), so they are byte for byte the job's.
+pub(crate) fn write_files(dir: &std::path::Path, finished: &Finished) -> Result<(), PlanError> {
     finished.report.write(&dir.join("report.json"))?;
     if let Some(patient) = &finished.patient {
         for name in ["patient.ply", "patient.obj", "patient.vtk"] {
@@ -198,19 +209,10 @@ fn write_files(dir: &std::path::Path, finished: &Finished) -> Result<(), PlanErr
 /// The `finished` message: the report, a single run's fields (displacement in the file's unit:
 /// `scale` cm per unit), a sweep's failed runs with their messages as the page labels fields.
 fn finished_message(job: &str, finished: &Finished, scale: f32) -> Result<JobMessage, PlanError> {
-    let fields = finished.patient.as_ref().map(|patient| {
-        Box::new(Fields {
-            after: patient
-                .after_cm
-                .positions()
-                .iter()
-                .flat_map(|p| p.to_array())
-                .collect(),
-            displacement: patient.displacement.iter().map(|d| d * scale).collect(),
-            stretch: patient.stretch_or_one(),
-            in_region: patient.in_region.clone(),
-        })
-    });
+    let fields = finished
+        .patient
+        .as_ref()
+        .map(|patient| Box::new(Fields::of(patient, scale)));
     let failed_runs = match &finished.report {
         JobReport::Sweep(r) => r
             .body

@@ -1,9 +1,16 @@
 //! # tissue-studio: the planner in a browser
 //!
 //! The server behind `studio`: an axum router ([`router`]) over a [`Studio`] (the patients
-//! loaded, the finished jobs' files, the one running job), the page's static files embedded in
-//! the binary ([`assets`]), and the planning done by tissue-planner on tissue-app's worker — the
-//! same code as `insert`. [`serve`] runs it on a listener with time limits and a stop that always
+//! loaded, the finished jobs' files, the one running job, the case library), the page's static
+//! files embedded in the binary ([`assets`]), and the planning done by tissue-planner on
+//! tissue-app's worker — the same code as `insert`.
+//!
+//! The Cases view (`/cases`, the `/api/cases/…` routes): the case library of tissue-cases (one
+//! SQLite database in the `--data` folder, [`Studio::with_data`]) as the surgeon sees it: a
+//! finished job saved with its patient's scan, the patients and their plans, a plan opened
+//! without recomputing, two compared, rename, note, delete, erase, export and import. Each route
+//! is one library call made off the async threads; what the `tissue-cases` command also needs is
+//! in the library, not here. [`serve`] runs it on a listener with time limits and a stop that always
 //! ends; [`Access`] says who may use it (Host, Origin, token). The binary (`main.rs`) only parses
 //! flags, binds, and turns signals into the stop.
 //!
@@ -32,8 +39,10 @@
 //!   `application/octet-stream`; header, body and send timeouts ([`Limits`]); at most [`KEPT`]
 //!   patients and [`KEPT`] finished jobs are kept, the oldest dropped first (their files
 //!   deleted).
-//! - **Files.** The server writes only in its temporary folder ([`Studio::temp_dir`], mode 0700,
-//!   made afresh), which it removes when it stops.
+//! - **Files.** The server writes its transient files only in its temporary folder
+//!   ([`Studio::temp_dir`], mode 0700, made afresh), which it removes when it stops, and what is
+//!   saved in the case library ([`Studio::library`]: the `--data` folder; for [`Studio::new`] a
+//!   folder inside the temporary one, so tests never touch the user's library).
 //! - **No panics on input.** Every user error is a JSON `{"error": {kind, field, message}}`.
 //!
 //! ## Example: the API without a browser
@@ -73,6 +82,7 @@
 mod access;
 mod api;
 pub mod assets;
+mod cases;
 mod jobs;
 pub mod material;
 pub mod messages;
@@ -84,4 +94,4 @@ pub mod trainer;
 pub use access::{content_security_policy, Access};
 pub use api::router;
 pub use serve::{serve, BodyTimeout};
-pub use state::{Limits, Studio, JOB_SOCKETS, KEPT, UPLOAD_LIMIT};
+pub use state::{KeptJob, Limits, Loaded, Studio, JOB_SOCKETS, KEPT, UPLOAD_LIMIT};

@@ -16,7 +16,8 @@ use tissue_cli::Exit;
 /// the README).
 #[derive(Debug, Parser)]
 #[command(name = "studio", version, after_long_help = Exit::help_section(&[
-    (Exit::Output, "the temporary folder cannot be made"),
+    (Exit::Usage, "no --data given and this computer has no user data folder"),
+    (Exit::Output, "the temporary folder or the case library cannot be made or opened"),
     (Exit::Failure, "the server cannot start or listen (another --port?) or stopped"),
 ]))]
 struct Cli {
@@ -35,6 +36,11 @@ struct Cli {
     /// reach 127.0.0.1.
     #[arg(long)]
     require_token: bool,
+    /// The case library's folder: the patients, their plans and results (patient data, made with
+    /// mode 0700, its files 0600). Default: the platform's user data folder
+    /// (`~/.local/share/tissue` on Linux).
+    #[arg(long, value_name = "DIR")]
+    data: Option<std::path::PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -80,12 +86,12 @@ async fn run(cli: Cli) -> Result<(), (Exit, String)> {
         .map_err(|e| (Exit::Failure, format!("cannot read the address: {e}")))?;
     let access = tissue_studio::Access::new(local, cli.allowed_hosts, cli.require_token)
         .map_err(|e| (Exit::Failure, format!("cannot make the access token: {e}")))?;
-    let studio = tissue_studio::Studio::new().map_err(|e| {
-        (
-            Exit::Output,
-            format!("cannot make the temporary folder: {e}"),
-        )
-    })?;
+    let data = match cli.data {
+        Some(dir) => dir,
+        None => tissue_cases::default_data_dir().map_err(|e| (Exit::Usage, e.to_string()))?,
+    };
+    let studio = tissue_studio::Studio::with_data(tissue_studio::Limits::default(), &data)
+        .map_err(|e| (Exit::Output, e.to_string()))?;
     if !local.ip().is_loopback() {
         eprintln!(
             "studio: warning: listening on {local}, reachable from other computers: every \

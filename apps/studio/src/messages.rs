@@ -40,6 +40,8 @@ pub enum ErrorKind {
     Forbidden,
     /// A token is needed.
     Unauthorized,
+    /// The case library failed (its database, damaged stored data, a full disk).
+    Library,
 }
 
 impl From<PlanKind> for ErrorKind {
@@ -215,6 +217,24 @@ pub struct Fields {
     pub stretch: Vec<f32>,
     /// 1 in the region, 0 outside.
     pub in_region: Vec<f32>,
+}
+
+impl Fields {
+    /// The fields of a single run's result on the patient (`scale` cm per file unit): what the
+    /// job's `finished` message and an opened plan (`GET /api/cases/plans/{uid}`) both send.
+    pub fn of(patient: &tissue_planner::PatientResult, scale: f32) -> Fields {
+        Fields {
+            after: patient
+                .after_cm
+                .positions()
+                .iter()
+                .flat_map(|p| p.to_array())
+                .collect(),
+            displacement: patient.displacement.iter().map(|d| d * scale).collect(),
+            stretch: patient.stretch_or_one(),
+            in_region: patient.in_region.clone(),
+        }
+    }
 }
 
 /// A failed run of a sweep, as the page shows it.

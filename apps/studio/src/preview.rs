@@ -76,7 +76,7 @@ async fn serve(
         if rx.has_changed().unwrap_or(true) || token.is_cancelled() {
             continue; // a newer one came while this one waited
         }
-        let Some(patient) = studio.patient(&message.patient) else {
+        let Some(loaded) = studio.patient(&message.patient) else {
             let e = PlanError::new(
                 PlanKind::Usage,
                 "no such patient on the server (it keeps the last few): load it again",
@@ -86,7 +86,7 @@ async fn serve(
         };
         let request = message.request;
         let run = tokio::task::spawn_blocking(move || {
-            let result = previewer.preview(&patient, request, &token);
+            let result = previewer.preview(&loaded.patient, request, &token);
             (previewer, result)
         })
         .await;

@@ -1,5 +1,6 @@
-//! What the server holds: the patients loaded, the finished jobs, the running job, its limits
-//! and its temporary folder.
+//! What the server holds: the patients loaded (with their scans, for saving), the finished jobs
+//! (with what a save needs), the running job, its limits, its temporary folder and the case
+//! library.
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -7,7 +8,8 @@ use std::sync::atomic::Ordering;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
-use tissue_planner::{CancelToken, Patient};
+use tissue_cases::{CaseError, Library, Scan};
+use tissue_planner::{CancelToken, JobSpec, Patient};
 use tokio::sync::{watch, OwnedSemaphorePermit, Semaphore};
 
 /// Largest upload, bytes (64 MiB: a 160k-triangle scan as text OBJ is about 10 MiB).
@@ -61,13 +63,40 @@ impl Default for Limits {
     }
 }
 
-/// A job that finished: its folder of downloads.
+/// A job that finished: its folder of downloads, and what saving it to the case library needs.
 #[derive(Debug)]
 pub struct Finished {
     /// The job's id.
     pub id: String,
     /// Its folder in the temporary folder.
     pub dir: PathBuf,
+    /// What it kept for a save.
+    pub kept: Arc<KeptJob>,
+}
+
+/// A finished job as the case library stores it: the job as asked, what it finished with, and
+/// its patient's scan and label.
+#[derive(Debug)]
+pub struct KeptJob {
+    /// The job as it was asked.
+    pub spec: JobSpec,
+    /// What it finished with.
+    pub finished: tissue_planner::Finished,
+    /// The patient it ran on.
+    pub patient: Arc<Loaded>,
+}
+
+/// A patient the studio holds: ready to plan on, with the scan it came from (what the case
+/// library keeps).
+#[derive(Debug)]
+pub struct Loaded {
+    /// Ready to plan on (shared: the previewer keeps it between previews).
+    pub patient: Arc<Patient>,
+    /// Its scan as it came (an upload's bytes, a shipped mesh written as OBJ, a stored scan).
+    pub scan: Scan,
+    /// What the case library calls it when a plan on it is saved without a label (an upload's
+    /// file name, a shipped mesh's label, a stored patient's label).
+    pub label: String,
 }
 
 /// The running job: its id, its cancel flag, and how far it is.
@@ -81,7 +110,7 @@ pub struct Running {
 
 #[derive(Debug, Default)]
 struct Inner {
-    patients: VecDeque<(String, Arc<Patient>)>,
+    patients: VecDeque<(String, Arc<Loaded>)>,
     finished: VecDeque<Finished>,
     running: Option<Running>,
 }
@@ -97,32 +126,60 @@ pub struct Studio {
     uploads: Arc<Semaphore>,
     sockets: Arc<Semaphore>,
     previews: Arc<Semaphore>,
+    library: Arc<Library>,
 }
 
+/// The library folder of a studio made without one ([`Studio::with_limits`]): inside its
+/// temporary folder, so removed with it.
+const TEMPORARY_LIBRARY: &str = "cases";
+
 impl Studio {
-    /// A studio with the default [`Limits`] and a new temporary folder.
+    /// A studio with the default [`Limits`], a new temporary folder, and a case library of its
+    /// own inside it (removed at shutdown: tests and examples never touch the user's library).
     ///
     /// # Errors
-    /// The folder cannot be made.
+    /// The folder or the library cannot be made.
     pub fn new() -> std::io::Result<Studio> {
         Studio::with_limits(Limits::default())
     }
 
-    /// A studio with `limits` and a new temporary folder: `$TMPDIR/tissue-studio-RANDOM`, made
-    /// afresh (never an existing one) with mode 0700, so other users of the computer cannot list
-    /// or read the patients' files in it.
+    /// A studio with `limits`, a new temporary folder, and a case library inside it (removed at
+    /// shutdown). `studio` itself uses [`Studio::with_data`].
     ///
     /// # Errors
-    /// The folder cannot be made.
+    /// The folder or the library cannot be made.
     pub fn with_limits(limits: Limits) -> std::io::Result<Studio> {
-        let name = crate::access::random_hex(12).map_err(std::io::Error::other)?;
-        let temp = std::env::temp_dir().join(format!("tissue-studio-{name}"));
-        let mut builder = std::fs::DirBuilder::new();
-        #[cfg(unix)]
-        std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
-        builder.create(&temp)?;
+        let temp = make_temp()?;
+        let library = Library::open(&temp.join(TEMPORARY_LIBRARY)).map_err(|e| {
+            let _ = std::fs::remove_dir_all(&temp);
+            std::io::Error::other(e)
+        })?;
+        Ok(Studio::assemble(limits, temp, library))
+    }
+
+    /// A studio with `limits`, a new temporary folder (transient files only), and the case
+    /// library in `data` (made with mode 0700 if missing; the database file 0600): what
+    /// `studio --data DIR` runs with.
+    ///
+    /// # Errors
+    /// [`CaseError::Open`] when the temporary folder cannot be made; the library's errors.
+    pub fn with_data(limits: Limits, data: &Path) -> Result<Studio, CaseError> {
+        let temp = make_temp().map_err(|source| CaseError::Open {
+            path: std::env::temp_dir(),
+            source,
+        })?;
+        match Library::open(data) {
+            Ok(library) => Ok(Studio::assemble(limits, temp, library)),
+            Err(e) => {
+                let _ = std::fs::remove_dir_all(&temp);
+                Err(e)
+            }
+        }
+    }
+
+    fn assemble(limits: Limits, temp: PathBuf, library: Library) -> Studio {
         let (shutdown, _) = watch::channel(false);
-        Ok(Studio {
+        Studio {
             organs: Arc::default(),
             inner: Arc::default(),
             temp: Arc::new(temp),
@@ -131,7 +188,14 @@ impl Studio {
             sockets: Arc::new(Semaphore::new(JOB_SOCKETS)),
             previews: Arc::new(Semaphore::new(limits.previews.max(1))),
             limits: Arc::new(limits),
-        })
+            library: Arc::new(library),
+        }
+    }
+
+    /// The case library (shared by every request; its calls block, so make them off the async
+    /// threads).
+    pub fn library(&self) -> &Arc<Library> {
+        &self.library
     }
 
     /// A place for one job socket, or `None` when [`JOB_SOCKETS`] are open.
@@ -177,19 +241,27 @@ impl Studio {
         &self.temp
     }
 
-    /// Keeps `patient` under a new id.
-    pub fn add_patient(&self, patient: Patient) -> String {
+    /// Keeps `patient` (with the scan it came from and its label in the case library) under a
+    /// new id.
+    pub fn add_patient(&self, patient: Patient, scan: Scan, label: String) -> String {
         let id = self.id("p");
         let mut inner = self.lock();
-        inner.patients.push_back((id.clone(), Arc::new(patient)));
+        inner.patients.push_back((
+            id.clone(),
+            Arc::new(Loaded {
+                patient: Arc::new(patient),
+                scan,
+                label,
+            }),
+        ));
         while inner.patients.len() > KEPT {
             inner.patients.pop_front();
         }
         id
     }
 
-    /// The patient `id`.
-    pub fn patient(&self, id: &str) -> Option<Arc<Patient>> {
+    /// The patient `id`, with its scan.
+    pub fn patient(&self, id: &str) -> Option<Arc<Loaded>> {
         self.lock()
             .patients
             .iter()
@@ -234,12 +306,14 @@ impl Studio {
         Ok(dir)
     }
 
-    /// Keeps job `id`'s folder for downloads, dropping the oldest beyond [`KEPT`].
-    pub fn add_finished(&self, id: &str, dir: PathBuf) {
+    /// Keeps job `id`'s folder for downloads and what a save needs, dropping the oldest beyond
+    /// [`KEPT`].
+    pub fn add_finished(&self, id: &str, dir: PathBuf, kept: KeptJob) {
         let mut inner = self.lock();
         inner.finished.push_back(Finished {
             id: id.to_owned(),
             dir,
+            kept: Arc::new(kept),
         });
         while inner.finished.len() > KEPT {
             if let Some(old) = inner.finished.pop_front() {
@@ -257,6 +331,39 @@ impl Studio {
             .map(|f| f.dir.clone())
     }
 
+    /// What finished job `id` kept for a save.
+    pub fn kept_job(&self, id: &str) -> Option<Arc<KeptJob>> {
+        self.lock()
+            .finished
+            .iter()
+            .find(|f| f.id == id)
+            .map(|f| Arc::clone(&f.kept))
+    }
+
+    /// Forgets the patients whose scan has SHA-256 `sha256` (and `bytes` bytes), and the
+    /// finished jobs run on them with their folders: an erased patient leaves the studio too.
+    /// Returns how many patients and jobs went.
+    pub fn forget_scan(&self, sha256: &str, bytes: u64) -> usize {
+        let same = |l: &Loaded| l.scan.bytes.len() as u64 == bytes && l.scan.sha256() == sha256;
+        let mut inner = self.lock();
+        let before = inner.patients.len() + inner.finished.len();
+        inner.patients.retain(|(_, l)| !same(l));
+        let mut gone = Vec::new();
+        inner.finished.retain(|f| {
+            let keep = !same(&f.kept.patient);
+            if !keep {
+                gone.push(f.dir.clone());
+            }
+            keep
+        });
+        let count = before - inner.patients.len() - inner.finished.len();
+        drop(inner);
+        for dir in gone {
+            let _ = std::fs::remove_dir_all(dir);
+        }
+        count
+    }
+
     /// A receiver that changes to `true` when the server stops.
     pub fn on_shutdown(&self) -> watch::Receiver<bool> {
         self.shutdown.subscribe()
@@ -271,6 +378,19 @@ impl Studio {
         self.shutdown.send_replace(true);
         let _ = std::fs::remove_dir_all(self.temp.as_path());
     }
+}
+
+/// A new private temporary folder: `$TMPDIR/tissue-studio-RANDOM`, made afresh (never an
+/// existing one) with mode 0700, so other users of the computer cannot list or read the
+/// patients' files in it.
+fn make_temp() -> std::io::Result<PathBuf> {
+    let name = crate::access::random_hex(12).map_err(std::io::Error::other)?;
+    let temp = std::env::temp_dir().join(format!("tissue-studio-{name}"));
+    let mut builder = std::fs::DirBuilder::new();
+    #[cfg(unix)]
+    std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
+    builder.create(&temp)?;
+    Ok(temp)
 }
 
 /// `prefix` and 128 random bits in hex; if the system's generator fails (it does not on the

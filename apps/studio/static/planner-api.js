@@ -33,6 +33,20 @@ export function preview(patient, request) {
   });
 }
 
+/** POST /api/cases/save: finished job `job` kept in the case library as plan `name`. */
+export function saveCase(job, name, note) {
+  return call('/api/cases/save', {
+    method: 'POST',
+    headers: { 'content-type': 'application/json' },
+    body: JSON.stringify({ job, name, note }),
+  });
+}
+
+/** POST /api/cases/patients/{uid}/open: a stored patient loaded to plan on. */
+export function openStoredPatient(uid) {
+  return call(`/api/cases/patients/${encodeURIComponent(uid)}/open`, { method: 'POST' });
+}
+
 /** Download links of a finished job. */
 export function resultUrl(job, file) {
   return `/api/results/${encodeURIComponent(job)}/${file}`;

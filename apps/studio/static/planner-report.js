@@ -37,15 +37,18 @@ function runsTable(table, rows, columns) {
   table.replaceChildren(el('thead', {}, head), body);
 }
 
+/** Where a finished job's `file` downloads from (a stored plan gives its own). */
+const jobUrls = (job) => (file) => resultUrl(job, file);
+
 /** The download links under a series' answer. */
-function downloads(section, job, extra = []) {
+function downloads(section, urlOf, extra = []) {
   let p = section.querySelector('.report-link');
   if (!p) {
     p = el('p', { class: 'downloads report-link' });
     section.append(p);
   }
-  p.replaceChildren('Download: ', el('a', { href: resultUrl(job, 'report.json'), download: '' }, 'report.json'));
-  for (const file of extra) p.append(' · ', el('a', { href: resultUrl(job, file), download: '' }, file));
+  p.replaceChildren('Download: ', el('a', { href: urlOf('report.json'), download: '' }, 'report.json'));
+  for (const file of extra) p.append(' · ', el('a', { href: urlOf(file), download: '' }, file));
 }
 
 /** The POST /api/patients answer: its summary and defects. */
@@ -80,8 +83,8 @@ const MEASURED_ON = {
   patient_region: "Areas and volume are measured on the patient's own triangles in the region.",
 };
 
-/** A single run's report. */
-export function renderReport(r, job) {
+/** A single run's report; `urlOf(file)` is where its downloads are (a job's by default). */
+export function renderReport(r, job, urlOf = jobUrls(job)) {
   $('result').hidden = false;
   figures($('report-figures'), [
     ['Area before', `${fmt(r.area_before_cm2, 2)} cm²`],
@@ -104,8 +107,8 @@ export function renderReport(r, job) {
     text += ` On the scan's own triangles: gain ${fmt(r.scan.area_gain_cm2, 2)} cm², volume difference ${fmt(r.scan.volume_difference_cm3, 2)} cm³.`;
   }
   setText('measured-on', text);
-  for (const f of ['ply', 'obj', 'vtk']) $(`dl-${f}`).href = resultUrl(job, `patient.${f}`);
-  $('dl-report').href = resultUrl(job, 'report.json');
+  for (const f of ['ply', 'obj', 'vtk']) $(`dl-${f}`).href = urlOf(`patient.${f}`);
+  $('dl-report').href = urlOf('report.json');
 }
 
 /**
@@ -113,7 +116,7 @@ export function renderReport(r, job) {
  * (`[{volume_cm3, error}]`, when the server sends it) are rows marked failed; its `warnings`
  * (older servers: one sentence per failed run) are listed under the table.
  */
-export function renderSweep(report, job, msg = {}) {
+export function renderSweep(report, job, msg = {}, urlOf = jobUrls(job)) {
   const failed = msg.failed_runs || report.failed_runs || [];
   const runs = (report.runs || []).map((r) => ({ ...r, volume_cm3: r.volume_cm3 ?? r.inputs?.volume_cm3 }));
   const points = runs.map((r) => [r.volume_cm3, r.area_gain_cm2]);
@@ -135,11 +138,11 @@ export function renderSweep(report, job, msg = {}) {
   const list = $('sweep-warnings');
   list.hidden = notes.length === 0;
   list.replaceChildren(...notes.map((w) => el('li', {}, w)));
-  downloads($('sweep-result'), job);
+  downloads($('sweep-result'), urlOf);
 }
 
 /** A target-gain search. */
-export function renderTarget(report, job) {
+export function renderTarget(report, job, urlOf = jobUrls(job)) {
   $('target-result').hidden = false;
   figures($('target-figures'), [
     ['Target gain', `${fmt(report.target_gain_cm2, 2)} cm²`],
@@ -153,7 +156,7 @@ export function renderTarget(report, job) {
     { label: 'Volume (cm³)', value: (r) => fmt(r.volume_cm3, 1) },
     { label: 'Area gain (cm²)', value: (r) => fmt(r.area_gain_cm2, 2) },
   ]);
-  downloads($('target-result'), job);
+  downloads($('target-result'), urlOf);
 }
 
 const DAY_SERIES = [
@@ -163,7 +166,7 @@ const DAY_SERIES = [
 ];
 
 /** An expansion over weeks: the days' chart with the flap's band, the flap, the weeks. */
-export function renderExpansion(report, job) {
+export function renderExpansion(report, job, urlOf = jobUrls(job)) {
   const days = report.days || [];
   const band = report.band?.flap_area_cm2;
   const removal = report.protocol?.removal_day ?? 0;
@@ -190,7 +193,7 @@ export function renderExpansion(report, job) {
     { label: 'Area gain (cm²)', value: (r) => fmt(r.area_gain_cm2, 1) },
     { label: 'Grown (cm²)', value: (r) => fmt(r.grown_gain_cm2, 1) },
   ]);
-  downloads($('expansion-result'), job, ['chart.png']);
+  downloads($('expansion-result'), urlOf, ['chart.png']);
 }
 
 const COLORBARS = {

@@ -18,6 +18,8 @@ const state = {
   placement: null, // { point (cm), vertex, normal }
   job: { state: 'idle', step: 0, settle: 0 }, // + run, runs, max_steps, job, mode, cancel_ms
   result: null, // the last finished report
+  saved: null, // the last plan saved to the case library (its PlanInfo), for the finished job
+  spec: null, // the job started last: { mode, ...JobSpec members, request }
   error: null, // the message in #error
   check: null, // the last placement check (POST /api/preview) answer
   preview: null, // the live preview: { ms, gain, edge_cm, stale, seq, steps, computed }
@@ -202,6 +204,11 @@ function setPatient(answer) {
 }
 
 async function initMeshes() {
+  // /planner?case=PATIENT: a patient of the case library, to plan on again.
+  const stored = new URLSearchParams(location.search).get('case');
+  if (stored) {
+    await loadPatient(() => api.openStoredPatient(stored), { kind: 'stored', id: stored }, 'the stored patient');
+  }
   let meshes = [];
   try {
     meshes = await api.listMeshes();
@@ -212,7 +219,9 @@ async function initMeshes() {
   const chosen = meshes.find((m) => m.default) || meshes[0];
   select.replaceChildren(el('option', { value: '' }, '— choose a shipped mesh —'),
     ...meshes.map((m) => el('option', { value: m.id }, m.label)));
-  if (chosen) {
+  if (stored && state.patient) {
+    select.value = '';
+  } else if (chosen) {
     select.value = chosen.id;
     await loadPatient(() => api.loadShipped(chosen.id), { kind: 'shipped', id: chosen.id }, chosen.label);
   } else {
@@ -564,6 +573,7 @@ function renderRunSummary() {
 function setJob(fields) {
   Object.assign(state.job, fields);
   document.body.dataset.job = state.job.state;
+  renderSave();
 }
 
 /** Starts a job of `mode` with the JobSpec members `spec` and the request's `extra` fields. */
@@ -585,6 +595,9 @@ async function startJob(mode, spec = {}, extra = {}) {
   const section = { sweep: 'sweep-result', 'target-gain': 'target-result', expansion: 'expansion-result' }[mode];
   if (section) $(section).hidden = true;
   renderRunControls();
+  state.spec = { mode, ...spec, request };
+  state.saved = null;
+  renderSave();
   try {
     await socket.send({ type: 'run', patient: state.patient.patient, mode, ...spec, request });
   } catch (e) {
@@ -672,6 +685,10 @@ function onFinished(msg) {
   state.result = report;
   setJob({ state: 'finished', job: msg.job });
   renderProgress();
+  $('save-name').value = defaultPlanName(mode);
+  $('save-note').value = '';
+  setText('save-status', '');
+  renderSave();
   if (mode === 'sweep') {
     renderSweep(report, msg.job, msg);
     setText('job-status', `Series finished: ${report.runs?.length ?? 0} runs.`);
@@ -695,6 +712,52 @@ function onFinished(msg) {
     }
   }
   renderRunControls();
+}
+
+// ---------------------------------------------------------------- save to cases
+
+const SHAPES = { round: 'round', rectangular: 'rectangular', crescent: 'crescent' };
+
+/** "100 cm³ round, 2026-11-29 10:42": what the finished job ran, and now. */
+function defaultPlanName(mode) {
+  const d = new Date();
+  const p = (n) => String(n).padStart(2, '0');
+  const now = `${d.getFullYear()}-${p(d.getMonth() + 1)}-${p(d.getDate())} ${p(d.getHours())}:${p(d.getMinutes())}`;
+  const r = state.spec?.request || {};
+  const shape = SHAPES[r.shape] || 'round';
+  const volume = r.volume_cm3 ?? 100;
+  const what = {
+    sweep: () => `series ${(state.spec?.volumes_cm3 || []).join(', ')} cm³ ${shape}`,
+    'target-gain': () => `${state.spec?.target_gain_cm2 ?? '—'} cm² target, ${shape}`,
+    expansion: () => `${volume} cm³ ${shape} over ${r.expand_weeks ?? 10} weeks`,
+  }[mode];
+  return `${what ? what() : `${volume} cm³ ${shape}`}, ${now}`;
+}
+
+/** The Save box: shown once a job finished, until the next starts. */
+function renderSave() {
+  const finished = state.job.state === 'finished' && !!state.job.job;
+  $('save-case').hidden = !finished;
+  $('save-button').disabled = !finished || !!state.saved;
+  $('save-open').hidden = !state.saved;
+  if (state.saved) $('save-open').href = `/cases?plan=${encodeURIComponent(state.saved.uid)}`;
+}
+
+async function saveCase(e) {
+  e?.preventDefault();
+  if (state.job.state !== 'finished' || state.saved) return;
+  $('save-button').disabled = true;
+  setText('save-status', 'Saving…');
+  try {
+    const plan = await api.saveCase(state.job.job, $('save-name').value, $('save-note').value);
+    state.saved = plan;
+    setText('save-status', `Saved as "${plan.name}" in the case library.`);
+  } catch (err) {
+    setText('save-status', '');
+    showError(err.message);
+  } finally {
+    renderSave();
+  }
 }
 
 /** The page's own errors of a series' inputs (not numbers; half a bracket); true when none. */
@@ -780,6 +843,7 @@ function wire() {
     applyColormap();
   });
   $('png').addEventListener('click', savePng);
+  $('save-case').addEventListener('submit', saveCase);
   $('reset-view').addEventListener('click', () => view.fit());
   $('show-edges').addEventListener('change', (e) => view.showEdges(e.target.checked));
   document.querySelector('.cb-ramp').style.background = `linear-gradient(to right, ${RAMP.join(', ')})`;

@@ -26,8 +26,17 @@ impl Server {
         let tmp = std::env::temp_dir().join(format!("studio-test-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&tmp);
         std::fs::create_dir_all(&tmp)?;
+        Server::start_in(tmp, &[])
+    }
+
+    /// A studio with `TMPDIR` `tmp` (made already) and its case library in `tmp/data` (never
+    /// the user's), with `args` besides.
+    fn start_in(tmp: PathBuf, args: &[&str]) -> Result<Server> {
+        let data = tmp.join("data");
         let mut child = Command::new(env!("CARGO_BIN_EXE_studio"))
-            .args(["--port", "0"])
+            .args(["--port", "0", "--data"])
+            .arg(&data)
+            .args(args)
             .env("TMPDIR", &tmp)
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit())
@@ -321,5 +330,54 @@ fn a_compressed_vtu_bomb_is_refused_within_100_mib_of_the_baseline() -> Result {
         peak as f64 / 1024.0
     );
     assert!(above < 100.0, "peak {above:.1} MiB above the baseline");
+    Ok(())
+}
+
+/// The restart of the issue, with real processes: a plan saved by one studio is reopened by the
+/// next on the same `--data` folder, its report and mesh byte for byte the job's downloads; the
+/// folder is private (0700) and the database file too (0600).
+#[test]
+fn a_plan_saved_is_reopened_by_the_next_process_byte_for_byte() -> Result {
+    let mut first = Server::start("restart")?;
+    let (status, body) = first.request("POST", "/api/patients?shipped=table2", "", b"")?;
+    assert_eq!(status, 200, "{body}");
+    let patient: serde_json::Value = serde_json::from_str(&body)?;
+    let job = run_short_job(first.addr, &patient["patient"])?;
+    let files = ["report.json", "patient.ply", "patient.vtk"];
+    let mut originals = Vec::new();
+    for file in files {
+        let (status, body) =
+            first.request("GET", &format!("/api/results/{job}/{file}"), "", b"")?;
+        assert_eq!(status, 200, "{file}: {body}");
+        originals.push(body);
+    }
+    let save = serde_json::json!({ "job": job, "name": "five steps" }).to_string();
+    let (status, body) = first.request(
+        "POST",
+        "/api/cases/save",
+        "Content-Type: application/json\r\n",
+        save.as_bytes(),
+    )?;
+    assert_eq!(status, 200, "{body}");
+    let plan: serde_json::Value = serde_json::from_str(&body)?;
+    let uid = plan["uid"].as_str().unwrap_or("").to_owned();
+    let data = first.tmp.join("data");
+    assert_eq!(mode(&data)?, 0o700, "the library's folder is private");
+    assert_eq!(mode(&data.join("cases.sqlite"))?, 0o600, "and its database");
+    first.signal("TERM")?;
+    let (code, _) = first.wait_exit(Duration::from_secs(10))?;
+    assert_eq!(code, Some(0));
+
+    let second = Server::start_in(first.tmp.clone(), &[])?;
+    for (file, original) in files.iter().zip(&originals) {
+        let (status, body) = second.request(
+            "GET",
+            &format!("/api/cases/plans/{uid}/files/{file}"),
+            "",
+            b"",
+        )?;
+        assert_eq!(status, 200, "{file}");
+        assert!(body == *original, "{file} differs after the restart");
+    }
     Ok(())
 }

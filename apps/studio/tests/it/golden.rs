@@ -14,9 +14,9 @@ type Result<T = ()> = std::result::Result<T, Box<dyn std::error::Error>>;
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn every_golden_job_gives_the_golden_report_over_the_socket() -> Result {
     let (studio, addr, server) = crate::serve().await?;
-    let patient = studio.add_patient(tissue_planner::Patient::shipped(
-        tissue_planner::Shipped::Table2,
-    )?);
+    let table2 = tissue_planner::Patient::shipped(tissue_planner::Shipped::Table2)?;
+    let scan = tissue_cases::Scan::of_mesh(&table2, "table2")?;
+    let patient = studio.add_patient(table2, scan, "Table 2".to_owned());
     let (mut tab, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/api/ws")).await?;
     for name in golden::JOBS {
         let (_, text) = golden::job(name)?;

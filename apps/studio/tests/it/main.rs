@@ -3,6 +3,7 @@
 //! counters, timing bounds) keep their own binaries beside `it/`.
 
 mod api;
+mod cases;
 mod golden;
 mod preview;
 mod security;

@@ -73,6 +73,11 @@ async fn a_rebinding_host_is_refused_on_every_route_and_the_headers_are_set() ->
         "/api/meshes",
         "/api/organs",
         "/api/results/j1/report.json",
+        "/cases",
+        "/api/cases/patients",
+        "/api/cases/plans/c00000000000000000000000000000000",
+        "/api/cases/plans/c00000000000000000000000000000000/files/report.json",
+        "/api/cases/patients/p00000000000000000000000000000000/export",
         "/no/such/page",
     ] {
         let (status, headers, body) = call(&app, get(uri, evil)?).await?;
