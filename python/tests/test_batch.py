@@ -104,6 +104,12 @@ def test_the_key_is_canonical_and_follows_the_scan_and_the_version(tmp_path, mon
         f.write("# changed\n")
     assert batch.case_key(case, base=tmp_path / "y") != k1
 
+    # a Path and NumPy numbers are the same case as their plain forms
+    np = pytest.importorskip("numpy")
+    assert batch.case_key({"patient": PLANE, "vertex": np.int64(CENTRE), "volume_cm3": np.float64(90)}) == batch.case_key(
+        {"patient": str(PLANE), "vertex": CENTRE, "volume_cm3": 90}
+    )
+
     # another library version recomputes
     monkeypatch.setattr(tissue, "__version__", tissue.__version__ + "+other")
     k_other = batch.case_key(a)

@@ -65,6 +65,10 @@ class _CaseError(Exception):
         self.message = message
 
 
+#: CSV columns kept as text (a scan called ``17.ply`` is not a number, nor a unit).
+_TEXT_FIELDS = ("patient", "unit")
+
+
 def _parse_cell(text: str) -> Any:
     """A CSV cell: an int or a float when it parses as one, true/false, a JSON list
     (``[1.5, 2, 0]`` for ``at`` or ``tangent``), else the text."""
@@ -101,7 +105,11 @@ def load_cases(path: str | os.PathLike) -> list[dict]:
             cases = []
             for row in csv.DictReader(f):
                 cases.append(
-                    {k.strip(): _parse_cell(v) for k, v in row.items() if k and v is not None and v.strip() != ""}
+                    {
+                        k.strip(): (v.strip() if k.strip() in _TEXT_FIELDS else _parse_cell(v))
+                        for k, v in row.items()
+                        if k and isinstance(v, str) and v.strip() != ""
+                    }
                 )
             return cases
     if suffix in (".jsonl", ".ndjson"):
@@ -133,6 +141,8 @@ def _canonical(value: Any) -> Any:
     tuples as lists; NaN and infinities refused."""
     if isinstance(value, bool) or value is None or isinstance(value, str):
         return value
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
     if isinstance(value, int):
         return int(value)
     if isinstance(value, float):
@@ -597,7 +607,6 @@ def run(
                 else:
                     result = dict(result)
                     result["key"] = p.key
-                    result["case"] = p.given
                     _write_atomic(out, p.key, result)
                     results[p.key] = result
                 done += waiting_rows.get(p.key, 1)
