@@ -310,6 +310,20 @@ def test_a_dask_cluster_of_two_worker_processes_runs_a_batch_and_resumes(tmp_pat
         assert counting.submitted == 9
         assert [_figures(r) for r in again] == [_figures(r) for r in rows]
         assert again[:3] == rows[:3] and again[4:] == rows[4:]
+        # the command line on the same cluster: a new case runs on one of its workers
+        cases_file = tmp_path / "cases.jsonl"
+        cases_file.write_text("\n".join(json.dumps(c) for c in cases + [table2(135)]) + "\n")
+        cli = subprocess.run(
+            [sys.executable, "-m", "tissue.batch", str(cases_file), "--out", str(tmp_path / "out"),
+             "--scheduler", cluster.scheduler_address, "--json", "--quiet"],
+            capture_output=True, text=True,
+        )
+        assert cli.returncode == 1, cli.stderr  # the failing case, recorded, still counts
+        cli_rows = [json.loads(line) for line in cli.stdout.splitlines()]
+        assert [r["key"] for r in cli_rows] == [r["key"] for r in again] + [batch.case_key(table2(135))]
+        assert cli_rows[-1]["error"] is None
+        new = json.loads((tmp_path / "out" / f"{cli_rows[-1]['key']}.json").read_text())
+        assert new["worker"]["pid"] in set(client.run(os.getpid).values())
 
 
 def test_the_command_line(tmp_path):
@@ -335,3 +349,14 @@ def test_the_command_line(tmp_path):
     assert subprocess.run(cmd[:4], capture_output=True, cwd=tmp_path).returncode == 2
     bad = subprocess.run(cmd[:3] + [str(tmp_path / "cases.txt"), "--out", "o"], capture_output=True, text=True, cwd=tmp_path)
     assert bad.returncode == 2 and "cases" in bad.stderr
+
+
+def test_a_ray_executor_runs_a_batch(tmp_path):
+    ray = pytest.importorskip("ray")  # not in CI's venv (a large wheel): run by hand with ray installed
+    ray.init(num_cpus=2, include_dashboard=False, runtime_env={"env_vars": {"RAYON_NUM_THREADS": "1"}})
+    try:
+        rows = batch.run([table2(60), table2(-5)], tmp_path / "out", batch.RayExecutor(num_cpus=1), as_frame=False)
+    finally:
+        ray.shutdown()
+    assert [r["error_kind"] for r in rows] == [None, "parameters"]
+    assert rows[0]["area_gain_cm2"] > 0
