@@ -28,16 +28,17 @@ from pathlib import Path
 VOLUMES = list(range(60, 220, 10))  # 16 variants, cm3
 
 
-def insert_side(insert: str, volumes: list[int], work: Path, env: dict) -> tuple[float, dict]:
-    half = len(volumes) // 2
-    loops = [volumes[:half], volumes[half:]]
+def insert_side(insert: str, volumes: list[int], work: Path, env: dict, flags: str = "") -> tuple[float, dict]:
+    # two loops of 8, interleaved (60, 80, … and 70, 90, …): larger volumes take longer, and
+    # halves by size would leave one loop with the long runs
+    loops = [volumes[0::2], volumes[1::2]]
     started = time.perf_counter()
     procs = []
     for n, vs in enumerate(loops):
         script = "set -e\n" + "".join(
-            f'"{insert}" --volume {v} --quiet --report "{work}/insert_{v}.json"\n' for v in vs
+            f'"{insert}" --volume {v}{flags} --quiet --report "{work}/insert_{v}.json"\n' for v in vs
         )
-        procs.append(subprocess.Popen(["sh", "-c", script], env=env))
+        procs.append(subprocess.Popen(["sh", "-c", script], env=env, stdout=subprocess.DEVNULL))
     for p in procs:
         if p.wait() != 0:
             raise SystemExit(f"an insert loop failed with exit code {p.returncode}")
@@ -52,6 +53,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--insert", default=str(target / "release" / "insert"), help="the insert binary")
     parser.add_argument("--repeat", type=int, default=3, help="rounds of both sides (the medians are compared)")
+    parser.add_argument("--max-steps", type=int, help="a step limit for every run (a quicker check; default: the library's)")
     args = parser.parse_args()
     if not os.access(args.insert, os.X_OK):
         raise SystemExit(f"no insert binary at {args.insert}: cargo build --release --bin insert, or --insert PATH")
@@ -63,7 +65,9 @@ def main() -> int:
 
     env = dict(os.environ, RAYON_NUM_THREADS="1")
     os.environ["RAYON_NUM_THREADS"] = "1"
-    cases = [{"patient": "table2", "volume_cm3": v} for v in VOLUMES]
+    extra = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    flags = "" if args.max_steps is None else f" --max-steps {args.max_steps}"
+    cases = [{"patient": "table2", "volume_cm3": v, **extra} for v in VOLUMES]
     print(f"tissue {tissue.__version__}, {len(VOLUMES)} Table 2 variants (volumes {VOLUMES[0]}..{VOLUMES[-1]} cm3), "
           f"{os.cpu_count()} cores, RAYON_NUM_THREADS=1 on both sides")
 
@@ -79,11 +83,19 @@ def main() -> int:
         for r in range(args.repeat):
             with tempfile.TemporaryDirectory() as d:
                 work = Path(d)
-                wall_i, gains_i = insert_side(args.insert, VOLUMES, work, env)
-                # a fresh cluster's workers import tissue on their first task: count it in round 1
-                t = time.perf_counter()
-                rows = tissue.batch.run(cases, work / "out", client, as_frame=False)
-                wall_b = time.perf_counter() - t
+                # alternate which side goes first, so that a drift in the machine's load (or
+                # the workers' first `import tissue`, counted in round 1) does not favour one
+                def batch_side() -> tuple[float, list]:
+                    t = time.perf_counter()
+                    rows = tissue.batch.run(cases, work / "out", client, as_frame=False)
+                    return time.perf_counter() - t, rows
+
+                if r % 2 == 0:
+                    wall_i, gains_i = insert_side(args.insert, VOLUMES, work, env, flags)
+                    wall_b, rows = batch_side()
+                else:
+                    wall_b, rows = batch_side()
+                    wall_i, gains_i = insert_side(args.insert, VOLUMES, work, env, flags)
             failed = [row for row in rows if row["error"] is not None]
             if failed:
                 raise SystemExit(f"batch cases failed: {failed}")
