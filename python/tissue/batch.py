@@ -446,7 +446,7 @@ def _write_atomic(out_dir: Path, key: str, result: dict) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{key}.json.tmp-{os.getpid()}-", dir=out_dir)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
-            json.dump(result, f, indent=1, sort_keys=True, allow_nan=True)
+            json.dump(result, f, indent=1, sort_keys=True, ensure_ascii=False)
             f.write("\n")
             f.flush()
             os.fsync(f.fileno())
@@ -675,7 +675,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.scheduler and args.workers:
         parser.error("--workers is for the local pool; a Dask cluster has its own workers")
     try:
-        cases = load_cases(args.cases)
+        load_cases(args.cases)  # read before any cluster is reached: a bad file is a usage error
     except (OSError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -694,9 +694,15 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: cannot reach the Dask scheduler {args.scheduler}: {e}", file=sys.stderr)
             return 2
 
+    tty = sys.stderr.isatty()
+
     def show(done: int, total: int) -> None:
-        if not args.quiet:
+        if args.quiet:
+            return
+        if tty:
             print(f"\r{done}/{total} cases", end="" if done < total else "\n", file=sys.stderr, flush=True)
+        elif done == total:
+            print(f"{done}/{total} cases", file=sys.stderr, flush=True)
 
     try:
         rows = run(
@@ -711,7 +717,6 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if client is not None:
             client.close()
-    del cases
     if args.json:
         for r in rows:
             print(json.dumps(r, sort_keys=True))
