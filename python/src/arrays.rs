@@ -135,7 +135,10 @@ pub fn indices(
     let array = as_array(obj, field, columns, "vertex indices from 0")?;
     let k = array.shape()[1];
     let kind = array.dtype().kind();
-    if !(kind == b'i' || kind == b'u') && !(kind == b'f' && array.len() == 0) {
+    let integers = kind == b'i' || kind == b'u';
+    // An empty float array (`np.zeros((0, 3))`) has no index to lose.
+    let empty = kind == b'f' && array.len() == 0;
+    if !(integers || empty) {
         return Err(bad_array(
             py,
             field,

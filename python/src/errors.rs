@@ -125,3 +125,30 @@ pub fn tool_error(py: Python<'_>, field: Option<&str>, message: impl AsRef<str>)
 pub fn bug(py: Python<'_>, message: impl AsRef<str>) -> PyErr {
     raise(py, "TissueError", message.as_ref(), Some("bug"), None)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `.kind` is the library's own JSON name of the kind (what the report's `failed_runs`
+    /// and the studio's errors carry).
+    #[test]
+    fn kind_names_are_the_json_names() {
+        let kinds = [
+            ErrorKind::Usage,
+            ErrorKind::Input,
+            ErrorKind::Mesh,
+            ErrorKind::Placement,
+            ErrorKind::Parameters,
+            ErrorKind::Run,
+            ErrorKind::Output,
+            ErrorKind::Cancelled,
+        ];
+        for kind in kinds {
+            assert_eq!(
+                serde_json::to_value(kind).ok(),
+                Some(serde_json::json!(kind_name(kind)))
+            );
+        }
+    }
+}

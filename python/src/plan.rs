@@ -477,3 +477,31 @@ fn plan_of(py: Python<'_>, finished: Finished) -> PyResult<Plan> {
     }
     Ok(plan)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The keywords the package takes are the request's JSON names, placement included, and
+    /// each one parses on its own (how `job_of` finds the field a bad value is in).
+    #[test]
+    fn the_request_fields_are_the_json_names_and_parse_alone() {
+        let fields = request_fields();
+        for name in [
+            "vertex",
+            "at",
+            "volume_cm3",
+            "diameter_cm",
+            "expand_weeks",
+            "solver",
+        ] {
+            assert!(fields.iter().any(|f| f == name), "{name}: {fields:?}");
+        }
+        let defaults = serde_json::to_value(PlanRequest::default()).unwrap_or_default();
+        for name in &fields {
+            let alone = serde_json::json!({ name.clone(): defaults[name].clone() });
+            let parsed = serde_json::from_value::<PlanRequest>(alone);
+            assert_eq!(parsed.ok(), Some(PlanRequest::default()), "{name}");
+        }
+    }
+}

@@ -506,6 +506,9 @@ fn add_tool(
     })
 }
 
+/// A pose as NumPy arrays: the quaternion (x, y, z, w) and the translation (cm).
+type PoseArrays<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+
 /// A contact tool of a `Body`: its pose (set by the caller; the next step sweeps it there) and
 /// the tissue's force on it.
 #[pyclass(module = "tissue._tissue", frozen)]
@@ -524,10 +527,7 @@ impl Tool {
 
     /// The newest pose set: `(quaternion (x, y, z, w), translation cm)`, float64 arrays.
     #[getter]
-    fn pose<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+    fn pose<'py>(&self, py: Python<'py>) -> PyResult<PoseArrays<'py>> {
         let sim = self.body.get().sim(py)?;
         let p = sim.poses.get(self.id).copied().unwrap_or_default();
         Ok((
