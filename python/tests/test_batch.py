@@ -212,6 +212,39 @@ def test_a_rerun_resumes_and_only_a_new_case_is_run(tmp_path, executor):
     assert twice[0]["key"] == twice[1]["key"]
 
 
+def test_a_worker_without_the_file_gets_it_sent_and_a_changed_file_is_refused(tmp_path):
+    scan = tmp_path / "scan.obj"
+    shutil.copy(PLANE, scan)
+    case = {"patient": str(scan), "vertex": CENTRE, "volume_cm3": 70, **FAST}
+
+    class Elsewhere:
+        """Runs each task where the driver's file is not (moved away while it runs)."""
+
+        def __init__(self, change=False):
+            self.change = change
+
+        def submit(self, fn, *args):
+            f = cf.Future()
+            if self.change:
+                with open(scan, "a") as out:
+                    out.write("# changed after keying\n")
+                f.set_result(fn(*args))
+            else:
+                os.rename(scan, tmp_path / "away.obj")
+                try:
+                    f.set_result(fn(*args))
+                finally:
+                    os.rename(tmp_path / "away.obj", scan)
+            return f
+
+    sent = batch.run([case], tmp_path / "sent", Elsewhere(), send_files=True, as_frame=False)
+    assert sent[0]["error"] is None and sent[0]["area_gain_cm2"] > 0
+    changed = batch.run([case], tmp_path / "changed", Elsewhere(change=True), as_frame=False)
+    assert (changed[0]["error_kind"], changed[0]["error_field"]) == ("input", "patient")
+    assert "is not the one the batch keyed" in changed[0]["error"]
+    assert result_files(tmp_path / "changed") == []  # not this key's answer: a rerun retries
+
+
 def test_a_lost_worker_is_not_recorded_and_a_rerun_retries(tmp_path):
     class Broken:
         submitted = 0

@@ -327,6 +327,7 @@ def _run_case(case: dict, shipped: str | None = None, path: str | None = None,
                         f"(SHA-256 {seen[:12]}…, not {sha256[:12]}…): changed during the batch, or another "
                         "machine's copy; pass send_files=True (--send-files) for workers without the file",
                     }
+                    result["transient"] = True  # not this case's answer: not recorded, a rerun retries
                     return result
             patient = tissue.Patient.load(local, unit=unit) if unit is not None else tissue.Patient.load(local)
         placement = {k: case.pop(k) for k in _PLACEMENT if k in case}
@@ -606,9 +607,12 @@ def run(
                     errors[p.key] = {"kind": "worker", "field": None, "message": f"{type(e).__name__}: {e}"}
                 else:
                     result = dict(result)
-                    result["key"] = p.key
-                    _write_atomic(out, p.key, result)
-                    results[p.key] = result
+                    if result.pop("transient", False):
+                        errors[p.key] = result["error"]
+                    else:
+                        result["key"] = p.key
+                        _write_atomic(out, p.key, result)
+                        results[p.key] = result
                 done += waiting_rows.get(p.key, 1)
                 if progress is not None:
                     progress(done, total)
@@ -659,13 +663,13 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m tissue.batch",
         description="Plan every case of a cases file (.jsonl, .json or .csv) as an independent task; "
-        "each result is written to OUT/<key>.json, and cases already there are skipped.",
+        "each result is written to DIR/<key>.json, and cases already there are skipped.",
         epilog="Exit status: 0 every case ran, 1 some failed (their errors are recorded), 2 usage errors.",
     )
-    parser.add_argument("cases", help="the cases file: .jsonl, .json (a list) or .csv")
-    parser.add_argument("--out", required=True, help="the results folder (created if missing)")
-    parser.add_argument("--scheduler", help="a Dask scheduler's address (tcp://host:8786); default: a local process pool")
-    parser.add_argument("--workers", type=int, help="local pool size [default: one per core]")
+    parser.add_argument("cases", metavar="CASES", help="the cases file: .jsonl, .json (a list) or .csv")
+    parser.add_argument("--out", metavar="DIR", required=True, help="the results folder (created if missing)")
+    parser.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler's address (tcp://host:8786); default: a local process pool")
+    parser.add_argument("--workers", metavar="N", type=int, help="local pool size [default: one per core]")
     parser.add_argument("--send-files", action="store_true", help="send patient files with the tasks (workers without them)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON lines")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
