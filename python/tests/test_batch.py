@@ -239,6 +239,10 @@ def test_a_worker_without_the_file_gets_it_sent_and_a_changed_file_is_refused(tm
 
     sent = batch.run([case], tmp_path / "sent", Elsewhere(), send_files=True, as_frame=False)
     assert sent[0]["error"] is None and sent[0]["area_gain_cm2"] > 0
+    # without it, the worker says so, and that is not recorded as the case's answer
+    unsent = batch.run([case], tmp_path / "unsent", Elsewhere(), as_frame=False)
+    assert (unsent[0]["error_kind"], unsent[0]["error_field"]) == ("input", "patient")
+    assert "is not on this worker" in unsent[0]["error"] and result_files(tmp_path / "unsent") == []
     changed = batch.run([case], tmp_path / "changed", Elsewhere(change=True), as_frame=False)
     assert (changed[0]["error_kind"], changed[0]["error_field"]) == ("input", "patient")
     assert "is not the one the batch keyed" in changed[0]["error"]

@@ -314,6 +314,15 @@ def _run_case(case: dict, shipped: str | None = None, path: str | None = None,
                     f.write(data)
             else:
                 local = path
+                if sha256 is not None and not os.path.exists(local):
+                    result["error"] = {
+                        "kind": "input",
+                        "field": "patient",
+                        "message": f"the patient file {path} is not on this worker ({socket.gethostname()}): "
+                        "pass send_files=True (--send-files) for workers without the driver's files",
+                    }
+                    result["transient"] = True  # the worker's, not the case's: a rerun retries
+                    return result
             if sha256 is not None:
                 try:
                     seen = _file_sha256(local)
