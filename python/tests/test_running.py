@@ -72,12 +72,14 @@ def test_two_threads_planning_at_once_beat_one_after_the_other(table2: tissue.Pa
 
     one()  # warm up (the thread pools, the page cache)
     seq, par = [], []
-    for _ in range(3):  # alternated, medians: the machine is shared
+    for _ in range(5):  # alternated, medians: the machine is shared
         seq.append(sequential())
         par.append(together())
     s, p = statistics.median(seq), statistics.median(par)
     print(f"\ntwo short Table 2 runs: one after the other {s:.3f} s, at once {p:.3f} s, ratio {p / s:.2f}")
-    assert p < 0.85 * s, (seq, par)
+    # On 2 idle cores about 0.7 (each run also uses rayon); a shared, loaded machine brings it
+    # towards 0.8. Planning with the GIL held would make it 1.0 or more.
+    assert p < 0.9 * s, (seq, par)
 
 
 def test_ctrl_c_cancels_a_long_run_within_100_ms(table2: tissue.Patient) -> None:
