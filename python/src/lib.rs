@@ -55,6 +55,7 @@ fn _tissue(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<plan::Plan>()?;
     m.add_function(wrap_pyfunction!(plan::_run, m)?)?;
     m.add_function(wrap_pyfunction!(plan::_request_fields, m)?)?;
+    m.add_function(wrap_pyfunction!(plan::_plan_restore, m)?)?;
     m.add_class::<trainer::Body>()?;
     m.add_class::<trainer::Tool>()?;
     Ok(())

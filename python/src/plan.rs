@@ -18,6 +18,7 @@ use std::time::Duration;
 use crossbeam_channel::RecvTimeoutError;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 use tissue_mesh::TriMesh;
 use tissue_planner::{
     CancelToken, ErrorKind, Finished, JobReport, JobSpec, PlanError, PlanRequest, ProgressEvent,
@@ -174,6 +175,29 @@ impl Patient {
         self.patient.file.positions().len()
     }
 
+    /// Pickling (Dask ships patients to its workers): a shipped patient by its name, any other
+    /// by its arrays, unit and label (the same mesh, bit for bit).
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let this = slf.get();
+        let class = slf.get_type();
+        match this.shipped {
+            Some(which) => Ok((class.getattr("shipped")?, (which.id(),).into_pyobject(py)?)),
+            None => Ok((
+                class.getattr("from_arrays")?,
+                (
+                    arrays::positions_out(py, this.patient.file.positions())?,
+                    arrays::indices_out(py, this.patient.file.triangles())?,
+                    this.patient.unit.symbol(),
+                    this.patient.label.clone(),
+                )
+                    .into_pyobject(py)?,
+            )),
+        }
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "Patient({:?}, {} vertices, {} triangles, unit={:?})",
@@ -266,6 +290,28 @@ impl Plan {
         self.in_region.as_ref().map(|a| a.clone_ref(py))
     }
 
+    /// Pickling (Dask returns plans from its workers): its figures, report and arrays.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let p = slf.get();
+        let restore = py.import("tissue._tissue")?.getattr("_plan_restore")?;
+        let state = (
+            p.mode,
+            p.report_json.as_str(),
+            (p.area_gain_cm2, p.volume_difference_cm3, p.volume_cm3),
+            (
+                p.vertices_after.as_ref().map(|a| a.clone_ref(py)),
+                p.displacement.as_ref().map(|a| a.clone_ref(py)),
+                p.stretch.as_ref().map(|a| a.clone_ref(py)),
+                p.in_region.as_ref().map(|a| a.clone_ref(py)),
+            ),
+        )
+            .into_pyobject(py)?;
+        Ok((restore, state))
+    }
+
     fn __repr__(&self) -> String {
         match (self.area_gain_cm2, self.volume_cm3) {
             (Some(gain), Some(volume)) => format!(
@@ -275,6 +321,46 @@ impl Plan {
             _ => format!("Plan(mode={:?})", self.mode),
         }
     }
+}
+
+/// The arrays of a pickled plan: after, displacement, stretch, in region.
+type PlanArrays = (
+    Option<Py<PyArray2<f64>>>,
+    Option<Py<PyArray1<f64>>>,
+    Option<Py<PyArray1<f64>>>,
+    Option<Py<PyArray1<f64>>>,
+);
+
+/// A `Plan` from its pickled state (`Plan.__reduce__`).
+#[pyfunction]
+pub fn _plan_restore(
+    py: Python<'_>,
+    mode: &str,
+    report_json: String,
+    figures: (Option<f64>, Option<f64>, Option<f64>),
+    fields: PlanArrays,
+) -> PyResult<Plan> {
+    let mode = ["single", "sweep", "target-gain", "expansion"]
+        .into_iter()
+        .find(|m| *m == mode)
+        .ok_or_else(|| usage(py, Some("mode"), format!("no planning mode {mode:?}")))?;
+    let report = py
+        .import("json")?
+        .call_method1("loads", (&report_json,))?
+        .unbind();
+    let (vertices_after, displacement, stretch, in_region) = fields;
+    Ok(Plan {
+        mode,
+        report,
+        report_json,
+        area_gain_cm2: figures.0,
+        volume_difference_cm3: figures.1,
+        volume_cm3: figures.2,
+        vertices_after,
+        displacement,
+        stretch,
+        in_region,
+    })
 }
 
 /// The request's field names (`PlanRequest`'s JSON names), in the order the JSON has them.

@@ -205,3 +205,40 @@ def test_a_progress_that_returns_none_does_not_cancel(table2: tissue.Patient) ->
     steps = []
     plan = tissue.plan(table2, max_steps=60, progress=lambda s, m, _: steps.append(s))
     assert plan.report["steps"] == 60 and steps and max(steps) <= 60
+
+
+def test_placement_by_point_or_default_vertex() -> None:
+    table2 = tissue.Patient.shipped("table2")
+    plan = tissue.plan(table2, at=np.array([1.0, 0.5, 0.0]), max_steps=10)
+    assert plan.report["inputs"]["at"] == [1.0, 0.5, 0.0]
+    assert plan.report["inputs"]["surface_point_cm"] == pytest.approx([1.0, 0.5, 0.0])
+    # A shipped patch runs at its suggested vertex when no placement is given; its results
+    # come back in its unit (dm): a tenth of the cm figures.
+    chest = tissue.Patient.shipped("chest")
+    plan = tissue.plan(chest, max_steps=50)
+    assert plan.report["inputs"]["vertex"] == chest.suggested_vertex == 2277
+    assert plan.report["inputs"]["unit"] == "dm"
+    assert plan.displacement.max() == pytest.approx(plan.report["max_displacement_cm"] / 10, rel=0.05)
+
+
+def test_patients_and_plans_pickle_for_dask_workers(table2_plan: tissue.Plan) -> None:
+    import pickle
+
+    for patient in (
+        tissue.Patient.shipped("head"),
+        tissue.Patient.from_arrays(np.eye(3), np.array([[0, 1, 2]]), unit="mm", label="one"),
+    ):
+        back = pickle.loads(pickle.dumps(patient))
+        np.testing.assert_array_equal(back.vertices, patient.vertices)
+        np.testing.assert_array_equal(back.triangles, patient.triangles)
+        assert (back.unit, back.label, back.shipped_name) == (patient.unit, patient.label, patient.shipped_name)
+    back = pickle.loads(pickle.dumps(table2_plan))
+    assert back.report == table2_plan.report and back.report_json == table2_plan.report_json
+    assert (back.mode, back.area_gain_cm2, back.volume_difference_cm3, back.volume_cm3) == (
+        table2_plan.mode,
+        table2_plan.area_gain_cm2,
+        table2_plan.volume_difference_cm3,
+        table2_plan.volume_cm3,
+    )
+    np.testing.assert_array_equal(back.vertices_after, table2_plan.vertices_after)
+    np.testing.assert_array_equal(back.stretch, table2_plan.stretch)

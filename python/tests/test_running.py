@@ -52,8 +52,16 @@ def test_other_python_threads_run_while_a_plan_runs(table2: tissue.Patient) -> N
 
 
 def test_two_threads_planning_at_once_beat_one_after_the_other(table2: tissue.Patient) -> None:
-    def one() -> None:
-        tissue.plan(table2, **SHORT)
+    """Two threads plan at once: their runs overlap in time (with the GIL held they could not:
+    the second would wait for the first), and on free cores they take clearly less than one
+    after the other."""
+    spans: dict = {}
+
+    def one(key: object = None) -> None:
+        steps = []
+        tissue.plan(table2, progress=lambda s, m, _: steps.append(time.perf_counter()), **SHORT)
+        if key is not None:
+            spans[key] = (steps[0], steps[-1])
 
     def sequential() -> float:
         start = time.perf_counter()
@@ -62,7 +70,7 @@ def test_two_threads_planning_at_once_beat_one_after_the_other(table2: tissue.Pa
         return time.perf_counter() - start
 
     def together() -> float:
-        threads = [threading.Thread(target=one) for _ in range(2)]
+        threads = [threading.Thread(target=one, args=(i,)) for i in range(2)]
         start = time.perf_counter()
         for t in threads:
             t.start()
@@ -71,13 +79,26 @@ def test_two_threads_planning_at_once_beat_one_after_the_other(table2: tissue.Pa
         return time.perf_counter() - start
 
     one()  # warm up (the thread pools, the page cache)
-    seq, par = [], []
-    for _ in range(3):  # alternated, medians: the machine is shared
+    seq, par, overlaps = [], [], []
+    for _ in range(5):  # alternated, medians: the machine is shared
         seq.append(sequential())
         par.append(together())
+        (a0, a1), (b0, b1) = spans[0], spans[1]
+        overlaps.append((min(a1, b1) - max(a0, b0)) / min(a1 - a0, b1 - b0))
     s, p = statistics.median(seq), statistics.median(par)
-    print(f"\ntwo short Table 2 runs: one after the other {s:.3f} s, at once {p:.3f} s, ratio {p / s:.2f}")
-    assert p < 0.85 * s, (seq, par)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else 0.0
+    cores = os.cpu_count() or 1
+    print(
+        f"\ntwo short Table 2 runs: one after the other {s:.3f} s, at once {p:.3f} s, ratio "
+        f"{p / s:.2f}; the runs' stepping overlapped {statistics.median(overlaps):.0%} "
+        f"(load average {load:.1f} on {cores} cores)"
+    )
+    # Both runs step at the same time: most of the shorter one lies within the other.
+    assert statistics.median(overlaps) > 0.5, overlaps
+    # The speed-up needs cores to spare: on 2 idle cores about 0.7 (each run also uses rayon);
+    # a machine already busy with other work gives none, whatever the GIL does.
+    if load < cores - 0.5:
+        assert p < 0.9 * s, (seq, par)
 
 
 def test_ctrl_c_cancels_a_long_run_within_100_ms(table2: tissue.Patient) -> None:
