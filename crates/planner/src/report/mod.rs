@@ -94,6 +94,8 @@ pub enum Tool {
     Studio,
     /// The C ABI (`tissue-capi`).
     Capi,
+    /// The Python package (`import tissue`, `python/`).
+    Python,
 }
 
 /// Every report: the envelope (`schema_version`, `tool`, `version`, `mode`, `inputs`) and its
@@ -476,6 +478,7 @@ mod tests {
         let names = [
             (serde_json::to_value(Tool::Insert)?, json!("insert")),
             (serde_json::to_value(Tool::Capi)?, json!("capi")),
+            (serde_json::to_value(Tool::Python)?, json!("python")),
             (
                 serde_json::to_value(JobMode::TargetGain)?,
                 json!("target-gain"),
