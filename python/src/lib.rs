@@ -28,10 +28,8 @@
 //! feature: PyO3 0.30 leaves libpython unlinked when maturin sets `PYO3_BUILD_EXTENSION_MODULE`,
 //! so the workspace's own `cargo test` and `cargo clippy` build this crate as any other member.
 
-// PyO3's `#[pyclass]`, `#[pymethods]`, `#[pyfunction]` and `#[pymodule]` expand to `unsafe`
-// FFI glue (the CPython entry points and type slots); this crate writes no `unsafe` of its own.
-// The workspace denies unsafe code, so it is allowed here at the crate root, as in tissue-capi.
-#![allow(unsafe_code)]
+// No `unsafe` here: PyO3's macros allow their own FFI glue, so the workspace's deny holds.
+#![forbid(unsafe_code)]
 
 use pyo3::prelude::*;
 
