@@ -232,19 +232,30 @@ impl Body {
         while left > 0 {
             // In batches, checking for Ctrl-C between them.
             let batch = left.min(10);
+            // A panic in the solver is a bug, raised as `TissueError` (kind `bug`), never
+            // PyO3's `PanicException`; the body's lock is then poisoned and refuses further use.
             let done = py.detach(|| {
-                let mut sim = self
-                    .sim
-                    .lock()
-                    .map_err(|_| SceneError::Tool("the body's lock is poisoned".to_owned()))?;
-                let mut count = 0;
-                for _ in 0..batch {
-                    let events = sim.session.step()?;
-                    count += events.len();
-                    sim.events.extend(events);
-                }
-                Ok::<usize, SceneError>(count)
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    let mut sim = self
+                        .sim
+                        .lock()
+                        .map_err(|_| SceneError::Tool("the body's lock is poisoned".to_owned()))?;
+                    let mut count = 0;
+                    for _ in 0..batch {
+                        let events = sim.session.step()?;
+                        count += events.len();
+                        sim.events.extend(events);
+                    }
+                    Ok::<usize, SceneError>(count)
+                }))
             });
+            let done = done.map_err(|_| {
+                bug(
+                    py,
+                    "the trainer's step panicked (a bug: please report it with the organ and \
+                     the tool moves); this body can no longer be used",
+                )
+            })?;
             added += done.map_err(scene(py, None))?;
             left -= batch;
             py.check_signals()?;
