@@ -194,6 +194,7 @@ mod error;
 mod force;
 mod geometry;
 mod haptic;
+mod intersect;
 mod partition;
 mod pieces;
 mod settings;
@@ -212,6 +213,10 @@ pub use edit::ConstraintSlot;
 pub use error::{PbdError, PbdParam};
 pub use force::DYN_PER_NEWTON;
 pub use haptic::{ContactForceModel, ModelContact, StiffnessEstimator};
+pub use intersect::{
+    count_intersecting_pairs, intersecting_pairs, intersecting_pairs_brute_force,
+    triangles_intersect,
+};
 pub use settings::{Elastic, Material, Solver, StepSettings, VolumeConstraintKind};
 pub use tool::{Pose, Tool, ToolShape};
 pub use voxel::{ColliderShape, OrientedBox, VoxelCollider, MAX_COLLIDER_CORNERS};

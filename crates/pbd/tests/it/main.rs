@@ -10,6 +10,7 @@ mod edit;
 mod elastic;
 mod errors;
 mod force;
+mod intersect;
 mod parallel;
 mod physics;
 mod presets;
