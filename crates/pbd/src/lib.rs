@@ -197,6 +197,7 @@ mod haptic;
 mod intersect;
 mod partition;
 mod pieces;
+mod selfcol;
 mod settings;
 mod step;
 mod tool;
@@ -217,6 +218,7 @@ pub use intersect::{
     count_intersecting_pairs, intersecting_pairs, intersecting_pairs_brute_force,
     triangles_intersect,
 };
+pub use selfcol::SelfCollision;
 pub use settings::{Elastic, Material, Solver, StepSettings, VolumeConstraintKind};
 pub use tool::{Pose, Tool, ToolShape};
 pub use voxel::{ColliderShape, OrientedBox, VoxelCollider, MAX_COLLIDER_CORNERS};

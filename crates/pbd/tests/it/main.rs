@@ -14,3 +14,4 @@ mod intersect;
 mod parallel;
 mod physics;
 mod presets;
+mod selfcol;

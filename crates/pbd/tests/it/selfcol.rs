@@ -1,0 +1,112 @@
+//! Self-collision (issue 35, `selfcol.rs`): a slab folded over itself (a U at rest) whose upper
+//! arm a probe presses onto its lower arm ends with no intersecting surface triangle pairs (the
+//! exact counter of `intersect.rs`), and without self-collision it passes through itself.
+#![allow(clippy::unwrap_used)]
+
+use glam::{Vec3, Vec3A};
+use tissue_mesh::{tet_box, TetMesh};
+use tissue_pbd::{
+    count_intersecting_pairs, ContactParams, Floor, Material, Pose, SelfCollision, SoftBody,
+    StepSettings, ToolShape,
+};
+
+/// A 6 × 0.4 × 1 cm slab (30 × 2 × 5 boxes of 2 mm) bent at rest into a U: its lower arm
+/// (centre line `y = 0`, `x < −0.5`), a half loop of centre-line radius 0.6 cm, and its upper
+/// arm back over the lower one, 0.8 cm above it (its underside at `y = 1.0`, `x` from −0.5 to
+/// −2.1). `t` is the coordinate across the slab (+0.2 the inside of the U).
+fn folded_slab() -> TetMesh {
+    let (positions, tets) = tet_box(30, 2, 5, Vec3::new(6.0, 0.4, 1.0))
+        .unwrap()
+        .into_parts();
+    let (s0, r) = (-0.5f32, 0.6f32);
+    let loop_len = std::f32::consts::PI * r;
+    let bent = positions
+        .iter()
+        .map(|p| {
+            let (s, t) = (p.x, p.y);
+            if s <= s0 {
+                Vec3::new(s, t, p.z)
+            } else if s <= s0 + loop_len {
+                let phi = (s - s0) / r;
+                Vec3::new(s0 + (r - t) * phi.sin(), r - (r - t) * phi.cos(), p.z)
+            } else {
+                Vec3::new(s0 - (s - s0 - loop_len), 2.0 * r - t, p.z)
+            }
+        })
+        .collect();
+    TetMesh::new(bent, tets).unwrap()
+}
+
+/// The U on a floor at its bottom (`y = −0.2`), the lower arm's underside held as taped to the
+/// tray; a horizontal probe of radius 0.2 cm across the upper arm at `x = −1.5` comes down until
+/// its bottom is at `y = 0.5`: the upper arm, 0.4 cm thick, would have to go 0.1 cm into the
+/// lower one (whose top is at 0.2). Returns the final count of intersecting surface triangle
+/// pairs, and the body.
+fn press(self_collision: bool) -> (usize, SoftBody) {
+    let mut body = SoftBody::new(&folded_slab(), &Material::soft_tissue()).unwrap();
+    body.set_settings(StepSettings::realtime()).unwrap();
+    body.set_floor(Some(Floor::y(-0.2))).unwrap();
+    if self_collision {
+        body.set_self_collision(Some(SelfCollision::default()))
+            .unwrap();
+    }
+    let start: Vec<Vec3A> = body.positions().to_vec();
+    for (i, p) in start.iter().enumerate() {
+        if p.x < -0.5 && p.y < -0.19 {
+            body.pin(i as u32).unwrap();
+        }
+    }
+    let probe = ToolShape::Capsule {
+        a: Vec3::new(0.0, 0.0, -1.5),
+        b: Vec3::new(0.0, 0.0, 1.5),
+        radius: 0.2,
+    };
+    let at = |y: f32| Pose::from_translation(Vec3::new(-1.5, y, 0.0));
+    let tool = body
+        .add_tool(probe, at(1.8), ContactParams::default())
+        .unwrap();
+    // Down from 1.8 to 0.7 (its bottom at 0.5) in 110 steps, then held for 1 s.
+    for s in 1..=210 {
+        body.set_tool_pose(tool, at(1.8 - 1.1 * (s.min(110) as f32 / 110.0)))
+            .unwrap();
+        body.step().unwrap();
+    }
+    let tris = body.surface_triangles();
+    (
+        count_intersecting_pairs(body.positions(), &tris).unwrap(),
+        body,
+    )
+}
+
+#[test]
+fn a_folded_slab_pressed_onto_itself_does_not_pass_through_itself() {
+    let (without, _) = press(false);
+    // The check can fail: without self-collision the upper arm is pressed into the lower.
+    assert!(without > 0, "without self-collision: {without}");
+    let (with, body) = press(true);
+    let (contacts, active) = body.self_contact_counts();
+    assert_eq!(
+        with, 0,
+        "with self-collision: {with} intersecting pairs ({contacts} contacts)"
+    );
+    // The upper arm rests on the lower one through its contacts: under the probe, its lowest
+    // node is above the lower arm's highest one there, and within 0.15 cm of it (it came down
+    // the 0.8 cm gap).
+    assert!(active > 0, "{contacts} {active}");
+    let rest = folded_slab();
+    let (mut upper, mut lower) = (f32::MAX, f32::MIN);
+    for (p, r) in body.positions().iter().zip(rest.positions()) {
+        if (p.x + 1.5).abs() < 0.3 && p.z.abs() < 0.3 {
+            if r.y > 0.5 {
+                upper = upper.min(p.y);
+            } else {
+                lower = lower.max(p.y);
+            }
+        }
+    }
+    let h = body.self_collision_thickness().unwrap();
+    assert!(
+        upper > lower && upper < lower + 0.15,
+        "upper {upper} lower {lower} h {h}"
+    );
+}
