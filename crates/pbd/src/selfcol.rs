@@ -20,16 +20,18 @@
 //!
 //! ## Exclusion (rest neighbours)
 //! A vertex is never held against a triangle that has it as a corner, nor against one that is
-//! its rest neighbour: a corner of the triangle shares a tet with the vertex (its one-ring in the
-//! tet mesh: the far side of a one-tet-thick wall is in it) *and* the triangle was within `h`
-//! of the vertex at rest. Against a triangle with a corner in its tet one-ring, a vertex is
-//! held only if it starts the substep in front of it (never from behind: that is the inside of
-//! a thin wall, which the material, not the contact, keeps from inverting). Neighbourhood is read from
-//! the current tets: the two walls of a wound share no tet (their nodes were duplicated), so
-//! they collide, although they start at the same place. Farther pairs (a crease folding the
-//! surface into itself two edges away) are held apart. At rest no other pair is within `h` of
-//! each other from the outer side and over the triangle (the lateral test below rejects the
-//! flat neighbourhood of a vertex), so a body at rest has no active self-contact.
+//! its rest neighbour: within `1.5 h` of it at rest (its surface fan and surroundings, the far
+//! corner of a sliver), except when the two coincided at rest: the two walls of a cut, whose
+//! nodes were duplicated in place, do collide (unless a corner of the triangle shares a tet
+//! with the vertex: the cut's own end). The far side of a wall is farther than `1.5 h` at rest
+//! (a wall is at least one tet, about four `h`, thick), but a vertex is never held against a
+//! triangle it starts the substep *behind* when a corner of the triangle shares a tet with it
+//! (the inside of a thin wall, which the material keeps from inverting) or when it was within
+//! `2h` of it at rest (a vertex just below a sharp convex edge is behind the faces across the
+//! edge). A vertex that starts behind a triangle it was farther from at rest came through it,
+//! and is pushed back out (see `h'` below). Pairs farther apart at rest (a crease folding the
+//! surface into itself three edges away, a flap laid on its base, a wound's walls) are held
+//! apart. A body at rest has no active self-contact (`tests/it/selfcol.rs`, the bunny).
 //!
 //! ## Constraint
 //! With the triangle's corners `a, b, c`, the barycentric weights `(u, v, w)` of the closest
@@ -50,8 +52,9 @@
 //! iteration after the body's own constraints (material, sutures, floor) and before the tool
 //! and collider contacts, which thus have the last word (tools, pins and the tray hold). Serial,
 //! in a fixed order (surface vertices in increasing index, triangles in the hierarchy's order):
-//! the same for any thread count. No allocation in a step after the first (the buffers grow to
-//! their high-water mark and are kept).
+//! the same for any thread count (`tests/it/selfcol.rs`). No allocation in a step after the
+//! one that builds the surface (the buffers are reserved then: at most eight contacts per
+//! surface vertex and substep, the rest dropped and counted, `tests/no_allocation.rs`).
 //!
 //! Edge–edge proximity is not handled (a known gap: two edges can cross between vertices held
 //! apart when the thickness is small against the edges).
@@ -148,6 +151,8 @@ pub(crate) struct SelfState {
     ws: BvhWorkspace,
     candidates: Vec<u32>,
     contacts: Vec<SelfContact>,
+    /// Contacts found past the buffer's capacity this substep (not projected).
+    dropped: usize,
 }
 
 impl SelfState {
@@ -240,30 +245,69 @@ impl SelfState {
             .resize(self.triangles.len(), Aabb::from_point(Vec3A::ZERO));
         self.bvh = None;
         self.contacts.clear();
+        // The step's buffers at their largest, so that no step allocates (`MAX_CONTACTS_PER_VERTEX`).
+        let most = MAX_CONTACTS_PER_VERTEX * self.vertices.len();
+        self.contacts
+            .reserve(most.saturating_sub(self.contacts.len()));
+        self.candidates
+            .reserve(self.triangles.len().saturating_sub(self.candidates.len()));
         self.stale = false;
     }
 
+    /// The tet one-ring of surface vertex `k`.
+    fn ring(&self, k: usize) -> &[u32] {
+        &self.neighbours[self.start[k] as usize..self.start[k + 1] as usize]
+    }
+
     /// How the surface vertex `k` (node `v`) stands to triangle `t`: `None` when it must not be
-    /// held against it (`t` has `v` as a corner, or `t` is a rest neighbour: a corner shares a
-    /// tet with `v` and `t` was within `h` of `v` at rest; `rest`: rest positions), else
-    /// `Some(ring)`, whether a corner shares a tet with `v`.
-    fn relation(&self, k: usize, v: u32, t: [u32; 3], rest: &[Vec3A], h: f32) -> Option<bool> {
+    /// held against it, else `Some((ring, d))`: whether a corner of `t` shares a tet with `v`,
+    /// and their rest distance `d` (`rest`: rest positions). Excluded: `t` has `v` as a corner;
+    /// `t` was within `1.5 h` of `v` at rest (rest neighbours: the vertex's surface fan and its
+    /// surroundings, a sliver's far corner) unless they coincided at rest (`d < 10⁻⁴ h`: the two
+    /// walls of a cut, made from one place), in which case only if a corner shares a tet with
+    /// `v` (the cut's own end).
+    fn relation(
+        &self,
+        k: usize,
+        v: u32,
+        t: [u32; 3],
+        rest: &[Vec3A],
+        h: f32,
+    ) -> Option<(bool, f32)> {
         if t.contains(&v) {
             return None;
         }
-        let ring = &self.neighbours[self.start[k] as usize..self.start[k + 1] as usize];
-        if !t.iter().any(|c| ring.binary_search(c).is_ok()) {
-            return Some(false);
-        }
+        let ring = self.ring(k);
+        let near = t.iter().any(|c| ring.binary_search(c).is_ok());
         let at = |i: u32| rest.get(i as usize).copied().unwrap_or(Vec3A::ZERO);
         let (q, _) = closest_point_on_triangle(at(v), at(t[0]), at(t[1]), at(t[2]));
-        if q.distance(at(v)) < h {
-            None
-        } else {
-            Some(true)
+        let d = q.distance(at(v));
+        if d >= REST_NEIGHBOUR * h {
+            return Some((near, d));
         }
+        if d < TWIN * h && !near {
+            return Some((false, d));
+        }
+        None
     }
 }
+
+/// Pairs nearer than this many `h` at rest are rest neighbours (excluded).
+const REST_NEIGHBOUR: f32 = 1.5;
+
+/// Pairs nearer than this many `h` at rest coincided at rest: the two walls of a cut.
+const TWIN: f32 = 1e-4;
+
+/// At most this many contacts per surface vertex and substep on average: the contact buffer is
+/// reserved for them when the surface is built, and a substep's contacts past it are dropped
+/// (counted by [`SoftBody::self_contacts_dropped`], never projected), so that a
+/// step never allocates. A vertex has one to three contacts where a surface rests on another.
+const MAX_CONTACTS_PER_VERTEX: usize = 8;
+
+/// How far (a fraction of `h`) the vertex may be off the normal through its closest point on
+/// the triangle: mostly held by the triangles it lies over, also by those whose edge or corner
+/// is within `h` sideways (a vertex of one grid over the edges of another must not slip through).
+const LATERAL: f32 = 1.0;
 
 /// The fraction of `h` by which a vertex nearer than `h` to a triangle (or behind it) at the
 /// start of a substep is pushed back per substep: the gap is restored over a few substeps
@@ -321,6 +365,12 @@ impl SoftBody {
         )
     }
 
+    /// Self-contacts found in the last substep past the buffer's capacity (eight per surface
+    /// vertex), hence not projected: 0 unless the surface is badly tangled.
+    pub fn self_contacts_dropped(&self) -> usize {
+        self.self_collision.dropped
+    }
+
     /// The surface's triangles as self-collision sees them (the faces used by one tet only,
     /// wound outward; caller's node indices). Computes them (allocates).
     pub fn surface_triangles(&self) -> Vec<[u32; 3]> {
@@ -341,6 +391,7 @@ impl SoftBody {
             st.rebuild(&self.tets, &self.edits.rest_x);
         }
         st.contacts.clear();
+        st.dropped = 0;
         let Some(h) = st.thickness else {
             return;
         };
@@ -386,7 +437,8 @@ impl SoftBody {
             );
             for &ti in &st.candidates {
                 let t = st.triangles[ti as usize];
-                let Some(ring) = st.relation(k, v, t, &self.edits.rest_x, h) else {
+                let Some((ring, rest_distance)) = st.relation(k, v, t, &self.edits.rest_x, h)
+                else {
                     continue;
                 };
                 let [a0, a1, a2] = t.map(|i| x[i as usize]);
@@ -408,16 +460,23 @@ impl SoftBody {
                 if along >= h + reach || along < -reach - h {
                     continue;
                 }
-                if (d - n * along).length() > h {
+                if (d - n * along).length() > LATERAL * h {
                     continue;
                 }
                 let slots = [v, t[0], t[1], t[2]].map(|i| rank[i as usize]);
                 if slots.iter().all(|&s| q[s as usize].w <= 0.0) {
                     continue;
                 }
+                if st.contacts.len() == st.contacts.capacity() {
+                    st.dropped += 1;
+                    continue;
+                }
                 let start = n.dot(xv - (a0 * bary[0] + a1 * bary[1] + a2 * bary[2]));
-                if ring && start < 0.0 {
-                    // Behind a tet neighbour's face: inside a thin wall, not through it.
+                if start < 0.0 && (ring || (rest_distance >= TWIN * h && rest_distance < 2.0 * h)) {
+                    // Behind a tet neighbour's face (inside a thin wall, not through it), or
+                    // behind a face it was near at rest (beside a sharp convex edge): the
+                    // material's business. Only a vertex that came through from afar is pushed
+                    // back out.
                     continue;
                 }
                 st.contacts.push(SelfContact {

@@ -14,7 +14,7 @@ use tissue_pbd::{
 /// (centre line `y = 0`, `x < −0.5`), a half loop of centre-line radius 0.6 cm, and its upper
 /// arm back over the lower one, 0.8 cm above it (its underside at `y = 1.0`, `x` from −0.5 to
 /// −2.1). `t` is the coordinate across the slab (+0.2 the inside of the U).
-fn folded_slab() -> TetMesh {
+pub fn folded_slab() -> TetMesh {
     let (positions, tets) = tet_box(30, 2, 5, Vec3::new(6.0, 0.4, 1.0))
         .unwrap()
         .into_parts();
@@ -109,4 +109,135 @@ fn a_folded_slab_pressed_onto_itself_does_not_pass_through_itself() {
         upper > lower && upper < lower + 0.15,
         "upper {upper} lower {lower} h {h}"
     );
+}
+
+/// The U falling onto itself, 20 steps, on a pool of `threads`: the bits of the positions.
+fn fall(parallel: bool, threads: usize) -> Vec<u32> {
+    let mut body = SoftBody::new(&folded_slab(), &Material::soft_tissue()).unwrap();
+    body.set_settings(StepSettings {
+        parallel,
+        ..StepSettings::realtime()
+    })
+    .unwrap();
+    body.set_floor(Some(Floor::y(-0.2))).unwrap();
+    body.set_self_collision(Some(SelfCollision::default()))
+        .unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        for _ in 0..20 {
+            body.step().unwrap();
+        }
+    });
+    assert!(body.self_contact_counts().1 > 0);
+    body.positions()
+        .iter()
+        .flat_map(|p| p.to_array().map(f32::to_bits))
+        .collect()
+}
+
+#[test]
+fn self_collision_is_bit_identical_in_parallel_and_serial() {
+    let serial = fall(false, 1);
+    for threads in [1, 2, 3] {
+        assert!(fall(true, threads) == serial, "{threads} threads differ");
+    }
+}
+
+#[test]
+fn a_body_at_rest_has_no_active_self_contact() {
+    // The bunny (10 cm), held still: every pair within reach at rest is a rest neighbour or
+    // stays clear, so self-collision moves nothing.
+    let mesh = crate::common::bunny();
+    let mut body = SoftBody::new(&mesh, &Material::soft_tissue()).unwrap();
+    body.set_settings(StepSettings {
+        gravity: Vec3::ZERO,
+        ..StepSettings::realtime()
+    })
+    .unwrap();
+    body.set_self_collision(Some(SelfCollision::default()))
+        .unwrap();
+    let before = body.positions().to_vec();
+    body.step().unwrap();
+    assert_eq!(body.self_contact_counts().1, 0);
+    assert_eq!(body.self_contacts_dropped(), 0);
+    let moved = body
+        .positions()
+        .iter()
+        .zip(&before)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0f32, f32::max);
+    assert!(moved < 1e-5, "{moved}");
+    let tris = body.surface_triangles();
+    assert_eq!(
+        count_intersecting_pairs(body.positions(), &tris).unwrap(),
+        0
+    );
+}
+
+#[test]
+fn the_walls_of_a_cut_collide() {
+    // A cut through the slab's middle (x = 0) by duplicating the nodes of the plane and moving
+    // the tets on the right onto the copies: two walls at the same place, which share no tet.
+    // Pushed into each other (the right piece moved left through the left one by its pinned
+    // far end), they stay apart with self-collision on, and pass through each other without.
+    let run = |on: bool| {
+        let mesh = tet_box(30, 2, 5, Vec3::new(6.0, 0.4, 1.0)).unwrap();
+        let mut body = SoftBody::new(&mesh, &Material::soft_tissue()).unwrap();
+        body.set_settings(StepSettings {
+            gravity: Vec3::ZERO,
+            ..StepSettings::realtime()
+        })
+        .unwrap();
+        if on {
+            body.set_self_collision(Some(SelfCollision::default()))
+                .unwrap();
+        }
+        let x: Vec<Vec3A> = body.positions().to_vec();
+        let plane: Vec<u32> = (0..x.len() as u32)
+            .filter(|&i| x[i as usize].x.abs() < 1e-4)
+            .collect();
+        let first = body.duplicate_nodes(&plane).unwrap();
+        let copy = |n: u32| {
+            plane
+                .iter()
+                .position(|&p| p == n)
+                .map_or(n, |k| first + k as u32)
+        };
+        for t in 0..body.tets().len() {
+            let tet = body.tets()[t];
+            let c = tet
+                .map(|n| x.get(n as usize).copied().unwrap_or(Vec3A::ZERO))
+                .iter()
+                .fold(Vec3A::ZERO, |a, b| a + *b)
+                / 4.0;
+            if c.x > 0.0 {
+                body.set_tet_nodes(t, tet.map(copy)).unwrap();
+            }
+        }
+        // Pin the far ends; drive the right one 0.3 cm left over 60 steps.
+        let mut ids = Vec::new();
+        for i in 0..body.node_count() as u32 {
+            let p = body.positions()[i as usize];
+            if p.x < -2.9 {
+                body.pin(i).unwrap();
+            } else if p.x > 2.9 {
+                ids.push((body.attach(i, p.into()).unwrap(), Vec3::from(p)));
+            }
+        }
+        for s in 1..=60 {
+            for &(id, p) in &ids {
+                body.set_attachment_target(id, p - Vec3::X * 0.3 * s as f32 / 60.0)
+                    .unwrap();
+            }
+            body.step().unwrap();
+        }
+        let tris = body.surface_triangles();
+        count_intersecting_pairs(body.positions(), &tris).unwrap()
+    };
+    let without = run(false);
+    assert!(without > 0, "{without}");
+    assert_eq!(run(true), 0);
 }
