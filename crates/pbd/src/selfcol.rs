@@ -14,24 +14,22 @@
 //! (fixed when the surface is first built, kept through cuts; 0.25 by default, i.e. 1 mm on a
 //! mesh of 4 mm edges). A vertex gets a contact with a triangle for the substep when its
 //! predicted position lies within `h + h` (thickness plus an equal detection band) in front of
-//! the triangle's plane or behind it, over the triangle (the closest point on the triangle at
-//! most `h` off the normal through the vertex), and it started the substep at most `h` behind
+//! the triangle's plane or behind it, over the triangle (the vertex within a 45° cone about the
+//! normal through its closest point on the triangle, `LATERAL`), and it started the substep at most `h` behind
 //! the triangle (so only a vertex coming from the triangle's outer side is held there).
 //!
 //! ## Exclusion (rest neighbours)
-//! A vertex is never held against a triangle that has it as a corner, nor against one that is
-//! its rest neighbour: within `1.5 h` of it at rest (its surface fan and surroundings, the far
-//! corner of a sliver), except when the two coincided at rest: the two walls of a cut, whose
-//! nodes were duplicated in place, do collide (unless a corner of the triangle shares a tet
-//! with the vertex: the cut's own end). The far side of a wall is farther than `1.5 h` at rest
-//! (a wall is at least one tet, about four `h`, thick), but a vertex is never held against a
-//! triangle it starts the substep *behind* when a corner of the triangle shares a tet with it
-//! (the inside of a thin wall, which the material keeps from inverting) or when it was within
-//! `2h` of it at rest (a vertex just below a sharp convex edge is behind the faces across the
-//! edge). A vertex that starts behind a triangle it was farther from at rest came through it,
-//! and is pushed back out (see `h'` below). Pairs farther apart at rest (a crease folding the
-//! surface into itself three edges away, a flap laid on its base, a wound's walls) are held
-//! apart. A body at rest has no active self-contact (`tests/it/selfcol.rs`, the bunny).
+//! A vertex is never held against a triangle that has it as a corner or a corner sharing a tet
+//! with it (its one-ring in the tet mesh: the surface fan around it, the fan's neighbours across
+//! short edges of an irregular mesh, the far side of a one-tet-thick wall), nor against one
+//! within `1.5 h` of it at rest (a sliver's far corner), except when the two coincided at rest:
+//! the two walls of a cut, whose nodes were duplicated in place and share no tet, do collide.
+//! A vertex is not held against a triangle it starts the substep *behind* if it was within `2h`
+//! of it at rest (a vertex just below a sharp convex edge is behind the faces across the edge);
+//! one that starts behind a triangle it was farther from at rest came through it, and is pushed
+//! back out (see `h'` below). Pairs farther apart at rest (a crease folding the surface into
+//! itself three edges away, a flap laid on its base, a wound's walls) are held apart. A body at
+//! rest has no active self-contact (`tests/it/selfcol.rs`, the bunny).
 //!
 //! ## Constraint
 //! With the triangle's corners `a, b, c`, the barycentric weights `(u, v, w)` of the closest
@@ -260,12 +258,13 @@ impl SelfState {
     }
 
     /// How the surface vertex `k` (node `v`) stands to triangle `t`: `None` when it must not be
-    /// held against it, else `Some((ring, d))`: whether a corner of `t` shares a tet with `v`,
-    /// and their rest distance `d` (`rest`: rest positions). Excluded: `t` has `v` as a corner;
-    /// `t` was within `1.5 h` of `v` at rest (rest neighbours: the vertex's surface fan and its
-    /// surroundings, a sliver's far corner) unless they coincided at rest (`d < 10⁻⁴ h`: the two
-    /// walls of a cut, made from one place), in which case only if a corner shares a tet with
-    /// `v` (the cut's own end).
+    /// held against it, else `Some((ring, d))`: whether a corner of `t` shares a tet with `v`
+    /// (always `false`: such triangles are excluded), and their rest distance `d` (`rest`: rest
+    /// positions). Excluded: `t` has `v` as a corner, or a corner sharing a tet with `v` (its
+    /// tet one-ring: on an irregular mesh a short edge puts a fan neighbour's far side within
+    /// `h`); `t` was within `1.5 h` of `v` at rest (rest neighbours further out, a sliver's far
+    /// corner) unless they coincided at rest (`d < 10⁻⁴ h`: the two walls of a cut, made from
+    /// one place).
     fn relation(
         &self,
         k: usize,
@@ -279,6 +278,9 @@ impl SelfState {
         }
         let ring = self.ring(k);
         let near = t.iter().any(|c| ring.binary_search(c).is_ok());
+        if near {
+            return None;
+        }
         let at = |i: u32| rest.get(i as usize).copied().unwrap_or(Vec3A::ZERO);
         let (q, _) = closest_point_on_triangle(at(v), at(t[0]), at(t[1]), at(t[2]));
         let d = q.distance(at(v));
@@ -304,9 +306,12 @@ const TWIN: f32 = 1e-4;
 /// step never allocates. A vertex has one to three contacts where a surface rests on another.
 const MAX_CONTACTS_PER_VERTEX: usize = 8;
 
-/// How far (a fraction of `h`) the vertex may be off the normal through its closest point on
-/// the triangle: mostly held by the triangles it lies over, also by those whose edge or corner
-/// is within `h` sideways (a vertex of one grid over the edges of another must not slip through).
+/// How far the vertex may be off the normal through its closest point on the triangle, as a
+/// fraction of its distance along the normal (1: a 45° cone around the normal over the
+/// triangle's edges): held by the triangles it lies over or just beside (a vertex of one grid
+/// over the edges of another must not slip through), never by a triangle beside it in its own
+/// plane (a flattened surface, such as an organ's base on the tray, is not in contact with
+/// itself).
 const LATERAL: f32 = 1.0;
 
 /// The fraction of `h` by which a vertex nearer than `h` to a triangle (or behind it) at the
@@ -460,7 +465,7 @@ impl SoftBody {
                 if along >= h + reach || along < -reach - h {
                     continue;
                 }
-                if (d - n * along).length() > LATERAL * h {
+                if (d - n * along).length() > LATERAL * along.abs() {
                     continue;
                 }
                 let slots = [v, t[0], t[1], t[2]].map(|i| rank[i as usize]);

@@ -241,3 +241,77 @@ fn the_walls_of_a_cut_collide() {
     assert!(without > 0, "{without}");
     assert_eq!(run(true), 0);
 }
+
+/// The cost of self-collision on the bench's bunny (42k tets, 10 cm) in the real-time preset
+/// (9 substeps, parallel), weightless (or, with `SELFCOST_FLOOR` set, falling onto a floor):
+/// median step time on and off, interleaved in one run. A measurement, not a check (timing depends on the machine): run it with
+/// `cargo test --release -p tissue-pbd --test it -- --ignored --nocapture selfcol::cost`.
+#[test]
+#[ignore = "a timing measurement; run by hand"]
+fn cost_on_the_bunny() {
+    let stem = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/bunny_10k_tet42k"
+    );
+    let data = tissue_meshio::read_tetgen(stem).unwrap();
+    let mesh = TetMesh::new(
+        data.positions.iter().map(|p| *p * 10.0).collect(),
+        data.tets,
+    )
+    .unwrap();
+    let squash = std::env::var("SELFCOST_FLOOR").is_ok();
+    let make = |on: bool| {
+        let mut body = SoftBody::new(&mesh, &Material::soft_tissue()).unwrap();
+        body.set_settings(StepSettings {
+            parallel: true,
+            // Weightless unless asked: the cost measured is that of the detection (refit,
+            // queries) on a body whose surface stays clear of itself.
+            gravity: if squash {
+                Vec3::new(0.0, -981.0, 0.0)
+            } else {
+                Vec3::ZERO
+            },
+            ..StepSettings::realtime()
+        })
+        .unwrap();
+        let low = mesh
+            .positions()
+            .iter()
+            .map(|p| p.y)
+            .fold(f32::MAX, f32::min);
+        if squash {
+            body.set_floor(Some(Floor::y(low - 0.2))).unwrap();
+        }
+        if on {
+            body.set_self_collision(Some(SelfCollision::default()))
+                .unwrap();
+        }
+        for _ in 0..5 {
+            body.step().unwrap();
+        }
+        body
+    };
+    let (mut on, mut off) = (make(true), make(false));
+    let (mut t_on, mut t_off) = (Vec::new(), Vec::new());
+    for _ in 0..10 {
+        for (body, times) in [(&mut off, &mut t_off), (&mut on, &mut t_on)] {
+            for _ in 0..10 {
+                let t = std::time::Instant::now();
+                body.step().unwrap();
+                times.push(t.elapsed().as_secs_f64() * 1e3);
+            }
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (a, b) = (median(&mut t_off), median(&mut t_on));
+    eprintln!(
+        "bunny {} tets, {} surface triangles: step median off {a:.2} ms, on {b:.2} ms (+{:.0} %), self-contacts {:?}",
+        mesh.tet_count(),
+        on.surface_triangles().len(),
+        100.0 * (b / a - 1.0),
+        on.self_contact_counts()
+    );
+}
