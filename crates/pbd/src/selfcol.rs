@@ -7,7 +7,7 @@
 //! are in it: a cut duplicates nodes and gives the two walls distinct faces), wound outward
 //! ([`tissue_mesh::TET_FACES`] on positively oriented tets). Rebuilt, with its hierarchy, after
 //! any topology edit (`duplicate_nodes`, `set_tet_nodes`, `add_tet`: that step allocates);
-//! otherwise the hierarchy over the triangles' swept boxes is refit every substep.
+//! otherwise the hierarchy over the triangles' swept boxes is refit every step.
 //!
 //! ## Thickness and detection
 //! `h` = [`SelfCollision::thickness_fraction`] × the mean rest length of the surface's edges
@@ -46,7 +46,11 @@
 //! otherwise reduced by what `μ_k` times it allows.
 //!
 //! ## Place in the step and determinism
-//! Generated once per substep after the tool and collider contacts; projected in every
+//! Broad phase once per step, in its first substep (the hierarchy refit over boxes swept over
+//! the whole step: the first substep's motion extrapolated over the step's substeps, grown by
+//! the detection reach `2h`; one query per surface vertex; rest neighbours dropped),
+//! narrow phase (the tests above) on those pairs in every substep, after the tool and collider
+//! contacts; projected in every
 //! iteration after the body's own constraints (material, sutures, floor) and before the tool
 //! and collider contacts, which thus have the last word (tools, pins and the tray hold). Serial,
 //! in a fixed order (surface vertices in increasing index, triangles in the hierarchy's order):
@@ -113,6 +117,15 @@ impl SelfCollision {
     }
 }
 
+/// A vertex–triangle pair of the step's broad phase, not a rest neighbour.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    vertex: u32,
+    triangle: u32,
+    ring: bool,
+    rest_distance: f32,
+}
+
 /// One vertex–triangle contact of the current substep.
 #[derive(Debug, Clone, Copy)]
 struct SelfContact {
@@ -148,6 +161,10 @@ pub(crate) struct SelfState {
     bvh: Option<Bvh>,
     ws: BvhWorkspace,
     candidates: Vec<u32>,
+    /// The step's broad-phase pairs (`MAX_PAIRS_PER_VERTEX` per surface vertex at most).
+    pairs: Vec<Candidate>,
+    /// Broad-phase pairs found past `pairs`' capacity this step (not tested).
+    dropped_pairs: usize,
     contacts: Vec<SelfContact>,
     /// Contacts found past the buffer's capacity this substep (not projected).
     dropped: usize,
@@ -249,6 +266,9 @@ impl SelfState {
             .reserve(most.saturating_sub(self.contacts.len()));
         self.candidates
             .reserve(self.triangles.len().saturating_sub(self.candidates.len()));
+        self.pairs.clear();
+        self.pairs
+            .reserve(MAX_PAIRS_PER_VERTEX * self.vertices.len());
         self.stale = false;
     }
 
@@ -314,6 +334,10 @@ const MAX_CONTACTS_PER_VERTEX: usize = 8;
 /// itself).
 const LATERAL: f32 = 1.0;
 
+/// At most this many broad-phase pairs per surface vertex and step on average (reserved when
+/// the surface is built; past it, pairs are dropped and counted).
+const MAX_PAIRS_PER_VERTEX: usize = 64;
+
 /// The fraction of `h` by which a vertex nearer than `h` to a triangle (or behind it) at the
 /// start of a substep is pushed back per substep: the gap is restored over a few substeps
 /// instead of in one (a push of `h` in one substep of `Δt/9` would be a velocity of `9h/Δt`,
@@ -371,9 +395,10 @@ impl SoftBody {
     }
 
     /// Self-contacts found in the last substep past the buffer's capacity (eight per surface
-    /// vertex), hence not projected: 0 unless the surface is badly tangled.
+    /// vertex), plus the step's broad-phase pairs past theirs (64 per surface vertex),
+    /// hence not tested or projected: 0 unless the surface is badly tangled.
     pub fn self_contacts_dropped(&self) -> usize {
-        self.self_collision.dropped
+        self.self_collision.dropped + self.self_collision.dropped_pairs
     }
 
     /// The surface's triangles as self-collision sees them (the faces used by one tet only,
@@ -386,7 +411,7 @@ impl SoftBody {
 
     /// Generates this substep's self-contacts from the start positions `x` and the predictions
     /// in `q` (after the prediction, step.rs).
-    pub(crate) fn generate_self_contacts(&mut self) {
+    pub(crate) fn generate_self_contacts(&mut self, first: bool) {
         if self.self_collision.config.is_none() {
             return;
         }
@@ -406,94 +431,122 @@ impl SoftBody {
         let reach = 2.0 * h;
         let (x, q, rank) = (&self.x, &self.q, &self.rank);
         let predicted = |i: u32| point(q, rank[i as usize]);
-        for (b, t) in st.boxes.iter_mut().zip(&st.triangles) {
-            let [a0, a1, a2] = t.map(|i| x[i as usize]);
-            let [b0, b1, b2] = t.map(predicted);
-            *b = Aabb::from_triangle(a0, a1, a2)
-                .union(&Aabb::from_triangle(b0, b1, b2))
-                .expanded(reach);
-        }
-        let ok = match &mut st.bvh {
-            Some(bvh) => bvh.refit(st.boxes.as_slice()).is_ok(),
-            None => false,
-        };
-        if !ok {
-            match Bvh::build(st.boxes.as_slice(), &BuildOptions::default()) {
-                Ok(bvh) => st.bvh = Some(bvh),
-                Err(_) => {
-                    // Non-finite positions: the step reports the divergence.
-                    st.bvh = None;
-                    return;
-                }
-            }
-        }
-        let Some(bvh) = &st.bvh else {
-            return;
-        };
-        for (k, &v) in st.vertices.iter().enumerate() {
-            let (xv, pv) = (x[v as usize], predicted(v));
-            let probe = Aabb::from_segment(xv, pv);
-            bvh.overlapping_primitives(
-                st.boxes.as_slice(),
-                &probe,
-                0.0,
-                &mut st.ws,
-                &mut st.candidates,
-            );
-            for &ti in &st.candidates {
-                let t = st.triangles[ti as usize];
-                let Some((ring, rest_distance)) = st.relation(k, v, t, &self.edits.rest_x, h)
-                else {
-                    continue;
-                };
+        if first || st.bvh.is_none() {
+            // The broad phase, once per step: every (vertex, triangle) whose boxes over the
+            // whole step (the first substep's motion extrapolated over the step's substeps,
+            // the triangle's grown by the detection reach `2h`) overlap, rest neighbours left
+            // out.
+            let ahead = self.settings.substeps.max(1) as f32;
+            let far = |i: u32| {
+                let x0 = x[i as usize];
+                x0 + (predicted(i) - x0) * ahead
+            };
+            for (b, t) in st.boxes.iter_mut().zip(&st.triangles) {
                 let [a0, a1, a2] = t.map(|i| x[i as usize]);
-                let n = (a1 - a0).cross(a2 - a0);
-                let len = n.length();
-                if len <= 0.0 || !len.is_finite() {
-                    continue;
-                }
-                let n = n / len;
-                // Started on the outer side (at most h behind the plane).
-                let (q0, _) = closest_point_on_triangle(xv, a0, a1, a2);
-                if n.dot(xv - q0) < -h {
-                    continue;
-                }
-                let [b0, b1, b2] = t.map(predicted);
-                let (q1, bary) = closest_point_on_triangle(pv, b0, b1, b2);
-                let d = pv - q1;
-                let along = n.dot(d);
-                if along >= h + reach || along < -reach - h {
-                    continue;
-                }
-                if (d - n * along).length() > LATERAL * along.abs() {
-                    continue;
-                }
-                let slots = [v, t[0], t[1], t[2]].map(|i| rank[i as usize]);
-                if slots.iter().all(|&s| q[s as usize].w <= 0.0) {
-                    continue;
-                }
-                if st.contacts.len() == st.contacts.capacity() {
-                    st.dropped += 1;
-                    continue;
-                }
-                let start = n.dot(xv - (a0 * bary[0] + a1 * bary[1] + a2 * bary[2]));
-                if start < 0.0 && (ring || (rest_distance >= TWIN * h && rest_distance < 2.0 * h)) {
-                    // Behind a tet neighbour's face (inside a thin wall, not through it), or
-                    // behind a face it was near at rest (beside a sharp convex edge): the
-                    // material's business. Only a vertex that came through from afar is pushed
-                    // back out.
-                    continue;
-                }
-                st.contacts.push(SelfContact {
-                    slots,
-                    nodes: [v, t[0], t[1], t[2]],
-                    bary,
-                    normal: n,
-                    target: h.min(start + RECOVERY * h),
-                    normal_correction: 0.0,
-                    friction_correction: 0.0,
-                });
+                let [b0, b1, b2] = t.map(far);
+                *b = Aabb::from_triangle(a0, a1, a2)
+                    .union(&Aabb::from_triangle(b0, b1, b2))
+                    .expanded(reach);
             }
+            let ok = match &mut st.bvh {
+                Some(bvh) => bvh.refit(st.boxes.as_slice()).is_ok(),
+                None => false,
+            };
+            if !ok {
+                match Bvh::build(st.boxes.as_slice(), &BuildOptions::default()) {
+                    Ok(bvh) => st.bvh = Some(bvh),
+                    Err(_) => {
+                        // Non-finite positions: the step reports the divergence.
+                        st.bvh = None;
+                        return;
+                    }
+                }
+            }
+            let Some(bvh) = &st.bvh else {
+                return;
+            };
+            st.pairs.clear();
+            st.dropped_pairs = 0;
+            for (k, &v) in st.vertices.iter().enumerate() {
+                let probe = Aabb::from_segment(x[v as usize], far(v));
+                bvh.overlapping_primitives(
+                    st.boxes.as_slice(),
+                    &probe,
+                    0.0,
+                    &mut st.ws,
+                    &mut st.candidates,
+                );
+                for &ti in &st.candidates {
+                    let t = st.triangles[ti as usize];
+                    let Some((ring, rest_distance)) = st.relation(k, v, t, &self.edits.rest_x, h)
+                    else {
+                        continue;
+                    };
+                    if st.pairs.len() == st.pairs.capacity() {
+                        st.dropped_pairs += 1;
+                        continue;
+                    }
+                    st.pairs.push(Candidate {
+                        vertex: v,
+                        triangle: ti,
+                        ring,
+                        rest_distance,
+                    });
+                }
+            }
+        }
+        // The narrow phase, every substep, on the step's candidates.
+        for c in &st.pairs {
+            let (v, t) = (c.vertex, st.triangles[c.triangle as usize]);
+            let (xv, pv) = (x[v as usize], predicted(v));
+            let [a0, a1, a2] = t.map(|i| x[i as usize]);
+            let n = (a1 - a0).cross(a2 - a0);
+            let len = n.length();
+            if len <= 0.0 || !len.is_finite() {
+                continue;
+            }
+            let n = n / len;
+            // Started on the outer side (at most h behind the plane).
+            let (q0, _) = closest_point_on_triangle(xv, a0, a1, a2);
+            if n.dot(xv - q0) < -h {
+                continue;
+            }
+            let [b0, b1, b2] = t.map(predicted);
+            let (q1, bary) = closest_point_on_triangle(pv, b0, b1, b2);
+            let d = pv - q1;
+            let along = n.dot(d);
+            if along >= h + reach || along < -reach - h {
+                continue;
+            }
+            if (d - n * along).length() > LATERAL * along.abs() {
+                continue;
+            }
+            let slots = [v, t[0], t[1], t[2]].map(|i| rank[i as usize]);
+            if slots.iter().all(|&s| q[s as usize].w <= 0.0) {
+                continue;
+            }
+            if st.contacts.len() == st.contacts.capacity() {
+                st.dropped += 1;
+                continue;
+            }
+            let start = n.dot(xv - (a0 * bary[0] + a1 * bary[1] + a2 * bary[2]));
+            let rest_distance = c.rest_distance;
+            if start < 0.0 && (c.ring || (rest_distance >= TWIN * h && rest_distance < 2.0 * h)) {
+                // Behind a tet neighbour's face (inside a thin wall, not through it), or
+                // behind a face it was near at rest (beside a sharp convex edge): the
+                // material's business. Only a vertex that came through from afar is pushed
+                // back out.
+                continue;
+            }
+            st.contacts.push(SelfContact {
+                slots,
+                nodes: [v, t[0], t[1], t[2]],
+                bary,
+                normal: n,
+                target: h.min(start + RECOVERY * h),
+                normal_correction: 0.0,
+                friction_correction: 0.0,
+            });
         }
     }
 

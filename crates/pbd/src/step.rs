@@ -355,7 +355,7 @@ impl SoftBody {
         // Contacts with colliders and tools for the predictions (contact.rs).
         self.generate_contacts(dt, first);
         // Self-contacts of the surface (selfcol.rs).
-        self.generate_self_contacts();
+        self.generate_self_contacts(first);
         if self.pieces.enabled && last {
             // The pieces' volumes are projected in the step's last substep (contact.rs): the
             // nodes the colliders, tools and attachments hold in it.
