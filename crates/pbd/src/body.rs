@@ -96,6 +96,8 @@ pub struct SoftBody {
     pub(crate) edits: crate::edit::Edits,
     /// The connected pieces and their volume constraints (`pieces.rs`).
     pub(crate) pieces: crate::pieces::Pieces,
+    /// Self-collision of the surface (`selfcol.rs`).
+    pub(crate) self_collision: crate::selfcol::SelfState,
 }
 
 /// The identity of a [`SoftBody`] ([`SoftBody::id`]): a process-unique number given at
@@ -503,6 +505,7 @@ impl SoftBody {
             floor: None,
             attachments: Default::default(),
             collision: Default::default(),
+            self_collision: Default::default(),
             settings: StepSettings::default(),
             step_count: 0,
             rest_volume,

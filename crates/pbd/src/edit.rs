@@ -471,6 +471,7 @@ impl SoftBody {
             let s = s as usize;
             let i = self.x.len() as u32;
             self.pieces.stale = true;
+            self.self_collision.stale = true;
             self.pieces.split.push(s as u32);
             self.pieces.split.push(self.x.len() as u32);
             self.x.push(self.x[s]);
@@ -973,6 +974,7 @@ impl SoftBody {
             }
         }
         self.pieces.stale = true;
+        self.self_collision.stale = true;
         if let Some((volume, _)) = rest {
             self.edits.tet_rest[t] = volume;
         }
@@ -1070,6 +1072,7 @@ impl SoftBody {
         }
         self.tets.push(nodes);
         self.pieces.stale = true;
+        self.self_collision.stale = true;
         self.edits.tet_rest.push(volume);
         self.edits.tet_slot.push(ConstraintSlot::Removed);
         match self.volume_kind {

@@ -194,8 +194,10 @@ mod error;
 mod force;
 mod geometry;
 mod haptic;
+mod intersect;
 mod partition;
 mod pieces;
+mod selfcol;
 mod settings;
 mod step;
 mod tool;
@@ -212,6 +214,11 @@ pub use edit::ConstraintSlot;
 pub use error::{PbdError, PbdParam};
 pub use force::DYN_PER_NEWTON;
 pub use haptic::{ContactForceModel, ModelContact, StiffnessEstimator};
+pub use intersect::{
+    count_intersecting_pairs, intersecting_pairs, intersecting_pairs_brute_force,
+    triangles_intersect,
+};
+pub use selfcol::SelfCollision;
 pub use settings::{Elastic, Material, Solver, StepSettings, VolumeConstraintKind};
 pub use tool::{Pose, Tool, ToolShape};
 pub use voxel::{ColliderShape, OrientedBox, VoxelCollider, MAX_COLLIDER_CORNERS};

@@ -354,6 +354,8 @@ impl SoftBody {
         }
         // Contacts with colliders and tools for the predictions (contact.rs).
         self.generate_contacts(dt, first);
+        // Self-contacts of the surface (selfcol.rs).
+        self.generate_self_contacts(first);
         if self.pieces.enabled && last {
             // The pieces' volumes are projected in the step's last substep (contact.rs): the
             // nodes the colliders, tools and attachments hold in it.
@@ -385,6 +387,8 @@ impl SoftBody {
                 } else {
                     self.project_once::<false>();
                 }
+                // Self-contacts after the body's own constraints (selfcol.rs).
+                self.project_self_contacts();
                 // Contacts last, so that the positions of each iteration satisfy them (contact.rs).
                 self.project_contacts();
             }

@@ -10,6 +10,8 @@ mod edit;
 mod elastic;
 mod errors;
 mod force;
+mod intersect;
 mod parallel;
 mod physics;
 mod presets;
+mod selfcol;
