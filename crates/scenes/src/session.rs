@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use glam::{Mat3, Quat, Vec3, Vec3A};
 use tissue_pbd::{
-    ContactForceModel, ContactParams, Material, Pose, SoftBody, StepSettings, StiffnessEstimator,
-    ToolShape, DYN_PER_NEWTON,
+    ContactForceModel, ContactParams, Material, Pose, SelfCollision, SoftBody, StepSettings,
+    StiffnessEstimator, ToolShape, DYN_PER_NEWTON,
 };
 use tissue_surgery::{BladeSweep, Surgery, SurgeryEvent, SurgerySettings};
 
@@ -413,6 +413,18 @@ impl Session {
     /// The body (read only).
     pub fn body(&self) -> &SoftBody {
         &self.body
+    }
+
+    /// Switches the organ's self-collision on (with these settings) or off (`None`) from the
+    /// next step on ([`SoftBody::set_self_collision`]).
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] for settings out of range.
+    pub fn set_self_collision(
+        &mut self,
+        settings: Option<SelfCollision>,
+    ) -> Result<(), SceneError> {
+        Ok(self.body.set_self_collision(settings)?)
     }
 
     /// Node positions, cm.
