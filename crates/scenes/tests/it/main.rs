@@ -4,5 +4,6 @@
 mod material;
 mod moving_body;
 mod probe;
+mod selfcol;
 mod session;
 mod shipped;
