@@ -4,6 +4,9 @@
 //! piece a split made at or above `MIN_RATIO`), and the body keeps stepping without
 //! divergence. The worst *current* volume ratio is reported, not asserted: under gravity and floor contact with K = 5 some of the input's slivers invert with
 //! or without cutting (the solver's business, not the cut's).
+//!
+//! The same sweeps run with self-collision on (issue 35, `tissue_pbd::SelfCollision`): a short
+//! run on the liver in CI, the full ones ignored (slow: see `SESSIONS_WITH_SELF_COLLISION`).
 #![allow(clippy::unwrap_used, clippy::panic, clippy::print_stderr)]
 
 use std::hash::{DefaultHasher, Hash, Hasher};
@@ -11,7 +14,7 @@ use std::time::Instant;
 
 use glam::{Quat, Vec3};
 use tissue_mesh::TetMesh;
-use tissue_pbd::{Floor, Material, Pose, SoftBody, StepSettings, ToolShape};
+use tissue_pbd::{Floor, Material, Pose, SelfCollision, SoftBody, StepSettings, ToolShape};
 use tissue_surgery::{BladeSweep, Surgery, SurgerySettings, TipCounts};
 
 /// The bunny's surface (≈ 1 unit tall), shipped with the repository.
@@ -101,9 +104,15 @@ fn hammer(
     per_session: usize,
     steps: usize,
     split: bool,
+    self_collision: bool,
 ) -> Stats {
     let material = Material::default();
-    let fresh = SoftBody::new(mesh, &material).unwrap();
+    let mut fresh = SoftBody::new(mesh, &material).unwrap();
+    if self_collision {
+        fresh
+            .set_self_collision(Some(SelfCollision::default()))
+            .unwrap();
+    }
     let settings = SurgerySettings {
         split_tets: split,
         ..SurgerySettings::default()
@@ -262,7 +271,7 @@ fn bunny(split: bool) {
     let mesh = TetMesh::new(p.iter().map(|p| *p * 10.0).collect(), t).unwrap();
     let start = Instant::now();
     let sessions = if split { 250 } else { SESSIONS_WITHOUT_SPLITS };
-    let s = hammer(&mesh, 0x05EE_DB0B, sessions, 4, 10, split);
+    let s = hammer(&mesh, 0x05EE_DB0B, sessions, 4, 10, split, false);
     report(
         if split {
             "bunny, split"
@@ -297,7 +306,7 @@ fn liver(split: bool) {
     let mesh = tetrahedralised(LIVER);
     let start = Instant::now();
     let sessions = if split { 250 } else { SESSIONS_WITHOUT_SPLITS };
-    let s = hammer(&mesh, 0x0001_1FE2, sessions, 4, 10, split);
+    let s = hammer(&mesh, 0x0001_1FE2, sessions, 4, 10, split, false);
     report(
         if split {
             "liver, split"
@@ -309,6 +318,64 @@ fn liver(split: bool) {
     );
     assert_eq!(s.cuts, 4 * sessions);
     assert!(!split || (s.tips.four_way > 0 && s.tips.fallback > 0));
+    assert!(
+        s.cuts_opening > s.cuts / 2,
+        "too few sweeps opened anything: {}",
+        s.cuts_opening
+    );
+}
+
+/// Sessions (of 4 sweeps) of the run with self-collision on that CI runs: 2 bodies of 8 cuts on
+/// the liver. Self-collision is costly here: the bodies land on the floor at once and some of
+/// their slivers invert (see the module doc), and on that tangled surface the contact buffer is
+/// full from the first cut on (measured 2026-11-29 on the liver: 9 568 contacts, 4 500 of
+/// them active, over 10⁵ dropped per step; 0.1–0.7 s per cut's 10 steps against 1 ms per 10
+/// steps without). The issue's full sweeps with it on are the ignored tests below.
+const SESSIONS_WITH_SELF_COLLISION: usize = 4;
+
+#[test]
+fn random_sweeps_over_the_liver_with_self_collision_keep_the_body_valid() {
+    self_colliding(Fixture::Liver, SESSIONS_WITH_SELF_COLLISION);
+}
+
+#[test]
+#[ignore = "the issue's 1000 sweeps with self-collision on: slow (tangled surfaces, see above); run by hand with --ignored"]
+fn random_sweeps_over_the_liver_with_self_collision_full() {
+    self_colliding(Fixture::Liver, 250);
+}
+
+#[test]
+#[ignore = "the issue's 1000 sweeps with self-collision on: slow (tangled surfaces, see above); run by hand with --ignored"]
+fn random_sweeps_over_the_bunny_with_self_collision_full() {
+    self_colliding(Fixture::Bunny, 250);
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Fixture {
+    Bunny,
+    Liver,
+}
+
+/// The seeded sweeps of [`bunny`] or [`liver`] (geometric cuts, the same seeds) with
+/// self-collision on: the same checks after every cut, and the body keeps stepping.
+fn self_colliding(fixture: Fixture, sessions: usize) {
+    let (mesh, seed, name) = match fixture {
+        Fixture::Bunny => {
+            let (p, t) = tetrahedralised(BUNNY).into_parts();
+            let mesh = TetMesh::new(p.iter().map(|p| *p * 10.0).collect(), t).unwrap();
+            (mesh, 0x05EE_DB0B, "bunny, split, self-collision")
+        }
+        Fixture::Liver => (
+            tetrahedralised(LIVER),
+            0x0001_1FE2,
+            "liver, split, self-collision",
+        ),
+    };
+    let start = Instant::now();
+    let s = hammer(&mesh, seed, sessions, 4, 10, true, true);
+    report(name, &s, start.elapsed().as_secs_f64());
+    assert_eq!(s.cuts, 4 * sessions);
+    assert_eq!(s.steps, 10 * s.cuts);
     assert!(
         s.cuts_opening > s.cuts / 2,
         "too few sweeps opened anything: {}",
