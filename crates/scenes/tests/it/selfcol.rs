@@ -35,10 +35,14 @@ struct Pairs {
 }
 
 fn self_intersections(s: &Session) -> Pairs {
-    let tris = s.body().surface_triangles();
-    let x = s.positions();
+    pairs_of(s.body())
+}
+
+fn pairs_of(body: &tissue_pbd::SoftBody) -> Pairs {
+    let tris = body.surface_triangles();
+    let x = body.positions();
     let mut ring = std::collections::HashSet::new();
-    for t in s.body().tets() {
+    for t in body.tets() {
         for &a in t {
             for &b in t {
                 ring.insert((a, b));
@@ -384,10 +388,19 @@ fn appendix(self_collision: bool) -> Result<(usize, Pairs, usize, f64, f64)> {
 /// stitches, touch without passing through each other; the three stitches are placed and the
 /// tip comes off as without self-collision (`session.rs`' demonstration test).
 ///
-/// Fails (issue 35, measured 2026-11-29): with self-collision on the tip never comes off (the
-/// cut-off's sweeps open fewer wall triangles and no piece detaches; off, the tip, 7.57 cm³,
-/// at step 104), and the hanging tip's tangle then blows up (node speeds up to 290 cm/s, the
-/// contact buffer full, 60 000 intersecting pairs); the three stitches are placed.
+/// Fails (issue 35, measured 2026-11-29), two problems:
+/// - the tip does not come off with self-collision on (off: 7.57 cm³ at step 104). Not
+///   self-collision's fault as such: the cut-off is that sensitive either way
+///   ([`the_appendix_cut_off_across_nearby_planes`]: 3 of 5 nearby planes work with it, 3 of 5
+///   without, the default among the failures with it);
+/// - the surface blows up during the cut-off with the default thickness (0.25 of the mean
+///   edge), whether the tip comes off or not (cut-off at 1.95: tip off at step 109, then nodes
+///   of the cut-off's walls, 1.8–1.95 cm at rest, at 100–300 cm/s from step ~106, the contact
+///   buffer full, 3 × 10⁵ intersecting pairs). Not friction (the same with μ = 0); with a
+///   thickness fraction of 0.1 it does not (0.9 cm/s at the end, nothing dropped), but the
+///   incision's walls still intersect (39–66 pairs; 134–149 off).
+///
+/// The three stitches are placed in every run.
 #[test]
 #[ignore = "fails with self-collision on: the tip does not come off, the surface tangles (issue 35)"]
 fn the_appendix_procedure_with_self_collision_keeps_the_incision_walls_apart() -> Result {
@@ -404,5 +417,50 @@ fn the_appendix_procedure_with_self_collision_keeps_the_incision_walls_apart() -
     assert!((6.0..11.0).contains(&tip), "tip {tip} cm³");
     assert!(drift < 0.02, "drift {drift}");
     assert_eq!(near, 0, "the incision's walls intersect");
+    Ok(())
+}
+
+/// A measurement, not a check: whether the appendix's tip comes off (a piece over 0.5 cm³
+/// detached by step 115) with the cut-off's plane at x = 1.95 … 2.15 cm, with and without
+/// self-collision; the procedure as the trainer plays it otherwise (`AppendixProcedure` on the
+/// session's physics). Measured 2026-11-29: without, it comes off at 1.95, 2.05 and 2.15 (not
+/// 2.0, 2.1); with, at 1.95, 2.0 and 2.15 (not 2.05, the default, nor 2.1). The cut-off of a
+/// body falling while it is cut is that sensitive with or without self-collision
+/// (`moving_body.rs`); self-collision only changes which planes fail. Run it with
+/// `cargo test --release -p tissue-scenes --test it -- --ignored --nocapture cut_off_across`.
+#[test]
+#[ignore = "a measurement of the cut-off's sensitivity; run by hand"]
+fn the_appendix_cut_off_across_nearby_planes() -> Result {
+    use tissue_scenes::{AppendixPlan, AppendixProcedure, Script, Tray};
+    use tissue_surgery::{Surgery, SurgeryEvent, SurgerySettings};
+    let organ = Organ::shipped(ShippedOrgan::Appendix)?;
+    let o = SessionOptions::default();
+    let tray = Tray::for_extent(organ.extent());
+    for x in [1.95f32, 2.0, 2.05, 2.1, 2.15] {
+        for on in [false, true] {
+            let mut body = organ.body(&o.material, o.step, o.contact, tray)?;
+            body.set_self_collision(on.then(SelfCollision::default))?;
+            let mut surgery = Surgery::new(&body, SurgerySettings::default())?;
+            let plan = AppendixPlan {
+                total: 115,
+                cutoff_x: x,
+                ..AppendixPlan::default()
+            };
+            let mut script = AppendixProcedure::new(&mut body, plan)?;
+            let mut tip = None;
+            for k in 1..=script.steps() {
+                script.before_step(k, &mut body)?;
+                body.step()?;
+                for e in script.after_step(k, &mut body, &mut surgery)?.events {
+                    if let SurgeryEvent::PieceDetached { rest_volume, .. } = e {
+                        if rest_volume > 0.5 && tip.is_none() {
+                            tip = Some((k, rest_volume));
+                        }
+                    }
+                }
+            }
+            eprintln!("cut-off at x = {x} cm, self-collision {on}: tip off (step, cm³) {tip:?}");
+        }
+    }
     Ok(())
 }
