@@ -8,7 +8,7 @@
 //!
 //! - [`AppendixProcedure`]: on the shipped appendix ([`crate::ShippedOrgan::Appendix`]): the tip
 //!   lifted by a grasper while the organ settles, an incision near the base, the tip cut off
-//!   (the grasper lets go as the blade comes down: the tip falls while it is cut), the incision
+//!   (held by the grasper until the blade is through, then let go: it falls), the incision
 //!   sutured with three stitches.
 //! - [`PressAndDrag`]: a probe (a capsule tool already in the body) settles above the organ,
 //!   presses down to a depth below its top and drags along waypoints.
@@ -238,13 +238,17 @@ impl Script for AppendixProcedure {
                 body.set_attachment_target(id, at + Vec3::new(0.0, lift, 0.0))?;
             }
         } else if k == cutoff_start {
-            // The grasper lets go as the cut-off starts: the tip falls while it is cut.
-            for &(i, _, _) in &self.grasp {
-                body.unpin(i)?;
-            }
             // A new blade: its first pose starts a new sweep (not one from where the scalpel
             // ended, 4.5 cm away).
             self.last_pose = None;
+        } else if k == cutoff_start + p.cutoff {
+            // The grasper lets go once the blade is through: the tip held still while it is
+            // cut comes off wherever the blade crosses (x = 1.95 … 2.15 cm, with or without
+            // self-collision, `tests/it/selfcol.rs`); let go as the blade came down, the tip
+            // fell while it was cut and stayed on at two planes of five.
+            for &(i, _, _) in &self.grasp {
+                body.unpin(i)?;
+            }
         }
         self.pose = self.blade_pose(k, body);
         Ok(())
