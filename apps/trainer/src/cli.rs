@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Parser, ValueEnum};
-use tissue_scenes::{OrganMaterial, PressPlan, TissuePreset};
+use tissue_scenes::{OrganMaterial, PressPlan, SelfCollision, SessionOptions, TissuePreset};
 
 use crate::failure::{self, Failure};
 
@@ -257,6 +257,11 @@ pub struct Cli {
     /// Project constraints colour-parallel on all cores (bit-identical to serial).
     #[arg(long)]
     pub parallel: bool,
+    /// Switch off the self-collision of the organ's surface (on by default, as in the studio
+    /// and the C ABI: tissue-scenes' SessionOptions::self_collision; cut walls included), for
+    /// comparison; the run still prints its self-intersections.
+    #[arg(long)]
+    pub no_self_collision: bool,
     /// Drop the realtime scheme's volume constraint per connected piece (tissue-pbd's
     /// Material::hold_piece_volumes), keeping the tets' own: for comparison.
     #[arg(long)]
@@ -319,6 +324,16 @@ impl Cli {
     /// The material scheme's organ as the finite-element reference takes it (E, ν, ρ).
     pub fn elastic_material(&self) -> tissue_fem::ElasticMaterial {
         self.organ_material().elastic
+    }
+
+    /// The self-collision of the run: tissue-scenes' default (the studio's and the C ABI's),
+    /// or none with `--no-self-collision`.
+    pub fn self_collision(&self) -> Option<SelfCollision> {
+        if self.no_self_collision {
+            None
+        } else {
+            SessionOptions::default().self_collision
+        }
     }
 
     /// The scheme of the run: `--scheme` as given; without it `material` when a material flag
