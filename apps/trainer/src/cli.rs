@@ -52,9 +52,12 @@ magnitude, the tets' own volume errors at the end (median, p90, volume-weighted 
 |V/V0 - 1| per tet: the local compression the total can hide), the organ's height as loaded and \
 settled, the contacts, and the force of the tissue on the probe in newtons (the largest \
 magnitude over the run and the last step's vector; tissue-pbd's SoftBody::tool_force, 1 N = 1e5 \
-dyn). With --frames DIR (created if missing): the organ's surface every --every steps and \
-at the end, frame_STEP.vtk (with point field `displacement`, cm: from the shape as loaded during \
-the settling, from the settled shape afterwards) or frame_STEP.obj (--format), and with --png \
+dyn), the self-collision of the organ's surface (on unless --no-self-collision: its thickness and \
+the last step's self-contacts) and, last, `self-intersections N`: the pairs of surface triangles \
+that intersect at the end, counted exactly (every run that steps ends with these two lines). \
+With --frames DIR (created if missing): the organ's surface every --every steps and at the end, \
+frame_STEP.vtk (with point field `displacement`, cm: from the shape as loaded during the \
+settling, from the settled shape afterwards) or frame_STEP.obj (--format), and with --png \
 frame_STEP.png (coloured by that displacement, the probe in grey). Each file is \
 written atomically.";
 
