@@ -288,7 +288,9 @@ impl Body {
 
     /// The body's figures: `label`, `nodes`, `tets`, `triangles`, `steps`, `surface_version`
     /// (changes with cuts and sutures), `volume_drift` (V/V₀ − 1), `step_ms_median`,
-    /// `step_ms_p99` (ms), `time_step_s`, `tools`, `tray_side_cm`, `up` (`"y"`).
+    /// `step_ms_p99` (ms), `time_step_s`, `tools`, `tray_side_cm`, `up` (`"y"`),
+    /// `self_collision` (on?), `self_contacts` and `self_contacts_active` (the last step's
+    /// self-contacts of the surface, and those the solver pushed apart).
     #[getter]
     fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let sim = self.sim(py)?;
@@ -308,7 +310,42 @@ impl Body {
         d.set_item("tools", s.tool_count())?;
         d.set_item("tray_side_cm", s.tray_side())?;
         d.set_item("up", "y")?;
+        let (found, active) = s.self_contacts();
+        d.set_item("self_collision", s.options().self_collision.is_some())?;
+        d.set_item("self_contacts", found)?;
+        d.set_item("self_contacts_active", active)?;
         Ok(d)
+    }
+
+    /// Self-collision of the organ's surface, cut walls included (tissue-scenes'
+    /// `SessionOptions::self_collision`): on by default, as in the trainer, the studio and the
+    /// C ABI; set `False` to switch it off (from the next step on), for comparison.
+    #[getter]
+    fn self_collision(&self, py: Python<'_>) -> PyResult<bool> {
+        Ok(self.sim(py)?.session.options().self_collision.is_some())
+    }
+
+    #[setter]
+    fn set_self_collision(&self, py: Python<'_>, on: bool) -> PyResult<()> {
+        let settings = if on {
+            SessionOptions::default().self_collision
+        } else {
+            None
+        };
+        self.sim(py)?
+            .session
+            .set_self_collision(settings)
+            .map_err(scene(py, Some("self_collision")))
+    }
+
+    /// The number of pairs of surface triangles that intersect now, counted exactly: 0 when the
+    /// organ does not pass through itself (the two walls of a fresh cut touch and count until
+    /// the steps part them).
+    fn self_intersections(&self, py: Python<'_>) -> PyResult<usize> {
+        self.sim(py)?
+            .session
+            .self_intersections()
+            .map_err(scene(py, None))
     }
 
     /// Adds a capsule tool (a probe's tip, a needle, a shaft): the points within `radius` cm of

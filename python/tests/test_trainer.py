@@ -51,6 +51,23 @@ def test_a_cut_across_the_appendix_opens_it_and_a_suture_closes_the_wound() -> N
     assert abs(body.info["volume_drift"]) < 0.1
 
 
+def test_self_collision_is_on_by_default_and_switched() -> None:
+    """Issue 35: the switch the trainer, the studio and the C ABI have; the wound's walls of a
+    fresh cut are held by self-contacts, and there are none with it off."""
+    body = tissue.Body.shipped("appendix")
+    assert body.self_collision and body.info["self_collision"]
+    body.step(20)
+    assert body.self_intersections() == 0
+    path = np.array([[0.0, top(body, 0.0, z), z] for z in np.linspace(-1.3, 1.3, 11)])
+    body.step(body.cut(path, view_dir=(0, -1, 0)) + 5)
+    assert body.info["self_contacts"] > 0, body.info
+    body.self_collision = False
+    body.step()
+    assert not body.self_collision and not body.info["self_collision"]
+    assert body.info["self_contacts"] == 0 and body.info["self_contacts_active"] == 0
+    assert body.self_intersections() >= 0
+
+
 def test_a_capsule_pressed_down_into_the_bunny_is_pushed_up() -> None:
     body = tissue.Body.shipped("bunny")
     body.step(30)

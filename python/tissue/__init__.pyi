@@ -194,7 +194,15 @@ class Body:
     def info(self) -> Dict[str, Any]:
         """``label``, ``nodes``, ``tets``, ``triangles``, ``steps``, ``surface_version``,
         ``volume_drift``, ``step_ms_median``, ``step_ms_p99``, ``time_step_s``, ``tools``,
-        ``tray_side_cm``, ``up``."""
+        ``tray_side_cm``, ``up``, ``self_collision``, ``self_contacts``,
+        ``self_contacts_active``."""
+    @property
+    def self_collision(self) -> bool:
+        """Self-collision of the surface (cut walls included); on by default."""
+    @self_collision.setter
+    def self_collision(self, on: bool) -> None: ...
+    def self_intersections(self) -> int:
+        """Pairs of surface triangles intersecting now, counted exactly."""
     def add_capsule(
         self, a: Point, b: Point, radius: float, pose: Optional[Pose] = None
     ) -> Tool:

@@ -209,8 +209,8 @@ async function main() {
     await sleep(300);
     await shot(page, 't3-cut.png');
     // The path is cut one segment per step: wait until the last segment is in (no new event
-    // for 0.5 s) before the wound's sides are looked for. (Not longer: nothing keeps the walls
-    // of a wound apart, and a wound that gravity has pressed shut gives the needle no gap.)
+    // for 0.5 s) before the wound's sides are looked for. (Not longer: a wound that gravity has
+    // pressed shut gives the needle a narrow gap, kept by self-collision only.)
     let quiet = 0;
     for (let n = -1, t0 = Date.now(); quiet < 2 && Date.now() - t0 < 30000; await sleep(250)) {
       const m = (await hookOf(page)).events;
@@ -267,9 +267,55 @@ async function main() {
     figures.framesDrawnPerSecond = (r1.framesDrawn - r0.framesDrawn) / 2;
     figures.framesReceivedPerSecond = r1.fps.received;
     figures.stepMs = r1.stepMs;
+    console.log(`# the bunny with a cut and a suture, self-collision on: ${fmt(r1.stats.steps_per_s, 1)} steps/s on the server, `
+      + `step ${fmt(r1.stepMs.median)} ms median, ${fmt(r1.stepMs.p99)} ms p99`);
 
     // Issue 19: the organ's volume held over the probe, the cut and the suture.
     check(Math.abs(r1.volumeDrift) <= 0.02, `volume drift after the probe, the cut and the suture: ${fmt(r1.volumeDrift * 100, 3)} % (|drift| ≤ 2 %)`);
+
+    // e2. self-collision (issue 35): on by default with the cut in the bunny (the figures above
+    // were measured so); the HUD shows the last step's self-contacts, a number, more than 0 with
+    // the wound's walls present; the checkbox switches it on the running session and back.
+    const selfState = () => trainer(page, () => {
+      const t = window.tissueStudio.trainer;
+      return {
+        on: t.selfCollision, box: document.getElementById('self-collision').checked,
+        stats: t.stats?.self_collision, contacts: t.selfContacts,
+        hud: document.getElementById('h-self').textContent, sps: t.stats?.steps_per_s,
+      };
+    });
+    const sc0 = await selfState();
+    check(sc0.on === true && sc0.box === true && sc0.stats === true,
+      `self-collision is on by default: checkbox ${sc0.box}, hook ${sc0.on}, stats ${sc0.stats}`);
+    const found = await page.waitForFunction(() => {
+      const c = window.tissueStudio.trainer.selfContacts;
+      return c && Number.isInteger(c.found) && c.found > 0 ? c : false;
+    }, null, { timeout: 10000, polling: 100 }).then((h) => h.jsonValue()).catch(() => null);
+    const sc1 = await selfState();
+    check(found && /^[\d,\s]+ \([\d,\s]+ pushed\)$/.test(sc1.hud),
+      `the HUD shows the self-contacts, more than 0 with the wound's walls there: "${sc1.hud}" (${JSON.stringify(found)})`);
+    await page.locator('#hud').screenshot({ path: path.join(shots, 't4b-hud-self-contacts.png') });
+    console.log('# screenshot screenshots/t4b-hud-self-contacts.png');
+    await page.click('#self-collision');
+    const off = await page.waitForFunction(() => {
+      const t = window.tissueStudio.trainer;
+      return t.stats?.self_collision === false && t.selfContacts?.found === 0;
+    }, null, { timeout: 5000, polling: 50 }).then(() => true).catch(() => false);
+    const sc2 = await selfState();
+    check(off && !sc2.box && sc2.on === false && sc2.hud === 'off',
+      `unchecked, the running session's self-collision is off: stats ${sc2.stats}, contacts ${JSON.stringify(sc2.contacts)}, HUD "${sc2.hud}"`);
+    await sleep(2500);
+    figures.selfOffStepsPerSecond = (await selfState()).sps;
+    console.log(`# self-collision off: ${fmt(figures.selfOffStepsPerSecond, 1)} steps/s`);
+    await shot(page, 't4c-self-collision-off.png');
+    await page.click('#self-collision');
+    const on = await page.waitForFunction(() => window.tissueStudio.trainer.stats?.self_collision === true,
+      null, { timeout: 5000, polling: 50 }).then(() => true).catch(() => false);
+    const sc3 = await selfState();
+    check(on && sc3.box && sc3.on === true, `checked again, it is back on: stats ${sc3.stats}, HUD "${sc3.hud}"`);
+    await sleep(2500);
+    figures.selfOnStepsPerSecond = (await selfState()).sps;
+    console.log(`# self-collision on again: ${fmt(figures.selfOnStepsPerSecond, 1)} steps/s`);
 
     // f. the demonstration: the appendix procedure of tissue-scenes, played in the session
     await page.selectOption('#organ-select', 'appendix');
@@ -393,7 +439,9 @@ async function main() {
     + `${fmt(figures.framesDrawnPerSecond, 1)} frames drawn/s and ${figures.framesReceivedPerSecond} received/s (page), `
     + `step ${fmt(figures.stepMs?.median)} ms median, ${fmt(figures.stepMs?.p99)} ms p99 (default scheme); `
     + `bunny: material scheme ${fmt(figures.materialStepsPerSecond, 1)} steps/s (step ${fmt(figures.materialStepMs?.median)} ms median), `
-    + `realtime ${fmt(figures.realtimeStepsPerSecond, 1)} steps/s; sag ratio at 2E ${fmt(figures.sagRatio, 3)}`);
+    + `realtime ${fmt(figures.realtimeStepsPerSecond, 1)} steps/s; sag ratio at 2E ${fmt(figures.sagRatio, 3)}; `
+    + `bunny with a cut: self-collision on ${fmt(figures.stepsPerSecond, 1)} and ${fmt(figures.selfOnStepsPerSecond, 1)} steps/s, `
+    + `off ${fmt(figures.selfOffStepsPerSecond, 1)} steps/s`);
 
   await stopServer();
 }

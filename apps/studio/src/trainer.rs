@@ -13,7 +13,10 @@ use std::time::{Duration, Instant};
 use axum::extract::ws::{Message, WebSocket};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
-use tissue_scenes::{Organ, SceneError, SceneErrorKind, Session, ShippedOrgan, TrainerEvent};
+use tissue_scenes::{
+    Organ, SceneError, SceneErrorKind, SelfCollision, Session, SessionOptions, ShippedOrgan,
+    TrainerEvent,
+};
 use tokio::sync::{mpsc, watch};
 
 use crate::material::{MaterialError, TissueMaterial};
@@ -101,6 +104,14 @@ pub struct Stats {
     pub paused: bool,
     /// |force| on the probe, N.
     pub force_n: f64,
+    /// Whether the organ's surface collides with itself (the `self_collision` command; on by
+    /// default).
+    pub self_collision: bool,
+    /// Self-contacts of the last step (tissue-scenes' `Session::self_contacts`): the surface
+    /// vertex–triangle pairs within the detection band (0 with self-collision off).
+    pub self_contacts: usize,
+    /// Of those, the ones the solver had to push apart.
+    pub self_contacts_active: usize,
 }
 
 /// Step times of [`Stats`], ms.
@@ -166,6 +177,12 @@ pub enum Command {
     Material {
         /// The material asked for.
         material: TissueMaterial,
+    },
+    /// Self-collision of the organ's surface on or off (on by default): at once on the running
+    /// session, and for every later one until switched again; the stats say which is in force.
+    SelfCollision {
+        /// On?
+        on: bool,
     },
 }
 
@@ -658,6 +675,10 @@ impl Simulation {
                 out.send(TrainerMessage::Material(state));
                 None
             }
+            Command::SelfCollision { on } => {
+                self.desk.set_self_collision(on)?;
+                None
+            }
             tool => {
                 match self.desk.live.as_mut() {
                     Some(live) => live.apply(tool, out)?,
@@ -717,6 +738,7 @@ impl Simulation {
             .send_replace(Some(Arc::new(live.frame(self.number))));
         let s = &live.session;
         let (median, p99) = s.step_ms();
+        let (self_contacts, self_contacts_active) = s.self_contacts();
         out.stats.send_replace(Stats {
             steps: s.steps(),
             step_ms: StepTimes { median, p99 },
@@ -727,12 +749,18 @@ impl Simulation {
             tets: s.body().tets().len(),
             paused: self.paused,
             force_n: f64::from(s.tool_force().length()),
+            self_collision: s.options().self_collision.is_some(),
+            self_contacts,
+            self_contacts_active,
         });
     }
 }
 
 /// The organ loaded and its live session. The organ outlives a session that failed, so that
 /// Reset (and the demonstration) rebuild it: the failure message tells the user to press Reset.
+///
+/// Self-collision: on until the page switches it off; a switch applies to the live session at
+/// once and to every later one (another organ too).
 ///
 /// The material: a `material` command waits in `pending` until the next reset, load or
 /// demonstration, which makes it the chosen one; the chosen one stays for every later session
@@ -748,12 +776,15 @@ struct Desk {
     chosen: Option<TissueMaterial>,
     /// The material the page chose, for the next session.
     pending: Option<TissueMaterial>,
+    /// Self-collision switched off by the page (`false`: on, tissue-scenes' default).
+    no_self_collision: bool,
 }
 
 impl Desk {
     /// Starts a session on `organ` (the pending material applied); the `scene` message.
     fn load(&mut self, organ: Arc<Organ>, id: &str) -> Result<SceneInfo, Refusal> {
-        let live = Live::new(&organ, id, self.next_material(id))?;
+        let material = self.next_material(id);
+        let live = Live::new(&organ, id, material, self.self_collision())?;
         let scene = live.scene();
         self.loaded = Some((organ, id.to_owned()));
         self.live = Some(live);
@@ -780,6 +811,25 @@ impl Desk {
         })
     }
 
+    /// The self-collision of the sessions: tissue-scenes' default unless switched off.
+    fn self_collision(&self) -> Option<SelfCollision> {
+        if self.no_self_collision {
+            None
+        } else {
+            SessionOptions::default().self_collision
+        }
+    }
+
+    /// Switches self-collision on or off: the live session at once, the later ones too.
+    fn set_self_collision(&mut self, on: bool) -> Result<(), Refusal> {
+        self.no_self_collision = !on;
+        let settings = self.self_collision();
+        if let Some(live) = self.live.as_mut() {
+            live.session.set_self_collision(settings)?;
+        }
+        Ok(())
+    }
+
     /// The loaded organ's session afresh (also after a failure); nothing before a load.
     fn reset(&mut self) -> Result<Option<SceneInfo>, Refusal> {
         match self.loaded.clone() {
@@ -795,7 +845,7 @@ impl Desk {
             return Err(self.not_live());
         };
         let material = self.next_material(&id);
-        let mut fresh = Live::new(&organ, &id, material)?;
+        let mut fresh = Live::new(&organ, &id, material, self.self_collision())?;
         let started = fresh.session.play()?;
         let scene = fresh.scene();
         self.live = Some(fresh);
@@ -832,8 +882,17 @@ struct Live {
 }
 
 impl Live {
-    fn new(organ: &Organ, id: &str, material: TissueMaterial) -> Result<Live, Refusal> {
-        let session = Session::new(organ, material.options()?)?;
+    fn new(
+        organ: &Organ,
+        id: &str,
+        material: TissueMaterial,
+        self_collision: Option<SelfCollision>,
+    ) -> Result<Live, Refusal> {
+        let options = SessionOptions {
+            self_collision,
+            ..material.options()?
+        };
+        let session = Session::new(organ, options)?;
         let top = session
             .positions()
             .iter()
@@ -888,7 +947,8 @@ impl Live {
             | Command::Demo
             | Command::Pause { .. }
             | Command::Step
-            | Command::Material { .. } => {}
+            | Command::Material { .. }
+            | Command::SelfCollision { .. } => {}
         }
         Ok(())
     }
@@ -949,6 +1009,56 @@ mod tests {
         desk.diverged();
         assert!(desk.demo().is_ok());
         assert!(desk.live.is_some());
+    }
+
+    /// The self-collision command: on by default; switched at once on the live session (its
+    /// stats say so) and kept for the next sessions (a reset, a demonstration).
+    #[test]
+    fn self_collision_is_on_by_default_and_switched_live() {
+        let organs = Organs::default();
+        let (frames, _f) = watch::channel(None);
+        let (stats, stats_rx) = watch::channel(Stats::default());
+        let (texts, _received) = mpsc::unbounded_channel();
+        let out = Outlets {
+            frames,
+            stats,
+            texts,
+        };
+        let mut sim = Simulation::default();
+        let load = Command::Load {
+            organ: "appendix".to_owned(),
+        };
+        assert!(sim.apply(load, &organs, &out).unwrap());
+        let on = |sim: &Simulation| {
+            let live = sim.desk.live.as_ref().expect("a live session");
+            (
+                live.session.options().self_collision.is_some(),
+                live.session.body().self_collision().is_some(),
+            )
+        };
+        assert_eq!(on(&sim), (true, true), "on by default");
+        sim.step_live(&out);
+        sim.publish(&out);
+        assert!(stats_rx.borrow().self_collision);
+        let off = Command::SelfCollision { on: false };
+        assert!(!sim.apply(off, &organs, &out).unwrap());
+        assert_eq!(on(&sim), (false, false), "switched off on the live session");
+        sim.step_live(&out);
+        sim.publish(&out);
+        let s = stats_rx.borrow().clone();
+        assert!(!s.self_collision);
+        assert_eq!((s.self_contacts, s.self_contacts_active), (0, 0));
+        // Kept through a reset and a demonstration.
+        sim.apply(Command::Reset, &organs, &out).unwrap();
+        assert_eq!(on(&sim), (false, false), "kept off by Reset");
+        sim.apply(Command::SelfCollision { on: true }, &organs, &out)
+            .unwrap();
+        assert_eq!(on(&sim), (true, true));
+        sim.apply(Command::Demo, &organs, &out).unwrap();
+        assert_eq!(on(&sim), (true, true), "kept on by the demonstration");
+        let json = r#"{"type": "self_collision", "on": false}"#;
+        let c: Command = serde_json::from_str(json).unwrap();
+        assert_eq!(c, Command::SelfCollision { on: false });
     }
 
     /// The material command: checked at once (out of range refused naming the field, nothing

@@ -41,6 +41,8 @@ const state = {
   reallocations: 0,
   lastCut: null, // { path: [[x,y,z], ...], viewDir, fromVertex }
   material: null, // { scheme, young_kpa, poisson, density, pending } (trainer-material.js)
+  selfCollision: true, // in force: the server's word (the stats), or what was asked until it had time to land
+  selfContacts: null, // { found, active }: the last step's self-contacts (the stats)
   // The page's own.
   organs: [],
   awaitingScene: false,
@@ -48,6 +50,8 @@ const state = {
   refused: false,
   pauseAsked: false, // what the Pause button shows
   pauseSentAt: 0,
+  selfCollisionAsked: true, // what the checkbox shows
+  selfCollisionSentAt: 0,
   gesture: null,
   needleFirst: null,
   pathTimer: null,
@@ -119,6 +123,8 @@ async function load(id, label = organLabel(id)) {
   setText('view-empty', `Loading ${label}…`);
   try {
     tissue.flush(); // a material waiting in the panel applies to this organ
+    // The checkbox's setting for this session (a new connection starts with it on).
+    await socket.send({ type: 'self_collision', on: state.selfCollisionAsked });
     await socket.send({ type: 'load', organ: id });
   } catch (e) {
     showError(e.message);
@@ -225,6 +231,14 @@ function onStats(msg) {
   if (state.paused !== state.pauseAsked && performance.now() - state.pauseSentAt > 1000) {
     state.pauseAsked = state.paused;
     updateControls();
+  }
+  if (typeof msg.self_collision === 'boolean') state.selfCollision = msg.self_collision;
+  state.selfContacts = Number.isFinite(msg.self_contacts)
+    ? { found: msg.self_contacts, active: msg.self_contacts_active ?? 0 }
+    : null;
+  if (state.selfCollision !== state.selfCollisionAsked && performance.now() - state.selfCollisionSentAt > 1000) {
+    state.selfCollisionAsked = state.selfCollision;
+    $('self-collision').checked = state.selfCollision;
   }
   renderHud();
 }
@@ -358,6 +372,11 @@ function renderHud() {
   const scale = view.scale < 0.99 ? ` · ${Math.round(view.scale * 100)} % res.` : '';
   setText('h-fps', `${state.fps.received} in · ${state.fps.drawn} drawn /s${scale}`);
   setText('h-drift', s && Number.isFinite(s.volume_drift) ? `${fmt(s.volume_drift * 100, 3)} %` : '—');
+  const c = state.selfContacts;
+  let self = '—';
+  if (s && !state.selfCollision) self = 'off';
+  else if (c) self = `${fmtInt(c.found)} (${fmtInt(c.active)} pushed)`;
+  setText('h-self', self);
   const nodes = s?.nodes ?? state.scene?.nodes;
   const tets = s?.tets ?? state.scene?.tets;
   setText('h-mesh', `${fmtInt(nodes)} nodes · ${fmtInt(tets)} tets`);
@@ -538,6 +557,15 @@ function togglePause() {
   updateControls();
 }
 
+function setSelfCollision(on) {
+  state.selfCollisionAsked = on;
+  state.selfCollisionSentAt = performance.now();
+  state.selfCollision = on;
+  $('self-collision').checked = on;
+  socket.send({ type: 'self_collision', on }).catch((e) => showError(e.message));
+  renderHud();
+}
+
 function reset() {
   cancelGesture();
   setNeedleFirst(null);
@@ -565,6 +593,7 @@ function wire() {
   $('step').addEventListener('click', () => socket.send({ type: 'step' }).catch((e) => showError(e.message)));
   $('reset').addEventListener('click', reset);
   $('demo').addEventListener('click', demo);
+  $('self-collision').addEventListener('change', (e) => setSelfCollision(e.target.checked));
   $('reset-view').addEventListener('click', () => view.fit());
   document.addEventListener('keydown', (ev) => {
     if (ev.ctrlKey || ev.metaKey || ev.altKey) return;

@@ -39,6 +39,8 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
     let mut body = organ
         .body(&material, settings, ContactParams::default(), tray)
         .map_err(|e| failure::from_scene(&e))?;
+    body.set_self_collision(cli.self_collision())
+        .map_err(|e| failure::from_pbd(&e))?;
     let mut surgery =
         Surgery::new(&body, SurgerySettings::default()).map_err(|e| surgery_failure(&e))?;
     println!(
@@ -123,7 +125,7 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
     if let Some(dir) = &cli.frames {
         println!("  frames        {frames} written to {}", dir.display());
     }
-    Ok(())
+    crate::print_self_collision(&body)
 }
 
 fn write_frame(

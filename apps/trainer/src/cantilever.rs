@@ -40,6 +40,8 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
             Tray::for_extent(organ.extent()),
         )
         .map_err(|e| failure::from_scene(&e))?;
+    body.set_self_collision(cli.self_collision())
+        .map_err(|e| failure::from_pbd(&e))?;
     println!("trainer: {}, clamped at x = 0", organ.label);
     println!(
         "  organ         {} nodes, {} tets, {:.0} g, {} cells through the thickness",
@@ -87,5 +89,5 @@ pub fn run(cli: &Cli) -> Result<(), Failure> {
         sum / count.max(1) as f64
     );
     println!("  beam theory   {beam:.4} cm (Euler–Bernoulli, small deflection)");
-    Ok(())
+    crate::print_self_collision(&body)
 }

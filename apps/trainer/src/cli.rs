@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Parser, ValueEnum};
-use tissue_scenes::{OrganMaterial, PressPlan, TissuePreset};
+use tissue_scenes::{OrganMaterial, PressPlan, SelfCollision, SessionOptions, TissuePreset};
 
 use crate::failure::{self, Failure};
 
@@ -52,9 +52,12 @@ magnitude, the tets' own volume errors at the end (median, p90, volume-weighted 
 |V/V0 - 1| per tet: the local compression the total can hide), the organ's height as loaded and \
 settled, the contacts, and the force of the tissue on the probe in newtons (the largest \
 magnitude over the run and the last step's vector; tissue-pbd's SoftBody::tool_force, 1 N = 1e5 \
-dyn). With --frames DIR (created if missing): the organ's surface every --every steps and \
-at the end, frame_STEP.vtk (with point field `displacement`, cm: from the shape as loaded during \
-the settling, from the settled shape afterwards) or frame_STEP.obj (--format), and with --png \
+dyn), the self-collision of the organ's surface (on unless --no-self-collision: its thickness and \
+the last step's self-contacts) and, last, `self-intersections N`: the pairs of surface triangles \
+that intersect at the end, counted exactly (every run that steps ends with these two lines). \
+With --frames DIR (created if missing): the organ's surface every --every steps and at the end, \
+frame_STEP.vtk (with point field `displacement`, cm: from the shape as loaded during the \
+settling, from the settled shape afterwards) or frame_STEP.obj (--format), and with --png \
 frame_STEP.png (coloured by that displacement, the probe in grey). Each file is \
 written atomically.";
 
@@ -257,6 +260,11 @@ pub struct Cli {
     /// Project constraints colour-parallel on all cores (bit-identical to serial).
     #[arg(long)]
     pub parallel: bool,
+    /// Switch off the self-collision of the organ's surface (on by default, as in the studio
+    /// and the C ABI: tissue-scenes' SessionOptions::self_collision; cut walls included), for
+    /// comparison; the run still prints its self-intersections.
+    #[arg(long)]
+    pub no_self_collision: bool,
     /// Drop the realtime scheme's volume constraint per connected piece (tissue-pbd's
     /// Material::hold_piece_volumes), keeping the tets' own: for comparison.
     #[arg(long)]
@@ -319,6 +327,16 @@ impl Cli {
     /// The material scheme's organ as the finite-element reference takes it (E, ν, ρ).
     pub fn elastic_material(&self) -> tissue_fem::ElasticMaterial {
         self.organ_material().elastic
+    }
+
+    /// The self-collision of the run: tissue-scenes' default (the studio's and the C ABI's),
+    /// or none with `--no-self-collision`.
+    pub fn self_collision(&self) -> Option<SelfCollision> {
+        if self.no_self_collision {
+            None
+        } else {
+            SessionOptions::default().self_collision
+        }
     }
 
     /// The scheme of the run: `--scheme` as given; without it `material` when a material flag

@@ -49,6 +49,29 @@ fn describe_settings(body: &tissue_pbd::SoftBody) -> String {
     )
 }
 
+/// The self-collision lines every run ends with: whether it is on (its thickness, the last
+/// step's self-contacts), then `self-intersections N`, the pairs of surface triangles that
+/// intersect at the end (tissue-scenes' exact count over the body's boundary faces, cut walls
+/// included; 0 when the organ does not pass through itself).
+fn print_self_collision(body: &tissue_pbd::SoftBody) -> Result<(), Failure> {
+    match body.self_collision() {
+        Some(_) => {
+            let (found, active) = body.self_contact_counts();
+            println!(
+                "  self-collision on, thickness {:.3} cm, the last step's self-contacts: found \
+                 {found}, active {active}, dropped {}",
+                body.self_collision_thickness().unwrap_or(f32::NAN),
+                body.self_contacts_dropped()
+            );
+        }
+        None => println!("  self-collision off (--no-self-collision)"),
+    }
+    let n = tissue_scenes::surface_self_intersections(body.positions(), &body.surface_triangles())
+        .map_err(|e| failure::from_scene(&e))?;
+    println!("  self-intersections {n}");
+    Ok(())
+}
+
 fn main_inner(cli: &Cli) -> Result<(), Failure> {
     match cli.scenario {
         Some(cli::Scenario::Appendix) if cli.reference => {
@@ -155,7 +178,7 @@ fn main_inner(cli: &Cli) -> Result<(), Failure> {
             dir.display()
         );
     }
-    Ok(())
+    print_self_collision(&scene.body)
 }
 
 fn main() -> ExitCode {

@@ -119,6 +119,8 @@ pub fn build(cli: &Cli) -> Result<Scene, Failure> {
     let mut body = organ
         .body(&material, settings, contact, tray)
         .map_err(scene)?;
+    body.set_self_collision(cli.self_collision())
+        .map_err(|e| failure::from_pbd(&e))?;
     if cli.waypoints.len() == 1 {
         return Err(Failure::new(
             Exit::Parameters,

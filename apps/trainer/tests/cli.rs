@@ -142,6 +142,50 @@ fn a_small_box_runs_and_writes_frames_and_a_summary() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Self-collision is on by default (tissue-scenes' SessionOptions::self_collision) and
+/// `--no-self-collision` switches it off; either way the run ends with `self-intersections N`,
+/// the exact count of intersecting surface triangle pairs: none on a box pressed and dragged.
+#[test]
+fn self_collision_is_on_by_default_and_the_run_counts_self_intersections() {
+    let out = run(&SMALL_BOX);
+    let text = stdout(&out);
+    assert!(out.status.success(), "{}\n{text}", stderr(&out));
+    assert!(text.contains("self-collision on, thickness"), "{text}");
+    let thickness = number_after(&text, "self-collision on", "thickness");
+    // A quarter of the mean surface edge (1 cm cells): 0.25 cm.
+    assert!(thickness > 0.1 && thickness < 0.5, "{text}");
+    assert_eq!(
+        number_after(&text, "self-collision on", "dropped"),
+        0.0,
+        "{text}"
+    );
+    let last = text.lines().last().unwrap_or_default();
+    assert!(
+        last.trim_start().starts_with("self-intersections "),
+        "{text}"
+    );
+    assert_eq!(
+        number_after(&text, "self-intersections", "self-intersections"),
+        0.0,
+        "{text}"
+    );
+
+    let mut args = SMALL_BOX.to_vec();
+    args.push("--no-self-collision");
+    let out = run(&args);
+    let text = stdout(&out);
+    assert!(out.status.success(), "{}\n{text}", stderr(&out));
+    assert!(
+        text.contains("self-collision off (--no-self-collision)"),
+        "{text}"
+    );
+    assert_eq!(
+        number_after(&text, "self-intersections", "self-intersections"),
+        0.0,
+        "{text}"
+    );
+}
+
 #[test]
 fn a_closed_surface_is_tetrahedralised_and_runs() {
     // A cube surface written as OBJ: --surface meshes it with tissue-tetra and runs the scenario.

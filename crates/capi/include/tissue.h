@@ -226,6 +226,10 @@ typedef struct tissue_patient tissue_patient;
 // Bounds (checked when a body is made, `TISSUE_PARAMETERS` with a message naming the field):
 // `young_kpa` positive, `poisson` from 0 to 0.495, `density` positive, `relaxation_time`
 // positive, all finite.
+//
+// `self_collision` (issue 35, appended last) is the body's setting whatever the scheme: the
+// fill functions set it to `true` (on by default, as in the studio and the headless
+// trainer); a struct zeroed by hand has it off.
 typedef struct tissue_material {
   // A `tissue_scheme`.
   uint32_t scheme;
@@ -238,6 +242,11 @@ typedef struct tissue_material {
   // The damping's relaxation time `τ`, s: every motion relative to the organ's rigid motion
   // decays as `exp(−t/τ)` (0.1 s damps a wobble in a few tenths of a second).
   double relaxation_time;
+  // Self-collision of the organ's surface, cut walls included (tissue-scenes'
+  // `SessionOptions::self_collision`): `true` keeps the tissue from passing through itself
+  // (the default the fill functions give), `false` switches it off for comparison;
+  // `tissue_body_set_self_collision` switches it on a live body.
+  bool self_collision;
 } tissue_material;
 
 // The common fields of a planning request (the planner's `PlanRequest`; every other field at
@@ -391,6 +400,14 @@ typedef struct tissue_body_info {
   double time_step_s;
   // Contact tools added.
   uint32_t tools;
+  // Whether self-collision is on (issue 35; `tissue_material.self_collision`,
+  // `tissue_body_set_self_collision`).
+  bool self_collision;
+  // Self-contacts of the last step: the surface's vertex–triangle pairs within the detection
+  // band (0 with self-collision off).
+  uint64_t self_contacts;
+  // Of those, the ones the solver had to push apart.
+  uint64_t self_contacts_active;
 } tissue_body_info;
 
 // A rigid placement: `world = rotation · local + translation`, cm.
@@ -823,6 +840,22 @@ enum tissue_status tissue_body_get_info(const struct tissue_body *body,
 // Thread safety: any thread (waits for a running step).
 enum tissue_status tissue_body_get_material(const struct tissue_body *body,
                                             struct tissue_material *material);
+
+// Switches self-collision of the body's surface on (`true`, tissue-scenes' default settings)
+// or off from the next step on (issue 35; `tissue_body_get_info` says which is in force and
+// counts the last step's self-contacts).
+//
+// Thread safety: any thread (waits for a running step).
+enum tissue_status tissue_body_set_self_collision(const struct tissue_body *body, bool on);
+
+// Sets `*count` to the number of pairs of surface triangles that intersect now, counted exactly
+// (tissue-scenes' `Session::self_intersections`: 0 when the organ does not pass through
+// itself; the two walls of a fresh cut touch and count until the steps part them).
+//
+// Errors: `TISSUE_SIMULATION` for a diverged body (a position not finite).
+//
+// Thread safety: any thread (waits for a running step).
+enum tissue_status tissue_body_self_intersections(const struct tissue_body *body, uint64_t *count);
 
 // Copies every node's position (x, y, z, cm) into `out` (`capacity` floats: at least 3 ×
 // `tissue_body_info.nodes`), and sets `*revision` (may be NULL) to the positions' revision

@@ -108,6 +108,10 @@ pub(crate) fn shipped_of(value: u32) -> Result<ShippedOrgan, Error> {
 /// Bounds (checked when a body is made, `TISSUE_PARAMETERS` with a message naming the field):
 /// `young_kpa` positive, `poisson` from 0 to 0.495, `density` positive, `relaxation_time`
 /// positive, all finite.
+///
+/// `self_collision` (issue 35, appended last) is the body's setting whatever the scheme: the
+/// fill functions set it to `true` (on by default, as in the studio and the headless
+/// trainer); a struct zeroed by hand has it off.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct tissue_material {
@@ -122,6 +126,11 @@ pub struct tissue_material {
     /// The damping's relaxation time `τ`, s: every motion relative to the organ's rigid motion
     /// decays as `exp(−t/τ)` (0.1 s damps a wobble in a few tenths of a second).
     pub relaxation_time: f64,
+    /// Self-collision of the organ's surface, cut walls included (tissue-scenes'
+    /// `SessionOptions::self_collision`): `true` keeps the tissue from passing through itself
+    /// (the default the fill functions give), `false` switches it off for comparison;
+    /// `tissue_body_set_self_collision` switches it on a live body.
+    pub self_collision: bool,
 }
 
 impl From<&OrganMaterial> for tissue_material {
@@ -132,6 +141,7 @@ impl From<&OrganMaterial> for tissue_material {
             poisson: m.elastic.poisson,
             density: m.elastic.density,
             relaxation_time: f64::from(m.relaxation_time),
+            self_collision: SessionOptions::default().self_collision.is_some(),
         }
     }
 }
@@ -151,14 +161,22 @@ impl tissue_material {
     /// check of the values), and the material as the body reports it (`None`: the real-time
     /// preset, reported from its body).
     pub(crate) fn session_options(&self) -> Result<(SessionOptions, Option<Self>), Error> {
-        match scheme_of(self.scheme)? {
+        let (mut options, material) = match scheme_of(self.scheme)? {
             tissue_scheme::TISSUE_SCHEME_MATERIAL => {
                 let organ = self.organ();
                 let options = SessionOptions::material(&organ).map_err(|e| refused(&e))?;
-                Ok((options, Some(tissue_material::from(&organ))))
+                let material = tissue_material {
+                    self_collision: self.self_collision,
+                    ..tissue_material::from(&organ)
+                };
+                (options, Some(material))
             }
-            tissue_scheme::TISSUE_SCHEME_REALTIME => Ok((SessionOptions::default(), None)),
+            tissue_scheme::TISSUE_SCHEME_REALTIME => (SessionOptions::default(), None),
+        };
+        if !self.self_collision {
+            options.self_collision = None;
         }
+        Ok((options, material))
     }
 }
 

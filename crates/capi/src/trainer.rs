@@ -135,6 +135,14 @@ pub struct tissue_body_info {
     pub time_step_s: f64,
     /// Contact tools added.
     pub tools: u32,
+    /// Whether self-collision is on (issue 35; `tissue_material.self_collision`,
+    /// `tissue_body_set_self_collision`).
+    pub self_collision: bool,
+    /// Self-contacts of the last step: the surface's vertex–triangle pairs within the detection
+    /// band (0 with self-collision off).
+    pub self_contacts: u64,
+    /// Of those, the ones the solver had to push apart.
+    pub self_contacts_active: u64,
 }
 
 /// A trainee's soft body: its simulation behind a mutex, its haptic state apart (module docs).
@@ -408,6 +416,9 @@ pub extern "C" fn tissue_body_get_info(
             step_ms_p99: p99,
             time_step_s: f64::from(s.body().settings().dt),
             tools: s.tool_count() as u32,
+            self_collision: s.options().self_collision.is_some(),
+            self_contacts: s.self_contacts().0 as u64,
+            self_contacts_active: s.self_contacts().1 as u64,
         };
         // SAFETY: `info` is NULL or valid.
         unsafe { put(info, "info", out) }
@@ -435,10 +446,57 @@ pub extern "C" fn tissue_body_get_material(
                 poisson: 0.0,
                 density: f64::from(sim.session.body().density()),
                 relaxation_time: f64::from(sim.session.body().settings().relaxation_time()),
+                self_collision: false,
             },
+        };
+        let out = tissue_material {
+            self_collision: sim.session.options().self_collision.is_some(),
+            ..out
         };
         // SAFETY: `material` is NULL or valid.
         unsafe { put(material, "material", out) }
+    })
+}
+
+/// Switches self-collision of the body's surface on (`true`, tissue-scenes' default settings)
+/// or off from the next step on (issue 35; `tissue_body_get_info` says which is in force and
+/// counts the last step's self-contacts).
+///
+/// Thread safety: any thread (waits for a running step).
+#[no_mangle]
+pub extern "C" fn tissue_body_set_self_collision(
+    body: *const tissue_body,
+    on: bool,
+) -> tissue_status {
+    guard(|| {
+        let mut sim = body_of(body)?.sim()?;
+        let settings = if on {
+            SessionOptions::default().self_collision
+        } else {
+            None
+        };
+        sim.session.set_self_collision(settings)?;
+        Ok(())
+    })
+}
+
+/// Sets `*count` to the number of pairs of surface triangles that intersect now, counted exactly
+/// (tissue-scenes' `Session::self_intersections`: 0 when the organ does not pass through
+/// itself; the two walls of a fresh cut touch and count until the steps part them).
+///
+/// Errors: `TISSUE_SIMULATION` for a diverged body (a position not finite).
+///
+/// Thread safety: any thread (waits for a running step).
+#[no_mangle]
+pub extern "C" fn tissue_body_self_intersections(
+    body: *const tissue_body,
+    count: *mut u64,
+) -> tissue_status {
+    guard(|| {
+        let sim = body_of(body)?.sim()?;
+        let n = sim.session.self_intersections()? as u64;
+        // SAFETY: `count` is NULL or valid.
+        unsafe { put(count, "count", n) }
     })
 }
 

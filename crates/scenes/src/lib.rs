@@ -17,7 +17,10 @@
 //!   host poses ([`Session::add_tool`], [`Session::set_tool_pose`]: a probe's tip, a needle, a
 //!   blade) with each one's force model of the last step for a haptic loop
 //!   ([`Session::contact_force_model`], tissue-pbd's `ContactForceModel`, N), and a blade-sweep
-//!   cut at once ([`Session::cut_sweep`]); the organ's demonstration ([`Session::play`]).
+//!   cut at once ([`Session::cut_sweep`]); the organ's demonstration ([`Session::play`]); the
+//!   surface's self-collision, on by default ([`SessionOptions::self_collision`],
+//!   [`Session::set_self_collision`]), its contacts ([`Session::self_contacts`]) and the exact
+//!   count of intersecting surface triangle pairs ([`Session::self_intersections`]).
 //! - [`script`]: scenarios written once and stepped by any host — [`AppendixProcedure`] (grasp
 //!   and lift the appendix's tip, incise near the base, cut the tip off, suture the incision)
 //!   and [`PressAndDrag`] (a probe pressed into an organ and dragged along waypoints), behind
@@ -98,7 +101,10 @@ pub use script::{
     SETTLE_RELAXATION_TIME,
 };
 pub use session::{
-    MaterialField, OrganMaterial, Session, SessionOptions, CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS,
-    SUTURE_SPACING_CM,
+    surface_self_intersections, MaterialField, OrganMaterial, Session, SessionOptions,
+    CUT_QUEUE_TRAY_SIDES, MAX_CUT_POINTS, SUTURE_SPACING_CM,
 };
 pub use tissue::TissuePreset;
+/// Self-collision's settings ([`SessionOptions::self_collision`]), re-exported so that a front
+/// end needs no dependency on tissue-pbd to switch it.
+pub use tissue_pbd::SelfCollision;

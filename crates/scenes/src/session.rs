@@ -59,6 +59,12 @@ pub struct SessionOptions {
     /// Scalpel paths are taken in segments of at least this length (cm); one segment is cut per
     /// step.
     pub cut_segment: f32,
+    /// Self-collision of the organ's surface, cut walls included (tissue-pbd's
+    /// [`SoftBody::set_self_collision`]; issue 35): on by default with
+    /// [`SelfCollision::default`], `None` to switch it off (the trainer's `--no-self-collision`,
+    /// the studio's checkbox, the C ABI's `self_collision` field). [`Session::set_self_collision`]
+    /// switches it on a running session.
+    pub self_collision: Option<SelfCollision>,
 }
 
 impl Default for SessionOptions {
@@ -78,6 +84,7 @@ impl Default for SessionOptions {
             grab_radius: 0.6,
             suture_depth: 0.35,
             cut_segment: 0.4,
+            self_collision: Some(SelfCollision::default()),
         }
     }
 }
@@ -319,7 +326,8 @@ impl Session {
         let _span = tracing::info_span!("session_new", organ = %organ.label).entered();
         let extent = organ.extent();
         let tray = Tray::for_extent(extent);
-        let body = organ.body(&options.material, options.step, options.contact, tray)?;
+        let mut body = organ.body(&options.material, options.step, options.contact, tray)?;
+        body.set_self_collision(options.self_collision)?;
         let tray_side = tray.side;
         let surgery = Surgery::new(&body, SurgerySettings::default())?;
         let surface = surgery.boundary_faces(&body);
@@ -440,6 +448,57 @@ impl Session {
     /// Changes whenever [`Session::surface`] does (after a cut or suture).
     pub fn surface_version(&self) -> u64 {
         self.surface_version
+    }
+
+    /// The session's settings (with the self-collision in force).
+    pub fn options(&self) -> &SessionOptions {
+        &self.options
+    }
+
+    /// Switches self-collision of the organ's surface on (with these settings) or off (`None`)
+    /// from the next step on ([`SessionOptions::self_collision`]).
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] for settings out of range (a thickness fraction outside `(0, 1]`, a
+    /// negative friction coefficient); the setting in force is then kept.
+    pub fn set_self_collision(
+        &mut self,
+        settings: Option<SelfCollision>,
+    ) -> Result<(), SceneError> {
+        self.body.set_self_collision(settings)?;
+        self.options.self_collision = settings;
+        Ok(())
+    }
+
+    /// The self-contacts of the last step's last substep: (found, active), the vertex–triangle
+    /// pairs of the surface within the detection band, and those the solver had to push apart
+    /// (tissue-pbd's [`SoftBody::self_contact_counts`]); `(0, 0)` with self-collision off.
+    pub fn self_contacts(&self) -> (usize, usize) {
+        if self.body.self_collision().is_none() {
+            return (0, 0);
+        }
+        self.body.self_contact_counts()
+    }
+
+    /// Self-contacts the last step found past the solver's buffers and so did not hold
+    /// (tissue-pbd's [`SoftBody::self_contacts_dropped`]): 0 unless the surface is badly
+    /// tangled.
+    pub fn self_contacts_dropped(&self) -> usize {
+        if self.body.self_collision().is_none() {
+            return 0;
+        }
+        self.body.self_contacts_dropped()
+    }
+
+    /// The number of pairs of [`Session::surface`]'s triangles that intersect now, counted
+    /// exactly ([`surface_self_intersections`]): 0 when the organ does not pass through itself.
+    /// The two walls of a fresh cut touch (their nodes were duplicated in place) and count until
+    /// the steps part them. Allocates; one BVH over the surface.
+    ///
+    /// # Errors
+    /// [`SceneError::Pbd`] for a non-finite position (a diverged body).
+    pub fn self_intersections(&self) -> Result<usize, SceneError> {
+        surface_self_intersections(self.body.positions(), &self.surface)
     }
 
     /// Buffer sizes that hold what cuts are likely to add: (vertices, triangles).
@@ -972,6 +1031,20 @@ impl Session {
     }
 }
 
+/// The number of pairs of `surface`'s triangles (over `positions`, cm) that intersect, counted
+/// exactly (tissue-pbd's [`tissue_pbd::count_intersecting_pairs`]: a triangle–triangle test in
+/// `f64`, neighbours by their shared indices): what self-collision is judged by
+/// ([`Session::self_intersections`], the headless `trainer`'s `self-intersections N`).
+///
+/// # Errors
+/// [`SceneError::Pbd`] for a triangle naming a missing node or a non-finite position.
+pub fn surface_self_intersections(
+    positions: &[Vec3A],
+    surface: &[[u32; 3]],
+) -> Result<usize, SceneError> {
+    Ok(tissue_pbd::count_intersecting_pairs(positions, surface)?)
+}
+
 /// The distance from `p` to the segment `a`–`b`.
 fn distance_to_segment(p: Vec3, a: Vec3, b: Vec3) -> f32 {
     let ab = b - a;
@@ -981,4 +1054,35 @@ fn distance_to_segment(p: Vec3, a: Vec3, b: Vec3) -> f32 {
         0.0
     };
     p.distance(a + ab * t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Self-collision is on by default, switched on a running session (a refused setting
+    /// keeps the one in force), and a box at rest does not pass through itself.
+    #[test]
+    fn self_collision_is_on_by_default_and_switched() {
+        let tets = tissue_mesh::tet_box(4, 2, 4, Vec3::new(4.0, 2.0, 4.0)).unwrap();
+        let organ = Organ::from_tets(&tets, "box").unwrap();
+        let mut s = Session::new(&organ, SessionOptions::default()).unwrap();
+        assert_eq!(s.options().self_collision, Some(SelfCollision::default()));
+        assert!(s.body().self_collision().is_some());
+        for _ in 0..5 {
+            s.step().unwrap();
+        }
+        assert_eq!(s.self_intersections().unwrap(), 0);
+        assert_eq!(s.self_contacts_dropped(), 0);
+        let bad = SelfCollision {
+            thickness_fraction: 0.0,
+            ..SelfCollision::default()
+        };
+        assert!(s.set_self_collision(Some(bad)).is_err());
+        assert_eq!(s.options().self_collision, Some(SelfCollision::default()));
+        s.set_self_collision(None).unwrap();
+        assert!(s.body().self_collision().is_none() && s.options().self_collision.is_none());
+        s.step().unwrap();
+        assert_eq!(s.self_contacts(), (0, 0));
+    }
 }

@@ -106,6 +106,27 @@ void surgery() {
     check(s.topology_revision != topology_before && s.triangles.size() / 3 > triangles_before,
           "the surface changed and was copied again");
 
+    // Self-collision (issue 35), on by default: the wound's two walls, their nodes duplicated in
+    // place by the cut, are held apart by self-contacts; switched off, there are none.
+    tissue_body_info self_info{};
+    ok(tissue_body_get_info(body.p, &self_info), "info");
+    uint64_t crossing = 0;
+    ok(tissue_body_self_intersections(body.p, &crossing), "self-intersections");
+    std::printf("after the cut: self-collision %s, %llu self-contacts (%llu active), %llu "
+                "self-intersections\n",
+                self_info.self_collision ? "on" : "off",
+                static_cast<unsigned long long>(self_info.self_contacts),
+                static_cast<unsigned long long>(self_info.self_contacts_active),
+                static_cast<unsigned long long>(crossing));
+    check(self_info.self_collision && self_info.self_contacts > 0,
+          "self-collision is on by default and holds the wound's walls");
+    ok(tissue_body_set_self_collision(body.p, false), "self-collision off");
+    ok(tissue_body_step(body.p, nullptr), "step");
+    ok(tissue_body_get_info(body.p, &self_info), "info");
+    check(!self_info.self_collision && self_info.self_contacts == 0,
+          "switched off: no self-contacts");
+    ok(tissue_body_set_self_collision(body.p, true), "self-collision on");
+
     // The needle across the wound, 0.3 cm either side.
     const float a[3] = {-0.3f, s.top(-0.3f, 0.0f), 0.0f};
     const float b[3] = {0.3f, s.top(0.3f, 0.0f), 0.0f};
