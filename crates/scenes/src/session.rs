@@ -423,18 +423,6 @@ impl Session {
         &self.body
     }
 
-    /// Switches the organ's self-collision on (with these settings) or off (`None`) from the
-    /// next step on ([`SoftBody::set_self_collision`]).
-    ///
-    /// # Errors
-    /// [`SceneError::Pbd`] for settings out of range.
-    pub fn set_self_collision(
-        &mut self,
-        settings: Option<SelfCollision>,
-    ) -> Result<(), SceneError> {
-        Ok(self.body.set_self_collision(settings)?)
-    }
-
     /// Node positions, cm.
     pub fn positions(&self) -> &[Vec3A] {
         self.body.positions()
