@@ -59,15 +59,21 @@
 //! per surface vertex with its segment's box grown by `h`) keeps every vertex's pairs, and they
 //! hold while every surface vertex's segment stays inside its box of that pass grown by `h`
 //! (then any pair whose boxes overlap now overlapped then); each step filters them with its own
-//! boxes, so the pairs are exactly those of a full pass every step. A body at rest or moving
-//! slowly skips the refit and the queries. The queries go by chunks of 128 consecutive surface
-//! vertices, each into its own list (in parallel when the step is), read in chunk order; the
-//! hierarchy is built over the first step's boxes without the slack (then refit with it), so a
-//! vertex's triangles come in the same order as without the lists.
+//! boxes, so the pairs are exactly those of a full pass every step. When a few vertices left
+//! their boxes (at most one in 16), an *update* instead: they take new boxes, so do the
+//! triangles they are a corner of (then a refit), and the chunks holding them or meeting a moved
+//! triangle's new box query again (`tests::updated_lists_give_the_pairs_of_a_full_pass`). A body
+//! at rest skips the refit and the queries; a tool pressing on one place re-queries the chunks
+//! around it. The queries go by chunks of 128 consecutive surface vertices, each into its own
+//! list (in parallel when the step is), read in chunk order; the hierarchy is built over the
+//! first step's boxes without the slack (then refit with it), so a vertex's triangles come in
+//! the same order as without the lists.
 //!
 //! **Narrow phase** (the tests above) on the step's pairs in every substep, after the tool and
 //! collider contacts, with cheap rejections first (the predicted triangle's extent along `n`
-//! bounds the distance along it; the cone bounds the distance to the triangle's box). Projected
+//! bounds the distance along it; the cone bounds the distance to the triangle's box). A contact
+//! whose four nodes are all pinned or held in the substep (by a tool or collider contact, or
+//! predicted at or under the floor) is dropped: it could only fight the holders. Projected
 //! in every iteration after the body's own constraints (material, sutures, floor) and before
 //! the tool and collider contacts, which thus have the last word (tools, pins and the tray
 //! hold). Serial, in a fixed order (surface vertices in increasing index, triangles in the
@@ -137,7 +143,7 @@ impl SelfCollision {
 }
 
 /// A vertex–triangle pair of the step's broad phase, not a rest neighbour.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 struct Candidate {
     vertex: u32,
     triangle: u32,
@@ -155,18 +161,26 @@ struct Chunk {
     end: usize,
     ws: BvhWorkspace,
     candidates: Vec<u32>,
-    /// The pairs of the last full pass, found over boxes grown by the slack
-    /// (`MAX_PAIRS_PER_VERTEX` per vertex at most, reserved).
+    /// The pairs of the last full pass, found over boxes grown by the slack (twice
+    /// `MAX_PAIRS_PER_VERTEX` per vertex at most, reserved).
     near: Vec<Candidate>,
     /// This step's pairs (from `near`).
     pairs: Vec<Candidate>,
-    /// Pairs found past `near`'s capacity in the last full pass.
+    /// Pairs found past `near`'s capacity in its last query.
     dropped: usize,
+    /// `near` must be found again this step.
+    dirty: bool,
+    /// The union of its vertices' boxes of the last pass, grown by the slack.
+    bounds: Aabb,
 }
 
 /// The slack of the broad phase's pairs, in `h` (see `SelfState::swept`): larger keeps them
 /// over more steps, and gives the narrow phase more pairs to test.
 const SLACK: f32 = 1.0;
+
+/// A full pass instead of an update when more than one surface vertex in this many left its
+/// box.
+const FULL_PASS: usize = 16;
 
 /// Surface vertices per broad-phase chunk.
 const CHUNK: usize = 128;
@@ -179,6 +193,8 @@ struct SelfContact {
     /// Caller's node indices, same order (for the start positions).
     nodes: [u32; 4],
     bary: [f32; 3],
+    /// Inverse masses, same order.
+    weights: [f32; 4],
     normal: Vec3A,
     /// The distance kept this substep (cm): `h`, or less for a vertex that started nearer
     /// (`RECOVERY` below).
@@ -215,12 +231,24 @@ pub(crate) struct SelfState {
     swept: Vec<Aabb>,
     /// The chunks hold the pairs of a full broad phase over the current surface.
     found: bool,
+    /// Per surface vertex, whether its segment left its box this step (scratch).
+    moved: Vec<bool>,
+    /// Broad phases that updated the lists without a full pass (a statistic for the tests).
+    updates: usize,
+    /// Surface vertices per chunk, `CHUNK` when 0 (smaller in the tests).
+    chunk_size: usize,
+    /// `FULL_PASS` when 0 (1 in the tests: updates only).
+    full_pass: usize,
     /// The triangles' boxes of the last full pass (grown by reach and slack), with their
     /// hierarchy.
     boxes: Vec<Aabb>,
     bvh: Option<Bvh>,
     /// The triangles' boxes over this step, grown by the reach.
     tight: Vec<Aabb>,
+    /// Per node, whether a tool or collider contact holds it this substep, or the floor (its
+    /// prediction at or under the floor): a self-contact whose nodes are all held or pinned is
+    /// dropped (it would fight the holders).
+    held: Vec<bool>,
     /// The broad phase's chunks of surface vertices, in order.
     chunks: Vec<Chunk>,
     contacts: Vec<SelfContact>,
@@ -322,6 +350,10 @@ impl SelfState {
         self.swept
             .resize(self.vertices.len(), Aabb::from_point(Vec3A::ZERO));
         self.found = false;
+        self.moved.clear();
+        self.moved.resize(self.vertices.len(), false);
+        self.held.clear();
+        self.held.resize(rest.len(), false);
         self.boxes.clear();
         self.boxes
             .resize(self.triangles.len(), Aabb::from_point(Vec3A::ZERO));
@@ -333,16 +365,23 @@ impl SelfState {
         self.contacts
             .reserve(most.saturating_sub(self.contacts.len()));
         self.chunks.clear();
-        for start in (0..self.vertices.len()).step_by(CHUNK) {
-            let end = (start + CHUNK).min(self.vertices.len());
+        let chunk = if self.chunk_size > 0 {
+            self.chunk_size
+        } else {
+            CHUNK
+        };
+        for start in (0..self.vertices.len()).step_by(chunk) {
+            let end = (start + chunk).min(self.vertices.len());
             self.chunks.push(Chunk {
                 start,
                 end,
                 ws: BvhWorkspace::new(),
                 candidates: Vec::with_capacity(self.triangles.len()),
-                near: Vec::with_capacity(MAX_PAIRS_PER_VERTEX * (end - start)),
+                near: Vec::with_capacity(2 * MAX_PAIRS_PER_VERTEX * (end - start)),
                 pairs: Vec::with_capacity(MAX_PAIRS_PER_VERTEX * (end - start)),
                 dropped: 0,
+                dirty: true,
+                bounds: Aabb::EMPTY,
             });
         }
         self.rest_start.clear();
@@ -566,6 +605,22 @@ impl SoftBody {
             return;
         }
         let (x, q, rank) = (&self.x, &self.q, &self.rank);
+        // The nodes held this substep: by the contacts with tools and colliders (generated
+        // before these), by the floor.
+        st.held.clear();
+        st.held.resize(x.len(), false);
+        for c in &self.collision.contacts {
+            if let Some(h) = st.held.get_mut(c.node as usize) {
+                *h = true;
+            }
+        }
+        if let Some(f) = self.floor {
+            for &v in &st.vertices {
+                if q[rank[v as usize] as usize][f.axis] <= f.height {
+                    st.held[v as usize] = true;
+                }
+            }
+        }
         if first || st.bvh.is_none() {
             let ahead = self.settings.substeps.max(1) as f32;
             let parallel = self.settings.parallel;
@@ -611,21 +666,50 @@ impl SelfState {
                 .union(&Aabb::from_triangle(b0, b1, b2))
                 .expanded(reach);
         }
-        let within = st.found
-            && st.bvh.is_some()
-            && (st.vertices.iter().zip(&st.swept))
-                .all(|(&v, r)| r.expanded(slack).contains(&segment(v)));
-        if !within {
-            // The full pass: boxes grown by the slack, refit, one query per surface vertex,
-            // by chunks of consecutive vertices (in parallel when the step is, each chunk
-            // into its own list: the same lists on any number of threads).
+        // The vertices whose segment left its box of the last pass grown by the slack.
+        let mut escaped = 0;
+        for ((m, r), &v) in st.moved.iter_mut().zip(&st.swept).zip(&st.vertices) {
+            *m = !r.expanded(slack).contains(&segment(v));
+            escaped += usize::from(*m);
+        }
+        let most = st.vertices.len()
+            / if st.full_pass > 0 {
+                st.full_pass
+            } else {
+                FULL_PASS
+            };
+        let full = !st.found || st.bvh.is_none() || escaped > most;
+        if full || escaped > 0 {
+            // A full pass (boxes grown by the slack, refit, one query per surface vertex), or
+            // an update: the escaped vertices take their new boxes, the triangles they are a
+            // corner of too, and the chunks of the escaped vertices and of every vertex whose
+            // box meets a moved triangle's new one query again. Queries by chunks of
+            // consecutive vertices (in parallel when the step is, each chunk into its own
+            // list: the same lists on any number of threads).
             st.found = false;
-            for (r, &v) in st.swept.iter_mut().zip(&st.vertices) {
-                *r = segment(v);
+            for ((r, &m), &v) in st.swept.iter_mut().zip(&st.moved).zip(&st.vertices) {
+                if full || m {
+                    *r = segment(v);
+                }
+            }
+            for c in &mut st.chunks {
+                c.dirty = full || st.moved[c.start..c.end].contains(&true);
+                c.bounds = st.swept[c.start..c.end]
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, r| b.union(r))
+                    .expanded(slack);
             }
             for (b, t) in st.boxes.iter_mut().zip(&st.local) {
+                if !full && !t.iter().any(|&k| st.moved[k as usize]) {
+                    continue;
+                }
                 let [r0, r1, r2] = t.map(|k| st.swept[k as usize]);
                 *b = r0.union(&r1).union(&r2).expanded(reach + slack);
+                if !full {
+                    for c in st.chunks.iter_mut().filter(|c| !c.dirty) {
+                        c.dirty = c.bounds.overlaps(b, 0.0);
+                    }
+                }
             }
             if st.bvh.is_none() {
                 // Built over this step's boxes without the slack (the hierarchy, and the order
@@ -659,6 +743,9 @@ impl SelfState {
                 &st.rest,
             );
             let query = |c: &mut Chunk| {
+                if !c.dirty {
+                    return;
+                }
                 c.near.clear();
                 c.dropped = 0;
                 for (k, &v) in vertices.iter().enumerate().take(c.end).skip(c.start) {
@@ -687,6 +774,7 @@ impl SelfState {
                 st.chunks.iter_mut().for_each(query);
             }
             st.found = true;
+            st.updates += usize::from(!full);
         }
         // This step's pairs: the lists' pairs whose boxes over this step overlap.
         let tight = st.tight.as_slice();
@@ -752,8 +840,13 @@ impl SelfState {
             if (d - n * along).length() > LATERAL * along.abs() {
                 continue;
             }
-            let slots = [v, t[0], t[1], t[2]].map(|i| rank[i as usize]);
-            if slots.iter().all(|&s| q[s as usize].w <= 0.0) {
+            let nodes = [v, t[0], t[1], t[2]];
+            let slots = nodes.map(|i| rank[i as usize]);
+            let weights = slots.map(|s| q[s as usize].w.max(0.0));
+            if (weights.iter().zip(&nodes))
+                .all(|(&w, &i)| w <= 0.0 || st.held.get(i as usize).copied().unwrap_or(true))
+            {
+                // Every node pinned or held this substep: the holders have the last word.
                 continue;
             }
             if st.contacts.len() == st.contacts.capacity() {
@@ -770,8 +863,9 @@ impl SelfState {
             }
             st.contacts.push(SelfContact {
                 slots,
-                nodes: [v, t[0], t[1], t[2]],
+                nodes,
                 bary,
+                weights,
                 normal: n,
                 target: h.min(start + RECOVERY * h),
                 normal_correction: 0.0,
@@ -791,12 +885,7 @@ impl SoftBody {
         for c in &mut self.self_collision.contacts {
             let [sv, sa, sb, sc] = c.slots;
             let [u, v, w] = c.bary;
-            let (wv, wa, wb, wc) = (
-                q[sv as usize].w,
-                q[sa as usize].w,
-                q[sb as usize].w,
-                q[sc as usize].w,
-            );
+            let [wv, wa, wb, wc] = c.weights;
             let big_w = wv + u * u * wa + v * v * wb + w * w * wc;
             if big_w <= 0.0 {
                 continue;
@@ -843,5 +932,102 @@ impl SoftBody {
                 q[s as usize] = p.extend(wq);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use glam::Vec3;
+    use tissue_mesh::{tet_box, TetMesh};
+
+    use super::*;
+    use crate::{ContactParams, Floor, Material, Pose, StepSettings, ToolShape};
+
+    /// The lists updated for the vertices that left their boxes give the pairs of a full pass:
+    /// the upper arm of a weightless U-folded slab pressed onto the lower one by a probe (a
+    /// few vertices move at a time, and come near vertices that do not), checked after every
+    /// step against a full pass on the same positions.
+    #[test]
+    fn updated_lists_give_the_pairs_of_a_full_pass() {
+        let (positions, tets) = tet_box(30, 2, 5, Vec3::new(6.0, 0.4, 1.0))
+            .unwrap()
+            .into_parts();
+        // Bent into a U (tests/it/selfcol.rs): the upper arm 0.8 cm over the lower one.
+        let (s0, r) = (-0.5f32, 0.6f32);
+        let loop_len = std::f32::consts::PI * r;
+        let bent = positions
+            .iter()
+            .map(|p| {
+                let (s, t) = (p.x, p.y);
+                if s <= s0 {
+                    Vec3::new(s, t, p.z)
+                } else if s <= s0 + loop_len {
+                    let phi = (s - s0) / r;
+                    Vec3::new(s0 + (r - t) * phi.sin(), r - (r - t) * phi.cos(), p.z)
+                } else {
+                    Vec3::new(s0 - (s - s0 - loop_len), 2.0 * r - t, p.z)
+                }
+            })
+            .collect();
+        let mesh = TetMesh::new(bent, tets).unwrap();
+        let mut body = SoftBody::new(&mesh, &Material::soft_tissue()).unwrap();
+        body.set_settings(StepSettings {
+            gravity: Vec3::ZERO,
+            ..StepSettings::realtime()
+        })
+        .unwrap();
+        body.set_floor(Some(Floor::y(-0.2))).unwrap();
+        body.set_self_collision(Some(SelfCollision::default()))
+            .unwrap();
+        // Chunks of four vertices (the arms' vertices in different ones; with larger ones the
+        // chunks of the moved vertices cover the others here), and updates however many
+        // vertices moved.
+        body.self_collision.chunk_size = 4;
+        body.self_collision.full_pass = 1;
+        let probe = ToolShape::Capsule {
+            a: Vec3::new(0.0, 0.0, -1.5),
+            b: Vec3::new(0.0, 0.0, 1.5),
+            radius: 0.2,
+        };
+        let at = |y: f32| Pose::from_translation(Vec3::new(-1.5, y, 0.0));
+        let tool = body
+            .add_tool(probe, at(1.8), ContactParams::default())
+            .unwrap();
+        let ahead = StepSettings::REALTIME_SUBSTEPS as f32;
+        let mut checked = 0;
+        for s in 1..=100 {
+            body.set_tool_pose(tool, at(1.8 - 1.1 * s as f32 / 100.0))
+                .unwrap();
+            body.step().unwrap();
+            let h = body.self_collision.thickness.unwrap();
+            let (x, q, rank) = (&body.x, &body.q, &body.rank);
+            // A clone with the buffers' capacities (a clone's are its lengths).
+            let copy = || {
+                let mut st = body.self_collision.clone();
+                for c in &mut st.chunks {
+                    let n = c.end - c.start;
+                    c.near.reserve(2 * MAX_PAIRS_PER_VERTEX * n - c.near.len());
+                    c.pairs.reserve(MAX_PAIRS_PER_VERTEX * n - c.pairs.len());
+                }
+                st
+            };
+            let mut updated = copy();
+            let before = updated.updates;
+            assert!(updated.broad_phase(x, q, rank, h, ahead, false));
+            let mut full = copy();
+            full.found = false;
+            assert!(full.broad_phase(x, q, rank, h, ahead, false));
+            let pairs = |st: &SelfState| -> Vec<Candidate> {
+                st.chunks.iter().flat_map(|c| c.pairs.clone()).collect()
+            };
+            assert_eq!(full.chunks.iter().map(|c| c.dropped).sum::<usize>(), 0);
+            assert_eq!(pairs(&updated), pairs(&full), "step {s}");
+            checked += updated.updates - before;
+        }
+        assert!(
+            checked > 0,
+            "no update without a full pass: the test tests nothing"
+        );
     }
 }
