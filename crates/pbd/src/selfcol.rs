@@ -6,8 +6,9 @@
 //! The faces used by one tet only (the boundary of the current tets, so the faces a cut opens
 //! are in it: a cut duplicates nodes and gives the two walls distinct faces), wound outward
 //! ([`tissue_mesh::TET_FACES`] on positively oriented tets). Rebuilt, with its hierarchy, after
-//! any topology edit (`duplicate_nodes`, `set_tet_nodes`, `add_tet`: that step allocates);
-//! otherwise the hierarchy over the triangles' swept boxes is refit every step.
+//! any topology edit (`duplicate_nodes`, `set_tet_nodes`, `add_tet`) or rest-position edit
+//! (`set_rest_position`; that step allocates); otherwise the hierarchy over the triangles'
+//! swept boxes is refit when the broad phase's lists are found again (below).
 //!
 //! ## Thickness and detection
 //! `h` = [`SelfCollision::thickness_fraction`] × the mean rest length of the surface's edges
