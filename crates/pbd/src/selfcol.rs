@@ -65,7 +65,8 @@
 //! triangles they are a corner of (then a refit), and the chunks holding them or meeting a moved
 //! triangle's new box query again (`tests::updated_lists_give_the_pairs_of_a_full_pass`). A body
 //! at rest skips the refit and the queries; a tool pressing on one place re-queries the chunks
-//! around it. The queries go by chunks of 128 consecutive surface vertices, each into its own
+//! around it. Lists that did not outlast a step (a body in motion) are found without the slack
+//! (the old, smaller boxes) until one in `BARE_PASSES` = 8 full passes tries the slack again. The queries go by chunks of 128 consecutive surface vertices, each into its own
 //! list (in parallel when the step is), read in chunk order; the hierarchy is built over the
 //! first step's boxes without the slack (then refit with it), so a vertex's triangles come in
 //! the same order as without the lists.
@@ -183,6 +184,9 @@ const SLACK: f32 = 1.0;
 /// box.
 const FULL_PASS: usize = 16;
 
+/// Full passes without slack in a row before one with it again (see `SelfState::slack`).
+const BARE_PASSES: u32 = 8;
+
 /// Surface vertices per broad-phase chunk.
 const CHUNK: usize = 128;
 
@@ -236,6 +240,11 @@ pub(crate) struct SelfState {
     moved: Vec<bool>,
     /// Broad phases that updated the lists without a full pass (a statistic for the tests).
     updates: usize,
+    /// The slack of the lists (cm): `SLACK h`, or 0 while they do not outlast a step.
+    slack: f32,
+    /// Steps since the last full pass, and full passes without slack in a row.
+    lasted: u32,
+    bare: u32,
     /// Surface vertices per chunk, `CHUNK` when 0 (smaller in the tests).
     chunk_size: usize,
     /// `FULL_PASS` when 0 (1 in the tests: updates only).
@@ -351,6 +360,8 @@ impl SelfState {
         self.swept
             .resize(self.vertices.len(), Aabb::from_point(Vec3A::ZERO));
         self.found = false;
+        self.lasted = 0;
+        self.bare = 0;
         self.moved.clear();
         self.moved.resize(self.vertices.len(), false);
         self.held.clear();
@@ -653,7 +664,8 @@ impl SelfState {
         parallel: bool,
     ) -> bool {
         let st = self;
-        let (reach, slack) = (2.0 * h, SLACK * h);
+        // The slack of the current lists.
+        let (reach, mut slack) = (2.0 * h, st.slack);
         let far = |i: u32| {
             let x0 = x[i as usize];
             x0 + (point(q, rank[i as usize]) - x0) * ahead
@@ -680,6 +692,16 @@ impl SelfState {
                 FULL_PASS
             };
         let full = !st.found || st.bvh.is_none() || escaped > most;
+        st.lasted = st.lasted.saturating_add(1);
+        if full {
+            // Lists that did not outlast a step (a body in motion): the slack would only cost
+            // (larger boxes, more pairs), so none, but tried again every `BARE_PASSES` passes.
+            let bare = st.found && st.lasted <= 1 && st.bare < BARE_PASSES;
+            st.bare = if bare { st.bare + 1 } else { 0 };
+            slack = if bare { 0.0 } else { SLACK * h };
+            st.slack = slack;
+            st.lasted = 0;
+        }
         if full || escaped > 0 {
             // A full pass (boxes grown by the slack, refit, one query per surface vertex), or
             // an update: the escaped vertices take their new boxes, the triangles they are a
