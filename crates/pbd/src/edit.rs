@@ -1147,6 +1147,8 @@ impl SoftBody {
             });
         }
         self.edits.rest_x[node as usize] = rest.into();
+        // Self-collision's rest relations are cached per surface build (selfcol.rs).
+        self.self_collision.stale = true;
         Ok(())
     }
 

@@ -6,8 +6,9 @@
 //! The faces used by one tet only (the boundary of the current tets, so the faces a cut opens
 //! are in it: a cut duplicates nodes and gives the two walls distinct faces), wound outward
 //! ([`tissue_mesh::TET_FACES`] on positively oriented tets). Rebuilt, with its hierarchy, after
-//! any topology edit (`duplicate_nodes`, `set_tet_nodes`, `add_tet`: that step allocates);
-//! otherwise the hierarchy over the triangles' swept boxes is refit every step.
+//! any topology edit (`duplicate_nodes`, `set_tet_nodes`, `add_tet`) or rest-position edit
+//! (`set_rest_position`; that step allocates); otherwise the hierarchy over the triangles'
+//! swept boxes is refit when the broad phase's lists are found again (below).
 //!
 //! ## Thickness and detection
 //! `h` = [`SelfCollision::thickness_fraction`] × the mean rest length of the surface's edges
@@ -45,23 +46,49 @@
 //! while it and the friction already applied stay within `μ_s` times the normal correction,
 //! otherwise reduced by what `μ_k` times it allows.
 //!
-//! ## Place in the step and determinism
-//! Broad phase once per step, in its first substep (the hierarchy refit over boxes swept over
-//! the whole step: the first substep's motion extrapolated over the step's substeps, grown by
-//! the detection reach `2h`; one query per surface vertex; rest neighbours dropped),
-//! narrow phase (the tests above) on those pairs in every substep, after the tool and collider
-//! contacts; projected in every
-//! iteration after the body's own constraints (material, sutures, floor) and before the tool
-//! and collider contacts, which thus have the last word (tools, pins and the tray hold). Serial,
-//! in a fixed order (surface vertices in increasing index, triangles in the hierarchy's order):
-//! the same for any thread count (`tests/it/selfcol.rs`). No allocation in a step after the
-//! one that builds the surface (the buffers are reserved then: at most eight contacts per
-//! surface vertex and substep, the rest dropped and counted, `tests/no_allocation.rs`).
+//! ## Place in the step, cost and determinism
+//! **Rest relations**, once per surface build: per surface vertex, the sorted list of the
+//! triangles it is never held against (above) or was near at rest (within `2h`: not pushed out
+//! from behind them), found with a hierarchy over the rest triangles grown by `2h`. A step looks
+//! a pair up in it (a binary search) instead of computing a closest point at rest.
+//!
+//! **Broad phase**, once per step in its first substep: the (vertex, triangle) pairs, rest
+//! neighbours left out, whose boxes over the whole step overlap (the vertex's segment from its
+//! start to its first-substep motion extrapolated over the step's substeps; the triangle's
+//! corners over the same, grown by the detection reach `2h`). Taken from Verlet lists: a *full
+//! pass* (the hierarchy refit over the triangles' boxes grown by a further slack `h`, one query
+//! per surface vertex with its segment's box grown by `h`) keeps every vertex's pairs, and they
+//! hold while every surface vertex's segment stays inside its box of that pass grown by `h`
+//! (then any pair whose boxes overlap now overlapped then); each step filters them with its own
+//! boxes, so the pairs are exactly those of a full pass every step. When a few vertices left
+//! their boxes (at most one in 16), an *update* instead: they take new boxes, so do the
+//! triangles they are a corner of (then a refit), and the chunks holding them or meeting a moved
+//! triangle's new box query again (`tests::updated_lists_give_the_pairs_of_a_full_pass`). A body
+//! at rest skips the refit and the queries; a tool pressing on one place re-queries the chunks
+//! around it. Lists that did not outlast a step (a body in motion) are found without the slack
+//! (the old, smaller boxes) until one in `BARE_PASSES` = 8 full passes tries the slack again. The queries go by chunks of 128 consecutive surface vertices, each into its own
+//! list (in parallel when the step is), read in chunk order; the hierarchy is built over the
+//! first step's boxes without the slack (then refit with it), so a vertex's triangles come in
+//! the same order as without the lists.
+//!
+//! **Narrow phase** (the tests above) on the step's pairs in every substep, after the tool and
+//! collider contacts, with cheap rejections first (the predicted triangle's extent along `n`
+//! bounds the distance along it; the cone bounds the distance to the triangle's box). A contact
+//! whose four nodes are all pinned or held in the substep (by a tool or collider contact, or
+//! predicted at or under the floor) is dropped: it could only fight the holders. Projected
+//! in every iteration after the body's own constraints (material, sutures, floor) and before
+//! the tool and collider contacts, which thus have the last word (tools, pins and the tray
+//! hold). Serial, in a fixed order (surface vertices in increasing index, triangles in the
+//! hierarchy's order): the same for any thread count (`tests/it/selfcol.rs`). No allocation in
+//! a step after the one that builds the surface (the buffers are reserved then: at most 64
+//! broad-phase pairs per surface vertex and eight contacts per vertex and substep, the rest
+//! dropped and counted, `tests/selfcol_allocation.rs`, serial and parallel).
 //!
 //! Edge–edge proximity is not handled (a known gap: two edges can cross between vertices held
 //! apart when the thickness is small against the edges).
 
 use glam::{Vec3A, Vec4, Vec4Swizzles};
+use rayon::prelude::*;
 use tissue_bvh::{closest_point_on_triangle, Aabb, BuildOptions, Bvh, BvhWorkspace};
 use tissue_mesh::TET_FACES;
 
@@ -118,13 +145,50 @@ impl SelfCollision {
 }
 
 /// A vertex–triangle pair of the step's broad phase, not a rest neighbour.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 struct Candidate {
     vertex: u32,
     triangle: u32,
-    ring: bool,
-    rest_distance: f32,
+    /// The two were within `2h` at rest without coinciding (`NEAR_AT_REST`).
+    near_at_rest: bool,
 }
+
+/// A run of consecutive surface vertices whose broad-phase queries are made together (by one
+/// thread), with its own scratch and pairs: `CHUNK` vertices, so that the chunks, and the
+/// order of the pairs they give, are the same for any number of threads.
+#[derive(Debug, Clone, Default)]
+struct Chunk {
+    /// Its surface vertices, `start..end` in `SelfState::vertices`.
+    start: usize,
+    end: usize,
+    ws: BvhWorkspace,
+    candidates: Vec<u32>,
+    /// The pairs of the last full pass, found over boxes grown by the slack (twice
+    /// `MAX_PAIRS_PER_VERTEX` per vertex at most, reserved).
+    near: Vec<Candidate>,
+    /// This step's pairs (from `near`).
+    pairs: Vec<Candidate>,
+    /// Pairs found past `near`'s capacity in its last query.
+    dropped: usize,
+    /// `near` must be found again this step.
+    dirty: bool,
+    /// The union of its vertices' boxes of the last pass, grown by the slack.
+    bounds: Aabb,
+}
+
+/// The slack of the broad phase's pairs, in `h` (see `SelfState::swept`): larger keeps them
+/// over more steps, and gives the narrow phase more pairs to test.
+const SLACK: f32 = 1.0;
+
+/// A full pass instead of an update when more than one surface vertex in this many left its
+/// box.
+const FULL_PASS: usize = 16;
+
+/// Full passes without slack in a row before one with it again (see `SelfState::slack`).
+const BARE_PASSES: u32 = 8;
+
+/// Surface vertices per broad-phase chunk.
+const CHUNK: usize = 128;
 
 /// One vertex–triangle contact of the current substep.
 #[derive(Debug, Clone, Copy)]
@@ -134,6 +198,8 @@ struct SelfContact {
     /// Caller's node indices, same order (for the start positions).
     nodes: [u32; 4],
     bary: [f32; 3],
+    /// Inverse masses, same order.
+    weights: [f32; 4],
     normal: Vec3A,
     /// The distance kept this substep (cm): `h`, or less for a vertex that started nearer
     /// (`RECOVERY` below).
@@ -157,14 +223,44 @@ pub(crate) struct SelfState {
     /// Per surface vertex, the nodes sharing a tet with it (sorted): `neighbours[start[k]..start[k + 1]]`.
     start: Vec<u32>,
     neighbours: Vec<u32>,
+    /// Per surface vertex, the triangles it must not be held against or was near at rest
+    /// (`relation`), sorted, each as `triangle << 1 | near`: `rest[rest_start[k]..rest_start[k + 1]]`.
+    /// Computed once per surface build from the rest positions.
+    rest_start: Vec<u32>,
+    rest: Vec<u32>,
+    /// The triangles in surface-vertex indices (`vertices[..]`).
+    local: Vec<[u32; 3]>,
+    /// Per surface vertex, the box of its segment over the step at the last full broad phase:
+    /// the pairs found then hold while every vertex's segment stays in its box grown by
+    /// `SLACK h`.
+    swept: Vec<Aabb>,
+    /// The chunks hold the pairs of a full broad phase over the current surface.
+    found: bool,
+    /// Per surface vertex, whether its segment left its box this step (scratch).
+    moved: Vec<bool>,
+    /// Broad phases that updated the lists without a full pass (a statistic for the tests).
+    updates: usize,
+    /// The slack of the lists (cm): `SLACK h`, or 0 while they do not outlast a step.
+    slack: f32,
+    /// Steps since the last full pass, and full passes without slack in a row.
+    lasted: u32,
+    bare: u32,
+    /// Surface vertices per chunk, `CHUNK` when 0 (smaller in the tests).
+    chunk_size: usize,
+    /// `FULL_PASS` when 0 (1 in the tests: updates only).
+    full_pass: usize,
+    /// The triangles' boxes of the last full pass (grown by reach and slack), with their
+    /// hierarchy.
     boxes: Vec<Aabb>,
     bvh: Option<Bvh>,
-    ws: BvhWorkspace,
-    candidates: Vec<u32>,
-    /// The step's broad-phase pairs (`MAX_PAIRS_PER_VERTEX` per surface vertex at most).
-    pairs: Vec<Candidate>,
-    /// Broad-phase pairs found past `pairs`' capacity this step (not tested).
-    dropped_pairs: usize,
+    /// The triangles' boxes over this step, grown by the reach.
+    tight: Vec<Aabb>,
+    /// Per node, whether a tool or collider contact holds it this substep, or the floor (its
+    /// prediction at or under the floor): a self-contact whose nodes are all held or pinned is
+    /// dropped (it would fight the holders).
+    held: Vec<bool>,
+    /// The broad phase's chunks of surface vertices, in order.
+    chunks: Vec<Chunk>,
     contacts: Vec<SelfContact>,
     /// Contacts found past the buffer's capacity this substep (not projected).
     dropped: usize,
@@ -255,64 +351,155 @@ impl SelfState {
                 self.thickness = Some((sum / n as f64) as f32 * fraction);
             }
         }
+        self.local = self
+            .triangles
+            .iter()
+            .map(|t| t.map(|i| self.vertices.binary_search(&i).unwrap_or(0) as u32))
+            .collect();
+        self.swept.clear();
+        self.swept
+            .resize(self.vertices.len(), Aabb::from_point(Vec3A::ZERO));
+        self.found = false;
+        self.lasted = 0;
+        self.bare = 0;
+        self.moved.clear();
+        self.moved.resize(self.vertices.len(), false);
+        self.held.clear();
+        self.held.resize(rest.len(), false);
         self.boxes.clear();
         self.boxes
             .resize(self.triangles.len(), Aabb::from_point(Vec3A::ZERO));
+        self.tight.clone_from(&self.boxes);
         self.bvh = None;
         self.contacts.clear();
         // The step's buffers at their largest, so that no step allocates (`MAX_CONTACTS_PER_VERTEX`).
         let most = MAX_CONTACTS_PER_VERTEX * self.vertices.len();
         self.contacts
             .reserve(most.saturating_sub(self.contacts.len()));
-        self.candidates
-            .reserve(self.triangles.len().saturating_sub(self.candidates.len()));
-        self.pairs.clear();
-        self.pairs
-            .reserve(MAX_PAIRS_PER_VERTEX * self.vertices.len());
+        self.chunks.clear();
+        let chunk = if self.chunk_size > 0 {
+            self.chunk_size
+        } else {
+            CHUNK
+        };
+        for start in (0..self.vertices.len()).step_by(chunk) {
+            let end = (start + chunk).min(self.vertices.len());
+            self.chunks.push(Chunk {
+                start,
+                end,
+                ws: BvhWorkspace::new(),
+                candidates: Vec::with_capacity(self.triangles.len()),
+                near: Vec::with_capacity(2 * MAX_PAIRS_PER_VERTEX * (end - start)),
+                pairs: Vec::with_capacity(MAX_PAIRS_PER_VERTEX * (end - start)),
+                dropped: 0,
+                dirty: true,
+                bounds: Aabb::EMPTY,
+            });
+        }
+        self.rest_start.clear();
+        self.rest.clear();
+        if let Some(h) = self.thickness {
+            self.cache_rest_relations(rest, h);
+        }
         self.stale = false;
+    }
+
+    /// Fills `rest_start` and `rest` (see the fields) from the rest positions `rest`: for each
+    /// surface vertex `v`, the triangles it must never be held against, and those it was near
+    /// at rest. Excluded: a triangle with `v` as a corner, or a corner sharing a tet with `v`
+    /// (its tet one-ring: on an irregular mesh a short edge puts a fan neighbour's far side
+    /// within `h`); one within `1.5 h` of `v` at rest (rest neighbours further out, a sliver's
+    /// far corner) unless they coincided at rest (`d < 10⁻⁴ h`: the two walls of a cut, made
+    /// from one place). Near at rest: from `1.5 h` to `2 h`. Found with a hierarchy over the
+    /// rest triangles grown by `2 h`. Allocates (once per surface build).
+    fn cache_rest_relations(&mut self, rest: &[Vec3A], h: f32) {
+        let at = |i: u32| rest.get(i as usize).copied().unwrap_or(Vec3A::ZERO);
+        // Node → its surface triangles.
+        let n = self
+            .triangles
+            .iter()
+            .flatten()
+            .map(|&i| i as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let mut first = vec![0u32; n + 1];
+        for &c in self.triangles.iter().flatten() {
+            first[c as usize + 1] += 1;
+        }
+        for i in 0..n {
+            first[i + 1] += first[i];
+        }
+        let mut fill = first.clone();
+        let mut incident = vec![0u32; 3 * self.triangles.len()];
+        for (ti, t) in self.triangles.iter().enumerate() {
+            for &c in t {
+                incident[fill[c as usize] as usize] = ti as u32;
+                fill[c as usize] += 1;
+            }
+        }
+        let boxes: Vec<Aabb> = self
+            .triangles
+            .iter()
+            .map(|t| Aabb::from_triangle(at(t[0]), at(t[1]), at(t[2])).expanded(NEAR_AT_REST * h))
+            .collect();
+        let bvh = Bvh::build(boxes.as_slice(), &BuildOptions::default()).ok();
+        let (mut ws, mut hits, mut list) = (BvhWorkspace::new(), Vec::new(), Vec::new());
+        for (k, &v) in self.vertices.iter().enumerate() {
+            self.rest_start.push(self.rest.len() as u32);
+            list.clear();
+            let ring = self.ring(k);
+            for &r in std::iter::once(&v).chain(ring) {
+                let r = r as usize;
+                if let (Some(&a), Some(&b)) = (first.get(r), first.get(r + 1)) {
+                    list.extend(incident[a as usize..b as usize].iter().map(|&t| t << 1));
+                }
+            }
+            if let Some(bvh) = &bvh {
+                let probe = Aabb::from_point(at(v));
+                bvh.overlapping_primitives(boxes.as_slice(), &probe, 0.0, &mut ws, &mut hits);
+                for &ti in &hits {
+                    let t = self.triangles[ti as usize];
+                    if t.contains(&v) || t.iter().any(|c| ring.binary_search(c).is_ok()) {
+                        continue;
+                    }
+                    let (q, _) = closest_point_on_triangle(at(v), at(t[0]), at(t[1]), at(t[2]));
+                    let d = q.distance(at(v));
+                    if d < TWIN * h {
+                        // The two walls of a cut: they collide.
+                    } else if d < REST_NEIGHBOUR * h {
+                        list.push(ti << 1);
+                    } else if d < NEAR_AT_REST * h {
+                        list.push(ti << 1 | 1);
+                    }
+                }
+            }
+            list.sort_unstable();
+            list.dedup();
+            self.rest.extend_from_slice(&list);
+        }
+        self.rest_start.push(self.rest.len() as u32);
     }
 
     /// The tet one-ring of surface vertex `k`.
     fn ring(&self, k: usize) -> &[u32] {
         &self.neighbours[self.start[k] as usize..self.start[k + 1] as usize]
     }
+}
 
-    /// How the surface vertex `k` (node `v`) stands to triangle `t`: `None` when it must not be
-    /// held against it, else `Some((ring, d))`: whether a corner of `t` shares a tet with `v`
-    /// (always `false`: such triangles are excluded), and their rest distance `d` (`rest`: rest
-    /// positions). Excluded: `t` has `v` as a corner, or a corner sharing a tet with `v` (its
-    /// tet one-ring: on an irregular mesh a short edge puts a fan neighbour's far side within
-    /// `h`); `t` was within `1.5 h` of `v` at rest (rest neighbours further out, a sliver's far
-    /// corner) unless they coincided at rest (`d < 10⁻⁴ h`: the two walls of a cut, made from
-    /// one place).
-    fn relation(
-        &self,
-        k: usize,
-        v: u32,
-        t: [u32; 3],
-        rest: &[Vec3A],
-        h: f32,
-    ) -> Option<(bool, f32)> {
-        if t.contains(&v) {
-            return None;
-        }
-        let ring = self.ring(k);
-        let near = t.iter().any(|c| ring.binary_search(c).is_ok());
-        if near {
-            return None;
-        }
-        let at = |i: u32| rest.get(i as usize).copied().unwrap_or(Vec3A::ZERO);
-        let (q, _) = closest_point_on_triangle(at(v), at(t[0]), at(t[1]), at(t[2]));
-        let d = q.distance(at(v));
-        if d >= REST_NEIGHBOUR * h {
-            return Some((near, d));
-        }
-        if d < TWIN * h && !near {
-            return Some((false, d));
-        }
-        None
+/// How surface vertex `k` stands to triangle `t`, from its cached rest relations `rest`
+/// (`SelfState::rest` from `rest_start[k]` to `rest_start[k + 1]`): `None` when it must not be
+/// held against it, else whether the two were near at rest (`NEAR_AT_REST`).
+fn relation(rest: &[u32], t: u32) -> Option<bool> {
+    match rest.binary_search_by_key(&t, |e| e >> 1) {
+        Ok(i) => (rest[i] & 1 == 1).then_some(true),
+        Err(_) => Some(false),
     }
 }
+
+/// Pairs within this many `h` at rest (and not rest neighbours) were near at rest: a vertex
+/// that starts a substep behind such a triangle is left to the material (beside a sharp convex
+/// edge), not pushed out.
+const NEAR_AT_REST: f32 = 2.0;
 
 /// Pairs nearer than this many `h` at rest are rest neighbours (excluded).
 const REST_NEIGHBOUR: f32 = 1.5;
@@ -398,7 +585,8 @@ impl SoftBody {
     /// vertex), plus the step's broad-phase pairs past theirs (64 per surface vertex),
     /// hence not tested or projected: 0 unless the surface is badly tangled.
     pub fn self_contacts_dropped(&self) -> usize {
-        self.self_collision.dropped + self.self_collision.dropped_pairs
+        let st = &self.self_collision;
+        st.dropped + st.chunks.iter().map(|c| c.dropped).sum::<usize>()
     }
 
     /// The surface's triangles as self-collision sees them (the faces used by one tet only,
@@ -428,25 +616,128 @@ impl SoftBody {
         if st.triangles.is_empty() {
             return;
         }
-        let reach = 2.0 * h;
         let (x, q, rank) = (&self.x, &self.q, &self.rank);
-        let predicted = |i: u32| point(q, rank[i as usize]);
+        // The nodes held this substep: by the contacts with tools and colliders (generated
+        // before these), by the floor.
+        st.held.clear();
+        st.held.resize(x.len(), false);
+        for c in &self.collision.contacts {
+            if let Some(h) = st.held.get_mut(c.node as usize) {
+                *h = true;
+            }
+        }
+        if let Some(f) = self.floor {
+            for &v in &st.vertices {
+                if q[rank[v as usize] as usize][f.axis] <= f.height {
+                    st.held[v as usize] = true;
+                }
+            }
+        }
         if first || st.bvh.is_none() {
-            // The broad phase, once per step: every (vertex, triangle) whose boxes over the
-            // whole step (the first substep's motion extrapolated over the step's substeps,
-            // the triangle's grown by the detection reach `2h`) overlap, rest neighbours left
-            // out.
             let ahead = self.settings.substeps.max(1) as f32;
-            let far = |i: u32| {
-                let x0 = x[i as usize];
-                x0 + (predicted(i) - x0) * ahead
+            let parallel = self.settings.parallel;
+            let ok = st.broad_phase(x, q, rank, h, ahead, parallel);
+            if !ok {
+                return;
+            }
+        }
+        st.narrow_phase(x, q, rank, h);
+    }
+}
+
+impl SelfState {
+    /// The broad phase, once per step (in its first substep): every (vertex, triangle) whose
+    /// boxes over the whole step overlap (the vertex's segment from its start to `far`, the
+    /// first substep's motion extrapolated over the step's `ahead` substeps; the triangle's
+    /// corners over the same, grown by the detection reach `2h`), rest neighbours left out,
+    /// into the chunks' `pairs`. From the chunks' `near` lists (Verlet lists), which a full
+    /// pass (refit and one query per vertex) refills only when a vertex's segment left its box
+    /// of the last full pass grown by `SLACK h`. `false` for non-finite positions (no pairs:
+    /// the step reports the divergence).
+    fn broad_phase(
+        &mut self,
+        x: &[Vec3A],
+        q: &[Vec4],
+        rank: &[u32],
+        h: f32,
+        ahead: f32,
+        parallel: bool,
+    ) -> bool {
+        let st = self;
+        // The slack of the current lists.
+        let (reach, mut slack) = (2.0 * h, st.slack);
+        let far = |i: u32| {
+            let x0 = x[i as usize];
+            x0 + (point(q, rank[i as usize]) - x0) * ahead
+        };
+        let segment = |v: u32| Aabb::from_segment(x[v as usize], far(v));
+        // The triangles' boxes over this step, grown by the reach.
+        for (b, t) in st.tight.iter_mut().zip(&st.triangles) {
+            let [a0, a1, a2] = t.map(|i| x[i as usize]);
+            let [b0, b1, b2] = t.map(far);
+            *b = Aabb::from_triangle(a0, a1, a2)
+                .union(&Aabb::from_triangle(b0, b1, b2))
+                .expanded(reach);
+        }
+        // The vertices whose segment left its box of the last pass grown by the slack.
+        let mut escaped = 0;
+        for ((m, r), &v) in st.moved.iter_mut().zip(&st.swept).zip(&st.vertices) {
+            *m = !r.expanded(slack).contains(&segment(v));
+            escaped += usize::from(*m);
+        }
+        let most = st.vertices.len()
+            / if st.full_pass > 0 {
+                st.full_pass
+            } else {
+                FULL_PASS
             };
-            for (b, t) in st.boxes.iter_mut().zip(&st.triangles) {
-                let [a0, a1, a2] = t.map(|i| x[i as usize]);
-                let [b0, b1, b2] = t.map(far);
-                *b = Aabb::from_triangle(a0, a1, a2)
-                    .union(&Aabb::from_triangle(b0, b1, b2))
-                    .expanded(reach);
+        let full = !st.found || st.bvh.is_none() || escaped > most;
+        st.lasted = st.lasted.saturating_add(1);
+        if full {
+            // Lists that did not outlast a step (a body in motion): the slack would only cost
+            // (larger boxes, more pairs), so none, but tried again every `BARE_PASSES` passes.
+            let bare = st.found && st.lasted <= 1 && st.bare < BARE_PASSES;
+            st.bare = if bare { st.bare + 1 } else { 0 };
+            slack = if bare { 0.0 } else { SLACK * h };
+            st.slack = slack;
+            st.lasted = 0;
+        }
+        if full || escaped > 0 {
+            // A full pass (boxes grown by the slack, refit, one query per surface vertex), or
+            // an update: the escaped vertices take their new boxes, the triangles they are a
+            // corner of too, and the chunks of the escaped vertices and of every vertex whose
+            // box meets a moved triangle's new one query again. Queries by chunks of
+            // consecutive vertices (in parallel when the step is, each chunk into its own
+            // list: the same lists on any number of threads).
+            st.found = false;
+            for ((r, &m), &v) in st.swept.iter_mut().zip(&st.moved).zip(&st.vertices) {
+                if full || m {
+                    *r = segment(v);
+                }
+            }
+            for c in &mut st.chunks {
+                c.dirty = full || st.moved[c.start..c.end].contains(&true);
+                c.bounds = st.swept[c.start..c.end]
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, r| b.union(r))
+                    .expanded(slack);
+            }
+            for (b, t) in st.boxes.iter_mut().zip(&st.local) {
+                if !full && !t.iter().any(|&k| st.moved[k as usize]) {
+                    continue;
+                }
+                let [r0, r1, r2] = t.map(|k| st.swept[k as usize]);
+                *b = r0.union(&r1).union(&r2).expanded(reach + slack);
+                if !full {
+                    for c in st.chunks.iter_mut().filter(|c| !c.dirty) {
+                        c.dirty = c.bounds.overlaps(b, 0.0);
+                    }
+                }
+            }
+            if st.bvh.is_none() {
+                // Built over this step's boxes without the slack (the hierarchy, and the order
+                // of each vertex's triangles, as without the lists), then refit with it.
+                st.bvh = Bvh::build(st.tight.as_slice(), &BuildOptions::default()).ok();
             }
             let ok = match &mut st.bvh {
                 Some(bvh) => bvh.refit(st.boxes.as_slice()).is_ok(),
@@ -456,47 +747,86 @@ impl SoftBody {
                 match Bvh::build(st.boxes.as_slice(), &BuildOptions::default()) {
                     Ok(bvh) => st.bvh = Some(bvh),
                     Err(_) => {
-                        // Non-finite positions: the step reports the divergence.
                         st.bvh = None;
-                        return;
+                        for c in &mut st.chunks {
+                            c.pairs.clear();
+                        }
+                        return false;
                     }
                 }
             }
             let Some(bvh) = &st.bvh else {
-                return;
+                return false;
             };
-            st.pairs.clear();
-            st.dropped_pairs = 0;
-            for (k, &v) in st.vertices.iter().enumerate() {
-                let probe = Aabb::from_segment(x[v as usize], far(v));
-                bvh.overlapping_primitives(
-                    st.boxes.as_slice(),
-                    &probe,
-                    0.0,
-                    &mut st.ws,
-                    &mut st.candidates,
-                );
-                for &ti in &st.candidates {
-                    let t = st.triangles[ti as usize];
-                    let Some((ring, rest_distance)) = st.relation(k, v, t, &self.edits.rest_x, h)
-                    else {
-                        continue;
-                    };
-                    if st.pairs.len() == st.pairs.capacity() {
-                        st.dropped_pairs += 1;
-                        continue;
+            let (vertices, swept, boxes, rest_start, rest) = (
+                &st.vertices,
+                &st.swept,
+                st.boxes.as_slice(),
+                &st.rest_start,
+                &st.rest,
+            );
+            let query = |c: &mut Chunk| {
+                if !c.dirty {
+                    return;
+                }
+                c.near.clear();
+                c.dropped = 0;
+                for (k, &v) in vertices.iter().enumerate().take(c.end).skip(c.start) {
+                    let probe = swept[k].expanded(slack);
+                    bvh.overlapping_primitives(boxes, &probe, 0.0, &mut c.ws, &mut c.candidates);
+                    let rest = &rest[rest_start[k] as usize..rest_start[k + 1] as usize];
+                    for &triangle in &c.candidates {
+                        let Some(near_at_rest) = relation(rest, triangle) else {
+                            continue;
+                        };
+                        if c.near.len() == c.near.capacity() {
+                            c.dropped += 1;
+                            continue;
+                        }
+                        c.near.push(Candidate {
+                            vertex: v,
+                            triangle,
+                            near_at_rest,
+                        });
                     }
-                    st.pairs.push(Candidate {
-                        vertex: v,
-                        triangle: ti,
-                        ring,
-                        rest_distance,
-                    });
+                }
+            };
+            if parallel {
+                st.chunks.par_iter_mut().for_each(query);
+            } else {
+                st.chunks.iter_mut().for_each(query);
+            }
+            st.found = true;
+            st.updates += usize::from(!full);
+        }
+        // This step's pairs: the lists' pairs whose boxes over this step overlap.
+        let tight = st.tight.as_slice();
+        let filter = |c: &mut Chunk| {
+            c.pairs.clear();
+            let mut last = (u32::MAX, Aabb::from_point(Vec3A::ZERO));
+            for p in &c.near {
+                if p.vertex != last.0 {
+                    last = (p.vertex, segment(p.vertex));
+                }
+                if tight[p.triangle as usize].overlaps(&last.1, 0.0) {
+                    c.pairs.push(*p);
                 }
             }
+        };
+        if parallel {
+            st.chunks.par_iter_mut().for_each(filter);
+        } else {
+            st.chunks.iter_mut().for_each(filter);
         }
-        // The narrow phase, every substep, on the step's candidates.
-        for c in &st.pairs {
+        true
+    }
+
+    /// The narrow phase, every substep, on the step's pairs: this substep's contacts.
+    fn narrow_phase(&mut self, x: &[Vec3A], q: &[Vec4], rank: &[u32], h: f32) {
+        let st = self;
+        let reach = 2.0 * h;
+        let predicted = |i: u32| point(q, rank[i as usize]);
+        for c in st.chunks.iter().flat_map(|c| &c.pairs) {
             let (v, t) = (c.vertex, st.triangles[c.triangle as usize]);
             let (xv, pv) = (x[v as usize], predicted(v));
             let [a0, a1, a2] = t.map(|i| x[i as usize]);
@@ -506,12 +836,24 @@ impl SoftBody {
                 continue;
             }
             let n = n / len;
+            // Cheap rejections first: the distance `along` tested below lies between `lo` and
+            // `hi` (the predicted triangle's extent along `n`); the vertex, within the cone,
+            // is at most `√2 |along|` from the triangle, hence from its box.
+            let [b0, b1, b2] = t.map(predicted);
+            let (nb0, nb1, nb2, np) = (n.dot(b0), n.dot(b1), n.dot(b2), n.dot(pv));
+            let (lo, hi) = (np - nb0.max(nb1).max(nb2), np - nb0.min(nb1).min(nb2));
+            if lo >= h + reach || hi < -reach - h {
+                continue;
+            }
+            let most = lo.abs().max(hi.abs());
+            if Aabb::from_triangle(b0, b1, b2).distance_squared(pv) > 2.1 * most * most {
+                continue;
+            }
             // Started on the outer side (at most h behind the plane).
             let (q0, _) = closest_point_on_triangle(xv, a0, a1, a2);
             if n.dot(xv - q0) < -h {
                 continue;
             }
-            let [b0, b1, b2] = t.map(predicted);
             let (q1, bary) = closest_point_on_triangle(pv, b0, b1, b2);
             let d = pv - q1;
             let along = n.dot(d);
@@ -521,8 +863,13 @@ impl SoftBody {
             if (d - n * along).length() > LATERAL * along.abs() {
                 continue;
             }
-            let slots = [v, t[0], t[1], t[2]].map(|i| rank[i as usize]);
-            if slots.iter().all(|&s| q[s as usize].w <= 0.0) {
+            let nodes = [v, t[0], t[1], t[2]];
+            let slots = nodes.map(|i| rank[i as usize]);
+            let weights = slots.map(|s| q[s as usize].w.max(0.0));
+            if (weights.iter().zip(&nodes))
+                .all(|(&w, &i)| w <= 0.0 || st.held.get(i as usize).copied().unwrap_or(true))
+            {
+                // Every node pinned or held this substep: the holders have the last word.
                 continue;
             }
             if st.contacts.len() == st.contacts.capacity() {
@@ -530,8 +877,7 @@ impl SoftBody {
                 continue;
             }
             let start = n.dot(xv - (a0 * bary[0] + a1 * bary[1] + a2 * bary[2]));
-            let rest_distance = c.rest_distance;
-            if start < 0.0 && (c.ring || (rest_distance >= TWIN * h && rest_distance < 2.0 * h)) {
+            if start < 0.0 && c.near_at_rest {
                 // Behind a tet neighbour's face (inside a thin wall, not through it), or
                 // behind a face it was near at rest (beside a sharp convex edge): the
                 // material's business. Only a vertex that came through from afar is pushed
@@ -540,8 +886,9 @@ impl SoftBody {
             }
             st.contacts.push(SelfContact {
                 slots,
-                nodes: [v, t[0], t[1], t[2]],
+                nodes,
                 bary,
+                weights,
                 normal: n,
                 target: h.min(start + RECOVERY * h),
                 normal_correction: 0.0,
@@ -549,7 +896,9 @@ impl SoftBody {
             });
         }
     }
+}
 
+impl SoftBody {
     /// Projects the self-contacts once (one iteration), in order.
     pub(crate) fn project_self_contacts(&mut self) {
         let Some(config) = self.self_collision.config else {
@@ -559,12 +908,7 @@ impl SoftBody {
         for c in &mut self.self_collision.contacts {
             let [sv, sa, sb, sc] = c.slots;
             let [u, v, w] = c.bary;
-            let (wv, wa, wb, wc) = (
-                q[sv as usize].w,
-                q[sa as usize].w,
-                q[sb as usize].w,
-                q[sc as usize].w,
-            );
+            let [wv, wa, wb, wc] = c.weights;
             let big_w = wv + u * u * wa + v * v * wb + w * w * wc;
             if big_w <= 0.0 {
                 continue;
@@ -611,5 +955,102 @@ impl SoftBody {
                 q[s as usize] = p.extend(wq);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use glam::Vec3;
+    use tissue_mesh::{tet_box, TetMesh};
+
+    use super::*;
+    use crate::{ContactParams, Floor, Material, Pose, StepSettings, ToolShape};
+
+    /// The lists updated for the vertices that left their boxes give the pairs of a full pass:
+    /// the upper arm of a weightless U-folded slab pressed onto the lower one by a probe (a
+    /// few vertices move at a time, and come near vertices that do not), checked after every
+    /// step against a full pass on the same positions.
+    #[test]
+    fn updated_lists_give_the_pairs_of_a_full_pass() {
+        let (positions, tets) = tet_box(30, 2, 5, Vec3::new(6.0, 0.4, 1.0))
+            .unwrap()
+            .into_parts();
+        // Bent into a U (tests/it/selfcol.rs): the upper arm 0.8 cm over the lower one.
+        let (s0, r) = (-0.5f32, 0.6f32);
+        let loop_len = std::f32::consts::PI * r;
+        let bent = positions
+            .iter()
+            .map(|p| {
+                let (s, t) = (p.x, p.y);
+                if s <= s0 {
+                    Vec3::new(s, t, p.z)
+                } else if s <= s0 + loop_len {
+                    let phi = (s - s0) / r;
+                    Vec3::new(s0 + (r - t) * phi.sin(), r - (r - t) * phi.cos(), p.z)
+                } else {
+                    Vec3::new(s0 - (s - s0 - loop_len), 2.0 * r - t, p.z)
+                }
+            })
+            .collect();
+        let mesh = TetMesh::new(bent, tets).unwrap();
+        let mut body = SoftBody::new(&mesh, &Material::soft_tissue()).unwrap();
+        body.set_settings(StepSettings {
+            gravity: Vec3::ZERO,
+            ..StepSettings::realtime()
+        })
+        .unwrap();
+        body.set_floor(Some(Floor::y(-0.2))).unwrap();
+        body.set_self_collision(Some(SelfCollision::default()))
+            .unwrap();
+        // Chunks of four vertices (the arms' vertices in different ones; with larger ones the
+        // chunks of the moved vertices cover the others here), and updates however many
+        // vertices moved.
+        body.self_collision.chunk_size = 4;
+        body.self_collision.full_pass = 1;
+        let probe = ToolShape::Capsule {
+            a: Vec3::new(0.0, 0.0, -1.5),
+            b: Vec3::new(0.0, 0.0, 1.5),
+            radius: 0.2,
+        };
+        let at = |y: f32| Pose::from_translation(Vec3::new(-1.5, y, 0.0));
+        let tool = body
+            .add_tool(probe, at(1.8), ContactParams::default())
+            .unwrap();
+        let ahead = StepSettings::REALTIME_SUBSTEPS as f32;
+        let mut checked = 0;
+        for s in 1..=100 {
+            body.set_tool_pose(tool, at(1.8 - 1.1 * s as f32 / 100.0))
+                .unwrap();
+            body.step().unwrap();
+            let h = body.self_collision.thickness.unwrap();
+            let (x, q, rank) = (&body.x, &body.q, &body.rank);
+            // A clone with the buffers' capacities (a clone's are its lengths).
+            let copy = || {
+                let mut st = body.self_collision.clone();
+                for c in &mut st.chunks {
+                    let n = c.end - c.start;
+                    c.near.reserve(2 * MAX_PAIRS_PER_VERTEX * n - c.near.len());
+                    c.pairs.reserve(MAX_PAIRS_PER_VERTEX * n - c.pairs.len());
+                }
+                st
+            };
+            let mut updated = copy();
+            let before = updated.updates;
+            assert!(updated.broad_phase(x, q, rank, h, ahead, false));
+            let mut full = copy();
+            full.found = false;
+            assert!(full.broad_phase(x, q, rank, h, ahead, false));
+            let pairs = |st: &SelfState| -> Vec<Candidate> {
+                st.chunks.iter().flat_map(|c| c.pairs.clone()).collect()
+            };
+            assert_eq!(full.chunks.iter().map(|c| c.dropped).sum::<usize>(), 0);
+            assert_eq!(pairs(&updated), pairs(&full), "step {s}");
+            checked += updated.updates - before;
+        }
+        assert!(
+            checked > 0,
+            "no update without a full pass: the test tests nothing"
+        );
     }
 }

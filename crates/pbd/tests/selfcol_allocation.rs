@@ -56,19 +56,36 @@ fn self_collision_steps_allocate_nothing_after_the_first() {
         })
         .collect();
     let mesh = tissue_mesh::TetMesh::new(bent, tets).unwrap();
-    let mut body = SoftBody::new(&mesh, &Material::soft_tissue()).unwrap();
-    body.set_settings(StepSettings::realtime()).unwrap();
-    body.set_floor(Some(Floor::y(-0.2))).unwrap();
-    body.set_self_collision(Some(tissue_pbd::SelfCollision::default()))
+    // Serial, then parallel on a 2-thread pool (the broad phase's chunks in parallel).
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
         .unwrap();
-    body.step().unwrap();
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
-    let mut most = 0;
-    for _ in 0..40 {
-        body.step().unwrap();
-        most = most.max(body.self_contact_counts().1);
+    for parallel in [false, true] {
+        let mut body = SoftBody::new(&mesh, &Material::soft_tissue()).unwrap();
+        body.set_settings(StepSettings {
+            parallel,
+            ..StepSettings::realtime()
+        })
+        .unwrap();
+        body.set_floor(Some(Floor::y(-0.2))).unwrap();
+        body.set_self_collision(Some(tissue_pbd::SelfCollision::default()))
+            .unwrap();
+        pool.install(|| {
+            body.step().unwrap();
+            let before = ALLOCATIONS.load(Ordering::Relaxed);
+            let mut most = 0;
+            for _ in 0..40 {
+                body.step().unwrap();
+                most = most.max(body.self_contact_counts().1);
+            }
+            let after = ALLOCATIONS.load(Ordering::Relaxed);
+            assert!(most > 0, "no self-contact: the test tests nothing");
+            assert_eq!(
+                after - before,
+                0,
+                "a step with self-collision allocated (parallel = {parallel})"
+            );
+        });
     }
-    let after = ALLOCATIONS.load(Ordering::Relaxed);
-    assert!(most > 0, "no self-contact: the test tests nothing");
-    assert_eq!(after - before, 0, "a step with self-collision allocated");
 }
