@@ -27,8 +27,9 @@
 //! the two walls of a cut, whose nodes were duplicated in place and share no tet, do collide.
 //! A vertex is not held against a triangle it starts the substep *behind* if it was within `2h`
 //! of it at rest (a vertex just below a sharp convex edge is behind the faces across the edge);
-//! one that starts behind a triangle it was farther from at rest came through it, and is pushed
-//! back out (see `h'` below). Pairs farther apart at rest (a crease folding the surface into
+//! one that starts at most `h/10` behind a triangle it was farther from at rest (the slop of the
+//! iterations) is pushed back out (see `h'` below); one deeper behind is left to the material
+//! (`BEHIND`: pushing it across injected energy into a freshly cut, moving surface). Pairs farther apart at rest (a crease folding the surface into
 //! itself three edges away, a flap laid on its base, a wound's walls) are held apart. A body at
 //! rest has no active self-contact (`tests/it/selfcol.rs`, the bunny).
 //!
@@ -172,6 +173,11 @@ struct Chunk {
     dropped: usize,
     /// `near` must be found again this step.
     dirty: bool,
+    /// This substep's contacts of its vertices (`MAX_CONTACTS_PER_VERTEX` per vertex,
+    /// reserved), in the order of its pairs.
+    contacts: Vec<SelfContact>,
+    /// Contacts found past `contacts`' capacity this substep (not projected).
+    contacts_dropped: usize,
     /// The union of its vertices' boxes of the last pass, grown by the slack.
     bounds: Aabb,
 }
@@ -261,7 +267,6 @@ pub(crate) struct SelfState {
     held: Vec<bool>,
     /// The broad phase's chunks of surface vertices, in order.
     chunks: Vec<Chunk>,
-    contacts: Vec<SelfContact>,
     /// Contacts found past the buffer's capacity this substep (not projected).
     dropped: usize,
 }
@@ -371,11 +376,6 @@ impl SelfState {
             .resize(self.triangles.len(), Aabb::from_point(Vec3A::ZERO));
         self.tight.clone_from(&self.boxes);
         self.bvh = None;
-        self.contacts.clear();
-        // The step's buffers at their largest, so that no step allocates (`MAX_CONTACTS_PER_VERTEX`).
-        let most = MAX_CONTACTS_PER_VERTEX * self.vertices.len();
-        self.contacts
-            .reserve(most.saturating_sub(self.contacts.len()));
         self.chunks.clear();
         let chunk = if self.chunk_size > 0 {
             self.chunk_size
@@ -393,6 +393,8 @@ impl SelfState {
                 pairs: Vec::with_capacity(MAX_PAIRS_PER_VERTEX * (end - start)),
                 dropped: 0,
                 dirty: true,
+                contacts: Vec::with_capacity(MAX_CONTACTS_PER_VERTEX * (end - start)),
+                contacts_dropped: 0,
                 bounds: Aabb::EMPTY,
             });
         }
@@ -531,6 +533,14 @@ const MAX_PAIRS_PER_VERTEX: usize = 64;
 /// 51 cm/s for `h` = 0.57 mm at 10 ms, energy the contact would inject).
 const RECOVERY: f32 = 0.1;
 
+/// A vertex that starts a substep more than this fraction of `h` behind a triangle is not held
+/// against it (not pushed back out): only the slop of the solver's iterations (a vertex that
+/// crossed by less than a tenth of the thickness) is recovered. Pushed back from up to `h`
+/// behind, vertices of a freshly cut, moving surface were driven across the other wall and the
+/// surface tangled (the appendix's cut-off: 6 × 10³ – 10⁵ intersecting pairs against 362
+/// without self-collision; 192 with this bound; `tissue-scenes` `tests/it/selfcol.rs`).
+const BEHIND: f32 = 0.1;
+
 fn point(q: &[Vec4], s: u32) -> Vec3A {
     Vec3A::from(q[s as usize].xyz())
 }
@@ -554,7 +564,7 @@ impl SoftBody {
         }
         self.self_collision.config = settings;
         self.self_collision.stale = true;
-        self.self_collision.contacts.clear();
+        self.self_collision.clear_contacts();
         Ok(())
     }
 
@@ -574,10 +584,10 @@ impl SoftBody {
     /// The number of vertex–triangle self-contacts of the last substep, and how many of them
     /// the iterations had to push (the others stayed clear by themselves).
     pub fn self_contact_counts(&self) -> (usize, usize) {
-        let c = &self.self_collision.contacts;
+        let c = || self.self_collision.contacts();
         (
-            c.len(),
-            c.iter().filter(|c| c.normal_correction > 0.0).count(),
+            c().count(),
+            c().filter(|c| c.normal_correction > 0.0).count(),
         )
     }
 
@@ -586,7 +596,11 @@ impl SoftBody {
     /// hence not tested or projected: 0 unless the surface is badly tangled.
     pub fn self_contacts_dropped(&self) -> usize {
         let st = &self.self_collision;
-        st.dropped + st.chunks.iter().map(|c| c.dropped).sum::<usize>()
+        st.dropped
+            + st.chunks
+                .iter()
+                .map(|c| c.dropped + c.contacts_dropped)
+                .sum::<usize>()
     }
 
     /// The surface's triangles as self-collision sees them (the faces used by one tet only,
@@ -608,7 +622,7 @@ impl SoftBody {
         if st.stale {
             st.rebuild(&self.tets, &self.edits.rest_x);
         }
-        st.contacts.clear();
+        st.clear_contacts();
         st.dropped = 0;
         let Some(h) = st.thickness else {
             return;
@@ -641,7 +655,8 @@ impl SoftBody {
                 return;
             }
         }
-        st.narrow_phase(x, q, rank, h);
+        let parallel = self.settings.parallel;
+        st.narrow_phase(x, q, rank, h, parallel);
     }
 }
 
@@ -822,12 +837,47 @@ impl SelfState {
     }
 
     /// The narrow phase, every substep, on the step's pairs: this substep's contacts.
-    fn narrow_phase(&mut self, x: &[Vec3A], q: &[Vec4], rank: &[u32], h: f32) {
-        let st = self;
+    /// By chunks (in parallel with `parallel`), each into its own buffer: the contacts, in
+    /// the chunks' order, are the same for any thread count.
+    fn narrow_phase(&mut self, x: &[Vec3A], q: &[Vec4], rank: &[u32], h: f32, parallel: bool) {
+        let (triangles, held) = (self.triangles.as_slice(), self.held.as_slice());
+        let narrow = |chunk: &mut Chunk| narrow_chunk(chunk, triangles, held, x, q, rank, h);
+        if parallel {
+            self.chunks.par_iter_mut().for_each(narrow);
+        } else {
+            self.chunks.iter_mut().for_each(narrow);
+        }
+    }
+
+    /// Empties every chunk's contacts.
+    fn clear_contacts(&mut self) {
+        for c in &mut self.chunks {
+            c.contacts.clear();
+            c.contacts_dropped = 0;
+        }
+    }
+
+    /// This substep's contacts, in order.
+    fn contacts(&self) -> impl Iterator<Item = &SelfContact> {
+        self.chunks.iter().flat_map(|c| &c.contacts)
+    }
+}
+
+/// The narrow phase of one chunk: its pairs' tests into its contacts.
+fn narrow_chunk(
+    chunk: &mut Chunk,
+    triangles: &[[u32; 3]],
+    held: &[bool],
+    x: &[Vec3A],
+    q: &[Vec4],
+    rank: &[u32],
+    h: f32,
+) {
+    {
         let reach = 2.0 * h;
         let predicted = |i: u32| point(q, rank[i as usize]);
-        for c in st.chunks.iter().flat_map(|c| &c.pairs) {
-            let (v, t) = (c.vertex, st.triangles[c.triangle as usize]);
+        for c in &chunk.pairs {
+            let (v, t) = (c.vertex, triangles[c.triangle as usize]);
             let (xv, pv) = (x[v as usize], predicted(v));
             let [a0, a1, a2] = t.map(|i| x[i as usize]);
             let n = (a1 - a0).cross(a2 - a0);
@@ -867,16 +917,22 @@ impl SelfState {
             let slots = nodes.map(|i| rank[i as usize]);
             let weights = slots.map(|s| q[s as usize].w.max(0.0));
             if (weights.iter().zip(&nodes))
-                .all(|(&w, &i)| w <= 0.0 || st.held.get(i as usize).copied().unwrap_or(true))
+                .all(|(&w, &i)| w <= 0.0 || held.get(i as usize).copied().unwrap_or(true))
             {
                 // Every node pinned or held this substep: the holders have the last word.
                 continue;
             }
-            if st.contacts.len() == st.contacts.capacity() {
-                st.dropped += 1;
+            if chunk.contacts.len() == chunk.contacts.capacity() {
+                chunk.contacts_dropped += 1;
                 continue;
             }
             let start = n.dot(xv - (a0 * bary[0] + a1 * bary[1] + a2 * bary[2]));
+            if start < -BEHIND * h {
+                // Deeper behind than the solver's slop: through already (a sliver of a fresh
+                // cut, a tangle) or beside a crease. Pushing it back across injected energy
+                // (the appendix's cut-off blew up, 10⁵ intersecting pairs); the material has it.
+                continue;
+            }
             if start < 0.0 && c.near_at_rest {
                 // Behind a tet neighbour's face (inside a thin wall, not through it), or
                 // behind a face it was near at rest (beside a sharp convex edge): the
@@ -884,7 +940,7 @@ impl SelfState {
                 // back out.
                 continue;
             }
-            st.contacts.push(SelfContact {
+            chunk.contacts.push(SelfContact {
                 slots,
                 nodes,
                 bary,
@@ -905,7 +961,12 @@ impl SoftBody {
             return;
         };
         let (q, x) = (&mut self.q, &self.x);
-        for c in &mut self.self_collision.contacts {
+        for c in self
+            .self_collision
+            .chunks
+            .iter_mut()
+            .flat_map(|c| &mut c.contacts)
+        {
             let [sv, sa, sb, sc] = c.slots;
             let [u, v, w] = c.bary;
             let [wv, wa, wb, wc] = c.weights;
