@@ -15,7 +15,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use tissue_mesh::{TetMesh, TriMesh};
 use tissue_pbd::{Pose, ToolShape};
-use tissue_scenes::{Organ, SceneError, Session, SessionOptions, ShippedOrgan, TrainerEvent};
+use tissue_scenes::{
+    Organ, SceneError, SelfCollision, Session, SessionOptions, ShippedOrgan, TrainerEvent,
+};
 
 use crate::arrays;
 use crate::errors::{bad_array, bug, mesh_io_error, scene_error, tool_error};
@@ -318,8 +320,8 @@ impl Body {
     }
 
     /// Self-collision of the organ's surface, cut walls included (tissue-scenes'
-    /// `SessionOptions::self_collision`): on by default, as in the trainer, the studio and the
-    /// C ABI; set `False` to switch it off (from the next step on), for comparison.
+    /// `SessionOptions::self_collision`): off by default, as in the trainer, the studio and the
+    /// C ABI (for its cost); set `True` to switch it on (from the next step on).
     #[getter]
     fn self_collision(&self, py: Python<'_>) -> PyResult<bool> {
         Ok(self.sim(py)?.session.options().self_collision.is_some())
@@ -327,11 +329,7 @@ impl Body {
 
     #[setter]
     fn set_self_collision(&self, py: Python<'_>, on: bool) -> PyResult<()> {
-        let settings = if on {
-            SessionOptions::default().self_collision
-        } else {
-            None
-        };
+        let settings = on.then(SelfCollision::default);
         self.sim(py)?
             .session
             .set_self_collision(settings)

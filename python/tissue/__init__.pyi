@@ -198,7 +198,7 @@ class Body:
         ``self_contacts_active``."""
     @property
     def self_collision(self) -> bool:
-        """Self-collision of the surface (cut walls included); on by default."""
+        """Self-collision of the surface (cut walls included); off by default."""
     @self_collision.setter
     def self_collision(self, on: bool) -> None: ...
     def self_intersections(self) -> int:

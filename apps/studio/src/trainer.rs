@@ -104,7 +104,7 @@ pub struct Stats {
     pub paused: bool,
     /// |force| on the probe, N.
     pub force_n: f64,
-    /// Whether the organ's surface collides with itself (the `self_collision` command; on by
+    /// Whether the organ's surface collides with itself (the `self_collision` command; off by
     /// default).
     pub self_collision: bool,
     /// Self-contacts of the last step (tissue-scenes' `Session::self_contacts`): the surface
@@ -178,7 +178,7 @@ pub enum Command {
         /// The material asked for.
         material: TissueMaterial,
     },
-    /// Self-collision of the organ's surface on or off (on by default): at once on the running
+    /// Self-collision of the organ's surface on or off (off by default): at once on the running
     /// session, and for every later one until switched again; the stats say which is in force.
     SelfCollision {
         /// On?
@@ -776,8 +776,8 @@ struct Desk {
     chosen: Option<TissueMaterial>,
     /// The material the page chose, for the next session.
     pending: Option<TissueMaterial>,
-    /// Self-collision switched off by the page (`false`: on, tissue-scenes' default).
-    no_self_collision: bool,
+    /// Self-collision switched on by the page (`false`: off, tissue-scenes' default).
+    self_collision_on: bool,
 }
 
 impl Desk {
@@ -811,10 +811,11 @@ impl Desk {
         })
     }
 
-    /// The self-collision of the sessions: tissue-scenes' default unless switched off.
+    /// The self-collision of the sessions: [`SelfCollision::default`] once switched on, else
+    /// tissue-scenes' default (off).
     fn self_collision(&self) -> Option<SelfCollision> {
-        if self.no_self_collision {
-            None
+        if self.self_collision_on {
+            Some(SelfCollision::default())
         } else {
             SessionOptions::default().self_collision
         }
@@ -822,7 +823,7 @@ impl Desk {
 
     /// Switches self-collision on or off: the live session at once, the later ones too.
     fn set_self_collision(&mut self, on: bool) -> Result<(), Refusal> {
-        self.no_self_collision = !on;
+        self.self_collision_on = on;
         let settings = self.self_collision();
         if let Some(live) = self.live.as_mut() {
             live.session.set_self_collision(settings)?;
@@ -1011,10 +1012,10 @@ mod tests {
         assert!(desk.live.is_some());
     }
 
-    /// The self-collision command: on by default; switched at once on the live session (its
+    /// The self-collision command: off by default; switched at once on the live session (its
     /// stats say so) and kept for the next sessions (a reset, a demonstration).
     #[test]
-    fn self_collision_is_on_by_default_and_switched_live() {
+    fn self_collision_is_off_by_default_and_switched_live() {
         let organs = Organs::default();
         let (frames, _f) = watch::channel(None);
         let (stats, stats_rx) = watch::channel(Stats::default());
@@ -1036,7 +1037,10 @@ mod tests {
                 live.session.body().self_collision().is_some(),
             )
         };
-        assert_eq!(on(&sim), (true, true), "on by default");
+        assert_eq!(on(&sim), (false, false), "off by default");
+        sim.apply(Command::SelfCollision { on: true }, &organs, &out)
+            .unwrap();
+        assert_eq!(on(&sim), (true, true), "switched on on the live session");
         sim.step_live(&out);
         sim.publish(&out);
         assert!(stats_rx.borrow().self_collision);

@@ -41,7 +41,7 @@ const state = {
   reallocations: 0,
   lastCut: null, // { path: [[x,y,z], ...], viewDir, fromVertex }
   material: null, // { scheme, young_kpa, poisson, density, pending } (trainer-material.js)
-  selfCollision: true, // in force: the server's word (the stats), or what was asked until it had time to land
+  selfCollision: false, // in force: the server's word (the stats), or what was asked until it had time to land
   selfContacts: null, // { found, active }: the last step's self-contacts (the stats)
   // The page's own.
   organs: [],
@@ -50,7 +50,7 @@ const state = {
   refused: false,
   pauseAsked: false, // what the Pause button shows
   pauseSentAt: 0,
-  selfCollisionAsked: true, // what the checkbox shows
+  selfCollisionAsked: false, // what the checkbox shows
   selfCollisionSentAt: 0,
   gesture: null,
   needleFirst: null,

@@ -52,7 +52,7 @@ magnitude, the tets' own volume errors at the end (median, p90, volume-weighted 
 |V/V0 - 1| per tet: the local compression the total can hide), the organ's height as loaded and \
 settled, the contacts, and the force of the tissue on the probe in newtons (the largest \
 magnitude over the run and the last step's vector; tissue-pbd's SoftBody::tool_force, 1 N = 1e5 \
-dyn), the self-collision of the organ's surface (on unless --no-self-collision: its thickness and \
+dyn), the self-collision of the organ's surface (with --self-collision: its thickness and \
 the last step's self-contacts) and, last, `self-intersections N`: the pairs of surface triangles \
 that intersect at the end, counted exactly (every run that steps ends with these two lines). \
 With --frames DIR (created if missing): the organ's surface every --every steps and at the end, \
@@ -260,9 +260,12 @@ pub struct Cli {
     /// Project constraints colour-parallel on all cores (bit-identical to serial).
     #[arg(long)]
     pub parallel: bool,
-    /// Switch off the self-collision of the organ's surface (on by default, as in the studio
-    /// and the C ABI: tissue-scenes' SessionOptions::self_collision; cut walls included), for
-    /// comparison; the run still prints its self-intersections.
+    /// Switch on the self-collision of the organ's surface (tissue-scenes'
+    /// SelfCollision::default, cut walls included; off by default, as in the studio and the C
+    /// ABI, for its cost: docs/trainer.md). Every run prints its self-intersections.
+    #[arg(long, conflicts_with = "no_self_collision")]
+    pub self_collision: bool,
+    /// Self-collision off (the default; for scripts that say so).
     #[arg(long)]
     pub no_self_collision: bool,
     /// Drop the realtime scheme's volume constraint per connected piece (tissue-pbd's
@@ -329,10 +332,12 @@ impl Cli {
         self.organ_material().elastic
     }
 
-    /// The self-collision of the run: tissue-scenes' default (the studio's and the C ABI's),
-    /// or none with `--no-self-collision`.
+    /// The self-collision of the run: tissue-scenes' [`SelfCollision::default`] with
+    /// `--self-collision`, else tissue-scenes' default (off, the studio's and the C ABI's).
     pub fn self_collision(&self) -> Option<SelfCollision> {
-        if self.no_self_collision {
+        if self.self_collision {
+            Some(SelfCollision::default())
+        } else if self.no_self_collision {
             None
         } else {
             SessionOptions::default().self_collision

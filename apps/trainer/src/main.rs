@@ -64,7 +64,7 @@ fn print_self_collision(body: &tissue_pbd::SoftBody) -> Result<(), Failure> {
                 body.self_contacts_dropped()
             );
         }
-        None => println!("  self-collision off (--no-self-collision)"),
+        None => println!("  self-collision off (--self-collision switches it on)"),
     }
     let n = tissue_scenes::surface_self_intersections(body.positions(), &body.surface_triangles())
         .map_err(|e| failure::from_scene(&e))?;

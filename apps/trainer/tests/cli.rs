@@ -142,12 +142,14 @@ fn a_small_box_runs_and_writes_frames_and_a_summary() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Self-collision is on by default (tissue-scenes' SessionOptions::self_collision) and
-/// `--no-self-collision` switches it off; either way the run ends with `self-intersections N`,
+/// Self-collision is off by default (tissue-scenes' SessionOptions::self_collision) and
+/// `--self-collision` switches it on; either way the run ends with `self-intersections N`,
 /// the exact count of intersecting surface triangle pairs: none on a box pressed and dragged.
 #[test]
-fn self_collision_is_on_by_default_and_the_run_counts_self_intersections() {
-    let out = run(&SMALL_BOX);
+fn self_collision_is_off_by_default_and_the_run_counts_self_intersections() {
+    let mut args = SMALL_BOX.to_vec();
+    args.push("--self-collision");
+    let out = run(&args);
     let text = stdout(&out);
     assert!(out.status.success(), "{}\n{text}", stderr(&out));
     assert!(text.contains("self-collision on, thickness"), "{text}");
@@ -170,13 +172,11 @@ fn self_collision_is_on_by_default_and_the_run_counts_self_intersections() {
         "{text}"
     );
 
-    let mut args = SMALL_BOX.to_vec();
-    args.push("--no-self-collision");
-    let out = run(&args);
+    let out = run(&SMALL_BOX);
     let text = stdout(&out);
     assert!(out.status.success(), "{}\n{text}", stderr(&out));
     assert!(
-        text.contains("self-collision off (--no-self-collision)"),
+        text.contains("self-collision off (--self-collision switches it on)"),
         "{text}"
     );
     assert_eq!(

@@ -243,8 +243,8 @@ typedef struct tissue_material {
   // decays as `exp(−t/τ)` (0.1 s damps a wobble in a few tenths of a second).
   double relaxation_time;
   // Self-collision of the organ's surface, cut walls included (tissue-scenes'
-  // `SessionOptions::self_collision`): `true` keeps the tissue from passing through itself
-  // (the default the fill functions give), `false` switches it off for comparison;
+  // `SessionOptions::self_collision`): `true` keeps the tissue from passing through itself,
+  // `false` (the default the fill functions give, for its cost: docs/trainer.md) leaves it off;
   // `tissue_body_set_self_collision` switches it on a live body.
   bool self_collision;
 } tissue_material;

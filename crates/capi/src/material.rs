@@ -4,7 +4,9 @@
 //! `SessionOptions::material`, which checks it (the messages here only say which field of
 //! `tissue_material` the refused parameter is).
 
-use tissue_scenes::{OrganMaterial, SceneError, SessionOptions, ShippedOrgan, TissuePreset};
+use tissue_scenes::{
+    OrganMaterial, SceneError, SelfCollision, SessionOptions, ShippedOrgan, TissuePreset,
+};
 
 use crate::ffi::{guard, put, status_of, tissue_status, Error};
 
@@ -127,8 +129,8 @@ pub struct tissue_material {
     /// decays as `exp(−t/τ)` (0.1 s damps a wobble in a few tenths of a second).
     pub relaxation_time: f64,
     /// Self-collision of the organ's surface, cut walls included (tissue-scenes'
-    /// `SessionOptions::self_collision`): `true` keeps the tissue from passing through itself
-    /// (the default the fill functions give), `false` switches it off for comparison;
+    /// `SessionOptions::self_collision`): `true` keeps the tissue from passing through itself,
+    /// `false` (the default the fill functions give, for its cost: docs/trainer.md) leaves it off;
     /// `tissue_body_set_self_collision` switches it on a live body.
     pub self_collision: bool,
 }
@@ -173,9 +175,7 @@ impl tissue_material {
             }
             tissue_scheme::TISSUE_SCHEME_REALTIME => (SessionOptions::default(), None),
         };
-        if !self.self_collision {
-            options.self_collision = None;
-        }
+        options.self_collision = self.self_collision.then(SelfCollision::default);
         Ok((options, material))
     }
 }

@@ -15,7 +15,9 @@ use std::sync::{Arc, Mutex, MutexGuard, RwLock};
 use ::tissue_mesh::{TetMesh, TriMesh};
 use glam::{Quat, Vec3};
 use tissue_pbd::{ContactForceModel, Pose, ToolShape};
-use tissue_scenes::{Organ, Session, SessionOptions, TrainerEvent, TrainerEventKind};
+use tissue_scenes::{
+    Organ, SelfCollision, Session, SessionOptions, TrainerEvent, TrainerEventKind,
+};
 
 use crate::ffi::{
     copy_out, free_handle, get, guard, guard_void, into_handle, poisoned, put, put_opt, slice,
@@ -470,11 +472,7 @@ pub extern "C" fn tissue_body_set_self_collision(
 ) -> tissue_status {
     guard(|| {
         let mut sim = body_of(body)?.sim()?;
-        let settings = if on {
-            SessionOptions::default().self_collision
-        } else {
-            None
-        };
+        let settings = on.then(SelfCollision::default);
         sim.session.set_self_collision(settings)?;
         Ok(())
     })

@@ -246,11 +246,10 @@ fn presets_and_the_material_in_force_read_back() {
     assert_eq!((read.young_kpa, read.poisson), (0.0, 0.0));
     assert!(read.density > 0.0 && read.relaxation_time > 0.0, "{read:?}");
     tissue_body_free(body);
-    // (Self-collision on, as `tissue_body_new_shipped` has it: a zeroed struct has it off.)
-    assert!(read.self_collision, "{read:?}");
+    // (Self-collision off, as `tissue_body_new_shipped` has it, and as in a zeroed struct.)
+    assert!(!read.self_collision, "{read:?}");
     let realtime = tissue_material {
         scheme: tissue_scheme::TISSUE_SCHEME_REALTIME as u32,
-        self_collision: true,
         ..tissue_material::default()
     };
     ok(
