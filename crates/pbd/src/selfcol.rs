@@ -79,8 +79,11 @@
 //! predicted at or under the floor) is dropped: it could only fight the holders. Projected
 //! in every iteration after the body's own constraints (material, sutures, floor) and before
 //! the tool and collider contacts, which thus have the last word (tools, pins and the tray
-//! hold). Serial, in a fixed order (surface vertices in increasing index, triangles in the
-//! hierarchy's order): the same for any thread count (`tests/it/selfcol.rs`). No allocation in
+//! hold). Found by chunks of surface vertices (in parallel when the step is), each into its own
+//! contact buffer, and projected serially in chunk order (surface vertices in increasing index,
+//! triangles in the hierarchy's order): the same for any thread count (`tests/it/selfcol.rs`).
+//! A vertex that starts a substep more than `h/10` behind a triangle (`BEHIND`) is not held
+//! against it: only the slop of the iterations is pushed back out. No allocation in
 //! a step after the one that builds the surface (the buffers are reserved then: at most 64
 //! broad-phase pairs per surface vertex and eight contacts per vertex and substep, the rest
 //! dropped and counted, `tests/selfcol_allocation.rs`, serial and parallel).
@@ -873,84 +876,82 @@ fn narrow_chunk(
     rank: &[u32],
     h: f32,
 ) {
-    {
-        let reach = 2.0 * h;
-        let predicted = |i: u32| point(q, rank[i as usize]);
-        for c in &chunk.pairs {
-            let (v, t) = (c.vertex, triangles[c.triangle as usize]);
-            let (xv, pv) = (x[v as usize], predicted(v));
-            let [a0, a1, a2] = t.map(|i| x[i as usize]);
-            let n = (a1 - a0).cross(a2 - a0);
-            let len = n.length();
-            if len <= 0.0 || !len.is_finite() {
-                continue;
-            }
-            let n = n / len;
-            // Cheap rejections first: the distance `along` tested below lies between `lo` and
-            // `hi` (the predicted triangle's extent along `n`); the vertex, within the cone,
-            // is at most `√2 |along|` from the triangle, hence from its box.
-            let [b0, b1, b2] = t.map(predicted);
-            let (nb0, nb1, nb2, np) = (n.dot(b0), n.dot(b1), n.dot(b2), n.dot(pv));
-            let (lo, hi) = (np - nb0.max(nb1).max(nb2), np - nb0.min(nb1).min(nb2));
-            if lo >= h + reach || hi < -reach - h {
-                continue;
-            }
-            let most = lo.abs().max(hi.abs());
-            if Aabb::from_triangle(b0, b1, b2).distance_squared(pv) > 2.1 * most * most {
-                continue;
-            }
-            // Started on the outer side (at most h behind the plane).
-            let (q0, _) = closest_point_on_triangle(xv, a0, a1, a2);
-            if n.dot(xv - q0) < -h {
-                continue;
-            }
-            let (q1, bary) = closest_point_on_triangle(pv, b0, b1, b2);
-            let d = pv - q1;
-            let along = n.dot(d);
-            if along >= h + reach || along < -reach - h {
-                continue;
-            }
-            if (d - n * along).length() > LATERAL * along.abs() {
-                continue;
-            }
-            let nodes = [v, t[0], t[1], t[2]];
-            let slots = nodes.map(|i| rank[i as usize]);
-            let weights = slots.map(|s| q[s as usize].w.max(0.0));
-            if (weights.iter().zip(&nodes))
-                .all(|(&w, &i)| w <= 0.0 || held.get(i as usize).copied().unwrap_or(true))
-            {
-                // Every node pinned or held this substep: the holders have the last word.
-                continue;
-            }
-            if chunk.contacts.len() == chunk.contacts.capacity() {
-                chunk.contacts_dropped += 1;
-                continue;
-            }
-            let start = n.dot(xv - (a0 * bary[0] + a1 * bary[1] + a2 * bary[2]));
-            if start < -BEHIND * h {
-                // Deeper behind than the solver's slop: through already (a sliver of a fresh
-                // cut, a tangle) or beside a crease. Pushing it back across injected energy
-                // (the appendix's cut-off blew up, 10⁵ intersecting pairs); the material has it.
-                continue;
-            }
-            if start < 0.0 && c.near_at_rest {
-                // Behind a tet neighbour's face (inside a thin wall, not through it), or
-                // behind a face it was near at rest (beside a sharp convex edge): the
-                // material's business. Only a vertex that came through from afar is pushed
-                // back out.
-                continue;
-            }
-            chunk.contacts.push(SelfContact {
-                slots,
-                nodes,
-                bary,
-                weights,
-                normal: n,
-                target: h.min(start + RECOVERY * h),
-                normal_correction: 0.0,
-                friction_correction: 0.0,
-            });
+    let reach = 2.0 * h;
+    let predicted = |i: u32| point(q, rank[i as usize]);
+    for c in &chunk.pairs {
+        let (v, t) = (c.vertex, triangles[c.triangle as usize]);
+        let (xv, pv) = (x[v as usize], predicted(v));
+        let [a0, a1, a2] = t.map(|i| x[i as usize]);
+        let n = (a1 - a0).cross(a2 - a0);
+        let len = n.length();
+        if len <= 0.0 || !len.is_finite() {
+            continue;
         }
+        let n = n / len;
+        // Cheap rejections first: the distance `along` tested below lies between `lo` and
+        // `hi` (the predicted triangle's extent along `n`); the vertex, within the cone,
+        // is at most `√2 |along|` from the triangle, hence from its box.
+        let [b0, b1, b2] = t.map(predicted);
+        let (nb0, nb1, nb2, np) = (n.dot(b0), n.dot(b1), n.dot(b2), n.dot(pv));
+        let (lo, hi) = (np - nb0.max(nb1).max(nb2), np - nb0.min(nb1).min(nb2));
+        if lo >= h + reach || hi < -reach - h {
+            continue;
+        }
+        let most = lo.abs().max(hi.abs());
+        if Aabb::from_triangle(b0, b1, b2).distance_squared(pv) > 2.1 * most * most {
+            continue;
+        }
+        // Started on the outer side (at most h behind the plane).
+        let (q0, _) = closest_point_on_triangle(xv, a0, a1, a2);
+        if n.dot(xv - q0) < -h {
+            continue;
+        }
+        let (q1, bary) = closest_point_on_triangle(pv, b0, b1, b2);
+        let d = pv - q1;
+        let along = n.dot(d);
+        if along >= h + reach || along < -reach - h {
+            continue;
+        }
+        if (d - n * along).length() > LATERAL * along.abs() {
+            continue;
+        }
+        let nodes = [v, t[0], t[1], t[2]];
+        let slots = nodes.map(|i| rank[i as usize]);
+        let weights = slots.map(|s| q[s as usize].w.max(0.0));
+        if (weights.iter().zip(&nodes))
+            .all(|(&w, &i)| w <= 0.0 || held.get(i as usize).copied().unwrap_or(true))
+        {
+            // Every node pinned or held this substep: the holders have the last word.
+            continue;
+        }
+        if chunk.contacts.len() == chunk.contacts.capacity() {
+            chunk.contacts_dropped += 1;
+            continue;
+        }
+        let start = n.dot(xv - (a0 * bary[0] + a1 * bary[1] + a2 * bary[2]));
+        if start < -BEHIND * h {
+            // Deeper behind than the solver's slop: through already (a sliver of a fresh
+            // cut, a tangle) or beside a crease. Pushing it back across injected energy
+            // (the appendix's cut-off blew up, 10⁵ intersecting pairs); the material has it.
+            continue;
+        }
+        if start < 0.0 && c.near_at_rest {
+            // Behind a tet neighbour's face (inside a thin wall, not through it), or
+            // behind a face it was near at rest (beside a sharp convex edge): the
+            // material's business. Only a vertex that came through from afar is pushed
+            // back out.
+            continue;
+        }
+        chunk.contacts.push(SelfContact {
+            slots,
+            nodes,
+            bary,
+            weights,
+            normal: n,
+            target: h.min(start + RECOVERY * h),
+            normal_correction: 0.0,
+            friction_correction: 0.0,
+        });
     }
 }
 
