@@ -270,8 +270,6 @@ pub(crate) struct SelfState {
     held: Vec<bool>,
     /// The broad phase's chunks of surface vertices, in order.
     chunks: Vec<Chunk>,
-    /// Contacts found past the buffer's capacity this substep (not projected).
-    dropped: usize,
 }
 
 impl SelfState {
@@ -599,11 +597,10 @@ impl SoftBody {
     /// hence not tested or projected: 0 unless the surface is badly tangled.
     pub fn self_contacts_dropped(&self) -> usize {
         let st = &self.self_collision;
-        st.dropped
-            + st.chunks
-                .iter()
-                .map(|c| c.dropped + c.contacts_dropped)
-                .sum::<usize>()
+        st.chunks
+            .iter()
+            .map(|c| c.dropped + c.contacts_dropped)
+            .sum::<usize>()
     }
 
     /// The surface's triangles as self-collision sees them (the faces used by one tet only,
@@ -626,7 +623,6 @@ impl SoftBody {
             st.rebuild(&self.tets, &self.edits.rest_x);
         }
         st.clear_contacts();
-        st.dropped = 0;
         let Some(h) = st.thickness else {
             return;
         };
