@@ -91,7 +91,7 @@
 //! Edge–edge proximity is not handled (a known gap: two edges can cross between vertices held
 //! apart when the thickness is small against the edges).
 
-use glam::{Vec3A, Vec4, Vec4Swizzles};
+use glam::{Vec3, Vec3A, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use tissue_bvh::{closest_point_on_triangle, Aabb, BuildOptions, Bvh, BvhWorkspace};
 use tissue_mesh::TET_FACES;
@@ -152,6 +152,8 @@ impl SelfCollision {
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Candidate {
     vertex: u32,
+    /// The vertex's index in `SelfState::vertices`.
+    local: u32,
     triangle: u32,
     /// The two were within `2h` at rest without coinciding (`NEAR_AT_REST`).
     near_at_rest: bool,
@@ -162,7 +164,7 @@ struct Candidate {
 /// order of the pairs they give, are the same for any number of threads.
 #[derive(Debug, Clone, Default)]
 struct Chunk {
-    /// Its surface vertices, `start..end` in `SelfState::vertices`.
+    /// Its surface vertices, `SelfState::order[start..end]`.
     start: usize,
     end: usize,
     ws: BvhWorkspace,
@@ -170,6 +172,8 @@ struct Chunk {
     /// The pairs of the last full pass, found over boxes grown by the slack (twice
     /// `MAX_PAIRS_PER_VERTEX` per vertex at most, reserved).
     near: Vec<Candidate>,
+    /// The next `near` while it is found (its capacity).
+    spare: Vec<Candidate>,
     /// This step's pairs (from `near`).
     pairs: Vec<Candidate>,
     /// Pairs found past `near`'s capacity in its last query.
@@ -181,8 +185,6 @@ struct Chunk {
     contacts: Vec<SelfContact>,
     /// Contacts found past `contacts`' capacity this substep (not projected).
     contacts_dropped: usize,
-    /// The union of its vertices' boxes of the last pass, grown by the slack.
-    bounds: Aabb,
 }
 
 /// The slack of the broad phase's pairs, in `h` (see `SelfState::swept`): larger keeps them
@@ -199,9 +201,15 @@ const BARE_PASSES: u32 = 8;
 /// Surface vertices per broad-phase chunk.
 const CHUNK: usize = 128;
 
+/// A contact's place in the projection order: `(vertex, triangle's serial, chunk, index in the
+/// chunk's contacts)`.
+type Sequenced = (u32, u32, u32, u32);
+
 /// One vertex–triangle contact of the current substep.
 #[derive(Debug, Clone, Copy)]
 struct SelfContact {
+    /// The triangle.
+    triangle: u32,
     /// Solver slots: the vertex, then the triangle's corners.
     slots: [u32; 4],
     /// Caller's node indices, same order (for the start positions).
@@ -229,6 +237,10 @@ pub(crate) struct SelfState {
     triangles: Vec<[u32; 3]>,
     /// Surface vertices, increasing.
     vertices: Vec<u32>,
+    /// The surface vertices (indices into `vertices`) in the chunks' order: along a Morton
+    /// curve over their rest positions, so that a chunk is a patch of the surface (its
+    /// vertices' pairs read nearby triangles, and a tool dirties few chunks).
+    order: Vec<u32>,
     /// Per surface vertex, the nodes sharing a tet with it (sorted): `neighbours[start[k]..start[k + 1]]`.
     start: Vec<u32>,
     neighbours: Vec<u32>,
@@ -245,6 +257,24 @@ pub(crate) struct SelfState {
     swept: Vec<Aabb>,
     /// The chunks hold the pairs of a full broad phase over the current surface.
     found: bool,
+    /// Per surface vertex: its position at the start of the last step, its expected motion
+    /// over this step (its net motion over the last one, or its first substep's motion times
+    /// the substeps when the last is not `known`), and the spread of its path about that
+    /// (`SPREAD`).
+    previous: Vec<Vec3A>,
+    known: bool,
+    /// The mean of the surface vertices' positions at the last full pass: the lists' boxes
+    /// (`swept`, `boxes`, the hierarchy) are in a frame moved by the surface's mean translation
+    /// since.
+    centre: Vec3A,
+    motion: Vec<Vec3A>,
+    spread: Vec<f32>,
+    /// The triangles with a moved corner in an update, the vertices whose pairs are found
+    /// again, and the scratch of the hierarchy's queries that find them.
+    moved_triangles: Vec<u32>,
+    again: Vec<bool>,
+    scratch: BvhWorkspace,
+    hits: Vec<u32>,
     /// Per surface vertex, whether its segment left its box this step (scratch).
     moved: Vec<bool>,
     /// Broad phases that updated the lists without a full pass (a statistic for the tests).
@@ -264,51 +294,83 @@ pub(crate) struct SelfState {
     bvh: Option<Bvh>,
     /// The triangles' boxes over this step, grown by the reach.
     tight: Vec<Aabb>,
+    /// The triangles in the current substep (scratch of the narrow phase), for those of the
+    /// step's pairs (`wanted`).
+    facets: Vec<Facet>,
+    wanted: Vec<bool>,
     /// Per node, whether a tool or collider contact holds it this substep, or the floor (its
     /// prediction at or under the floor): a self-contact whose nodes are all held or pinned is
     /// dropped (it would fight the holders).
     held: Vec<bool>,
     /// The broad phase's chunks of surface vertices, in order.
     chunks: Vec<Chunk>,
+    /// The order in which this substep's contacts are projected: `(vertex, triangle's serial,
+    /// chunk, index in the chunk's contacts)`, by increasing vertex and serial, whatever the
+    /// chunks and the hierarchy.
+    sequence: Vec<Sequenced>,
+    /// Per triangle, its index among the boundary faces sorted by their nodes (`serial`): the
+    /// triangles themselves are in Morton order.
+    serial: Vec<u32>,
+    /// The last substep's `sequence` (empty after a surface build).
+    last: Vec<Sequenced>,
+}
+
+/// The faces used by one tet only (the boundary of `tets`), as the tets wind them; tets with
+/// a repeated node are skipped. Allocates.
+fn boundary_faces(tets: &[[u32; 4]]) -> Vec<[u32; 3]> {
+    // Faces keyed by their sorted nodes; those seen once are the boundary.
+    let mut faces: Vec<([u32; 3], [u32; 3])> = Vec::with_capacity(tets.len() * 4);
+    for t in tets {
+        if t[0] == t[1]
+            || t[0] == t[2]
+            || t[0] == t[3]
+            || t[1] == t[2]
+            || t[1] == t[3]
+            || t[2] == t[3]
+        {
+            continue;
+        }
+        for f in TET_FACES {
+            let tri = [t[f[0]], t[f[1]], t[f[2]]];
+            let mut key = tri;
+            key.sort_unstable();
+            faces.push((key, tri));
+        }
+    }
+    faces.sort_unstable_by_key(|f| f.0);
+    let mut triangles = Vec::new();
+    let mut i = 0;
+    while i < faces.len() {
+        let mut j = i + 1;
+        while j < faces.len() && faces[j].0 == faces[i].0 {
+            j += 1;
+        }
+        if j == i + 1 {
+            triangles.push(faces[i].1);
+        }
+        i = j;
+    }
+    triangles
 }
 
 impl SelfState {
     /// Rebuilds the surface, its neighbour lists and (at the next generation) its hierarchy.
     /// Allocates.
-    fn rebuild(&mut self, tets: &[[u32; 4]], rest: &[Vec3A]) {
+    fn rebuild(&mut self, tets: &[[u32; 4]], rest: &[Vec3A], parallel: bool) {
         let _span = tracing::debug_span!("self_collision_surface", tets = tets.len()).entered();
-        // Faces keyed by their sorted nodes; those seen once are the boundary.
-        let mut faces: Vec<([u32; 3], [u32; 3])> = Vec::with_capacity(tets.len() * 4);
-        for t in tets {
-            if t[0] == t[1]
-                || t[0] == t[2]
-                || t[0] == t[3]
-                || t[1] == t[2]
-                || t[1] == t[3]
-                || t[2] == t[3]
-            {
-                continue;
-            }
-            for f in TET_FACES {
-                let tri = [t[f[0]], t[f[1]], t[f[2]]];
-                let mut key = tri;
-                key.sort_unstable();
-                faces.push((key, tri));
-            }
-        }
-        faces.sort_unstable_by_key(|f| f.0);
-        self.triangles.clear();
-        let mut i = 0;
-        while i < faces.len() {
-            let mut j = i + 1;
-            while j < faces.len() && faces[j].0 == faces[i].0 {
-                j += 1;
-            }
-            if j == i + 1 {
-                self.triangles.push(faces[i].1);
-            }
-            i = j;
-        }
+        self.triangles = boundary_faces(tets);
+        // Along a Morton curve over their rest centroids (the narrow phase reads the triangles
+        // of a patch of the surface together), each with its index in the faces' order.
+        let centroid = |t: &[u32; 3]| {
+            t.iter()
+                .map(|&i| rest.get(i as usize).copied().unwrap_or(Vec3A::ZERO))
+                .sum::<Vec3A>()
+                / 3.0
+        };
+        self.serial = morton_order(&self.triangles.iter().map(centroid).collect::<Vec<_>>());
+        self.triangles = (self.serial.iter())
+            .map(|&t| self.triangles[t as usize])
+            .collect();
         self.vertices = self.triangles.iter().flatten().copied().collect();
         self.vertices.sort_unstable();
         self.vertices.dedup();
@@ -362,6 +424,8 @@ impl SelfState {
             .iter()
             .map(|t| t.map(|i| self.vertices.binary_search(&i).unwrap_or(0) as u32))
             .collect();
+        let at = |v: u32| rest.get(v as usize).copied().unwrap_or(Vec3A::ZERO);
+        self.order = morton_order(&self.vertices.iter().map(|&v| at(v)).collect::<Vec<_>>());
         self.swept.clear();
         self.swept
             .resize(self.vertices.len(), Aabb::from_point(Vec3A::ZERO));
@@ -370,12 +434,29 @@ impl SelfState {
         self.bare = 0;
         self.moved.clear();
         self.moved.resize(self.vertices.len(), false);
+        let nv = self.vertices.len();
+        self.previous.clear();
+        self.previous.resize(nv, Vec3A::ZERO);
+        self.known = false;
+        self.motion.clear();
+        self.motion.resize(nv, Vec3A::ZERO);
+        self.spread.clear();
+        self.spread.resize(nv, 0.0);
         self.held.clear();
         self.held.resize(rest.len(), false);
         self.boxes.clear();
         self.boxes
             .resize(self.triangles.len(), Aabb::from_point(Vec3A::ZERO));
         self.tight.clone_from(&self.boxes);
+        self.moved_triangles = Vec::with_capacity(self.triangles.len());
+        self.hits = Vec::with_capacity(self.triangles.len());
+        self.scratch = BvhWorkspace::new();
+        self.again.clear();
+        self.again.resize(self.vertices.len(), false);
+        self.wanted.clear();
+        self.wanted.resize(self.triangles.len(), false);
+        self.facets.clear();
+        self.facets.resize(self.triangles.len(), Facet::DEGENERATE);
         self.bvh = None;
         self.chunks.clear();
         let chunk = if self.chunk_size > 0 {
@@ -391,18 +472,20 @@ impl SelfState {
                 ws: BvhWorkspace::new(),
                 candidates: Vec::with_capacity(self.triangles.len()),
                 near: Vec::with_capacity(2 * MAX_PAIRS_PER_VERTEX * (end - start)),
+                spare: Vec::with_capacity(2 * MAX_PAIRS_PER_VERTEX * (end - start)),
                 pairs: Vec::with_capacity(MAX_PAIRS_PER_VERTEX * (end - start)),
                 dropped: 0,
                 dirty: true,
                 contacts: Vec::with_capacity(MAX_CONTACTS_PER_VERTEX * (end - start)),
                 contacts_dropped: 0,
-                bounds: Aabb::EMPTY,
             });
         }
+        self.sequence = Vec::with_capacity(MAX_CONTACTS_PER_VERTEX * self.vertices.len());
+        self.last = Vec::with_capacity(MAX_CONTACTS_PER_VERTEX * self.vertices.len());
         self.rest_start.clear();
         self.rest.clear();
         if let Some(h) = self.thickness {
-            self.cache_rest_relations(rest, h);
+            self.cache_rest_relations(rest, h, parallel);
         }
         self.stale = false;
     }
@@ -415,7 +498,7 @@ impl SelfState {
     /// far corner) unless they coincided at rest (`d < 10⁻⁴ h`: the two walls of a cut, made
     /// from one place). Near at rest: from `1.5 h` to `2 h`. Found with a hierarchy over the
     /// rest triangles grown by `2 h`. Allocates (once per surface build).
-    fn cache_rest_relations(&mut self, rest: &[Vec3A], h: f32) {
+    fn cache_rest_relations(&mut self, rest: &[Vec3A], h: f32, parallel: bool) {
         let at = |i: u32| rest.get(i as usize).copied().unwrap_or(Vec3A::ZERO);
         // Node → its surface triangles.
         let n = self
@@ -443,42 +526,85 @@ impl SelfState {
         let boxes: Vec<Aabb> = self
             .triangles
             .iter()
-            .map(|t| Aabb::from_triangle(at(t[0]), at(t[1]), at(t[2])).expanded(NEAR_AT_REST * h))
+            .map(|t| {
+                Aabb::from_triangle(at(t[0]), at(t[1]), at(t[2]))
+                    .expanded(SECOND_RING.max(NEAR_AT_REST) * h)
+            })
             .collect();
         let bvh = Bvh::build(boxes.as_slice(), &BuildOptions::default()).ok();
-        let (mut ws, mut hits, mut list) = (BvhWorkspace::new(), Vec::new(), Vec::new());
-        for (k, &v) in self.vertices.iter().enumerate() {
-            self.rest_start.push(self.rest.len() as u32);
-            list.clear();
-            let ring = self.ring(k);
-            for &r in std::iter::once(&v).chain(ring) {
-                let r = r as usize;
-                if let (Some(&a), Some(&b)) = (first.get(r), first.get(r + 1)) {
-                    list.extend(incident[a as usize..b as usize].iter().map(|&t| t << 1));
-                }
-            }
-            if let Some(bvh) = &bvh {
-                let probe = Aabb::from_point(at(v));
-                bvh.overlapping_primitives(boxes.as_slice(), &probe, 0.0, &mut ws, &mut hits);
-                for &ti in &hits {
-                    let t = self.triangles[ti as usize];
-                    if t.contains(&v) || t.iter().any(|c| ring.binary_search(c).is_ok()) {
-                        continue;
-                    }
-                    let (q, _) = closest_point_on_triangle(at(v), at(t[0]), at(t[1]), at(t[2]));
-                    let d = q.distance(at(v));
-                    if d < TWIN * h {
-                        // The two walls of a cut: they collide.
-                    } else if d < REST_NEIGHBOUR * h {
-                        list.push(ti << 1);
-                    } else if d < NEAR_AT_REST * h {
-                        list.push(ti << 1 | 1);
+        let this = &*self;
+        // One vertex's sorted relations into `list`.
+        let relations =
+            |k: usize, ws: &mut BvhWorkspace, hits: &mut Vec<u32>, list: &mut Vec<u32>| {
+                let v = this.vertices[k];
+                let ring = this.ring(k);
+                for &r in std::iter::once(&v).chain(ring) {
+                    let r = r as usize;
+                    if let (Some(&a), Some(&b)) = (first.get(r), first.get(r + 1)) {
+                        list.extend(incident[a as usize..b as usize].iter().map(|&t| t << 1));
                     }
                 }
+                if let Some(bvh) = &bvh {
+                    let probe = Aabb::from_point(at(v));
+                    bvh.overlapping_primitives(boxes.as_slice(), &probe, 0.0, ws, hits);
+                    for &ti in hits.iter() {
+                        let t = this.triangles[ti as usize];
+                        if t.contains(&v) || t.iter().any(|c| ring.binary_search(c).is_ok()) {
+                            continue;
+                        }
+                        let (q, _) = closest_point_on_triangle(at(v), at(t[0]), at(t[1]), at(t[2]));
+                        let d = q.distance(at(v));
+                        if d < TWIN * h {
+                            // The two walls of a cut: they collide.
+                        } else if d < SECOND_RING * h
+                            && t.iter().any(|&c| {
+                                (this.vertices.binary_search(&c))
+                                    .is_ok_and(|j| sorted_meet(ring, this.ring(j)))
+                            })
+                        {
+                            // In the tet mesh's second ring of `v`: a corner shares a tet with one
+                            // of `v`'s neighbours.
+                            list.push(ti << 1);
+                        } else if d < REST_NEIGHBOUR * h {
+                            list.push(ti << 1);
+                        } else if d < NEAR_AT_REST * h {
+                            list.push(ti << 1 | 1);
+                        }
+                    }
+                }
+            };
+        // By blocks of vertices (in parallel when the steps are), each into its own lists,
+        // joined in order.
+        let block = |range: std::ops::Range<usize>| {
+            let (mut ws, mut hits, mut list) = (BvhWorkspace::new(), Vec::new(), Vec::new());
+            let (mut all, mut counts) = (Vec::new(), Vec::with_capacity(range.len()));
+            for k in range {
+                list.clear();
+                relations(k, &mut ws, &mut hits, &mut list);
+                list.sort_unstable();
+                list.dedup();
+                all.extend_from_slice(&list);
+                counts.push(list.len() as u32);
             }
-            list.sort_unstable();
-            list.dedup();
-            self.rest.extend_from_slice(&list);
+            (all, counts)
+        };
+        let nv = self.vertices.len();
+        let ranges: Vec<_> = (0..nv)
+            .step_by(RELATIONS_BLOCK)
+            .map(|a| a..(a + RELATIONS_BLOCK).min(nv))
+            .collect();
+        let blocks: Vec<(Vec<u32>, Vec<u32>)> = if parallel {
+            ranges.into_par_iter().map(block).collect()
+        } else {
+            ranges.into_iter().map(block).collect()
+        };
+        for (all, counts) in blocks {
+            let mut start = self.rest.len() as u32;
+            for c in counts {
+                self.rest_start.push(start);
+                start += c;
+            }
+            self.rest.extend_from_slice(&all);
         }
         self.rest_start.push(self.rest.len() as u32);
     }
@@ -497,6 +623,26 @@ fn relation(rest: &[u32], t: u32) -> Option<bool> {
         Ok(i) => (rest[i] & 1 == 1).then_some(true),
         Err(_) => Some(false),
     }
+}
+
+/// Surface vertices per block of the rest relations' computation.
+const RELATIONS_BLOCK: usize = 256;
+
+/// Pairs within this many `h` at rest whose triangle has a corner in the vertex's second ring
+/// in the tet mesh are rest neighbours (excluded).
+const SECOND_RING: f32 = 8.0;
+
+/// Whether two sorted lists share an element.
+fn sorted_meet(a: &[u32], b: &[u32]) -> bool {
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        match a[i].cmp(&b[j]) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => return true,
+        }
+    }
+    false
 }
 
 /// Pairs within this many `h` at rest (and not rest neighbours) were near at rest: a vertex
@@ -606,9 +752,7 @@ impl SoftBody {
     /// The surface's triangles as self-collision sees them (the faces used by one tet only,
     /// wound outward; caller's node indices). Computes them (allocates).
     pub fn surface_triangles(&self) -> Vec<[u32; 3]> {
-        let mut s = SelfState::default();
-        s.rebuild(&self.tets, &self.edits.rest_x);
-        s.triangles
+        boundary_faces(&self.tets)
     }
 
     /// Generates this substep's self-contacts from the start positions `x` and the predictions
@@ -620,8 +764,10 @@ impl SoftBody {
         let _span = tracing::trace_span!("self_contacts").entered();
         let st = &mut self.self_collision;
         if st.stale {
-            st.rebuild(&self.tets, &self.edits.rest_x);
+            st.rebuild(&self.tets, &self.edits.rest_x, self.settings.parallel);
         }
+        // The last substep's contacts, for the contacts that persist (`BEHIND`).
+        std::mem::swap(&mut st.sequence, &mut st.last);
         st.clear_contacts();
         let Some(h) = st.thickness else {
             return;
@@ -680,23 +826,51 @@ impl SelfState {
         let st = self;
         // The slack of the current lists.
         let (reach, mut slack) = (2.0 * h, st.slack);
-        let far = |i: u32| {
-            let x0 = x[i as usize];
-            x0 + (point(q, rank[i as usize]) - x0) * ahead
+        // Each surface vertex's expected motion over the step and the spread about it.
+        for (k, &v) in st.vertices.iter().enumerate() {
+            let x0 = x[v as usize];
+            let sub = point(q, rank[v as usize]) - x0;
+            st.motion[k] = if st.known {
+                x0 - st.previous[k]
+            } else {
+                sub * ahead
+            };
+            // Held over a few steps as it decays (`SPREAD_DECAY`): a jittering vertex keeps
+            // its box, and its lists.
+            st.spread[k] = (SPREAD * sub.length()).max(SPREAD_DECAY * st.spread[k]);
+            st.previous[k] = x0;
+        }
+        st.known = true;
+        // The surface's mean translation since the last full pass: the lists' boxes are kept
+        // in a frame that moves with it (overlaps do not change when every box moves alike),
+        // so a body carried or falling as a whole keeps its lists.
+        let centre = st
+            .vertices
+            .iter()
+            .fold(Vec3A::ZERO, |c, &v| c + x[v as usize])
+            / st.vertices.len().max(1) as f32;
+        let shift = centre - st.centre;
+        let (motion, spread) = (&st.motion, &st.spread);
+        let segment = |k: usize| {
+            let x0 = x[st.vertices[k] as usize];
+            Aabb::from_segment(x0, x0 + motion[k]).expanded(spread[k])
         };
-        let segment = |v: u32| Aabb::from_segment(x[v as usize], far(v));
         // The triangles' boxes over this step, grown by the reach.
-        for (b, t) in st.tight.iter_mut().zip(&st.triangles) {
-            let [a0, a1, a2] = t.map(|i| x[i as usize]);
-            let [b0, b1, b2] = t.map(far);
-            *b = Aabb::from_triangle(a0, a1, a2)
-                .union(&Aabb::from_triangle(b0, b1, b2))
-                .expanded(reach);
+        for (b, t) in st.tight.iter_mut().zip(&st.local) {
+            let [r0, r1, r2] = t.map(|k| segment(k as usize));
+            *b = r0.union(&r1).union(&r2).expanded(reach);
         }
         // The vertices whose segment left its box of the last pass grown by the slack.
         let mut escaped = 0;
-        for ((m, r), &v) in st.moved.iter_mut().zip(&st.swept).zip(&st.vertices) {
-            *m = !r.expanded(slack).contains(&segment(v));
+        let framed = |k: usize| {
+            let b = segment(k);
+            Aabb {
+                min: b.min - Vec3::from(shift),
+                max: b.max - Vec3::from(shift),
+            }
+        };
+        for (k, (m, r)) in st.moved.iter_mut().zip(&st.swept).enumerate() {
+            *m = !r.expanded(slack).contains(&framed(k));
             escaped += usize::from(*m);
         }
         let most = st.vertices.len()
@@ -724,29 +898,36 @@ impl SelfState {
             // consecutive vertices (in parallel when the step is, each chunk into its own
             // list: the same lists on any number of threads).
             st.found = false;
-            for ((r, &m), &v) in st.swept.iter_mut().zip(&st.moved).zip(&st.vertices) {
+            if full {
+                // A new frame: the current positions.
+                st.centre = centre;
+            }
+            let shift = if full { Vec3A::ZERO } else { shift };
+            let framed = |k: usize| {
+                let b = segment(k);
+                Aabb {
+                    min: b.min - Vec3::from(shift),
+                    max: b.max - Vec3::from(shift),
+                }
+            };
+            for (k, (r, &m)) in st.swept.iter_mut().zip(&st.moved).enumerate() {
                 if full || m {
-                    *r = segment(v);
+                    *r = framed(k);
                 }
             }
             for c in &mut st.chunks {
-                c.dirty = full || st.moved[c.start..c.end].contains(&true);
-                c.bounds = st.swept[c.start..c.end]
-                    .iter()
-                    .fold(Aabb::EMPTY, |b, r| b.union(r))
-                    .expanded(slack);
+                c.dirty = full;
             }
-            for (b, t) in st.boxes.iter_mut().zip(&st.local) {
+            st.moved_triangles.clear();
+            for (ti, (b, t)) in st.boxes.iter_mut().zip(&st.local).enumerate() {
                 if !full && !t.iter().any(|&k| st.moved[k as usize]) {
                     continue;
                 }
+                if !full {
+                    st.moved_triangles.push(ti as u32);
+                }
                 let [r0, r1, r2] = t.map(|k| st.swept[k as usize]);
                 *b = r0.union(&r1).union(&r2).expanded(reach + slack);
-                if !full {
-                    for c in st.chunks.iter_mut().filter(|c| !c.dirty) {
-                        c.dirty = c.bounds.overlaps(b, 0.0);
-                    }
-                }
             }
             if st.bvh.is_none() {
                 // Built over this step's boxes without the slack (the hierarchy, and the order
@@ -772,8 +953,33 @@ impl SelfState {
             let Some(bvh) = &st.bvh else {
                 return false;
             };
-            let (vertices, swept, boxes, rest_start, rest) = (
+            // On an update, the vertices whose pairs are found again: those that moved, and
+            // those whose box meets a moved triangle's new one (found through the triangles
+            // around them: a vertex's box lies in those of its triangles).
+            if !full {
+                let (again, moved, swept, local) = (&mut st.again, &st.moved, &st.swept, &st.local);
+                again.copy_from_slice(moved);
+                let ws = &mut st.scratch;
+                for &ti in &st.moved_triangles {
+                    let b = &st.boxes[ti as usize];
+                    bvh.overlapping_primitives(st.boxes.as_slice(), b, 0.0, ws, &mut st.hits);
+                    for &tj in &st.hits {
+                        for k in local[tj as usize] {
+                            let k = k as usize;
+                            if !again[k] && swept[k].expanded(slack).overlaps(b, 0.0) {
+                                again[k] = true;
+                            }
+                        }
+                    }
+                }
+                for c in &mut st.chunks {
+                    c.dirty = st.order[c.start..c.end].iter().any(|&k| again[k as usize]);
+                }
+            }
+            let (vertices, order, again, swept, boxes, rest_start, rest) = (
                 &st.vertices,
+                &st.order,
+                &st.again,
                 &st.swept,
                 st.boxes.as_slice(),
                 &st.rest_start,
@@ -783,9 +989,24 @@ impl SelfState {
                 if !c.dirty {
                     return;
                 }
-                c.near.clear();
+                // The new list in `spare`: a vertex's pairs found again in a full pass or when
+                // marked (`again`), else kept.
+                c.spare.clear();
                 c.dropped = 0;
-                for (k, &v) in vertices.iter().enumerate().take(c.end).skip(c.start) {
+                let mut cursor = 0;
+                for &k in &order[c.start..c.end] {
+                    let k = k as usize;
+                    let begin = cursor;
+                    while cursor < c.near.len() && c.near[cursor].local == k as u32 {
+                        cursor += 1;
+                    }
+                    let v = vertices[k];
+                    if !(full || again[k]) {
+                        let keep = (c.spare.capacity() - c.spare.len()).min(cursor - begin);
+                        c.spare.extend_from_slice(&c.near[begin..begin + keep]);
+                        c.dropped += cursor - begin - keep;
+                        continue;
+                    }
                     let probe = swept[k].expanded(slack);
                     bvh.overlapping_primitives(boxes, &probe, 0.0, &mut c.ws, &mut c.candidates);
                     let rest = &rest[rest_start[k] as usize..rest_start[k + 1] as usize];
@@ -793,17 +1014,19 @@ impl SelfState {
                         let Some(near_at_rest) = relation(rest, triangle) else {
                             continue;
                         };
-                        if c.near.len() == c.near.capacity() {
+                        if c.spare.len() == c.spare.capacity() {
                             c.dropped += 1;
                             continue;
                         }
-                        c.near.push(Candidate {
+                        c.spare.push(Candidate {
                             vertex: v,
+                            local: k as u32,
                             triangle,
                             near_at_rest,
                         });
                     }
                 }
+                std::mem::swap(&mut c.near, &mut c.spare);
             };
             if parallel {
                 st.chunks.par_iter_mut().for_each(query);
@@ -819,8 +1042,8 @@ impl SelfState {
             c.pairs.clear();
             let mut last = (u32::MAX, Aabb::from_point(Vec3A::ZERO));
             for p in &c.near {
-                if p.vertex != last.0 {
-                    last = (p.vertex, segment(p.vertex));
+                if p.local != last.0 {
+                    last = (p.local, segment(p.local as usize));
                 }
                 if tight[p.triangle as usize].overlaps(&last.1, 0.0) {
                     c.pairs.push(*p);
@@ -832,6 +1055,11 @@ impl SelfState {
         } else {
             st.chunks.iter_mut().for_each(filter);
         }
+        // The triangles the narrow phase reads this step.
+        st.wanted.fill(false);
+        for p in st.chunks.iter().flat_map(|c| &c.pairs) {
+            st.wanted[p.triangle as usize] = true;
+        }
         true
     }
 
@@ -839,13 +1067,61 @@ impl SelfState {
     /// By chunks (in parallel with `parallel`), each into its own buffer: the contacts, in
     /// the chunks' order, are the same for any thread count.
     fn narrow_phase(&mut self, x: &[Vec3A], q: &[Vec4], rank: &[u32], h: f32, parallel: bool) {
-        let (triangles, held) = (self.triangles.as_slice(), self.held.as_slice());
-        let narrow = |chunk: &mut Chunk| narrow_chunk(chunk, triangles, held, x, q, rank, h);
+        // Each triangle's normal at the substep's start and its predicted box and extent along
+        // it, once per triangle instead of once per pair.
+        let triangles = self.triangles.as_slice();
+        let facet = |((f, t), &wanted): ((&mut Facet, &[u32; 3]), &bool)| {
+            if !wanted {
+                return;
+            }
+            let [a0, a1, a2] = t.map(|i| x[i as usize]);
+            let n = (a1 - a0).cross(a2 - a0);
+            let len = n.length();
+            let [b0, b1, b2] = t.map(|i| point(q, rank[i as usize]));
+            *f = if len > 0.0 && len.is_finite() {
+                let n = n / len;
+                let (nb0, nb1, nb2) = (n.dot(b0), n.dot(b1), n.dot(b2));
+                let bounds = Aabb::from_triangle(b0, b1, b2);
+                Facet {
+                    normal: n,
+                    min: bounds.min.into(),
+                    max: bounds.max.into(),
+                    lowest: nb0.min(nb1).min(nb2),
+                    highest: nb0.max(nb1).max(nb2),
+                }
+            } else {
+                Facet::DEGENERATE
+            };
+        };
+        if parallel {
+            (self.facets.par_iter_mut().zip(triangles.par_iter()))
+                .zip(self.wanted.par_iter())
+                .with_min_len(FACETS_PER_TASK)
+                .for_each(facet);
+        } else {
+            (self.facets.iter_mut().zip(triangles))
+                .zip(&self.wanted)
+                .for_each(facet);
+        }
+        let (facets, held) = (self.facets.as_slice(), self.held.as_slice());
+        let history = (self.last.as_slice(), self.serial.as_slice());
+        let narrow = |chunk: &mut Chunk| {
+            narrow_chunk(chunk, history, triangles, facets, held, x, q, rank, h)
+        };
         if parallel {
             self.chunks.par_iter_mut().for_each(narrow);
         } else {
             self.chunks.iter_mut().for_each(narrow);
         }
+        self.sequence.clear();
+        let serial = &self.serial;
+        for (ci, c) in self.chunks.iter().enumerate() {
+            self.sequence.extend(
+                (c.contacts.iter().enumerate())
+                    .map(|(i, s)| (s.nodes[0], serial[s.triangle as usize], ci as u32, i as u32)),
+            );
+        }
+        self.sequence.sort_unstable();
     }
 
     /// Empties every chunk's contacts.
@@ -854,6 +1130,7 @@ impl SelfState {
             c.contacts.clear();
             c.contacts_dropped = 0;
         }
+        self.sequence.clear();
     }
 
     /// This substep's contacts, in order.
@@ -862,41 +1139,121 @@ impl SelfState {
     }
 }
 
+/// The spread of a vertex's path over a step about its expected segment, in lengths of its
+/// first substep's motion: a vertex jittering in place (the step's last substep kicks the
+/// nodes, the next ones bring them back) moves by up to about twice its first substep's
+/// motion and back within a step, whatever its net motion.
+const SPREAD: f32 = 2.0;
+
+/// The fraction of a vertex's spread kept into the next step when its first substep moves it
+/// less.
+const SPREAD_DECAY: f32 = 0.9;
+
+/// The indices of `points` sorted along a Morton (Z-order) curve (10 bits per axis over their
+/// bounding box; ties by index).
+fn morton_order(points: &[Vec3A]) -> Vec<u32> {
+    let bounds = points
+        .iter()
+        .fold(Aabb::EMPTY, |b, &p| b.union(&Aabb::from_point(p)));
+    let (min, size) = (
+        Vec3A::from(bounds.min),
+        Vec3A::from(bounds.max - bounds.min).max(Vec3A::splat(f32::MIN_POSITIVE)),
+    );
+    let spread = |x: u32| {
+        // 10 bits, two zeros between each.
+        let mut x = x & 0x3ff;
+        x = (x | (x << 16)) & 0x0300_00ff;
+        x = (x | (x << 8)) & 0x0300_f00f;
+        x = (x | (x << 4)) & 0x030c_30c3;
+        (x | (x << 2)) & 0x0924_9249
+    };
+    let mut keyed: Vec<(u32, u32)> = points
+        .iter()
+        .enumerate()
+        .map(|(k, &p)| {
+            let u = ((p - min) / size * 1023.0).clamp(Vec3A::ZERO, Vec3A::splat(1023.0));
+            let code = spread(u.x as u32) | spread(u.y as u32) << 1 | spread(u.z as u32) << 2;
+            (code, k as u32)
+        })
+        .collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, k)| k).collect()
+}
+
+/// A surface triangle in a substep, for the narrow phase's cheap rejections: its outward unit
+/// normal at the substep's start, and the box and extent along that normal of its predicted
+/// corners.
+#[derive(Debug, Clone, Copy)]
+struct Facet {
+    normal: Vec3A,
+    min: Vec3A,
+    max: Vec3A,
+    lowest: f32,
+    highest: f32,
+}
+
+impl Facet {
+    /// A triangle without a normal (zero area at the substep's start): no contact.
+    const DEGENERATE: Facet = Facet {
+        normal: Vec3A::ZERO,
+        min: Vec3A::ZERO,
+        max: Vec3A::ZERO,
+        lowest: 1.0,
+        highest: 0.0,
+    };
+}
+
+/// Triangles per parallel task when the facets are computed.
+const FACETS_PER_TASK: usize = 1024;
+
 /// The narrow phase of one chunk: its pairs' tests into its contacts.
+#[allow(clippy::too_many_arguments)]
 fn narrow_chunk(
     chunk: &mut Chunk,
+    (history, serial): (&[Sequenced], &[u32]),
     triangles: &[[u32; 3]],
+    facets: &[Facet],
     held: &[bool],
     x: &[Vec3A],
     q: &[Vec4],
     rank: &[u32],
     h: f32,
 ) {
-    let reach = 2.0 * h;
+    let band = 3.0 * h;
     let predicted = |i: u32| point(q, rank[i as usize]);
-    for c in &chunk.pairs {
-        let (v, t) = (c.vertex, triangles[c.triangle as usize]);
-        let (xv, pv) = (x[v as usize], predicted(v));
-        let [a0, a1, a2] = t.map(|i| x[i as usize]);
-        let n = (a1 - a0).cross(a2 - a0);
-        let len = n.length();
-        if len <= 0.0 || !len.is_finite() {
+    let Chunk {
+        pairs,
+        contacts,
+        contacts_dropped,
+        ..
+    } = chunk;
+    let mut last = (u32::MAX, Vec3A::ZERO);
+    for c in pairs.iter() {
+        let v = c.vertex;
+        if v != last.0 {
+            last = (v, predicted(v));
+        }
+        let (pv, f) = (last.1, &facets[c.triangle as usize]);
+        if f.lowest > f.highest {
+            // Degenerate at the substep's start.
             continue;
         }
-        let n = n / len;
         // Cheap rejections first: the distance `along` tested below lies between `lo` and
-        // `hi` (the predicted triangle's extent along `n`); the vertex, within the cone,
-        // is at most `√2 |along|` from the triangle, hence from its box.
-        let [b0, b1, b2] = t.map(predicted);
-        let (nb0, nb1, nb2, np) = (n.dot(b0), n.dot(b1), n.dot(b2), n.dot(pv));
-        let (lo, hi) = (np - nb0.max(nb1).max(nb2), np - nb0.min(nb1).min(nb2));
-        if lo >= h + reach || hi < -reach - h {
+        // `hi` (the predicted triangle's extent along `n`); the vertex, within the cone, is
+        // at most `√2 |along|` from the triangle, hence from its box.
+        let (n, np) = (f.normal, f.normal.dot(pv));
+        let (lo, hi) = (np - f.highest, np - f.lowest);
+        if lo >= band || hi < -band {
             continue;
         }
         let most = lo.abs().max(hi.abs());
-        if Aabb::from_triangle(b0, b1, b2).distance_squared(pv) > 2.1 * most * most {
+        if (pv - pv.clamp(f.min, f.max)).length_squared() > 2.1 * most * most {
             continue;
         }
+        let t = triangles[c.triangle as usize];
+        let xv = x[v as usize];
+        let [a0, a1, a2] = t.map(|i| x[i as usize]);
+        let [b0, b1, b2] = t.map(predicted);
         // Started on the outer side (at most h behind the plane).
         let (q0, _) = closest_point_on_triangle(xv, a0, a1, a2);
         if n.dot(xv - q0) < -h {
@@ -905,7 +1262,7 @@ fn narrow_chunk(
         let (q1, bary) = closest_point_on_triangle(pv, b0, b1, b2);
         let d = pv - q1;
         let along = n.dot(d);
-        if along >= h + reach || along < -reach - h {
+        if along >= band || along < -band {
             continue;
         }
         if (d - n * along).length() > LATERAL * along.abs() {
@@ -920,15 +1277,21 @@ fn narrow_chunk(
             // Every node pinned or held this substep: the holders have the last word.
             continue;
         }
-        if chunk.contacts.len() == chunk.contacts.capacity() {
-            chunk.contacts_dropped += 1;
+        if contacts.len() == contacts.capacity() {
+            *contacts_dropped += 1;
             continue;
         }
         let start = n.dot(xv - (a0 * bary[0] + a1 * bary[1] + a2 * bary[2]));
-        if start < -BEHIND * h {
-            // Deeper behind than the solver's slop: through already (a sliver of a fresh
-            // cut, a tangle) or beside a crease. Pushing it back across injected energy
-            // (the appendix's cut-off blew up, 10⁵ intersecting pairs); the material has it.
+        if start < -BEHIND * h
+            && history
+                .binary_search_by(|e| (e.0, e.1).cmp(&(v, serial[c.triangle as usize])))
+                .is_err()
+        {
+            // Deeper behind than the solver's slop, and not held against the triangle in the
+            // last substep: through already (a sliver of a fresh cut, a tangle) or beside a
+            // crease. Pushing it back across injected energy (the appendix's cut-off blew up,
+            // 10⁵ intersecting pairs); the material has it. One that was held there is held
+            // still (up to `h` behind): the iterations let it through.
             continue;
         }
         if start < 0.0 && c.near_at_rest {
@@ -938,7 +1301,8 @@ fn narrow_chunk(
             // back out.
             continue;
         }
-        chunk.contacts.push(SelfContact {
+        contacts.push(SelfContact {
+            triangle: c.triangle,
             slots,
             nodes,
             bary,
@@ -958,12 +1322,15 @@ impl SoftBody {
             return;
         };
         let (q, x) = (&mut self.q, &self.x);
-        for c in self
-            .self_collision
-            .chunks
-            .iter_mut()
-            .flat_map(|c| &mut c.contacts)
-        {
+        let st = &mut self.self_collision;
+        for &(_, _, ci, i) in &st.sequence {
+            let Some(c) = st
+                .chunks
+                .get_mut(ci as usize)
+                .and_then(|c| c.contacts.get_mut(i as usize))
+            else {
+                continue;
+            };
             let [sv, sa, sb, sc] = c.slots;
             let [u, v, w] = c.bary;
             let [wv, wa, wb, wc] = c.weights;
@@ -1089,6 +1456,8 @@ mod tests {
                 for c in &mut st.chunks {
                     let n = c.end - c.start;
                     c.near.reserve(2 * MAX_PAIRS_PER_VERTEX * n - c.near.len());
+                    c.spare
+                        .reserve(2 * MAX_PAIRS_PER_VERTEX * n - c.spare.len());
                     c.pairs.reserve(MAX_PAIRS_PER_VERTEX * n - c.pairs.len());
                 }
                 st
