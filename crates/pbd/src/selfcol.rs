@@ -23,15 +23,17 @@
 //! A vertex is never held against a triangle that has it as a corner or a corner sharing a tet
 //! with it (its one-ring in the tet mesh: the surface fan around it, the fan's neighbours across
 //! short edges of an irregular mesh, the far side of a one-tet-thick wall), nor against one
-//! within `1.5 h` of it at rest (a sliver's far corner), except when the two coincided at rest:
-//! the two walls of a cut, whose nodes were duplicated in place and share no tet, do collide.
-//! A vertex is not held against a triangle it starts the substep *behind* if it was within `2h`
-//! of it at rest (a vertex just below a sharp convex edge is behind the faces across the edge);
-//! one that starts at most `h/10` behind a triangle it was farther from at rest (the slop of the
-//! iterations) is pushed back out (see `h'` below); one deeper behind is left to the material
-//! (`BEHIND`: pushing it across injected energy into a freshly cut, moving surface). Pairs farther apart at rest (a crease folding the surface into
-//! itself three edges away, a flap laid on its base, a wound's walls) are held apart. A body at
-//! rest has no active self-contact (`tests/it/selfcol.rs`, the bunny).
+//! within `1.5 h` of it at rest (a sliver's far corner), except when the two coincided at
+//! rest: the two walls of a cut, whose nodes were duplicated in place and share no tet, do
+//! collide. A vertex is not held against a triangle it starts the substep *behind* if it was
+//! within `2h` of it at rest (a vertex just below a sharp convex edge is behind the faces across
+//! the edge); one that starts at most `h/10` behind a triangle it was farther from at rest (the
+//! slop of the iterations) is pushed back out (see `h'` below), and so is one up to `h` behind
+//! a triangle it was held against in the last substep (the iterations let it through); any
+//! other is left to the material (`BEHIND`: pushing it across injected energy into a freshly
+//! cut, moving surface). Pairs farther apart at rest (a crease folding the surface into itself
+//! three edges away, a flap laid on its base, a wound's walls) are held apart. A body at rest
+//! has no active self-contact (`tests/it/selfcol.rs`, the bunny).
 //!
 //! ## Constraint
 //! With the triangle's corners `a, b, c`, the barycentric weights `(u, v, w)` of the closest
@@ -50,43 +52,56 @@
 //! ## Place in the step, cost and determinism
 //! **Rest relations**, once per surface build: per surface vertex, the sorted list of the
 //! triangles it is never held against (above) or was near at rest (within `2h`: not pushed out
-//! from behind them), found with a hierarchy over the rest triangles grown by `2h`. A step looks
-//! a pair up in it (a binary search) instead of computing a closest point at rest.
+//! from behind them), found with a hierarchy over the rest triangles grown by `2h`, by blocks of
+//! vertices (in parallel when the steps are). A step looks a pair up in it (a binary search)
+//! instead of computing a closest point at rest.
+//!
+//! **Travels.** Each step, every surface vertex's expected path over it: a segment from its
+//! position along its net displacement over the last step (its first substep's motion times
+//! the substeps when the surface was just built), grown by a spread of twice its first
+//! substep's motion, held as it decays (`SPREAD`, `SPREAD_DECAY`). The last substep's piece
+//! volume projection kicks the surface nodes, and the next substeps bring them back, so a
+//! body at rest has first-substep velocities of several cm/s whose extrapolation over the
+//! step would be a hundred times its real motion; its net displacement is not.
 //!
 //! **Broad phase**, once per step in its first substep: the (vertex, triangle) pairs, rest
-//! neighbours left out, whose boxes over the whole step overlap (the vertex's segment from its
-//! start to its first-substep motion extrapolated over the step's substeps; the triangle's
-//! corners over the same, grown by the detection reach `2h`). Taken from Verlet lists: a *full
-//! pass* (the hierarchy refit over the triangles' boxes grown by a further slack `h`, one query
-//! per surface vertex with its segment's box grown by `h`) keeps every vertex's pairs, and they
-//! hold while every surface vertex's segment stays inside its box of that pass grown by `h`
+//! neighbours left out, whose boxes over the whole step overlap (the vertex's travel; the
+//! triangle's corners' travels grown by the detection reach `2h`). Taken from Verlet lists: a
+//! *full pass* (the hierarchy refit over the triangles' boxes grown by a further slack `h`, one
+//! query per surface vertex with its travel's box grown by `h`) keeps every vertex's pairs, and
+//! they hold while every surface vertex's travel stays inside its box of that pass grown by `h`
 //! (then any pair whose boxes overlap now overlapped then); each step filters them with its own
-//! boxes, so the pairs are exactly those of a full pass every step. When a few vertices left
-//! their boxes (at most one in 16), an *update* instead: they take new boxes, so do the
-//! triangles they are a corner of (then a refit), and the chunks holding them or meeting a moved
-//! triangle's new box query again (`tests::updated_lists_give_the_pairs_of_a_full_pass`). A body
-//! at rest skips the refit and the queries; a tool pressing on one place re-queries the chunks
-//! around it. Lists that did not outlast a step (a body in motion) are found without the slack
-//! (the old, smaller boxes) until one in `BARE_PASSES` = 8 full passes tries the slack again. The queries go by chunks of 128 consecutive surface vertices, each into its own
-//! list (in parallel when the step is), read in chunk order; the hierarchy is built over the
-//! first step's boxes without the slack (then refit with it), so a vertex's triangles come in
-//! the same order as without the lists.
+//! boxes, so the pairs are exactly those of a full pass every step. The lists' boxes are kept in
+//! a frame that follows the surface's mean translation since the full pass (overlaps do not
+//! change when every box moves alike): a body carried or falling as a whole keeps its lists.
+//! When a few vertices left their boxes (at most one in 16), an *update* instead: they take new
+//! boxes, so do the triangles they are a corner of (then a refit), and the vertices whose box
+//! meets a moved triangle's new one (found through the hierarchy: a vertex's box lies in those
+//! of its triangles) query again, the others keeping their lists
+//! (`tests::updated_lists_give_the_pairs_of_a_full_pass`). A body at rest skips the refit and
+//! the queries; a tool pressing on one place re-queries the vertices around it. Lists that did
+//! not outlast a step (a body in motion) are found without the slack until one in
+//! `BARE_PASSES` = 8 full passes tries the slack again. The queries go by chunks of 128 surface
+//! vertices along a Morton curve over their rest positions (a chunk is a patch of the surface),
+//! each into its own list (in parallel when the step is).
 //!
 //! **Narrow phase** (the tests above) on the step's pairs in every substep, after the tool and
-//! collider contacts, with cheap rejections first (the predicted triangle's extent along `n`
+//! collider contacts. Each triangle of the step's pairs is read once per substep into a facet
+//! (its normal at the substep's start, its predicted box and extent along the normal; the
+//! triangles are stored along a Morton curve over their rest centroids, so a chunk's pairs read
+//! nearby facets), and the pairs are rejected cheaply from it first (the extent along `n`
 //! bounds the distance along it; the cone bounds the distance to the triangle's box). A contact
 //! whose four nodes are all pinned or held in the substep (by a tool or collider contact, or
 //! predicted at or under the floor) is dropped: it could only fight the holders. Projected
 //! in every iteration after the body's own constraints (material, sutures, floor) and before
 //! the tool and collider contacts, which thus have the last word (tools, pins and the tray
 //! hold). Found by chunks of surface vertices (in parallel when the step is), each into its own
-//! contact buffer, and projected serially in chunk order (surface vertices in increasing index,
-//! triangles in the hierarchy's order): the same for any thread count (`tests/it/selfcol.rs`).
-//! A vertex that starts a substep more than `h/10` behind a triangle (`BEHIND`) is not held
-//! against it: only the slop of the iterations is pushed back out. No allocation in
-//! a step after the one that builds the surface (the buffers are reserved then: at most 64
-//! broad-phase pairs per surface vertex and eight contacts per vertex and substep, the rest
-//! dropped and counted, `tests/selfcol_allocation.rs`, serial and parallel).
+//! contact buffer, and projected serially by increasing vertex, then triangle (its index among
+//! the boundary faces sorted by nodes): the same for any thread count and chunking
+//! (`tests/it/selfcol.rs`). No allocation in a step after the one that builds the surface (the
+//! buffers are reserved then: at most 64 broad-phase pairs per surface vertex and eight
+//! contacts per vertex and substep, the rest dropped and counted,
+//! `tests/selfcol_allocation.rs`, serial and parallel).
 //!
 //! Edge–edge proximity is not handled (a known gap: two edges can cross between vertices held
 //! apart when the thickness is small against the edges).
@@ -526,10 +541,7 @@ impl SelfState {
         let boxes: Vec<Aabb> = self
             .triangles
             .iter()
-            .map(|t| {
-                Aabb::from_triangle(at(t[0]), at(t[1]), at(t[2]))
-                    .expanded(SECOND_RING.max(NEAR_AT_REST) * h)
-            })
+            .map(|t| Aabb::from_triangle(at(t[0]), at(t[1]), at(t[2])).expanded(NEAR_AT_REST * h))
             .collect();
         let bvh = Bvh::build(boxes.as_slice(), &BuildOptions::default()).ok();
         let this = &*self;
@@ -556,15 +568,6 @@ impl SelfState {
                         let d = q.distance(at(v));
                         if d < TWIN * h {
                             // The two walls of a cut: they collide.
-                        } else if d < SECOND_RING * h
-                            && t.iter().any(|&c| {
-                                (this.vertices.binary_search(&c))
-                                    .is_ok_and(|j| sorted_meet(ring, this.ring(j)))
-                            })
-                        {
-                            // In the tet mesh's second ring of `v`: a corner shares a tet with one
-                            // of `v`'s neighbours.
-                            list.push(ti << 1);
                         } else if d < REST_NEIGHBOUR * h {
                             list.push(ti << 1);
                         } else if d < NEAR_AT_REST * h {
@@ -628,23 +631,6 @@ fn relation(rest: &[u32], t: u32) -> Option<bool> {
 /// Surface vertices per block of the rest relations' computation.
 const RELATIONS_BLOCK: usize = 256;
 
-/// Pairs within this many `h` at rest whose triangle has a corner in the vertex's second ring
-/// in the tet mesh are rest neighbours (excluded).
-const SECOND_RING: f32 = 8.0;
-
-/// Whether two sorted lists share an element.
-fn sorted_meet(a: &[u32], b: &[u32]) -> bool {
-    let (mut i, mut j) = (0, 0);
-    while i < a.len() && j < b.len() {
-        match a[i].cmp(&b[j]) {
-            std::cmp::Ordering::Less => i += 1,
-            std::cmp::Ordering::Greater => j += 1,
-            std::cmp::Ordering::Equal => return true,
-        }
-    }
-    false
-}
-
 /// Pairs within this many `h` at rest (and not rest neighbours) were near at rest: a vertex
 /// that starts a substep behind such a triangle is left to the material (beside a sharp convex
 /// edge), not pushed out.
@@ -685,7 +671,9 @@ const RECOVERY: f32 = 0.1;
 /// crossed by less than a tenth of the thickness) is recovered. Pushed back from up to `h`
 /// behind, vertices of a freshly cut, moving surface were driven across the other wall and the
 /// surface tangled (the appendix's cut-off: 6 × 10³ – 10⁵ intersecting pairs against 362
-/// without self-collision; 192 with this bound; `tissue-scenes` `tests/it/selfcol.rs`).
+/// without self-collision; 192 with this bound; `tissue-scenes` `tests/it/selfcol.rs`). A
+/// vertex held against the triangle in the last substep is held still, from up to `h` behind
+/// (a contact persists: the iterations let it through, it did not come through from afar).
 const BEHIND: f32 = 0.1;
 
 fn point(q: &[Vec4], s: u32) -> Vec3A {
@@ -1254,11 +1242,6 @@ fn narrow_chunk(
         let xv = x[v as usize];
         let [a0, a1, a2] = t.map(|i| x[i as usize]);
         let [b0, b1, b2] = t.map(predicted);
-        // Started on the outer side (at most h behind the plane).
-        let (q0, _) = closest_point_on_triangle(xv, a0, a1, a2);
-        if n.dot(xv - q0) < -h {
-            continue;
-        }
         let (q1, bary) = closest_point_on_triangle(pv, b0, b1, b2);
         let d = pv - q1;
         let along = n.dot(d);
@@ -1266,6 +1249,11 @@ fn narrow_chunk(
             continue;
         }
         if (d - n * along).length() > LATERAL * along.abs() {
+            continue;
+        }
+        // Started on the outer side (at most h behind the plane).
+        let (q0, _) = closest_point_on_triangle(xv, a0, a1, a2);
+        if n.dot(xv - q0) < -h {
             continue;
         }
         let nodes = [v, t[0], t[1], t[2]];
