@@ -174,9 +174,10 @@ struct Candidate {
     near_at_rest: bool,
 }
 
-/// A run of consecutive surface vertices whose broad-phase queries are made together (by one
-/// thread), with its own scratch and pairs: `CHUNK` vertices, so that the chunks, and the
-/// order of the pairs they give, are the same for any number of threads.
+/// A run of surface vertices (consecutive along the Morton curve of `SelfState::order`) whose
+/// broad-phase queries and narrow-phase tests are made together (by one thread), with its own
+/// scratch, pairs and contacts: `CHUNK` vertices, so that the chunks, and the order of the
+/// pairs they give, are the same for any number of threads.
 #[derive(Debug, Clone, Default)]
 struct Chunk {
     /// Its surface vertices, `SelfState::order[start..end]`.
@@ -795,13 +796,14 @@ impl SoftBody {
 
 impl SelfState {
     /// The broad phase, once per step (in its first substep): every (vertex, triangle) whose
-    /// boxes over the whole step overlap (the vertex's segment from its start to `far`, the
-    /// first substep's motion extrapolated over the step's `ahead` substeps; the triangle's
-    /// corners over the same, grown by the detection reach `2h`), rest neighbours left out,
-    /// into the chunks' `pairs`. From the chunks' `near` lists (Verlet lists), which a full
-    /// pass (refit and one query per vertex) refills only when a vertex's segment left its box
-    /// of the last full pass grown by `SLACK h`. `false` for non-finite positions (no pairs:
-    /// the step reports the divergence).
+    /// boxes over the whole step overlap (the vertex's travel: its net motion over the last
+    /// step, or its first substep's motion times the step's `ahead` substeps after a surface
+    /// build, grown by its spread; the triangle's corners' travels grown by the detection reach
+    /// `2h`), rest neighbours left out, into the chunks' `pairs`. From the chunks' `near` lists
+    /// (Verlet lists), which a full pass (refit and one query per vertex) refills, or an update
+    /// (the vertices concerned) amends, only when a vertex's travel left its box of the last
+    /// pass grown by `SLACK h` in the frame that follows the surface's mean translation.
+    /// `false` for non-finite positions (no pairs: the step reports the divergence).
     fn broad_phase(
         &mut self,
         x: &[Vec3A],
