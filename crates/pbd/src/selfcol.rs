@@ -279,12 +279,12 @@ pub(crate) struct SelfState {
     /// (`SPREAD`).
     previous: Vec<Vec3A>,
     known: bool,
+    motion: Vec<Vec3A>,
+    spread: Vec<f32>,
     /// The mean of the surface vertices' positions at the last full pass: the lists' boxes
     /// (`swept`, `boxes`, the hierarchy) are in a frame moved by the surface's mean translation
     /// since.
     centre: Vec3A,
-    motion: Vec<Vec3A>,
-    spread: Vec<f32>,
     /// The triangles with a moved corner in an update, the vertices whose pairs are found
     /// again, and the scratch of the hierarchy's queries that find them.
     moved_triangles: Vec<u32>,
