@@ -285,9 +285,11 @@ pub(crate) struct SelfState {
     /// (`swept`, `boxes`, the hierarchy) are in a frame moved by the surface's mean translation
     /// since.
     centre: Vec3A,
-    /// The triangles with a moved corner in an update, the vertices whose pairs are found
-    /// again, and the scratch of the hierarchy's queries that find them.
-    moved_triangles: Vec<u32>,
+    /// Per surface vertex, the triangles it is a corner of: `fan[fan_start[k]..fan_start[k + 1]]`.
+    fan_start: Vec<u32>,
+    fan: Vec<u32>,
+    /// The vertices whose pairs are found again in an update, and the scratch of the
+    /// hierarchy's queries that find them.
     again: Vec<bool>,
     scratch: BvhWorkspace,
     hits: Vec<u32>,
@@ -464,7 +466,26 @@ impl SelfState {
         self.boxes
             .resize(self.triangles.len(), Aabb::from_point(Vec3A::ZERO));
         self.tight.clone_from(&self.boxes);
-        self.moved_triangles = Vec::with_capacity(self.triangles.len());
+        // Each surface vertex's fan of triangles.
+        self.fan_start.clear();
+        self.fan_start.resize(self.vertices.len() + 1, 0);
+        for t in &self.local {
+            for &k in t {
+                self.fan_start[k as usize + 1] += 1;
+            }
+        }
+        for k in 0..self.vertices.len() {
+            self.fan_start[k + 1] += self.fan_start[k];
+        }
+        let mut fill = self.fan_start.clone();
+        self.fan.clear();
+        self.fan.resize(3 * self.local.len(), 0);
+        for (ti, t) in self.local.iter().enumerate() {
+            for &k in t {
+                self.fan[fill[k as usize] as usize] = ti as u32;
+                fill[k as usize] += 1;
+            }
+        }
         self.hits = Vec::with_capacity(self.triangles.len());
         self.scratch = BvhWorkspace::new();
         self.again.clear();
@@ -883,10 +904,9 @@ impl SelfState {
         if full || escaped > 0 {
             // A full pass (boxes grown by the slack, refit, one query per surface vertex), or
             // an update: the escaped vertices take their new boxes, the triangles they are a
-            // corner of too, and the chunks of the escaped vertices and of every vertex whose
-            // box meets a moved triangle's new one query again. Queries by chunks of
-            // consecutive vertices (in parallel when the step is, each chunk into its own
-            // list: the same lists on any number of threads).
+            // corner of too, and the vertices that moved or whose box meets a moved triangle's
+            // new one query again. Queries by chunks (in parallel when the step is, each chunk
+            // into its own list: the same lists on any number of threads).
             st.found = false;
             if full {
                 // A new frame: the current positions.
@@ -908,13 +928,9 @@ impl SelfState {
             for c in &mut st.chunks {
                 c.dirty = full;
             }
-            st.moved_triangles.clear();
-            for (ti, (b, t)) in st.boxes.iter_mut().zip(&st.local).enumerate() {
+            for (b, t) in st.boxes.iter_mut().zip(&st.local) {
                 if !full && !t.iter().any(|&k| st.moved[k as usize]) {
                     continue;
-                }
-                if !full {
-                    st.moved_triangles.push(ti as u32);
                 }
                 let [r0, r1, r2] = t.map(|k| st.swept[k as usize]);
                 *b = r0.union(&r1).union(&r2).expanded(reach + slack);
@@ -944,19 +960,28 @@ impl SelfState {
                 return false;
             };
             // On an update, the vertices whose pairs are found again: those that moved, and
-            // those whose box meets a moved triangle's new one (found through the triangles
-            // around them: a vertex's box lies in those of its triangles).
+            // those whose box meets a moved triangle's new one. Found per moved vertex `e`,
+            // with one query over the union of its triangles' boxes: a vertex whose box meets
+            // one of them has a triangle whose box (which holds the vertex's) meets the union.
             if !full {
-                let (again, moved, swept, local) = (&mut st.again, &st.moved, &st.swept, &st.local);
+                let (again, moved, swept, local, boxes) =
+                    (&mut st.again, &st.moved, &st.swept, &st.local, &st.boxes);
                 again.copy_from_slice(moved);
                 let ws = &mut st.scratch;
-                for &ti in &st.moved_triangles {
-                    let b = &st.boxes[ti as usize];
-                    bvh.overlapping_primitives(st.boxes.as_slice(), b, 0.0, ws, &mut st.hits);
+                for e in (0..moved.len()).filter(|&e| moved[e]) {
+                    let fan = &st.fan[st.fan_start[e] as usize..st.fan_start[e + 1] as usize];
+                    let union = (fan.iter()).fold(Aabb::EMPTY, |u, &t| u.union(&boxes[t as usize]));
+                    bvh.overlapping_primitives(boxes.as_slice(), &union, 0.0, ws, &mut st.hits);
                     for &tj in &st.hits {
                         for k in local[tj as usize] {
                             let k = k as usize;
-                            if !again[k] && swept[k].expanded(slack).overlaps(b, 0.0) {
+                            if again[k] {
+                                continue;
+                            }
+                            let probe = swept[k].expanded(slack);
+                            if probe.overlaps(&union, 0.0)
+                                && fan.iter().any(|&t| probe.overlaps(&boxes[t as usize], 0.0))
+                            {
                                 again[k] = true;
                             }
                         }
