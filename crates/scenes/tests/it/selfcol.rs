@@ -107,15 +107,10 @@ fn speed(before: &[Vec3A], s: &Session) -> f32 {
 }
 
 /// The probe grabs the surface at `from`, carries it over a half circle in the x–y plane to
-/// `to` (`steps` steps), holds it there for `hold` steps and lets go; then `settle` steps.
-fn fold_over(
-    s: &mut Session,
-    from: Vec3,
-    to: Vec3,
-    steps: usize,
-    hold: usize,
-    settle: usize,
-) -> Result {
+/// `to` (150 steps), holds it there for 30 steps and lets go; then 120 steps. Returns the
+/// intersecting pairs at the end and the largest node speed over one more step.
+fn fold_over(s: &mut Session, from: Vec3, to: Vec3) -> Result<(Pairs, f32)> {
+    let (steps, hold, settle) = (150, 30, 120);
     let (t, p) = surface_near(s, from);
     assert_eq!(s.grab(p, t)?.kind, K::Grabbed);
     let centre = 0.5 * (p + to);
@@ -137,7 +132,9 @@ fn fold_over(
     for _ in 0..settle {
         s.step()?;
     }
-    Ok(())
+    let before = s.positions().to_vec();
+    s.step()?;
+    Ok((self_intersections(s), speed(&before, s)))
 }
 
 /// A 10 × 0.6 × 3 cm slab (cells of 0.2 cm) on the tray; the probe takes its right end's
@@ -152,17 +149,7 @@ fn folded_slab(self_collision: bool) -> Result<(Pairs, f32)> {
     for _ in 0..20 {
         s.step()?;
     }
-    fold_over(
-        &mut s,
-        Vec3::new(4.9, 0.6, 0.0),
-        Vec3::new(-2.0, 1.3, 0.6),
-        150,
-        30,
-        120,
-    )?;
-    let before = s.positions().to_vec();
-    s.step()?;
-    Ok((self_intersections(&s), speed(&before, &s)))
+    fold_over(&mut s, Vec3::new(4.9, 0.6, 0.0), Vec3::new(-2.0, 1.3, 0.6))
 }
 
 /// Fails (issue 35, measured 2026-11-29, grab radius 0.3 cm): with self-collision on 23
@@ -211,17 +198,7 @@ fn cut_flap(self_collision: bool) -> Result<(Pairs, f32)> {
         s.step()?;
     }
     assert!(s.surface().len() > before, "the scalpel opened nothing");
-    fold_over(
-        &mut s,
-        Vec3::new(4.9, 0.6, 0.8),
-        Vec3::new(-2.0, 1.3, 0.0),
-        150,
-        30,
-        120,
-    )?;
-    let before = s.positions().to_vec();
-    s.step()?;
-    Ok((self_intersections(&s), speed(&before, &s)))
+    fold_over(&mut s, Vec3::new(4.9, 0.6, 0.8), Vec3::new(-2.0, 1.3, 0.0))
 }
 
 /// Without self-collision the flap sinks through its base (over 1 000 far pairs); with it, no
@@ -362,17 +339,7 @@ fn appendix(self_collision: bool) -> Result<(usize, Pairs, usize, f64, f64)> {
         s.step()?;
     }
     let sutures = kinds.iter().filter(|k| k.0 == K::SuturePlaced).count();
-    let largest = kinds
-        .iter()
-        .filter(|k| k.0 == K::PieceDetached)
-        .filter_map(|k| {
-            k.1.rsplit(", ")
-                .next()?
-                .trim_end_matches(" cm³")
-                .parse::<f64>()
-                .ok()
-        })
-        .fold(0.0f64, f64::max);
+    let largest = crate::largest_detached(&kinds);
     let tris = s.body().surface_triangles();
     let rest = s.body().rest_positions();
     let incision = tissue_scenes::AppendixPlan::default().incision.0;

@@ -238,17 +238,7 @@ fn the_appendix_demonstration_cuts_the_tip_off_and_sutures_the_incision() -> Res
     let sutures = kinds.iter().filter(|k| k.0 == K::SuturePlaced).count();
     assert_eq!(sutures, 3, "{kinds:?}");
     // The tip: the largest detached piece, from its event's text ("… tets, V cm³").
-    let largest = kinds
-        .iter()
-        .filter(|k| k.0 == K::PieceDetached)
-        .filter_map(|k| {
-            k.1.rsplit(", ")
-                .next()?
-                .trim_end_matches(" cm³")
-                .parse::<f64>()
-                .ok()
-        })
-        .fold(0.0f64, f64::max);
+    let largest = crate::largest_detached(&kinds);
     assert!(
         (6.0..11.0).contains(&largest),
         "tip {largest} cm³: {kinds:?}"
