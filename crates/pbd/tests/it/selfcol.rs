@@ -43,13 +43,15 @@ pub fn folded_slab() -> TetMesh {
 /// lower one (whose top is at 0.2). Returns the final count of intersecting surface triangle
 /// pairs, and the body.
 fn press(self_collision: bool) -> (usize, SoftBody) {
+    press_with(self_collision.then(SelfCollision::default))
+}
+
+/// [`press`] with these self-collision settings.
+fn press_with(settings: Option<SelfCollision>) -> (usize, SoftBody) {
     let mut body = SoftBody::new(&folded_slab(), &Material::soft_tissue()).unwrap();
     body.set_settings(StepSettings::realtime()).unwrap();
     body.set_floor(Some(Floor::y(-0.2))).unwrap();
-    if self_collision {
-        body.set_self_collision(Some(SelfCollision::default()))
-            .unwrap();
-    }
+    body.set_self_collision(settings).unwrap();
     let start: Vec<Vec3A> = body.positions().to_vec();
     for (i, p) in start.iter().enumerate() {
         if p.x < -0.5 && p.y < -0.19 {
@@ -93,6 +95,17 @@ fn a_folded_slab_pressed_onto_itself_does_not_pass_through_itself() {
     // node is above the lower arm's highest one there, and within 0.15 cm of it (it came down
     // the 0.8 cm gap).
     assert!(active > 0, "{contacts} {active}");
+    let (upper, lower) = arms_under_the_probe(&body);
+    let h = body.self_collision_thickness().unwrap();
+    assert!(
+        upper > lower && upper < lower + 0.15,
+        "upper {upper} lower {lower} h {h}"
+    );
+}
+
+/// Under the probe of [`press`] (within 0.3 cm of it across), the upper arm's lowest node and
+/// the lower arm's highest (cm).
+fn arms_under_the_probe(body: &SoftBody) -> (f32, f32) {
     let rest = folded_slab();
     let (mut upper, mut lower) = (f32::MAX, f32::MIN);
     for (p, r) in body.positions().iter().zip(rest.positions()) {
@@ -104,10 +117,35 @@ fn a_folded_slab_pressed_onto_itself_does_not_pass_through_itself() {
             }
         }
     }
-    let h = body.self_collision_thickness().unwrap();
+    (upper, lower)
+}
+
+/// The thickness acts as one: pressed by the probe, the two arms of the U keep a gap of about
+/// `h` between them, and twice the thickness fraction keeps about twice the gap. Measured
+/// 2026-11-29: 0.047 cm for `h` = 0.057 cm, 0.095 cm for 0.114 cm (0.83 h both; the probe's
+/// push and one iteration per substep leave the rest), ratio 2.02. Without self-collision the
+/// arms pass through each other (`a_folded_slab_pressed_onto_itself…`).
+#[test]
+fn the_pressed_arms_keep_the_thickness_apart() {
+    let gap = |fraction: f32| {
+        let (pairs, body) = press_with(Some(SelfCollision {
+            thickness_fraction: fraction,
+            ..SelfCollision::default()
+        }));
+        let (upper, lower) = arms_under_the_probe(&body);
+        let h = body.self_collision_thickness().unwrap();
+        let g = upper - lower;
+        assert_eq!(pairs, 0, "fraction {fraction}: {pairs} intersecting pairs");
+        assert!(
+            (0.7 * h..1.05 * h).contains(&g),
+            "fraction {fraction}: gap {g} cm for h {h} cm"
+        );
+        g
+    };
+    let (thin, thick) = (gap(0.25), gap(0.5));
     assert!(
-        upper > lower && upper < lower + 0.15,
-        "upper {upper} lower {lower} h {h}"
+        (1.7..2.3).contains(&(thick / thin)),
+        "twice the thickness: gap {thick} against {thin} cm"
     );
 }
 
