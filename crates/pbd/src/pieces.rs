@@ -22,6 +22,12 @@
 //! as the held nodes' weight would have it. The nodes a cut split (the walls of wounds) are held
 //! too: a wall's outward normal points into the wound, and the correction would close it.
 //!
+//! The correction is positional only: the step's velocity update leaves it out
+//! ([`Pieces::take_shift`]). Given as a velocity (`(p − x)/h` of the last substep), it was a
+//! kick outward of several cm/s on a resting organ's surface every step (8 cm/s on the bunny),
+//! which the next substeps undid: the surface breathed, and the tray's contacts and
+//! self-collision's broad phase had to follow it.
+//!
 //! The pieces and their boundary are found again after a topology edit, before the next step
 //! (union–find over the tets' nodes, faces counted by their sorted nodes); a step allocates
 //! nothing.
@@ -54,6 +60,9 @@ pub(crate) struct Pieces {
     rest: Vec<f64>,
     /// Six times `∇ᵢC` per solver slot (scratch; zero between projections).
     grad: Vec<Vec3A>,
+    /// The projections' displacement of each solver slot in the current step (cm), which the
+    /// step's velocity update leaves out ([`Pieces::take_shift`]); zero between steps.
+    shift: Vec<Vec3A>,
     /// The inverse masses the projection uses, per solver slot: the body's, zero for a node
     /// in contact (set every substep by [`Pieces::hold`]).
     w: Vec<f32>,
@@ -152,6 +161,8 @@ impl Pieces {
             .extend(boundary.iter().map(|f| f.map(|i| rank[i as usize])));
         self.grad.clear();
         self.grad.resize(slots, Vec3A::ZERO);
+        self.shift.clear();
+        self.shift.resize(slots, Vec3A::ZERO);
         self.w.clear();
         self.w.resize(slots, 0.0);
         self.split.sort_unstable();
@@ -283,6 +294,7 @@ impl Pieces {
                 }
                 let d = lambda * self.w[s] * self.grad[s];
                 q[s] += d.extend(0.0);
+                self.shift[s] += d;
                 self.grad[s] = Vec3A::ZERO;
             }
             if self.walled[p] && lambda != 0.0 {
@@ -291,11 +303,18 @@ impl Pieces {
         }
     }
 
+    /// The projections' displacement of solver slot `s` in this step, zeroed (the step's
+    /// velocity update reads each slot once).
+    #[inline]
+    pub fn take_shift(&mut self, s: usize) -> Vec3A {
+        self.shift.get_mut(s).map_or(Vec3A::ZERO, std::mem::take)
+    }
+
     /// Translates piece `p`'s nodes that are not in contact (a translation keeps the volume)
     /// so that they take the momentum `impulse` (g·cm), which the held walls would have taken:
     /// without it a cut piece would push itself along (the projection's corrections sum to
     /// zero only over all its boundary nodes).
-    fn give_back(&self, q: &mut [Vec4], p: usize, impulse: Vec3A) {
+    fn give_back(&mut self, q: &mut [Vec4], p: usize, impulse: Vec3A) {
         let members =
             &self.members[self.member_start[p] as usize..self.member_start[p + 1] as usize];
         let mass: f64 = members
@@ -307,10 +326,11 @@ impl Pieces {
         if mass <= 0.0 {
             return;
         }
-        let d = (impulse / mass as f32).extend(0.0);
+        let d = impulse / mass as f32;
         for &s in members {
             if self.w_move[s as usize] > 0.0 {
-                q[s as usize] += d;
+                q[s as usize] += d.extend(0.0);
+                self.shift[s as usize] += d;
             }
         }
     }

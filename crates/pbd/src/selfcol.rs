@@ -14,8 +14,8 @@
 //! `h` = [`SelfCollision::thickness_fraction`] × the mean rest length of the surface's edges
 //! (fixed when the surface is first built, kept through cuts; 0.25 by default, i.e. 1 mm on a
 //! mesh of 4 mm edges). A vertex gets a contact with a triangle for the substep when its
-//! predicted position lies within `h + h` (thickness plus an equal detection band) in front of
-//! the triangle's plane or behind it, over the triangle (the vertex within a 45° cone about the
+//! predicted position lies within `h + h` (thickness plus an equal detection band, `BAND`) in
+//! front of the triangle's plane or behind it, over the triangle (the vertex within a 45° cone about the
 //! normal through its closest point on the triangle, `LATERAL`), and it started the substep at most `h` behind
 //! the triangle (so only a vertex coming from the triangle's outer side is held there).
 //!
@@ -59,10 +59,9 @@
 //! **Travels.** Each step, every surface vertex's expected path over it: a segment from its
 //! position along its net displacement over the last step (its first substep's motion times
 //! the substeps when the surface was just built), grown by a spread of twice its first
-//! substep's motion, held as it decays (`SPREAD`, `SPREAD_DECAY`). The last substep's piece
-//! volume projection kicks the surface nodes, and the next substeps bring them back, so a
-//! body at rest has first-substep velocities of several cm/s whose extrapolation over the
-//! step would be a hundred times its real motion; its net displacement is not.
+//! substep's motion, held as it decays (`SPREAD`, `SPREAD_DECAY`). The net displacement,
+//! not the first substep's velocity extrapolated: a jittering vertex's velocity says little of
+//! where it will be at the step's end.
 //!
 //! **Broad phase**, once per step in its first substep: the (vertex, triangle) pairs, rest
 //! neighbours left out, whose boxes over the whole step overlap (the vertex's travel; the
@@ -71,7 +70,11 @@
 //! query per surface vertex with its travel's box grown by `h`) keeps every vertex's pairs, and
 //! they hold while every surface vertex's travel stays inside its box of that pass grown by `h`
 //! (then any pair whose boxes overlap now overlapped then); each step filters them with its own
-//! boxes, so the pairs are exactly those of a full pass every step. The lists' boxes are kept in
+//! boxes, so the pairs are exactly those of a full pass every step. A last filter keeps the pairs
+//! that can come within the narrow phase's reach (`√2 · 2h`, the band and the cone) over the
+//! step: their distance at its start, less what their travels can close (the vertex's
+//! expected motion against the triangle's corners' mean, plus how far each path can stray
+//! from it), about a third of the boxes' pairs on the bunny with a cut. The lists' boxes are kept in
 //! a frame that follows the surface's mean translation since the full pass (overlaps do not
 //! change when every box moves alike): a body carried or falling as a whole keeps its lists.
 //! When a few vertices left their boxes (at most one in 16), an *update* instead: they take new
@@ -312,6 +315,8 @@ pub(crate) struct SelfState {
     bvh: Option<Bvh>,
     /// The triangles' boxes over this step, grown by the reach.
     tight: Vec<Aabb>,
+    /// Where the triangles start this step (the pairs' last filter).
+    outset: Vec<Outset>,
     /// The triangles in the current substep (scratch of the narrow phase), for those of the
     /// step's pairs (`wanted`).
     facets: Vec<Facet>,
@@ -466,6 +471,15 @@ impl SelfState {
         self.boxes
             .resize(self.triangles.len(), Aabb::from_point(Vec3A::ZERO));
         self.tight.clone_from(&self.boxes);
+        self.outset.clear();
+        self.outset.resize(
+            self.triangles.len(),
+            Outset {
+                corners: [Vec3A::ZERO; 3],
+                motion: Vec3A::ZERO,
+                deviation: 0.0,
+            },
+        );
         // Each surface vertex's fan of triangles.
         self.fan_start.clear();
         self.fan_start.resize(self.vertices.len() + 1, 0);
@@ -836,7 +850,7 @@ impl SelfState {
     ) -> bool {
         let st = self;
         // The slack of the current lists.
-        let (reach, mut slack) = (2.0 * h, st.slack);
+        let (reach, mut slack) = (BAND * h, st.slack);
         // Each surface vertex's expected motion over the step and the spread about it.
         for (k, &v) in st.vertices.iter().enumerate() {
             let x0 = x[v as usize];
@@ -866,10 +880,22 @@ impl SelfState {
             let x0 = x[st.vertices[k] as usize];
             Aabb::from_segment(x0, x0 + motion[k]).expanded(spread[k])
         };
-        // The triangles' boxes over this step, grown by the reach.
-        for (b, t) in st.tight.iter_mut().zip(&st.local) {
+        // The triangles' boxes over this step, grown by the reach, and where they start.
+        for ((b, o), t) in st.tight.iter_mut().zip(&mut st.outset).zip(&st.local) {
             let [r0, r1, r2] = t.map(|k| segment(k as usize));
             *b = r0.union(&r1).union(&r2).expanded(reach);
+            let m = t.map(|k| motion[k as usize]);
+            let mean = (m[0] + m[1] + m[2]) / 3.0;
+            let deviation = (m.iter().map(|&m| m.distance(mean))).fold(0.0f32, f32::max)
+                + 3f32.sqrt()
+                    * t.map(|k| spread[k as usize])
+                        .into_iter()
+                        .fold(0.0, f32::max);
+            *o = Outset {
+                corners: t.map(|k| x[st.vertices[k as usize] as usize]),
+                motion: mean,
+                deviation,
+            };
         }
         // The vertices whose segment left its box of the last pass grown by the slack.
         let mut escaped = 0;
@@ -1051,16 +1077,36 @@ impl SelfState {
             st.found = true;
             st.updates += usize::from(!full);
         }
-        // This step's pairs: the lists' pairs whose boxes over this step overlap.
-        let tight = st.tight.as_slice();
+        // This step's pairs: the lists' pairs whose boxes over this step overlap, and that
+        // can come within the narrow phase's reach over the step: their distance at its start,
+        // less how much their motions (each node along its expected motion, off it by its
+        // spread) can close it, at most `√(1 + LATERAL²)` times the band.
+        let (tight, outset) = (st.tight.as_slice(), st.outset.as_slice());
+        let within = (1.0 + LATERAL * LATERAL).sqrt() * BAND * h;
         let filter = |c: &mut Chunk| {
             c.pairs.clear();
-            let mut last = (u32::MAX, Aabb::from_point(Vec3A::ZERO));
+            let mut last = (
+                u32::MAX,
+                Aabb::from_point(Vec3A::ZERO),
+                Vec3A::ZERO,
+                Vec3A::ZERO,
+                0.0,
+            );
             for p in &c.near {
                 if p.local != last.0 {
-                    last = (p.local, segment(p.local as usize));
+                    let k = p.local as usize;
+                    let xv = x[st.vertices[k] as usize];
+                    last = (p.local, segment(k), xv, motion[k], 3f32.sqrt() * spread[k]);
                 }
-                if tight[p.triangle as usize].overlaps(&last.1, 0.0) {
+                let (_, ref bv, xv, mv, sv) = last;
+                if !tight[p.triangle as usize].overlaps(bv, 0.0) {
+                    continue;
+                }
+                let o = &outset[p.triangle as usize];
+                let [a, b, c0] = o.corners;
+                let (cp, _) = closest_point_on_triangle(xv, a, b, c0);
+                let closing = (mv - o.motion).length() + o.deviation + sv;
+                if cp.distance(xv) - closing <= within {
                     c.pairs.push(*p);
                 }
             }
@@ -1154,6 +1200,21 @@ impl SelfState {
     }
 }
 
+/// The detection band in `h`: a vertex gets a contact with a triangle when its prediction lies
+/// within `BAND h` of it along its normal, in front or behind (the thickness `h` plus as much
+/// again for the iterations' motion within the substep).
+const BAND: f32 = 2.0;
+
+/// Where a triangle starts a step, for the broad phase's last filter: its corners, the mean of
+/// their expected motions over the step and how far any corner's path can stray from that mean
+/// (the largest corner's deviation from it plus the largest corner's spread, `√3` times).
+#[derive(Debug, Clone, Copy)]
+struct Outset {
+    corners: [Vec3A; 3],
+    motion: Vec3A,
+    deviation: f32,
+}
+
 /// The spread of a vertex's path over a step about its expected segment, in lengths of its
 /// first substep's motion: a vertex jittering in place (the step's last substep kicks the
 /// nodes, the next ones bring them back) moves by up to about twice its first substep's
@@ -1234,7 +1295,7 @@ fn narrow_chunk(
     rank: &[u32],
     h: f32,
 ) {
-    let band = 3.0 * h;
+    let band = BAND * h;
     let predicted = |i: u32| point(q, rank[i as usize]);
     let Chunk {
         pairs,

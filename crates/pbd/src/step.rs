@@ -276,7 +276,9 @@ impl SoftBody {
     ///    block by block, then the floor (Gauss–Seidel
     ///    in the order of the crate docs, in solver node order), then the contacts with friction;
     ///    XPBD multipliers start at 0 each step;
-    /// 4. `v = (1 − c)(p − x)/h` (`c` the linear damping per substep, default 0), `x = p` (the old `x` becomes [`SoftBody::previous_positions`]);
+    /// 4. `v = (1 − c)(p − x − s)/h` (`c` the linear damping per substep, default 0; `s` the
+    ///    pieces' volume correction of the last substep, positional only: see `pieces.rs`),
+    ///    `x = p` (the old `x` becomes [`SoftBody::previous_positions`]);
     /// 5. after the last substep, rigid-mode damping of the free nodes (about the rigid motion
     ///    the pinned nodes allow for an elastic body: they weigh `HELD_WEIGHT` = 1000 times
     ///    their mass in its fit; attached nodes, and every held node of the other materials,
@@ -398,6 +400,7 @@ impl SoftBody {
         let scale = (1.0 - s.per_substep(s.linear_damping)) / dt;
         let mut rigid = RigidSums::default();
         let damp = s.damping > 0.0 && last;
+        let pieces = self.pieces.enabled && last;
         // The pins' weight in the rigid fit: an elastic body's (material scheme); the other
         // materials' damping keeps its fit to the free nodes (their scripts were tuned to it).
         let pinned = if self.elastic.is_some() {
@@ -411,7 +414,13 @@ impl SoftBody {
                 .zip(self.rank.iter().zip(self.mass.iter().zip(&self.w))),
         ) {
             let p = Vec3A::from(self.q[r as usize].truncate());
-            *v = (p - *x) * scale;
+            // The pieces' volume correction moves the node without giving it a velocity.
+            let kick = if pieces {
+                self.pieces.take_shift(r as usize)
+            } else {
+                Vec3A::ZERO
+            };
+            *v = (p - *x - kick) * scale;
             *prev = *x;
             *x = p;
             if damp {
