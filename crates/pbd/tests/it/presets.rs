@@ -58,8 +58,10 @@ fn worst_drift(material: &Material, settings: StepSettings) -> f64 {
 
 #[test]
 fn realtime_preset_holds_a_pressed_blocks_volume() {
-    let material = Material::soft_tissue();
-    assert!(material.hold_piece_volumes);
+    let mut material = Material::soft_tissue();
+    if std::env::var("NOPIECE").is_ok() {
+        material.hold_piece_volumes = false;
+    }
     let realtime = worst_drift(&material, StepSettings::realtime());
     let tets_only = worst_drift(
         &Material {
@@ -279,4 +281,38 @@ fn each_piece_holds_its_own_volume_and_the_momentum_is_kept() {
     // velocity update keeps it only to second order in the corrections).
     let p = body.linear_momentum();
     assert!((p - p0).length() < 1e-3 * p0.length(), "{p0} → {p}");
+}
+
+/// The real-time preset leaves an organ resting on the floor still: after 3 s on a frictionless
+/// floor, a 4 × 4 × 2 cm block (8 × 4 × 8 cells, its piece's volume held) has no node faster
+/// than 0.5 cm/s over the last 0.2 s, relative to its rigid motion or not (0.31 and 0.28 cm/s,
+/// 2026-11-29). The pieces' volume correction of the last substep is positional only; given
+/// as a velocity (as before that date) it kicked the surface outward every step, by 7.9 cm/s
+/// here, which the next substeps pulled back (the surface breathed, and self-collision's
+/// travels with it).
+#[test]
+fn realtime_preset_leaves_a_resting_organ_still() {
+    let (p, t) = tet_box(8, 4, 8, Vec3::new(4.0, 2.0, 4.0))
+        .unwrap()
+        .into_parts();
+    // Its bottom 0.05 cm above the floor.
+    let block = TetMesh::new(p.iter().map(|p| *p + 1.05 * Vec3::Y).collect(), t).unwrap();
+    let material = Material::soft_tissue();
+    assert!(material.hold_piece_volumes);
+    let mut body = SoftBody::new(&block, &material).unwrap();
+    body.set_settings(StepSettings::realtime()).unwrap();
+    body.set_floor(Some(tissue_pbd::Floor::y(0.0))).unwrap();
+    let (mut deformation, mut speed) = (0.0f32, 0.0f32);
+    for s in 0..300 {
+        body.step().unwrap();
+        if s >= 280 {
+            deformation = deformation.max(crate::common::fastest_deformation(&body));
+            speed = (body.velocities().iter()).fold(speed, |m, v| m.max(v.length()));
+        }
+    }
+    eprintln!(
+        "resting block: fastest node {speed:.3} cm/s, {deformation:.3} cm/s relative to its \
+         rigid motion"
+    );
+    assert!(deformation < 0.5 && speed < 0.5, "{deformation} {speed}");
 }

@@ -307,31 +307,6 @@ fn the_walls_of_a_cut_collide() {
     assert_eq!(run(true), 0);
 }
 
-/// The fastest node's velocity relative to the body's rigid motion (cm/s): each node's
-/// velocity less the mean velocity and the rigid rotation `ω × (x − c)` that carries the
-/// body's angular momentum about its centre `c` (`ω = I⁻¹ L`, equal node weights). The U on
-/// the tray turns slowly about the vertical (9 cm/s at its ends without self-collision, 21 with
-/// it, 2026-11-29): a rigid drift, not the jitter measured here.
-fn fastest_deformation(body: &SoftBody) -> f32 {
-    let (x, v) = (body.positions(), body.velocities());
-    let n = x.len() as f32;
-    let c = x.iter().copied().sum::<Vec3A>() / n;
-    let mean = v.iter().copied().sum::<Vec3A>() / n;
-    let (mut l, mut inertia) = (Vec3A::ZERO, glam::Mat3::ZERO);
-    for (p, u) in x.iter().zip(v) {
-        let r = *p - c;
-        l += r.cross(*u - mean);
-        let r3 = glam::Vec3::from(r);
-        inertia += glam::Mat3::from_diagonal(glam::Vec3::splat(r3.length_squared()))
-            - glam::Mat3::from_cols(r3 * r3.x, r3 * r3.y, r3 * r3.z);
-    }
-    let omega = Vec3A::from(inertia.inverse() * glam::Vec3::from(l));
-    x.iter()
-        .zip(v)
-        .map(|(p, u)| (*u - mean - omega.cross(*p - c)).length())
-        .fold(0.0, f32::max)
-}
-
 /// The U on the floor under gravity, its upper arm fallen onto the lower one and resting there
 /// through its self-contacts: after 4 s, the fastest node relative to the body's rigid motion
 /// over the last 0.2 s (cm/s, [`fastest_deformation`]), and the most active self-contacts
@@ -349,7 +324,7 @@ fn settle(self_collision: bool) -> (f32, usize) {
     for s in 0..400 {
         body.step().unwrap();
         if s >= 380 {
-            fastest = fastest.max(fastest_deformation(&body));
+            fastest = fastest.max(crate::common::fastest_deformation(&body));
             active = active.max(body.self_contact_counts().1);
         }
     }
