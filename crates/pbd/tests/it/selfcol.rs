@@ -48,8 +48,13 @@ fn press(self_collision: bool) -> (usize, SoftBody) {
 
 /// [`press`] with these self-collision settings.
 fn press_with(settings: Option<SelfCollision>) -> (usize, SoftBody) {
+    press_stepped(settings, StepSettings::realtime())
+}
+
+/// [`press_with`] with these step settings.
+fn press_stepped(settings: Option<SelfCollision>, step: StepSettings) -> (usize, SoftBody) {
     let mut body = SoftBody::new(&folded_slab(), &Material::soft_tissue()).unwrap();
-    body.set_settings(StepSettings::realtime()).unwrap();
+    body.set_settings(step).unwrap();
     body.set_floor(Some(Floor::y(-0.2))).unwrap();
     body.set_self_collision(settings).unwrap();
     let start: Vec<Vec3A> = body.positions().to_vec();
@@ -441,4 +446,77 @@ fn cost_on_the_bunny() {
         100.0 * (b / a - 1.0),
         on.self_contact_counts()
     );
+}
+
+/// The U of [`settle`] (its upper arm fallen onto the lower one under gravity) stepped with
+/// `substeps` of one iteration, with this thickness fraction: after 1 s and 2 s, under the
+/// middle of the upper arm's resting part (rest `x` = −2 ± 0.15 cm, `|z|` < 0.3 cm), the upper
+/// arm's lowest node less the lower arm's highest, in units of `h`.
+fn resting_gap(substeps: u32, fraction: f32) -> [f32; 2] {
+    let rest = folded_slab();
+    let mut body = SoftBody::new(&rest, &Material::soft_tissue()).unwrap();
+    (body.set_settings(StepSettings {
+        substeps,
+        ..StepSettings::realtime()
+    }))
+    .unwrap();
+    body.set_floor(Some(Floor::y(-0.2))).unwrap();
+    (body.set_self_collision(Some(SelfCollision {
+        thickness_fraction: fraction,
+        ..SelfCollision::default()
+    })))
+    .unwrap();
+    let mut gaps = [0.0; 2];
+    for step in 1..=200 {
+        body.step().unwrap();
+        if step % 100 == 0 {
+            // Known once the surface is built (the first step).
+            let h = body.self_collision_thickness().unwrap();
+            let (mut upper, mut lower) = (f32::MAX, f32::MIN);
+            for (p, r) in body.positions().iter().zip(rest.positions()) {
+                if (r.x + 2.0).abs() < 0.15 && r.z.abs() < 0.3 {
+                    if r.y > 0.5 {
+                        upper = upper.min(p.y);
+                    } else {
+                        lower = lower.max(p.y);
+                    }
+                }
+            }
+            gaps[step / 100 - 1] = (upper - lower) / h;
+        }
+    }
+    let tris = body.surface_triangles();
+    assert_eq!(
+        count_intersecting_pairs(body.positions(), &tris).unwrap(),
+        0
+    );
+    gaps
+}
+
+/// The thickness is what the contacts converge to: where the U's upper arm rests on the lower
+/// one under its own weight (a feasible contact, unlike the probe's press, which demands that
+/// the arms overlap and leaves the gap to the contest between the probe and the self-contacts:
+/// 0.6–0.94 h there as the substeps or iterations change), the gap is `h` within 3 % with 36
+/// substeps a step, for two thicknesses, and within 0.8–1.0 h at the real-time preset's 9,
+/// where one iteration a substep leaves the weight's sag. Measured 2026-11-29: 36 substeps
+/// 1.014–1.017 h (fraction 0.25) and 1.006–1.007 h (0.5); 9 substeps 0.87–0.88 and 0.93–0.95 h.
+#[test]
+fn the_resting_gap_converges_to_the_thickness() {
+    for fraction in [0.25f32, 0.5] {
+        let fine = resting_gap(36, fraction);
+        let preset = resting_gap(StepSettings::REALTIME_SUBSTEPS, fraction);
+        eprintln!("fraction {fraction}: gap/h 36 substeps {fine:?}, 9 substeps {preset:?}");
+        for g in fine {
+            assert!(
+                (0.97..1.03).contains(&g),
+                "fraction {fraction}: 36 substeps {fine:?}"
+            );
+        }
+        for g in preset {
+            assert!(
+                (0.8..1.0).contains(&g),
+                "fraction {fraction}: 9 substeps {preset:?}"
+            );
+        }
+    }
 }
