@@ -198,7 +198,8 @@ class Body:
         ``self_contacts_active``."""
     @property
     def self_collision(self) -> bool:
-        """Self-collision of the surface (cut walls included); off by default."""
+        """Self-collision of the surface (cut walls included); on by default, ``False``
+        switches it off (for comparison)."""
     @self_collision.setter
     def self_collision(self, on: bool) -> None: ...
     def self_intersections(self) -> int:

@@ -139,6 +139,15 @@ async function main() {
     figures.framesReceivedPerSecond = h1.fps.received;
     figures.stepMs = h1.stepMs;
     check(h1.triangles > 0, `the surface has ${h1.triangles} triangles`);
+    // Self-collision (issue 35) is on by default: the page learns it from the server (the scene
+    // message) and its checkbox starts checked, no longer indeterminate.
+    const box0 = await trainer(page, () => {
+      const b = document.getElementById('self-collision');
+      const t = window.tissueStudio.trainer;
+      return { checked: b.checked, indeterminate: b.indeterminate, scene: t.scene?.self_collision, stats: t.stats?.self_collision };
+    });
+    check(box0.checked && !box0.indeterminate && box0.scene === true && box0.stats === true,
+      `self-collision is on by default and the checkbox starts checked: ${JSON.stringify(box0)}`);
     check(Number.isFinite(h1.volumeDrift) && Number.isFinite(h1.stepMs.median) && Number.isFinite(h1.stepMs.p99),
       `stats arrive: step ${fmt(h1.stepMs.median)} ms median, ${fmt(h1.stepMs.p99)} ms p99, volume drift ${fmt(h1.volumeDrift * 100, 3)} %`);
     await shot(page, 't1-organ.png');
@@ -267,16 +276,16 @@ async function main() {
     figures.framesDrawnPerSecond = (r1.framesDrawn - r0.framesDrawn) / 2;
     figures.framesReceivedPerSecond = r1.fps.received;
     figures.stepMs = r1.stepMs;
-    console.log(`# the bunny with a cut and a suture, self-collision off (the default): ${fmt(r1.stats.steps_per_s, 1)} steps/s on the server, `
+    console.log(`# the bunny with a cut and a suture, self-collision on (the default): ${fmt(r1.stats.steps_per_s, 1)} steps/s on the server, `
       + `step ${fmt(r1.stepMs.median)} ms median, ${fmt(r1.stepMs.p99)} ms p99`);
 
     // Issue 19: the organ's volume held over the probe, the cut and the suture.
     check(Math.abs(r1.volumeDrift) <= 0.02, `volume drift after the probe, the cut and the suture: ${fmt(r1.volumeDrift * 100, 3)} % (|drift| ≤ 2 %)`);
 
-    // e2. self-collision (issue 35): off by default (the figures above were measured so); the
-    // checkbox switches it on the running session with the cut in the bunny, the HUD shows the
-    // last step's self-contacts, a number, more than 0 with the wound's walls present; and back
-    // off.
+    // e2. self-collision (issue 35): on by default (the figures above were measured so): the
+    // checkbox is checked and the HUD shows the last step's self-contacts, a number, more than 0
+    // with the wound's walls present; unchecked, it is switched off on the running session with
+    // the cut in the bunny; checked again, back on (and left on for the rest: the default).
     const selfState = () => trainer(page, () => {
       const t = window.tissueStudio.trainer;
       return {
@@ -286,13 +295,8 @@ async function main() {
       };
     });
     const sc0 = await selfState();
-    check(sc0.on === false && sc0.box === false && sc0.stats === false && sc0.hud === 'off',
-      `self-collision is off by default: checkbox ${sc0.box}, hook ${sc0.on}, stats ${sc0.stats}, HUD "${sc0.hud}"`);
-    await page.click('#self-collision');
-    const on = await page.waitForFunction(() => window.tissueStudio.trainer.stats?.self_collision === true,
-      null, { timeout: 5000, polling: 50 }).then(() => true).catch(() => false);
-    const sc3 = await selfState();
-    check(on && sc3.box && sc3.on === true, `checked, it is on: stats ${sc3.stats}, HUD "${sc3.hud}"`);
+    check(sc0.on === true && sc0.box === true && sc0.stats === true,
+      `self-collision is on by default: checkbox ${sc0.box}, hook ${sc0.on}, stats ${sc0.stats}, HUD "${sc0.hud}"`);
     const found = await page.waitForFunction(() => {
       const c = window.tissueStudio.trainer.selfContacts;
       return c && Number.isInteger(c.found) && c.found > 0 ? c : false;
@@ -302,9 +306,7 @@ async function main() {
       `the HUD shows the self-contacts, more than 0 with the wound's walls there: "${sc1.hud}" (${JSON.stringify(found)})`);
     await page.locator('#hud').screenshot({ path: path.join(shots, 't4b-hud-self-contacts.png') });
     console.log('# screenshot screenshots/t4b-hud-self-contacts.png');
-    await sleep(2500);
-    figures.selfOnStepsPerSecond = (await selfState()).sps;
-    console.log(`# self-collision on: ${fmt(figures.selfOnStepsPerSecond, 1)} steps/s`);
+    figures.selfOnStepsPerSecond = figures.stepsPerSecond;
     await page.click('#self-collision');
     const off = await page.waitForFunction(() => {
       const t = window.tissueStudio.trainer;
@@ -317,6 +319,17 @@ async function main() {
     figures.selfOffStepsPerSecond = (await selfState()).sps;
     console.log(`# self-collision off: ${fmt(figures.selfOffStepsPerSecond, 1)} steps/s`);
     await shot(page, 't4c-self-collision-off.png');
+    await page.click('#self-collision');
+    const on = await page.waitForFunction(() => {
+      const t = window.tissueStudio.trainer;
+      return t.stats?.self_collision === true && t.selfContacts?.found > 0;
+    }, null, { timeout: 10000, polling: 50 }).then(() => true).catch(() => false);
+    const sc3 = await selfState();
+    check(on && sc3.box && sc3.on === true && sc3.hud !== 'off',
+      `checked again, it is back on: stats ${sc3.stats}, contacts ${JSON.stringify(sc3.contacts)}, HUD "${sc3.hud}"`);
+    await sleep(2500);
+    figures.selfOnAgainStepsPerSecond = (await selfState()).sps;
+    console.log(`# self-collision on again: ${fmt(figures.selfOnAgainStepsPerSecond, 1)} steps/s`);
 
     // f. the demonstration: the appendix procedure of tissue-scenes, played in the session
     await page.selectOption('#organ-select', 'appendix');
@@ -441,8 +454,8 @@ async function main() {
     + `step ${fmt(figures.stepMs?.median)} ms median, ${fmt(figures.stepMs?.p99)} ms p99 (default scheme); `
     + `bunny: material scheme ${fmt(figures.materialStepsPerSecond, 1)} steps/s (step ${fmt(figures.materialStepMs?.median)} ms median), `
     + `realtime ${fmt(figures.realtimeStepsPerSecond, 1)} steps/s; sag ratio at 2E ${fmt(figures.sagRatio, 3)}; `
-    + `bunny with a cut: self-collision off ${fmt(figures.stepsPerSecond, 1)} and ${fmt(figures.selfOffStepsPerSecond, 1)} steps/s, `
-    + `on ${fmt(figures.selfOnStepsPerSecond, 1)} steps/s`);
+    + `bunny with a cut: self-collision on (the default) ${fmt(figures.selfOnStepsPerSecond, 1)} and ${fmt(figures.selfOnAgainStepsPerSecond, 1)} steps/s, `
+    + `off ${fmt(figures.selfOffStepsPerSecond, 1)} steps/s`);
 
   await stopServer();
 }

@@ -104,7 +104,7 @@ pub struct Stats {
     pub paused: bool,
     /// |force| on the probe, N.
     pub force_n: f64,
-    /// Whether the organ's surface collides with itself (the `self_collision` command; off by
+    /// Whether the organ's surface collides with itself (the `self_collision` command; on by
     /// default).
     pub self_collision: bool,
     /// Self-contacts of the last step (tissue-scenes' `Session::self_contacts`): the surface
@@ -178,8 +178,10 @@ pub enum Command {
         /// The material asked for.
         material: TissueMaterial,
     },
-    /// Self-collision of the organ's surface on or off (off by default): at once on the running
-    /// session, and for every later one until switched again; the stats say which is in force.
+    /// Self-collision of the organ's surface on or off (on by default, tissue-scenes'
+    /// `SessionOptions::self_collision`; off for comparison): at once on the running session,
+    /// and for every later one until switched again; the `scene` message and the stats say which
+    /// is in force.
     SelfCollision {
         /// On?
         on: bool,
@@ -245,6 +247,9 @@ pub struct SceneInfo {
     pub top: f32,
     /// The material in force.
     pub material: TissueMaterial,
+    /// Whether the session's surface collides with itself: tissue-scenes' default (on) until
+    /// the page sends `self_collision` (what the page's checkbox starts from).
+    pub self_collision: bool,
 }
 
 /// Buffer sizes of [`SceneInfo`].
@@ -776,8 +781,8 @@ struct Desk {
     chosen: Option<TissueMaterial>,
     /// The material the page chose, for the next session.
     pending: Option<TissueMaterial>,
-    /// Self-collision switched on by the page (`false`: off, tissue-scenes' default).
-    self_collision_on: bool,
+    /// Self-collision switched on or off by the page (`None`: tissue-scenes' default, on).
+    self_collision_asked: Option<bool>,
 }
 
 impl Desk {
@@ -811,19 +816,19 @@ impl Desk {
         })
     }
 
-    /// The self-collision of the sessions: [`SelfCollision::default`] once switched on, else
-    /// tissue-scenes' default (off).
+    /// The self-collision of the sessions: [`SelfCollision::default`] once switched on, none
+    /// once switched off, else tissue-scenes' default (on).
     fn self_collision(&self) -> Option<SelfCollision> {
-        if self.self_collision_on {
-            Some(SelfCollision::default())
-        } else {
-            SessionOptions::default().self_collision
+        match self.self_collision_asked {
+            Some(true) => Some(SelfCollision::default()),
+            Some(false) => None,
+            None => SessionOptions::default().self_collision,
         }
     }
 
     /// Switches self-collision on or off: the live session at once, the later ones too.
     fn set_self_collision(&mut self, on: bool) -> Result<(), Refusal> {
-        self.self_collision_on = on;
+        self.self_collision_asked = Some(on);
         let settings = self.self_collision();
         if let Some(live) = self.live.as_mut() {
             live.session.set_self_collision(settings)?;
@@ -927,6 +932,7 @@ impl Live {
             },
             top: self.top,
             material: self.material,
+            self_collision: s.options().self_collision.is_some(),
         }
     }
 
@@ -1012,18 +1018,28 @@ mod tests {
         assert!(desk.live.is_some());
     }
 
-    /// The self-collision command: off by default; switched at once on the live session (its
-    /// stats say so) and kept for the next sessions (a reset, a demonstration).
+    /// The self-collision command: on by default (tissue-scenes' default, and the scene message
+    /// says so, for the page's checkbox); switched off and on again at once on the live session
+    /// (its stats say so) and kept for the next sessions (a reset, a demonstration).
     #[test]
-    fn self_collision_is_off_by_default_and_switched_live() {
+    fn self_collision_is_on_by_default_and_switched_live() {
         let organs = Organs::default();
         let (frames, _f) = watch::channel(None);
         let (stats, stats_rx) = watch::channel(Stats::default());
-        let (texts, _received) = mpsc::unbounded_channel();
+        let (texts, mut received) = mpsc::unbounded_channel();
         let out = Outlets {
             frames,
             stats,
             texts,
+        };
+        let mut scene_says = || {
+            let mut said = None;
+            while let Ok(m) = received.try_recv() {
+                if let TrainerMessage::Scene(scene) = m {
+                    said = Some(scene.self_collision);
+                }
+            }
+            said
         };
         let mut sim = Simulation::default();
         let load = Command::Load {
@@ -1037,10 +1053,8 @@ mod tests {
                 live.session.body().self_collision().is_some(),
             )
         };
-        assert_eq!(on(&sim), (false, false), "off by default");
-        sim.apply(Command::SelfCollision { on: true }, &organs, &out)
-            .unwrap();
-        assert_eq!(on(&sim), (true, true), "switched on on the live session");
+        assert_eq!(on(&sim), (true, true), "on by default");
+        assert_eq!(scene_says(), Some(true), "the scene says it is on");
         sim.step_live(&out);
         sim.publish(&out);
         assert!(stats_rx.borrow().self_collision);
@@ -1055,11 +1069,22 @@ mod tests {
         // Kept through a reset and a demonstration.
         sim.apply(Command::Reset, &organs, &out).unwrap();
         assert_eq!(on(&sim), (false, false), "kept off by Reset");
+        assert_eq!(scene_says(), Some(false), "the scene says it is off");
+        sim.apply(Command::Demo, &organs, &out).unwrap();
+        assert_eq!(on(&sim), (false, false), "kept off by the demonstration");
         sim.apply(Command::SelfCollision { on: true }, &organs, &out)
             .unwrap();
-        assert_eq!(on(&sim), (true, true));
-        sim.apply(Command::Demo, &organs, &out).unwrap();
-        assert_eq!(on(&sim), (true, true), "kept on by the demonstration");
+        assert_eq!(
+            on(&sim),
+            (true, true),
+            "switched on again on the live session"
+        );
+        sim.step_live(&out);
+        sim.publish(&out);
+        assert!(stats_rx.borrow().self_collision);
+        sim.apply(Command::Reset, &organs, &out).unwrap();
+        assert_eq!(on(&sim), (true, true), "kept on by Reset");
+        assert_eq!(scene_says(), Some(true));
         let json = r#"{"type": "self_collision", "on": false}"#;
         let c: Command = serde_json::from_str(json).unwrap();
         assert_eq!(c, Command::SelfCollision { on: false });

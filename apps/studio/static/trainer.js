@@ -41,7 +41,7 @@ const state = {
   reallocations: 0,
   lastCut: null, // { path: [[x,y,z], ...], viewDir, fromVertex }
   material: null, // { scheme, young_kpa, poisson, density, pending } (trainer-material.js)
-  selfCollision: false, // in force: the server's word (the stats), or what was asked until it had time to land
+  selfCollision: null, // in force: the server's word (the scene message, the stats), or what was asked until it had time to land; null until the server has said
   selfContacts: null, // { found, active }: the last step's self-contacts (the stats)
   // The page's own.
   organs: [],
@@ -50,7 +50,7 @@ const state = {
   refused: false,
   pauseAsked: false, // what the Pause button shows
   pauseSentAt: 0,
-  selfCollisionAsked: false, // what the checkbox shows
+  selfCollisionAsked: null, // what the checkbox shows: null (indeterminate) until the server's default arrives (the first scene message) or a click
   selfCollisionSentAt: 0,
   gesture: null,
   needleFirst: null,
@@ -123,8 +123,12 @@ async function load(id, label = organLabel(id)) {
   setText('view-empty', `Loading ${label}…`);
   try {
     tissue.flush(); // a material waiting in the panel applies to this organ
-    // The checkbox's setting for this session (a new connection starts with it on).
-    await socket.send({ type: 'self_collision', on: state.selfCollisionAsked });
+    // The checkbox's setting for this session (a new connection starts with the server's
+    // default); none before the server has said what its default is (the scene message then
+    // sets the checkbox) or the checkbox was clicked.
+    if (state.selfCollisionAsked !== null) {
+      await socket.send({ type: 'self_collision', on: state.selfCollisionAsked });
+    }
     await socket.send({ type: 'load', organ: id });
   } catch (e) {
     showError(e.message);
@@ -213,6 +217,7 @@ function onScene(msg) {
   view.allocate(msg.capacity.vertices, msg.capacity.triangles);
   if (msg.tray) view.setTray(msg.tray.size, msg.tray.top ?? 0);
   tissue.onScene(msg);
+  heardSelfCollision(msg.self_collision);
   state.steps = 0;
   state.triangles = 0;
   setReady(false);
@@ -232,15 +237,25 @@ function onStats(msg) {
     state.pauseAsked = state.paused;
     updateControls();
   }
-  if (typeof msg.self_collision === 'boolean') state.selfCollision = msg.self_collision;
   state.selfContacts = Number.isFinite(msg.self_contacts)
     ? { found: msg.self_contacts, active: msg.self_contacts_active ?? 0 }
     : null;
-  if (state.selfCollision !== state.selfCollisionAsked && performance.now() - state.selfCollisionSentAt > 1000) {
-    state.selfCollisionAsked = state.selfCollision;
-    $('self-collision').checked = state.selfCollision;
-  }
+  heardSelfCollision(msg.self_collision);
   renderHud();
+}
+
+// The server's word on self-collision (the scene message, the stats): in force, and shown by the
+// checkbox unless the page asked otherwise less than a second ago (the request on its way). The
+// first word is the server's default (on: tissue-scenes' SessionOptions::self_collision).
+function heardSelfCollision(on) {
+  if (typeof on !== 'boolean') return;
+  state.selfCollision = on;
+  if (on !== state.selfCollisionAsked && performance.now() - state.selfCollisionSentAt > 1000) {
+    state.selfCollisionAsked = on;
+    const box = $('self-collision');
+    box.indeterminate = false;
+    box.checked = on;
+  }
 }
 
 function addEvent(ev) {
@@ -561,6 +576,7 @@ function setSelfCollision(on) {
   state.selfCollisionAsked = on;
   state.selfCollisionSentAt = performance.now();
   state.selfCollision = on;
+  $('self-collision').indeterminate = false;
   $('self-collision').checked = on;
   socket.send({ type: 'self_collision', on }).catch((e) => showError(e.message));
   renderHud();
@@ -594,6 +610,7 @@ function wire() {
   $('reset').addEventListener('click', reset);
   $('demo').addEventListener('click', demo);
   $('self-collision').addEventListener('change', (e) => setSelfCollision(e.target.checked));
+  $('self-collision').indeterminate = true; // until the server says (heardSelfCollision) or a click
   $('reset-view').addEventListener('click', () => view.fit());
   document.addEventListener('keydown', (ev) => {
     if (ev.ctrlKey || ev.metaKey || ev.altKey) return;

@@ -52,9 +52,10 @@ magnitude, the tets' own volume errors at the end (median, p90, volume-weighted 
 |V/V0 - 1| per tet: the local compression the total can hide), the organ's height as loaded and \
 settled, the contacts, and the force of the tissue on the probe in newtons (the largest \
 magnitude over the run and the last step's vector; tissue-pbd's SoftBody::tool_force, 1 N = 1e5 \
-dyn), the self-collision of the organ's surface (with --self-collision: its thickness and \
-the last step's self-contacts) and, last, `self-intersections N`: the pairs of surface triangles \
-that intersect at the end, counted exactly (every run that steps ends with these two lines). \
+dyn), the self-collision of the organ's surface (on by default: its thickness and the last \
+step's self-contacts; `off` with --no-self-collision) and, last, `self-intersections N`: the \
+pairs of surface triangles that intersect at the end, counted exactly (every run that steps ends \
+with these two lines). \
 With --frames DIR (created if missing): the organ's surface every --every steps and at the end, \
 frame_STEP.vtk (with point field `displacement`, cm: from the shape as loaded during the \
 settling, from the settled shape afterwards) or frame_STEP.obj (--format), and with --png \
@@ -260,12 +261,13 @@ pub struct Cli {
     /// Project constraints colour-parallel on all cores (bit-identical to serial).
     #[arg(long)]
     pub parallel: bool,
-    /// Switch on the self-collision of the organ's surface (tissue-scenes'
-    /// SelfCollision::default, cut walls included; off by default, as in the studio and the C
-    /// ABI, for its cost: docs/trainer.md). Every run prints its self-intersections.
+    /// Self-collision of the organ's surface on (tissue-scenes' SelfCollision::default, cut
+    /// walls included): the default, as in the studio, the C ABI and Python; accepted for
+    /// scripts that say so. Every run prints its self-intersections.
     #[arg(long, conflicts_with = "no_self_collision")]
     pub self_collision: bool,
-    /// Self-collision off (the default; for scripts that say so).
+    /// Switch the self-collision of the organ's surface off, for comparison (it costs about
+    /// twice the step on the shipped bunny: docs/trainer.md).
     #[arg(long)]
     pub no_self_collision: bool,
     /// Drop the realtime scheme's volume constraint per connected piece (tissue-pbd's
@@ -332,8 +334,9 @@ impl Cli {
         self.organ_material().elastic
     }
 
-    /// The self-collision of the run: tissue-scenes' [`SelfCollision::default`] with
-    /// `--self-collision`, else tissue-scenes' default (off, the studio's and the C ABI's).
+    /// The self-collision of the run: none with `--no-self-collision`, tissue-scenes'
+    /// [`SelfCollision::default`] with `--self-collision`, else tissue-scenes' default (on, the
+    /// studio's, the C ABI's and Python's).
     pub fn self_collision(&self) -> Option<SelfCollision> {
         if self.self_collision {
             Some(SelfCollision::default())

@@ -50,7 +50,7 @@ fn describe_settings(body: &tissue_pbd::SoftBody) -> String {
 }
 
 /// The self-collision lines every run ends with: whether it is on (its thickness, the last
-/// step's self-contacts), then `self-intersections N`, the pairs of surface triangles that
+/// step's self-contacts; on unless `--no-self-collision`), then `self-intersections N`, the pairs of surface triangles that
 /// intersect at the end (tissue-scenes' exact count over the body's boundary faces, cut walls
 /// included; 0 when the organ does not pass through itself).
 fn print_self_collision(body: &tissue_pbd::SoftBody) -> Result<(), Failure> {
@@ -64,7 +64,14 @@ fn print_self_collision(body: &tissue_pbd::SoftBody) -> Result<(), Failure> {
                 body.self_contacts_dropped()
             );
         }
-        None => println!("  self-collision off (--self-collision switches it on)"),
+        // Off by `--no-self-collision` (tissue-scenes' default is on), or by that default.
+        None if tissue_scenes::SessionOptions::default()
+            .self_collision
+            .is_some() =>
+        {
+            println!("  self-collision off (--no-self-collision; on by default)");
+        }
+        None => println!("  self-collision off (the default; --self-collision switches it on)"),
     }
     let n = tissue_scenes::surface_self_intersections(body.positions(), &body.surface_triangles())
         .map_err(|e| failure::from_scene(&e))?;

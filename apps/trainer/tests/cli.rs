@@ -142,19 +142,15 @@ fn a_small_box_runs_and_writes_frames_and_a_summary() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Self-collision is off by default (tissue-scenes' SessionOptions::self_collision) and
-/// `--self-collision` switches it on; either way the run ends with `self-intersections N`,
-/// the exact count of intersecting surface triangle pairs: none on a box pressed and dragged.
-#[test]
-fn self_collision_is_off_by_default_and_the_run_counts_self_intersections() {
-    let mut args = SMALL_BOX.to_vec();
-    args.push("--self-collision");
-    let out = run(&args);
-    let text = stdout(&out);
-    assert!(out.status.success(), "{}\n{text}", stderr(&out));
+/// The lines a run with self-collision on ends with: `self-collision on`, its thickness (a
+/// quarter of the mean surface edge of the box's 1 cm cells: 0.25 cm), nothing dropped, and
+/// last `self-intersections 0` (a box pressed and dragged does not pass through itself).
+fn assert_self_collision_on(out: &Output) {
+    let text = stdout(out);
+    assert!(out.status.success(), "{}\n{text}", stderr(out));
     assert!(text.contains("self-collision on, thickness"), "{text}");
+    assert!(!text.contains("self-collision off"), "{text}");
     let thickness = number_after(&text, "self-collision on", "thickness");
-    // A quarter of the mean surface edge (1 cm cells): 0.25 cm.
     assert!(thickness > 0.1 && thickness < 0.5, "{text}");
     assert_eq!(
         number_after(&text, "self-collision on", "dropped"),
@@ -171,18 +167,49 @@ fn self_collision_is_off_by_default_and_the_run_counts_self_intersections() {
         0.0,
         "{text}"
     );
+}
 
-    let out = run(&SMALL_BOX);
+/// Self-collision is on by default (tissue-scenes' SessionOptions::self_collision, the studio's,
+/// the C ABI's and Python's too), `--no-self-collision` switches it off for comparison, and
+/// `--self-collision` is still accepted (the default, for scripts that say so); either way the
+/// run ends with `self-intersections N`, the exact count of intersecting surface triangle pairs:
+/// none on a box pressed and dragged. Both switches at once are refused.
+#[test]
+fn self_collision_is_on_by_default_and_switched_off_and_the_run_counts_self_intersections() {
+    assert_self_collision_on(&run(&SMALL_BOX));
+
+    let mut args = SMALL_BOX.to_vec();
+    args.push("--no-self-collision");
+    let out = run(&args);
     let text = stdout(&out);
     assert!(out.status.success(), "{}\n{text}", stderr(&out));
     assert!(
-        text.contains("self-collision off (--self-collision switches it on)"),
+        text.contains("self-collision off (--no-self-collision; on by default)"),
+        "{text}"
+    );
+    assert!(!text.contains("self-collision on"), "{text}");
+    let last = text.lines().last().unwrap_or_default();
+    assert!(
+        last.trim_start().starts_with("self-intersections "),
         "{text}"
     );
     assert_eq!(
         number_after(&text, "self-intersections", "self-intersections"),
         0.0,
         "{text}"
+    );
+
+    let mut args = SMALL_BOX.to_vec();
+    args.push("--self-collision");
+    assert_self_collision_on(&run(&args));
+
+    args.push("--no-self-collision");
+    let out = run(&args);
+    assert_eq!(
+        out.status.code(),
+        Some(Exit::Usage.code().into()),
+        "{}",
+        stderr(&out)
     );
 }
 

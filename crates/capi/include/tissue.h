@@ -228,8 +228,8 @@ typedef struct tissue_patient tissue_patient;
 // positive, all finite.
 //
 // `self_collision` (issue 35, appended last) is the body's setting whatever the scheme: the
-// fill functions set it to `true` (on by default, as in the studio and the headless
-// trainer); a struct zeroed by hand has it off.
+// fill functions set it to `true` (on by default, as in the trainer, the studio and Python:
+// tissue-scenes' default); a struct zeroed by hand has it off.
 typedef struct tissue_material {
   // A `tissue_scheme`.
   uint32_t scheme;
@@ -243,9 +243,10 @@ typedef struct tissue_material {
   // decays as `exp(−t/τ)` (0.1 s damps a wobble in a few tenths of a second).
   double relaxation_time;
   // Self-collision of the organ's surface, cut walls included (tissue-scenes'
-  // `SessionOptions::self_collision`): `true` keeps the tissue from passing through itself,
-  // `false` (the default the fill functions give, for its cost: docs/trainer.md) leaves it off;
-  // `tissue_body_set_self_collision` switches it on a live body.
+  // `SessionOptions::self_collision`): `true` (what the fill functions give: the default)
+  // keeps the tissue from passing through itself, `false` leaves it off, for comparison (a
+  // step costs about half as much: docs/trainer.md); `tissue_body_set_self_collision`
+  // switches it off or on in a live body.
   bool self_collision;
 } tissue_material;
 
@@ -769,7 +770,8 @@ enum tissue_status tissue_job_copy_field(const struct tissue_job *job,
 // A body from a mesh whose coordinates are in cm × `cm_per_unit` (1 for cm): a tet mesh as it
 // is, or a closed surface filled with tetrahedra (tissue-tetra). It is placed on a tray (a
 // static box whose top is y = 0; y is up): centred on x = z = 0 with its lowest node on y = 0;
-// read its positions back to see where. Soft-tissue material, 10 ms steps of 9 substeps.
+// read its positions back to see where. Soft-tissue material, 10 ms steps of 9 substeps,
+// self-collision on (`tissue_body_set_self_collision` switches it off).
 //
 // Errors: `TISSUE_INVALID_MESH` for a surface that cannot be filled (open, non-manifold,
 // inside out) or a mesh of more than 150 000 tets; `TISSUE_INVALID_ARGUMENT` for a scale
@@ -842,8 +844,9 @@ enum tissue_status tissue_body_get_material(const struct tissue_body *body,
                                             struct tissue_material *material);
 
 // Switches self-collision of the body's surface on (`true`, tissue-scenes' default settings)
-// or off from the next step on (issue 35; `tissue_body_get_info` says which is in force and
-// counts the last step's self-contacts).
+// or off (`false`, for comparison) from the next step on (issue 35; every body starts with it
+// on unless its `tissue_material` says `false`; `tissue_body_get_info` says which is in force
+// and counts the last step's self-contacts).
 //
 // Thread safety: any thread (waits for a running step).
 enum tissue_status tissue_body_set_self_collision(const struct tissue_body *body, bool on);

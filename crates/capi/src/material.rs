@@ -112,8 +112,8 @@ pub(crate) fn shipped_of(value: u32) -> Result<ShippedOrgan, Error> {
 /// positive, all finite.
 ///
 /// `self_collision` (issue 35, appended last) is the body's setting whatever the scheme: the
-/// fill functions set it to `true` (on by default, as in the studio and the headless
-/// trainer); a struct zeroed by hand has it off.
+/// fill functions set it to `true` (on by default, as in the trainer, the studio and Python:
+/// tissue-scenes' default); a struct zeroed by hand has it off.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct tissue_material {
@@ -129,9 +129,10 @@ pub struct tissue_material {
     /// decays as `exp(−t/τ)` (0.1 s damps a wobble in a few tenths of a second).
     pub relaxation_time: f64,
     /// Self-collision of the organ's surface, cut walls included (tissue-scenes'
-    /// `SessionOptions::self_collision`): `true` keeps the tissue from passing through itself,
-    /// `false` (the default the fill functions give, for its cost: docs/trainer.md) leaves it off;
-    /// `tissue_body_set_self_collision` switches it on a live body.
+    /// `SessionOptions::self_collision`): `true` (what the fill functions give: the default)
+    /// keeps the tissue from passing through itself, `false` leaves it off, for comparison (a
+    /// step costs about half as much: docs/trainer.md); `tissue_body_set_self_collision`
+    /// switches it off or on in a live body.
     pub self_collision: bool,
 }
 

@@ -236,7 +236,8 @@ fn give_body(out: *mut *mut tissue_body, value: tissue_body) -> Result<(), Error
 /// A body from a mesh whose coordinates are in cm × `cm_per_unit` (1 for cm): a tet mesh as it
 /// is, or a closed surface filled with tetrahedra (tissue-tetra). It is placed on a tray (a
 /// static box whose top is y = 0; y is up): centred on x = z = 0 with its lowest node on y = 0;
-/// read its positions back to see where. Soft-tissue material, 10 ms steps of 9 substeps.
+/// read its positions back to see where. Soft-tissue material, 10 ms steps of 9 substeps,
+/// self-collision on (`tissue_body_set_self_collision` switches it off).
 ///
 /// Errors: `TISSUE_INVALID_MESH` for a surface that cannot be filled (open, non-manifold,
 /// inside out) or a mesh of more than 150 000 tets; `TISSUE_INVALID_ARGUMENT` for a scale
@@ -440,20 +441,22 @@ pub extern "C" fn tissue_body_get_material(
 ) -> tissue_status {
     guard(|| {
         let sim = body_of(body)?.sim()?;
+        // The body's own, whatever the material was made with: switched live, or the session's
+        // default (on) for the real-time preset.
+        let self_collision = sim.session.options().self_collision.is_some();
         let out = match sim.material {
-            Some(m) => m,
+            Some(m) => tissue_material {
+                self_collision,
+                ..m
+            },
             None => tissue_material {
                 scheme: tissue_scheme::TISSUE_SCHEME_REALTIME as u32,
                 young_kpa: 0.0,
                 poisson: 0.0,
                 density: f64::from(sim.session.body().density()),
                 relaxation_time: f64::from(sim.session.body().settings().relaxation_time()),
-                self_collision: false,
+                self_collision,
             },
-        };
-        let out = tissue_material {
-            self_collision: sim.session.options().self_collision.is_some(),
-            ..out
         };
         // SAFETY: `material` is NULL or valid.
         unsafe { put(material, "material", out) }
@@ -461,8 +464,9 @@ pub extern "C" fn tissue_body_get_material(
 }
 
 /// Switches self-collision of the body's surface on (`true`, tissue-scenes' default settings)
-/// or off from the next step on (issue 35; `tissue_body_get_info` says which is in force and
-/// counts the last step's self-contacts).
+/// or off (`false`, for comparison) from the next step on (issue 35; every body starts with it
+/// on unless its `tissue_material` says `false`; `tissue_body_get_info` says which is in force
+/// and counts the last step's self-contacts).
 ///
 /// Thread safety: any thread (waits for a running step).
 #[no_mangle]

@@ -225,6 +225,13 @@ fn presets_and_the_material_in_force_read_back() {
         "bowel",
     );
     assert_eq!(appendix, bowel);
+    // Self-collision on in what every fill function gives (tissue-scenes' default), off in a
+    // struct zeroed by hand.
+    assert!(
+        skin.self_collision && liver.self_collision && bowel.self_collision,
+        "{skin:?} {liver:?} {bowel:?}"
+    );
+    assert!(!tissue_material::default().self_collision);
 
     // The material in force: the one given, and the real-time preset's.
     let mut body = ptr::null_mut();
@@ -246,8 +253,10 @@ fn presets_and_the_material_in_force_read_back() {
     assert_eq!((read.young_kpa, read.poisson), (0.0, 0.0));
     assert!(read.density > 0.0 && read.relaxation_time > 0.0, "{read:?}");
     tissue_body_free(body);
-    // (Self-collision off, as `tissue_body_new_shipped` has it, and as in a zeroed struct.)
-    assert!(!read.self_collision, "{read:?}");
+    // (Self-collision on, as `tissue_body_new_shipped` has it: the default.)
+    assert!(read.self_collision, "{read:?}");
+    // The real-time preset by its scheme in a zeroed struct: the same, self-collision off (the
+    // zeroed field), and on again once the field says so.
     let realtime = tissue_material {
         scheme: tissue_scheme::TISSUE_SCHEME_REALTIME as u32,
         ..tissue_material::default()
@@ -257,6 +266,23 @@ fn presets_and_the_material_in_force_read_back() {
         "realtime by its scheme",
     );
     let mut again = tissue_material::default();
+    ok(tissue_body_get_material(body, &mut again), "material");
+    assert_eq!(
+        again,
+        tissue_material {
+            self_collision: false,
+            ..read
+        }
+    );
+    tissue_body_free(body);
+    let realtime_on = tissue_material {
+        self_collision: true,
+        ..realtime
+    };
+    ok(
+        tissue_body_new_shipped_with_material(2, &realtime_on, &mut body),
+        "realtime by its scheme, self-collision on",
+    );
     ok(tissue_body_get_material(body, &mut again), "material");
     assert_eq!(again, read);
     tissue_body_free(body);

@@ -18,8 +18,8 @@
 //!   blade) with each one's force model of the last step for a haptic loop
 //!   ([`Session::contact_force_model`], tissue-pbd's `ContactForceModel`, N), and a blade-sweep
 //!   cut at once ([`Session::cut_sweep`]); the organ's demonstration ([`Session::play`]); the
-//!   surface's self-collision, off by default ([`SessionOptions::self_collision`],
-//!   [`Session::set_self_collision`]), its contacts ([`Session::self_contacts`]) and the exact
+//!   surface's self-collision, on by default and switched off for comparison
+//!   ([`SessionOptions::self_collision`], [`Session::set_self_collision`]), its contacts ([`Session::self_contacts`]) and the exact
 //!   count of intersecting surface triangle pairs ([`Session::self_intersections`]).
 //! - [`script`]: scenarios written once and stepped by any host — [`AppendixProcedure`] (grasp
 //!   and lift the appendix's tip, incise near the base, cut the tip off, suture the incision)

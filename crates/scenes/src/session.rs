@@ -60,12 +60,14 @@ pub struct SessionOptions {
     /// step.
     pub cut_segment: f32,
     /// Self-collision of the organ's surface, cut walls included (tissue-pbd's
-    /// [`SoftBody::set_self_collision`]; issue 35): `Some(`[`SelfCollision::default`]`)` to
-    /// switch it on (the trainer's `--self-collision`, the studio's checkbox, the C ABI's
-    /// `self_collision` field). Off by default for now: on the shipped bunny it makes the
-    /// realtime step about 4 × dearer (22 against 5.4 ms headless), below the studio's 60
-    /// steps/s (docs/trainer.md). [`Session::set_self_collision`] switches it on a running
-    /// session.
+    /// [`SoftBody::set_self_collision`]; issue 35): on by default,
+    /// `Some(`[`SelfCollision::default`]`)`, in every front end; `None` switches it off, for
+    /// comparison (the trainer's `--no-self-collision`, the studio's checkbox, the C ABI's
+    /// `self_collision` field, Python's `Body.self_collision`). Its cost: on the shipped bunny
+    /// the trainer's realtime step with it is about twice the step without it, headless, and
+    /// the studio runs the bunny with a cut at about 56 steps/s with it against about 58
+    /// without (docs/trainer.md, "Self-collision in the front ends").
+    /// [`Session::set_self_collision`] switches it on a running session.
     pub self_collision: Option<SelfCollision>,
 }
 
@@ -86,7 +88,7 @@ impl Default for SessionOptions {
             grab_radius: 0.6,
             suture_depth: 0.35,
             cut_segment: 0.4,
-            self_collision: None,
+            self_collision: Some(SelfCollision::default()),
         }
     }
 }
@@ -1050,21 +1052,14 @@ fn distance_to_segment(p: Vec3, a: Vec3, b: Vec3) -> f32 {
 mod tests {
     use super::*;
 
-    /// Self-collision is off by default, on through the options, switched on a running
-    /// session (a refused setting keeps the one in force), and a box at rest does not pass
-    /// through itself.
+    /// Self-collision is on by default, switched off and on again on a running session (a
+    /// refused setting keeps the one in force), off through the options (`None`), and a box at
+    /// rest does not pass through itself.
     #[test]
-    fn self_collision_is_off_by_default_and_switched() {
+    fn self_collision_is_on_by_default_and_switched() {
         let tets = tissue_mesh::tet_box(4, 2, 4, Vec3::new(4.0, 2.0, 4.0)).unwrap();
         let organ = Organ::from_tets(&tets, "box").unwrap();
-        let s = Session::new(&organ, SessionOptions::default()).unwrap();
-        assert_eq!(s.options().self_collision, None);
-        assert!(s.body().self_collision().is_none());
-        let options = SessionOptions {
-            self_collision: Some(SelfCollision::default()),
-            ..SessionOptions::default()
-        };
-        let mut s = Session::new(&organ, options).unwrap();
+        let mut s = Session::new(&organ, SessionOptions::default()).unwrap();
         assert_eq!(s.options().self_collision, Some(SelfCollision::default()));
         assert!(s.body().self_collision().is_some());
         for _ in 0..5 {
@@ -1078,9 +1073,24 @@ mod tests {
         };
         assert!(s.set_self_collision(Some(bad)).is_err());
         assert_eq!(s.options().self_collision, Some(SelfCollision::default()));
+        assert!(s.body().self_collision().is_some());
         s.set_self_collision(None).unwrap();
         assert!(s.body().self_collision().is_none() && s.options().self_collision.is_none());
         s.step().unwrap();
         assert_eq!(s.self_contacts(), (0, 0));
+        s.set_self_collision(Some(SelfCollision::default()))
+            .unwrap();
+        assert_eq!(s.options().self_collision, Some(SelfCollision::default()));
+        assert!(s.body().self_collision().is_some());
+        s.step().unwrap();
+        assert_eq!(s.self_intersections().unwrap(), 0);
+        // Off from the start through the options, for comparison.
+        let options = SessionOptions {
+            self_collision: None,
+            ..SessionOptions::default()
+        };
+        let s = Session::new(&organ, options).unwrap();
+        assert_eq!(s.options().self_collision, None);
+        assert!(s.body().self_collision().is_none());
     }
 }

@@ -159,6 +159,8 @@ async fn the_appendix_streams_is_cut_and_sutured_and_one_session_runs_at_a_time(
     let nodes = scene.nodes;
     assert_eq!(nodes, 33 * 9 * 9);
     assert!(scene.capacity.vertices > nodes);
+    // Self-collision is on by default, and the scene says so (the page's checkbox starts so).
+    assert!(scene.self_collision);
 
     // The first frame carries the index buffer; the next ones positions only, steps advancing.
     let first = frame_with(&mut tab, true).await?;
