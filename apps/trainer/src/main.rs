@@ -59,9 +59,10 @@ fn print_self_collision(body: &tissue_pbd::SoftBody) -> Result<(), Failure> {
             let (found, active) = body.self_contact_counts();
             println!(
                 "  self-collision on, thickness {:.3} cm, the last step's self-contacts: found \
-                 {found}, active {active}, dropped {}",
+                 {found}, active {active}, dropped {}; suspended {} times for a tangled surface",
                 body.self_collision_thickness().unwrap_or(f32::NAN),
-                body.self_contacts_dropped()
+                body.self_contacts_dropped(),
+                body.self_collision_suspensions()
             );
         }
         // Off by `--no-self-collision` (tissue-scenes' default is on), or by that default.

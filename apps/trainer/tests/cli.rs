@@ -143,8 +143,8 @@ fn a_small_box_runs_and_writes_frames_and_a_summary() {
 }
 
 /// The lines a run with self-collision on ends with: `self-collision on`, its thickness (a
-/// quarter of the mean surface edge of the box's 1 cm cells: 0.25 cm), nothing dropped, and
-/// last `self-intersections 0` (a box pressed and dragged does not pass through itself).
+/// quarter of the mean surface edge of the box's 1 cm cells: 0.25 cm), nothing dropped, never
+/// suspended (no tangle), and last `self-intersections 0` (a box pressed and dragged does not pass through itself).
 fn assert_self_collision_on(out: &Output) {
     let text = stdout(out);
     assert!(out.status.success(), "{}\n{text}", stderr(out));
@@ -154,6 +154,11 @@ fn assert_self_collision_on(out: &Output) {
     assert!(thickness > 0.1 && thickness < 0.5, "{text}");
     assert_eq!(
         number_after(&text, "self-collision on", "dropped"),
+        0.0,
+        "{text}"
+    );
+    assert_eq!(
+        number_after(&text, "self-collision on", "suspended"),
         0.0,
         "{text}"
     );
