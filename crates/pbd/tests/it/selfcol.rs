@@ -111,10 +111,16 @@ fn a_folded_slab_pressed_onto_itself_does_not_pass_through_itself() {
 /// Under the probe of [`press`] (within 0.3 cm of it across), the upper arm's lowest node and
 /// the lower arm's highest (cm).
 fn arms_under_the_probe(body: &SoftBody) -> (f32, f32) {
+    arms_where(body, |p, _| (p.x + 1.5).abs() < 0.3 && p.z.abs() < 0.3)
+}
+
+/// Over the nodes of the U of [`folded_slab`] that `keep(position, rest position)` selects, the
+/// upper arm's lowest node and the lower arm's highest (cm).
+fn arms_where(body: &SoftBody, keep: impl Fn(Vec3A, Vec3) -> bool) -> (f32, f32) {
     let rest = folded_slab();
     let (mut upper, mut lower) = (f32::MAX, f32::MIN);
-    for (p, r) in body.positions().iter().zip(rest.positions()) {
-        if (p.x + 1.5).abs() < 0.3 && p.z.abs() < 0.3 {
+    for (&p, &r) in body.positions().iter().zip(rest.positions()) {
+        if keep(p, r) {
             if r.y > 0.5 {
                 upper = upper.min(p.y);
             } else {
@@ -453,8 +459,7 @@ fn cost_on_the_bunny() {
 /// middle of the upper arm's resting part (rest `x` = −2 ± 0.15 cm, `|z|` < 0.3 cm), the upper
 /// arm's lowest node less the lower arm's highest, in units of `h`.
 fn resting_gap(substeps: u32, fraction: f32) -> [f32; 2] {
-    let rest = folded_slab();
-    let mut body = SoftBody::new(&rest, &Material::soft_tissue()).unwrap();
+    let mut body = SoftBody::new(&folded_slab(), &Material::soft_tissue()).unwrap();
     (body.set_settings(StepSettings {
         substeps,
         ..StepSettings::realtime()
@@ -472,16 +477,8 @@ fn resting_gap(substeps: u32, fraction: f32) -> [f32; 2] {
         if step % 100 == 0 {
             // Known once the surface is built (the first step).
             let h = body.self_collision_thickness().unwrap();
-            let (mut upper, mut lower) = (f32::MAX, f32::MIN);
-            for (p, r) in body.positions().iter().zip(rest.positions()) {
-                if (r.x + 2.0).abs() < 0.15 && r.z.abs() < 0.3 {
-                    if r.y > 0.5 {
-                        upper = upper.min(p.y);
-                    } else {
-                        lower = lower.max(p.y);
-                    }
-                }
-            }
+            let (upper, lower) =
+                arms_where(&body, |_, r| (r.x + 2.0).abs() < 0.15 && r.z.abs() < 0.3);
             gaps[step / 100 - 1] = (upper - lower) / h;
         }
     }
